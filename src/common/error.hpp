@@ -1,0 +1,33 @@
+#pragma once
+/// Error types. Loading and set-up code throws; code inside a time step never throws for numerical trouble
+/// but reports it through a StepStatus (see sph/fluid_solver.hpp).
+
+#include <stdexcept>
+#include <string>
+
+namespace drench {
+
+/// Base of every exception drench throws. The message always names the culprit (file, JSON path, particle or
+/// triangle index) and the offending value.
+class Error : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+/// A scene file, a --set override or a scene built in code is invalid. The message has the form
+/// `<json.path> <problem>, got <value> (<file>)`.
+class SceneError : public Error {
+ public:
+  using Error::Error;
+};
+
+/// Reading or writing a file failed (the message names the file and the system's reason).
+class IoError : public Error {
+ public:
+  using Error::Error;
+};
+
+/// Formats a double for error messages with enough digits to round-trip.
+std::string format_number(double value);
+
+}  // namespace drench

@@ -1,0 +1,135 @@
+#pragma once
+/// Plain settings structs for a whole scene, filled from JSON by scene_loader.hpp or built in code by tests,
+/// benchmarks and users. Every member states its unit and default; `docs/scenes.md` documents the same keys.
+/// Settings are kept apart from runtime objects: a SceneConfig builds a Simulation (scene/simulation.hpp).
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "common/types.hpp"
+
+namespace drench {
+
+/// Which pressure solver runs. Selected by name in the scene (`fluid.pressure_solver`).
+enum class PressureSolverKind { WCSPH, PCISPH };
+
+/// Weakly compressible SPH, Becker & Teschner 2007: Tait equation p = B ((rho / rho0)^gamma - 1).
+struct WcsphSettings {
+  /// Numerical speed of sound c (unit: m/s), B = rho0 c^2 / gamma. Unset: 10 x the scene's expected maximum
+  /// speed (sqrt(2 g H) over the scene's height H plus the fastest emitter), i.e. Mach 0.1 and about 1%
+  /// density variation (Monaghan 1994).
+  std::optional<Scalar> speed_of_sound;
+  Scalar exponent = 7.0;  ///< gamma of the Tait equation (dimensionless), >= 1
+};
+
+/// Predictive-corrective incompressible SPH, Solenthaler & Pajarola 2009.
+struct PcisphSettings {
+  Scalar eta = 0.001;      ///< target average density error (fraction of rest density), > 0
+  int min_iterations = 3;  ///< at least this many correction iterations per sub-step, >= 1 (SPlisHSPlasH: 3)
+  int max_iterations = 100;  ///< at most this many, >= min_iterations
+};
+
+/// Viscosity method. Constructed only when the scene's `effects` lists "viscosity".
+enum class ViscosityKind {
+  XSPH,       ///< velocity smoothing v_i += c sum_j m_j / rho_j (v_j - v_i) W_ij (Monaghan 1989)
+  ARTIFICIAL  ///< Monaghan's artificial viscosity Pi_ij with coefficient alpha (Monaghan 1992)
+};
+
+struct ViscositySettings {
+  ViscosityKind method = ViscosityKind::XSPH;
+  /// Dimensionless coefficient (XSPH c or artificial alpha), >= 0. 0.01 is SPlisHSPlasH's standard value.
+  Scalar coefficient = 0.01;
+};
+
+struct FluidSettings {
+  Scalar rest_density = 1000.0;    ///< rho0 (unit: kg/m^3), > 0
+  Scalar particle_spacing = 0.05;  ///< rest spacing of the particle lattice (unit: m), > 0; particle mass is
+                                   ///< rho0 spacing^3 and the kernel support radius is 2 spacing
+  PressureSolverKind pressure_solver = PressureSolverKind::PCISPH;
+  WcsphSettings wcsph;
+  PcisphSettings pcisph;
+  ViscositySettings viscosity;
+  /// CFL factor lambda (dimensionless), in (0, 1]: a fluid sub-step never exceeds lambda spacing / v_max,
+  /// with v_max the fastest particle (plus the speed of sound for WCSPH).
+  Scalar cfl = 0.4;
+  /// Steps between re-sorting particles along a z-order curve for cache locality, >= 1.
+  int sort_interval = 10;
+};
+
+/// A circular jet: particles leave a disc of `radius` around `center` along `direction` at `speed`, in layers
+/// one spacing apart, from `start_time` until `max_particles` have been emitted.
+struct NozzleEmitterSettings {
+  Vec3 center = Vec3::Zero();             ///< (unit: m)
+  Vec3 direction = Vec3(0.0, -1.0, 0.0);  ///< normalised on load, non-zero
+  Scalar radius = 0.02;                   ///< (unit: m), > 0
+  Scalar speed = 1.0;                     ///< (unit: m/s), > 0
+  Scalar start_time = 0.0;                ///< (unit: s), >= 0
+  std::int64_t max_particles = 10000;     ///< particle budget of this emitter, >= 0
+};
+
+/// A box of fluid at rest spacing, created at time 0 (dam-break columns, tanks).
+struct BoxEmitterSettings {
+  Vec3 min = Vec3::Zero();       ///< lower corner (unit: m)
+  Vec3 max = Vec3::Ones();       ///< upper corner (unit: m), > min on every axis
+  Vec3 velocity = Vec3::Zero();  ///< initial velocity (unit: m/s)
+};
+
+struct EmitterSettings {
+  enum class Kind { NOZZLE, BOX } kind = Kind::BOX;
+  NozzleEmitterSettings nozzle;
+  BoxEmitterSettings box;
+};
+
+/// Static boundaries sampled with boundary particles (Akinci et al. 2012).
+struct BoundarySettings {
+  enum class Kind {
+    BOX,   ///< a container: the fluid lives inside [min, max]; walls are sampled on its six faces
+    PLANE  ///< a rectangle of size[0] x size[1] centred at `point`, fluid on the side `normal` points to
+  } kind = Kind::BOX;
+  Vec3 min = Vec3::Zero();            ///< BOX: inner lower corner (unit: m)
+  Vec3 max = Vec3::Ones();            ///< BOX: inner upper corner (unit: m), > min
+  bool open_top = false;              ///< BOX: no wall at max.y (the up axis is +y, against default gravity)
+  Vec3 point = Vec3::Zero();          ///< PLANE: centre (unit: m)
+  Vec3 normal = Vec3(0.0, 1.0, 0.0);  ///< PLANE: normalised on load, non-zero
+  Scalar size[2] = {1.0, 1.0};        ///< PLANE: side lengths (unit: m), > 0
+  int layers = 2;  ///< layers of boundary particles behind the surface, one spacing apart, >= 1
+};
+
+/// Removes particles that leave the region of interest; the summary counts them as `removed`.
+struct KillRegionSettings {
+  enum class Kind {
+    PLANE,  ///< removes particles with (x - point) . normal < 0
+    BOX     ///< removes particles outside [min, max]
+  } kind = Kind::PLANE;
+  Vec3 point = Vec3::Zero();          ///< PLANE (unit: m)
+  Vec3 normal = Vec3(0.0, 1.0, 0.0);  ///< PLANE: normalised on load, non-zero; points into the kept region
+  Vec3 min = Vec3::Zero();            ///< BOX (unit: m)
+  Vec3 max = Vec3::Ones();            ///< BOX (unit: m)
+};
+
+struct TimeSettings {
+  Scalar dt = 0.005;      ///< step of the whole simulation (unit: s), > 0; the fluid may sub-step inside it
+  Scalar duration = 1.0;  ///< simulated time (unit: s), > 0
+  Scalar frame_rate = 30.0;  ///< frames written per simulated second (unit: 1/s), >= 0; 0 writes no frames
+};
+
+/// A complete scene. The effects named in `effects` are the only optional physics that get constructed.
+struct SceneConfig {
+  std::string source = "<code>";         ///< file the scene came from, used in error messages
+  Vec3 gravity = Vec3(0.0, -9.81, 0.0);  ///< (unit: m/s^2); +y is up
+  FluidSettings fluid;
+  std::vector<EmitterSettings> emitters;
+  std::vector<BoundarySettings> boundaries;
+  std::vector<KillRegionSettings> kill_regions;
+  TimeSettings time;
+  std::vector<std::string> effects;  ///< names from known_effects(), each at most once
+
+  /// True when `effects` lists `name`, i.e. that optional physics is to be constructed.
+  bool has_effect(const std::string& name) const;
+};
+
+/// The effect names a scene may list in `effects` (currently "viscosity"): the one list the loader checks.
+const std::vector<std::string>& known_effects();
+
+}  // namespace drench

@@ -1,0 +1,122 @@
+#include "scene/simulation.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "common/stopwatch.hpp"
+#include "sph/boundary_sampling.hpp"
+
+namespace drench {
+
+Scalar automatic_speed_of_sound(const SceneConfig& config) {
+  const Scalar g = config.gravity.norm();
+  const Vec3 up = g > 0.0 ? Vec3(-config.gravity / g) : Vec3::UnitY();
+  Scalar low = std::numeric_limits<Scalar>::infinity();
+  Scalar high = -low;
+  auto include = [&](const Vec3& x) {
+    low = std::min(low, x.dot(up));
+    high = std::max(high, x.dot(up));
+  };
+  auto include_box = [&](const Vec3& a, const Vec3& b) {
+    for (int corner = 0; corner < 8; ++corner) {
+      include(Vec3(corner & 1 ? b.x() : a.x(), corner & 2 ? b.y() : a.y(), corner & 4 ? b.z() : a.z()));
+    }
+  };
+  Scalar emit_speed = 0.0;
+  for (const auto& e : config.emitters) {
+    if (e.kind == EmitterSettings::Kind::BOX) {
+      include_box(e.box.min, e.box.max);
+      emit_speed = std::max(emit_speed, e.box.velocity.norm());
+    } else {
+      include(e.nozzle.center);
+      emit_speed = std::max(emit_speed, e.nozzle.speed);
+    }
+  }
+  for (const auto& b : config.boundaries) {
+    if (b.kind == BoundarySettings::Kind::BOX) {
+      include_box(b.min, b.max);
+    } else {
+      include(b.point);
+    }
+  }
+  const Scalar height = high > low ? high - low : 0.0;
+  return std::max(1.0, 10.0 * (std::sqrt(2.0 * g * height) + emit_speed));
+}
+
+namespace {
+
+BoundaryParticles sample_boundaries(const SceneConfig& config) {
+  const Scalar s = config.fluid.particle_spacing;
+  BoundaryParticles all;
+  for (const auto& b : config.boundaries) {
+    all.append(b.kind == BoundarySettings::Kind::BOX
+                   ? sample_box_container(b.min, b.max, s, b.layers, b.open_top)
+                   : sample_plane(b.point, b.normal, b.size, s, b.layers));
+  }
+  return all;
+}
+
+}  // namespace
+
+Simulation::Simulation(const SceneConfig& config)
+    : m_config(config),
+      m_speed_of_sound(config.fluid.wcsph.speed_of_sound.value_or(automatic_speed_of_sound(config))) {
+  m_fluid =
+      std::make_unique<FluidSolver>(m_config.fluid, m_config.gravity, sample_boundaries(m_config),
+                                    m_config.boundaries, m_config.has_effect("viscosity"), m_speed_of_sound);
+  m_total_steps = std::max<std::int64_t>(1, std::llround(m_config.time.duration / m_config.time.dt));
+  const Scalar mass = m_fluid->particle_mass();
+  for (const auto& e : m_config.emitters) {
+    if (e.kind == EmitterSettings::Kind::BOX) {
+      emit_box(e.box, m_config.fluid.particle_spacing, mass, m_fluid->particles(), m_next_id);
+    } else {
+      m_nozzles.emplace_back(e.nozzle, m_config.fluid.particle_spacing);
+    }
+  }
+}
+
+bool Simulation::finished() const {
+  return m_steps >= m_total_steps;
+}
+
+StepStatus Simulation::step() {
+  const Scalar dt = m_config.time.dt;
+  {
+    ScopedTimer timer(m_emit_seconds);
+    for (auto& nozzle : m_nozzles) {
+      nozzle.emit(time(), dt, m_fluid->particle_mass(), m_fluid->particles(), m_next_id);
+    }
+  }
+  const StepStatus status = m_fluid->step(dt);
+  ++m_steps;
+  if (!m_config.kill_regions.empty()) {
+    ScopedTimer timer(m_emit_seconds);
+    remove_killed();
+  }
+  return status;
+}
+
+void Simulation::remove_killed() {
+  ParticleSet& particles = m_fluid->particles();
+  const std::size_t n = particles.size();
+  std::vector<std::uint8_t> remove(n, 0);
+  std::size_t flagged = 0;
+#pragma omp parallel for schedule(static) reduction(+ : flagged)
+  for (std::size_t i = 0; i < n; ++i) {
+    const Vec3& x = particles.positions[i];
+    for (const auto& region : m_config.kill_regions) {
+      const bool out = region.kind == KillRegionSettings::Kind::PLANE
+                           ? (x - region.point).dot(region.normal) < 0.0
+                           : ((x.array() < region.min.array()) || (x.array() > region.max.array())).any();
+      if (out) {
+        remove[i] = 1;
+        ++flagged;
+        break;
+      }
+    }
+  }
+  if (flagged > 0) m_removed += static_cast<std::int64_t>(particles.remove_flagged(remove));
+}
+
+}  // namespace drench

@@ -1,0 +1,68 @@
+#pragma once
+/// A scene brought to life: fluid, boundaries, emitters and kill regions built from a SceneConfig, stepped at
+/// the scene's dt.
+
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include "scene/scene_config.hpp"
+#include "sph/emitters.hpp"
+#include "sph/fluid_solver.hpp"
+
+namespace drench {
+
+/// Builds and steps everything a SceneConfig names. Only effects listed in `effects` are constructed.
+class Simulation {
+ public:
+  /// @throws SceneError when the scene cannot be built (e.g. no emitter ever creates a particle is fine, but
+  /// a
+  ///         non-finite derived quantity is not).
+  explicit Simulation(const SceneConfig& config);
+
+  /// One step of the scene's dt: nozzles emit, the fluid advances (sub-stepping as it must), kill regions
+  /// remove the particles that left.
+  StepStatus step();
+
+  /// True once the simulated time has reached the scene's duration (within a thousandth of a step).
+  bool finished() const;
+  /// Steps the scene's duration takes, round(duration / dt).
+  std::int64_t total_steps() const { return m_total_steps; }
+  std::int64_t steps_done() const { return m_steps; }
+  Scalar time() const { return m_steps * m_config.time.dt; }
+
+  const SceneConfig& config() const { return m_config; }
+  FluidSolver& fluid() { return *m_fluid; }
+  const FluidSolver& fluid() const { return *m_fluid; }
+  const ParticleSet& particles() const { return m_fluid->particles(); }
+  /// Particles removed by kill regions so far.
+  std::int64_t removed() const { return m_removed; }
+  /// Particles ever created.
+  std::int64_t created() const { return m_next_id; }
+  /// The effects that were constructed (the scene's `effects`, in its order).
+  const std::vector<std::string>& effects() const { return m_config.effects; }
+  /// The speed of sound in use (unit: m/s): the scene's, or the automatic one.
+  Scalar speed_of_sound() const { return m_speed_of_sound; }
+  /// Wall time spent emitting and removing particles (unit: s).
+  double emit_seconds() const { return m_emit_seconds; }
+
+ private:
+  void remove_killed();
+
+  SceneConfig m_config;
+  Scalar m_speed_of_sound;
+  std::unique_ptr<FluidSolver> m_fluid;
+  std::vector<NozzleEmitter> m_nozzles;
+  std::uint32_t m_next_id = 0;
+  std::int64_t m_steps = 0;
+  std::int64_t m_total_steps = 0;
+  std::int64_t m_removed = 0;
+  double m_emit_seconds = 0;
+};
+
+/// Speed of sound a scene gets when fluid.wcsph.speed_of_sound is unset: 10 (sqrt(2 |g| H) + v_emit) (unit:
+/// m/s), H the scene's extent along gravity over its emitters and boundaries, v_emit the fastest nozzle;
+/// at least 1 m/s.
+Scalar automatic_speed_of_sound(const SceneConfig& config);
+
+}  // namespace drench

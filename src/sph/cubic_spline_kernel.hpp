@@ -1,0 +1,54 @@
+#pragma once
+/// Cubic spline kernel of Monaghan 1992 in 3D, with its gradient.
+
+#include <cmath>
+
+#include "common/types.hpp"
+
+namespace drench {
+
+/// W(r, h) = sigma * { 1 - 3/2 q^2 + 3/4 q^3  (0 <= q < 1);  1/4 (2 - q)^3  (1 <= q < 2);  0 }, q = r / h,
+/// sigma = 1 / (pi h^3). Support radius 2h. drench uses h = particle spacing, so the support holds the
+/// 27 nearest lattice neighbours, as SPlisHSPlasH's default (support = 4 particle radii).
+class CubicSplineKernel {
+ public:
+  /// @param smoothing_length  h (unit: m), > 0
+  explicit CubicSplineKernel(Scalar smoothing_length);
+
+  Scalar smoothing_length() const { return m_h; }
+  Scalar support_radius() const { return 2.0 * m_h; }
+
+  /// W at distance r (unit: m, >= 0); unit 1/m^3.
+  Scalar value(Scalar r) const {
+    const Scalar q = r * m_inv_h;
+    if (q >= 2.0) return 0.0;
+    if (q < 1.0) return m_sigma * (1.0 - 1.5 * q * q + 0.75 * q * q * q);
+    const Scalar a = 2.0 - q;
+    return m_sigma * 0.25 * a * a * a;
+  }
+
+  /// grad_i W(x_i - x_j) for r_vec = x_i - x_j (unit: m); unit 1/m^4. Zero at r = 0, where the kernel is
+  /// smooth and symmetric.
+  Vec3 gradient(const Vec3& r_vec) const {
+    const Scalar r2 = r_vec.squaredNorm();
+    if (r2 <= 0.0) return Vec3::Zero();
+    const Scalar r = std::sqrt(r2);
+    const Scalar q = r * m_inv_h;
+    if (q >= 2.0) return Vec3::Zero();
+    Scalar dw_dq;
+    if (q < 1.0) {
+      dw_dq = m_sigma * (-3.0 * q + 2.25 * q * q);
+    } else {
+      const Scalar a = 2.0 - q;
+      dw_dq = -m_sigma * 0.75 * a * a;
+    }
+    return (dw_dq * m_inv_h / r) * r_vec;
+  }
+
+ private:
+  Scalar m_h;
+  Scalar m_inv_h;
+  Scalar m_sigma;
+};
+
+}  // namespace drench

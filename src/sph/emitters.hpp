@@ -1,0 +1,41 @@
+#pragma once
+/// Sources of fluid particles: a box of fluid at rest spacing, and a circular nozzle (jet).
+
+#include <cstdint>
+
+#include "scene/scene_config.hpp"
+#include "sph/particle_set.hpp"
+
+namespace drench {
+
+/// Fills [min, max] with a cubic lattice of spacing s, particles at min + (i + 1/2) s, so that the particles'
+/// volumes s^3 tile the box. Each axis holds floor(extent / s + 1e-9) particles (at least one).
+/// @param mass  per particle (unit: kg);  @param next_id  in/out: id of the next particle created
+/// @return particles added
+std::size_t emit_box(const BoxEmitterSettings& box, Scalar spacing, Scalar mass, ParticleSet& particles,
+                     std::uint32_t& next_id);
+
+/// A circular jet. Each time the fluid leaving the nozzle has advanced one spacing, a disc of particles
+/// (square lattice of spacing s clipped to the radius) is released at the nozzle, moving at `speed` along
+/// `direction`, and pushed ahead by the part of the step that elapsed since its release, so that layers stay
+/// one spacing apart whatever dt is. Emission stops at the particle budget, mid-disc if need be.
+class NozzleEmitter {
+ public:
+  NozzleEmitter(const NozzleEmitterSettings& settings, Scalar spacing);
+
+  /// Emits the layers due in the step (t, t + dt] (unit: s); returns particles added.
+  std::size_t emit(Scalar t, Scalar dt, Scalar mass, ParticleSet& particles, std::uint32_t& next_id);
+
+  std::int64_t emitted() const { return m_emitted; }
+  /// Particles in one disc layer.
+  std::size_t disc_size() const { return m_disc.size(); }
+
+ private:
+  NozzleEmitterSettings m_settings;
+  Scalar m_spacing;
+  Vec3Array m_disc;  // offsets from the centre in the nozzle's plane
+  std::int64_t m_emitted = 0;
+  std::int64_t m_layers = 0;
+};
+
+}  // namespace drench

@@ -1,0 +1,169 @@
+#include "sph/fluid_solver.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "common/stopwatch.hpp"
+#include "sph/boundary_sampling.hpp"
+
+namespace drench {
+
+StepStatus& StepStatus::operator|=(const StepStatus& other) {
+  flags |= other.flags;
+  if (non_finite_particle < 0) non_finite_particle = other.non_finite_particle;
+  return *this;
+}
+
+std::string StepStatus::describe() const {
+  std::string text;
+  if (flags & NON_FINITE_STATE) {
+    text += "NON_FINITE_STATE: particle id " + std::to_string(non_finite_particle) +
+            " has a NaN or infinite position or velocity (lower time.dt or fluid.cfl)";
+  }
+  if (flags & PRESSURE_NOT_CONVERGED) {
+    if (!text.empty()) text += "; ";
+    text += "PRESSURE_NOT_CONVERGED: PCISPH reached fluid.pcisph.max_iterations above eta";
+  }
+  return text;
+}
+
+FluidSolver::FluidSolver(const FluidSettings& settings, const Vec3& gravity, BoundaryParticles boundary,
+                         std::vector<BoundarySettings> guards, bool with_viscosity, Scalar speed_of_sound)
+    : m_settings(settings),
+      m_gravity(gravity),
+      m_kernel(settings.particle_spacing),
+      m_boundary(std::move(boundary.positions)),
+      m_guards(std::move(guards)),
+      m_fluid_search(m_kernel.support_radius()),
+      m_boundary_search(m_kernel.support_radius()),
+      m_pressure(make_pressure_solver(settings, speed_of_sound)) {
+  m_boundary_psi.resize(boundary.volumes.size());
+  for (std::size_t b = 0; b < m_boundary_psi.size(); ++b)
+    m_boundary_psi[b] = settings.rest_density * boundary.volumes[b];
+  m_boundary_search.build(m_boundary);
+  if (with_viscosity) m_viscosity = make_viscosity(settings.viscosity, speed_of_sound);
+}
+
+Scalar FluidSolver::particle_mass() const {
+  const Scalar s = m_settings.particle_spacing;
+  return m_settings.rest_density * s * s * s;
+}
+
+void FluidSolver::update_neighbors() {
+  ScopedTimer timer(m_stats.timings_s.neighbors);
+  if (m_stats.substeps % m_settings.sort_interval == 0) {
+    m_particles.permute(m_fluid_search.z_order(m_particles.positions));
+  }
+  m_fluid_search.build(m_particles.positions);
+  m_fluid_search.find(m_particles.positions, m_fluid_neighbors, /*exclude_self=*/true);
+  m_boundary_search.find(m_particles.positions, m_boundary_neighbors, /*exclude_self=*/false);
+
+  // Kernel gradients at the current positions, once per sub-step: PCISPH reuses them in every iteration.
+  const auto& x = m_particles.positions;
+  m_fluid_gradients.resize(m_fluid_neighbors.indices.size());
+  m_boundary_gradients.resize(m_boundary_neighbors.indices.size());
+#pragma omp parallel for schedule(static)
+  for (std::size_t i = 0; i < x.size(); ++i) {
+    for (std::uint32_t n = m_fluid_neighbors.offsets[i]; n < m_fluid_neighbors.offsets[i + 1]; ++n) {
+      m_fluid_gradients[n] = m_kernel.gradient(x[i] - x[m_fluid_neighbors.indices[n]]);
+    }
+    for (std::uint32_t n = m_boundary_neighbors.offsets[i]; n < m_boundary_neighbors.offsets[i + 1]; ++n) {
+      m_boundary_gradients[n] = m_kernel.gradient(x[i] - m_boundary[m_boundary_neighbors.indices[n]]);
+    }
+  }
+}
+
+Scalar FluidSolver::cfl_limit() const {
+  Scalar max_speed_sq = 0.0;
+  const auto& v = m_particles.velocities;
+#pragma omp parallel for schedule(static) reduction(max : max_speed_sq)
+  for (std::size_t i = 0; i < v.size(); ++i)
+    max_speed_sq = std::max(max_speed_sq, v[i].squaredNorm());
+  const Scalar speed = std::sqrt(max_speed_sq) + m_pressure->signal_speed();
+  if (!(speed > 0.0)) return std::numeric_limits<Scalar>::infinity();
+  return m_settings.cfl * m_settings.particle_spacing / speed;
+}
+
+StepStatus FluidSolver::step(Scalar dt) {
+  ScopedTimer timer(m_stats.timings_s.total);
+  StepStatus status;
+  ++m_stats.steps;
+  if (m_particles.empty()) return status;
+  Scalar remaining = dt;
+  int count = 0;
+  while (true) {
+    const Scalar limit = cfl_limit();
+    // A NaN limit means a NaN velocity: take one sub-step so that the check below names the particle.
+    const Scalar wanted = std::isfinite(limit) ? std::ceil(remaining / limit) : 1.0;
+    const int n = static_cast<int>(std::clamp(wanted, 1.0, 1e6));
+    const Scalar sub = n == 1 ? remaining : remaining / n;
+    status |= substep(sub);
+    ++count;
+    if (n == 1 || !status.ok()) break;
+    remaining -= sub;
+  }
+  m_stats.max_substeps_per_step = std::max(m_stats.max_substeps_per_step, count);
+  return status;
+}
+
+StepStatus FluidSolver::substep(Scalar dt) {
+  update_neighbors();
+  ++m_stats.substeps;
+  const std::size_t n = m_particles.size();
+  const FluidContext ctx{
+      m_kernel,          m_particles,         m_fluid_neighbors,       m_boundary_neighbors,
+      m_boundary,        m_boundary_psi,      m_settings.rest_density, m_settings.particle_spacing,
+      m_fluid_gradients, m_boundary_gradients};
+  {
+    ScopedTimer timer(m_stats.timings_s.density);
+#pragma omp parallel for schedule(static)
+    for (std::size_t i = 0; i < n; ++i)
+      m_particles.densities[i] = sph_density(ctx, m_particles.positions, i);
+  }
+  {
+    ScopedTimer timer(m_stats.timings_s.forces);
+    m_accelerations.assign(n, m_gravity);
+    if (m_viscosity) m_viscosity->add_accelerations(ctx, dt, m_accelerations);
+    m_velocities_adv.resize(n);
+#pragma omp parallel for schedule(static)
+    for (std::size_t i = 0; i < n; ++i)
+      m_velocities_adv[i] = m_particles.velocities[i] + dt * m_accelerations[i];
+  }
+  PressureStats pressure;
+  {
+    ScopedTimer timer(m_stats.timings_s.pressure);
+    pressure = m_pressure->solve(ctx, m_velocities_adv, dt, m_pressure_accelerations);
+  }
+  m_stats.pressure_iterations += pressure.iterations;
+  m_stats.max_pressure_iterations = std::max(m_stats.max_pressure_iterations, pressure.iterations);
+  m_stats.density_error_sum += pressure.average_density_error;
+  m_stats.density_error_max = std::max(m_stats.density_error_max, pressure.average_density_error);
+  m_stats.particle_density_error_max =
+      std::max(m_stats.particle_density_error_max, pressure.max_density_error);
+
+  StepStatus status;
+  if (!pressure.converged) status.flags |= StepStatus::PRESSURE_NOT_CONVERGED;
+  ScopedTimer timer(m_stats.timings_s.integrate);
+  std::size_t first_bad = n;
+  std::int64_t guarded = 0;
+#pragma omp parallel for schedule(static) reduction(min : first_bad) reduction(+ : guarded)
+  for (std::size_t i = 0; i < n; ++i) {
+    Vec3& v = m_particles.velocities[i];
+    Vec3& x = m_particles.positions[i];
+    v = m_velocities_adv[i] + dt * m_pressure_accelerations[i];
+    const Vec3 x_t0 = x;
+    x += dt * v;
+    for (const BoundarySettings& guard : m_guards)
+      guarded += enforce_boundary(guard, x_t0, x, v) ? 1 : 0;
+    if (!v.allFinite() || !x.allFinite()) first_bad = std::min(first_bad, i);
+  }
+  m_stats.boundary_guards += guarded;
+  if (first_bad < n) {
+    status.flags |= StepStatus::NON_FINITE_STATE;
+    status.non_finite_particle = m_particles.ids[first_bad];
+  }
+  return status;
+}
+
+}  // namespace drench

@@ -1,0 +1,103 @@
+#pragma once
+/// The SPH fluid: neighbor search, density, non-pressure forces, pressure solve and symplectic Euler
+/// integration, sub-stepped under a CFL limit inside the scene's step.
+
+#include <cstdint>
+#include <memory>
+#include <string>
+
+#include "scene/scene_config.hpp"
+#include "sph/boundary_sampling.hpp"
+#include "sph/cubic_spline_kernel.hpp"
+#include "sph/forces/viscosity.hpp"
+#include "sph/neighbor_search.hpp"
+#include "sph/particle_set.hpp"
+#include "sph/pressure/pressure_solver.hpp"
+
+namespace drench {
+
+/// Outcome of a step. Numerical trouble inside a step is reported here, never thrown.
+struct StepStatus {
+  enum Flag : std::uint32_t {
+    /// A particle's position or velocity became NaN or infinite; `non_finite_particle` names its id. The
+    /// state is no longer meaningful: lower dt or the CFL factor, or check the scene's stiffness.
+    NON_FINITE_STATE = 1u << 0,
+    /// PCISPH stopped at max_iterations with the density error above eta in some sub-step. The step is still
+    /// usable; raise max_iterations or lower dt if it persists.
+    PRESSURE_NOT_CONVERGED = 1u << 1,
+  };
+  std::uint32_t flags = 0;
+  std::int64_t non_finite_particle = -1;  ///< id of the first non-finite particle, or -1
+
+  bool ok() const { return (flags & NON_FINITE_STATE) == 0; }
+  StepStatus& operator|=(const StepStatus& other);
+  /// One line naming each raised flag (and the particle id), empty when no flag is raised.
+  std::string describe() const;
+};
+
+/// Counters and timers over the fluid's whole life, the source of the summary's fluid keys.
+struct FluidStatistics {
+  std::int64_t steps = 0;
+  std::int64_t substeps = 0;
+  int max_substeps_per_step = 0;
+  std::int64_t pressure_iterations = 0;   ///< summed over sub-steps
+  int max_pressure_iterations = 0;        ///< in one sub-step
+  Scalar density_error_sum = 0;           ///< sum over sub-steps of the average density error
+  Scalar density_error_max = 0;           ///< largest average density error of a sub-step
+  Scalar particle_density_error_max = 0;  ///< largest density error of any particle in any sub-step
+  std::int64_t boundary_guards = 0;        ///< particles put back by enforce_boundary, over all sub-steps
+  struct Timings {
+    double total = 0, neighbors = 0, density = 0, forces = 0, pressure = 0, integrate = 0;
+  } timings_s;  ///< wall time per stage (unit: s)
+};
+
+/// An SPH fluid with static boundary particles.
+class FluidSolver {
+ public:
+  /// @param gravity  (unit: m/s^2)
+  /// @param boundary  boundary particles, e.g. from sample_box_container
+  /// @param guards  the analytic boundaries behind those particles, enforced by enforce_boundary
+  /// @param with_viscosity  builds the viscosity of settings.viscosity (the "viscosity" effect)
+  /// @param speed_of_sound  WCSPH's c and the artificial viscosity's c (unit: m/s), > 0
+  FluidSolver(const FluidSettings& settings, const Vec3& gravity, BoundaryParticles boundary,
+              std::vector<BoundarySettings> guards, bool with_viscosity, Scalar speed_of_sound);
+
+  ParticleSet& particles() { return m_particles; }
+  const ParticleSet& particles() const { return m_particles; }
+  const Vec3Array& boundary_positions() const { return m_boundary; }
+  const FluidSettings& settings() const { return m_settings; }
+  const CubicSplineKernel& kernel() const { return m_kernel; }
+  const FluidStatistics& statistics() const { return m_stats; }
+  /// Mass of one particle, rest_density * spacing^3 (unit: kg).
+  Scalar particle_mass() const;
+
+  /// Advances the fluid by dt (unit: s, > 0), in as many equal-ish sub-steps as the CFL limit asks.
+  StepStatus step(Scalar dt);
+
+ private:
+  void update_neighbors();
+  StepStatus substep(Scalar dt);
+  Scalar cfl_limit() const;
+
+  FluidSettings m_settings;
+  Vec3 m_gravity;
+  CubicSplineKernel m_kernel;
+  ParticleSet m_particles;
+  Vec3Array m_boundary;
+  std::vector<BoundarySettings> m_guards;
+  ScalarArray m_boundary_psi;
+  NeighborSearch m_fluid_search;
+  NeighborSearch m_boundary_search;
+  NeighborList m_fluid_neighbors;
+  NeighborList m_boundary_neighbors;
+  Vec3Array m_fluid_gradients;     // per fluid neighbor pair, at the current positions
+  Vec3Array m_boundary_gradients;  // per boundary neighbor pair
+  std::unique_ptr<PressureSolver> m_pressure;
+  std::unique_ptr<NonPressureForce> m_viscosity;
+  Vec3Array m_accelerations;
+  Vec3Array m_velocities_adv;
+  Vec3Array m_pressure_accelerations;
+  FluidStatistics m_stats;
+};
+
+}  // namespace drench

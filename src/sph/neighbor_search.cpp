@@ -1,0 +1,238 @@
+#include "sph/neighbor_search.hpp"
+
+#include <algorithm>
+#include <cassert>
+#include <cmath>
+#include <limits>
+#include <utility>
+
+#include <omp.h>
+
+namespace drench {
+
+namespace {
+
+constexpr int kCellBits = 21;
+constexpr std::int64_t kCellOffset = std::int64_t{1} << (kCellBits - 1);
+constexpr std::int64_t kCellMax = (std::int64_t{1} << kCellBits) - 1;
+
+/// Spreads the low 21 bits of v so that bit k moves to bit 3k.
+std::uint64_t spread_bits(std::uint64_t v) {
+  v &= 0x1fffff;
+  v = (v | (v << 32)) & 0x1f00000000ffffULL;
+  v = (v | (v << 16)) & 0x1f0000ff0000ffULL;
+  v = (v | (v << 8)) & 0x100f00f00f00f00fULL;
+  v = (v | (v << 4)) & 0x10c30c30c30c30c3ULL;
+  v = (v | (v << 2)) & 0x1249249249249249ULL;
+  return v;
+}
+
+std::uint64_t hash_key(std::uint64_t key) {
+  // splitmix64 finaliser: Morton keys of neighbouring cells differ in few bits, so they need mixing.
+  key ^= key >> 30;
+  key *= 0xbf58476d1ce4e5b9ULL;
+  key ^= key >> 27;
+  key *= 0x94d049bb133111ebULL;
+  key ^= key >> 31;
+  return key;
+}
+
+}  // namespace
+
+NeighborSearch::NeighborSearch(Scalar support_radius)
+    : m_radius(support_radius), m_inv_cell(1.0 / support_radius) {
+  assert(support_radius > 0.0);
+}
+
+Vec3i NeighborSearch::cell_of(const Vec3& x) const {
+  Vec3i cell;
+  for (int a = 0; a < 3; ++a) {
+    // Clamp before converting: a cast of an out-of-range double to int is undefined behaviour.
+    // NaN goes to the lowest cell; the solver reports non-finite particles itself.
+    const Scalar c = std::floor(x[a] * m_inv_cell) + static_cast<Scalar>(kCellOffset);
+    cell[a] = std::isnan(c) ? 1 : static_cast<int>(std::clamp(c, 1.0, static_cast<Scalar>(kCellMax - 1)));
+  }
+  return cell;
+}
+
+std::uint64_t NeighborSearch::key_of_cell(const Vec3i& cell) const {
+  return spread_bits(static_cast<std::uint64_t>(cell.x())) |
+         (spread_bits(static_cast<std::uint64_t>(cell.y())) << 1) |
+         (spread_bits(static_cast<std::uint64_t>(cell.z())) << 2);
+}
+
+std::uint64_t NeighborSearch::cell_key(const Vec3& x) const {
+  return key_of_cell(cell_of(x));
+}
+
+IndexArray NeighborSearch::z_order(const Vec3Array& points) const {
+  const std::size_t n = points.size();
+  std::vector<std::pair<std::uint64_t, Index>> keyed(n);
+#pragma omp parallel for schedule(static)
+  for (std::size_t i = 0; i < n; ++i)
+    keyed[i] = {cell_key(points[i]), static_cast<Index>(i)};
+  std::sort(keyed.begin(), keyed.end());
+  IndexArray order(n);
+  for (std::size_t k = 0; k < n; ++k)
+    order[k] = keyed[k].second;
+  return order;
+}
+
+void NeighborSearch::build(const Vec3Array& points) {
+  const std::size_t n = points.size();
+  std::vector<Vec3i> cells(n);
+#pragma omp parallel for schedule(static)
+  for (std::size_t i = 0; i < n; ++i)
+    cells[i] = cell_of(points[i]);
+  Vec3i lo = Vec3i::Constant(std::numeric_limits<int>::max());
+  Vec3i hi = Vec3i::Constant(std::numeric_limits<int>::min());
+  for (const Vec3i& c : cells) {
+    lo = lo.cwiseMin(c);
+    hi = hi.cwiseMax(c);
+  }
+  const Vec3i dims = n > 0 ? Vec3i(hi - lo + Vec3i::Ones()) : Vec3i::Zero();
+  const double cell_count = static_cast<double>(dims.x()) * dims.y() * dims.z();
+  m_dense = n > 0 && cell_count <= 4.0 * static_cast<double>(n) + 4096.0;
+  if (m_dense) {
+    build_dense(cells, lo, dims);
+  } else {
+    build_hashed(points);
+  }
+  m_points.resize(n);
+  for (std::size_t k = 0; k < n; ++k)
+    m_points[k] = points[m_sorted_index[k]];
+}
+
+void NeighborSearch::build_dense(const std::vector<Vec3i>& cells, const Vec3i& lo, const Vec3i& dims) {
+  m_lo = lo;
+  m_dims = dims;
+  const std::size_t cell_count = static_cast<std::size_t>(dims.x()) * dims.y() * dims.z();
+  auto linear = [&](const Vec3i& c) {
+    return (static_cast<std::size_t>(c.z() - lo.z()) * dims.y() + (c.y() - lo.y())) * dims.x() +
+           (c.x() - lo.x());
+  };
+  // Counting sort by cell: stable in the point index, so the order is deterministic.
+  m_cell_begin.assign(cell_count + 1, 0);
+  for (const Vec3i& c : cells)
+    ++m_cell_begin[linear(c) + 1];
+  for (std::size_t c = 0; c < cell_count; ++c)
+    m_cell_begin[c + 1] += m_cell_begin[c];
+  std::vector<std::uint32_t> next(m_cell_begin.begin(), m_cell_begin.end() - 1);
+  m_sorted_index.resize(cells.size());
+  for (std::size_t i = 0; i < cells.size(); ++i)
+    m_sorted_index[next[linear(cells[i])]++] = static_cast<Index>(i);
+  m_cell_keys.clear();
+  m_table.clear();
+}
+
+void NeighborSearch::build_hashed(const Vec3Array& points) {
+  m_sorted_index = z_order(points);
+  const std::size_t n = points.size();
+  m_cell_keys.clear();
+  m_cell_begin.clear();
+  for (std::size_t k = 0; k < n; ++k) {
+    const std::uint64_t key = cell_key(points[m_sorted_index[k]]);
+    if (m_cell_keys.empty() || m_cell_keys.back() != key) {
+      m_cell_keys.push_back(key);
+      m_cell_begin.push_back(static_cast<std::uint32_t>(k));
+    }
+  }
+  m_cell_begin.push_back(static_cast<std::uint32_t>(n));
+
+  std::size_t capacity = 16;
+  while (capacity < 2 * m_cell_keys.size())
+    capacity *= 2;
+  m_table.assign(capacity, -1);
+  m_table_mask = capacity - 1;
+  for (std::size_t c = 0; c < m_cell_keys.size(); ++c) {
+    std::uint64_t slot = hash_key(m_cell_keys[c]) & m_table_mask;
+    while (m_table[slot] >= 0)
+      slot = (slot + 1) & m_table_mask;
+    m_table[slot] = static_cast<std::int64_t>(c);
+  }
+}
+
+bool NeighborSearch::cell_range(const Vec3i& cell, std::uint32_t& begin, std::uint32_t& end) const {
+  std::size_t slot;
+  if (m_dense) {
+    const Vec3i local = cell - m_lo;
+    if ((local.array() < 0).any() || (local.array() >= m_dims.array()).any()) return false;
+    slot = (static_cast<std::size_t>(local.z()) * m_dims.y() + local.y()) * m_dims.x() + local.x();
+  } else {
+    const std::int64_t c = lookup(key_of_cell(cell));
+    if (c < 0) return false;
+    slot = static_cast<std::size_t>(c);
+  }
+  begin = m_cell_begin[slot];
+  end = m_cell_begin[slot + 1];
+  return begin < end;
+}
+
+std::int64_t NeighborSearch::lookup(std::uint64_t key) const {
+  std::uint64_t slot = hash_key(key) & m_table_mask;
+  while (true) {
+    const std::int64_t c = m_table[slot];
+    if (c < 0) return -1;
+    if (m_cell_keys[static_cast<std::size_t>(c)] == key) return c;
+    slot = (slot + 1) & m_table_mask;
+  }
+}
+
+void NeighborSearch::find(const Vec3Array& queries, NeighborList& out, bool exclude_self) const {
+  const std::size_t m = queries.size();
+  const Scalar r2 = m_radius * m_radius;
+  const Scalar cell = m_radius;
+  out.offsets.assign(m + 1, 0);
+  out.indices.clear();
+  if (m_points.empty() || m == 0) return;
+
+  // One pass: each thread gathers the neighbors of a contiguous block of queries (static schedule) into its
+  // own buffer; the buffers are then concatenated in thread order, which is query order, so the result is the
+  // same for any thread count.
+  const int threads = omp_get_max_threads();
+  std::vector<IndexArray> buffers(static_cast<std::size_t>(threads));
+#pragma omp parallel num_threads(threads)
+  {
+    IndexArray& local = buffers[static_cast<std::size_t>(omp_get_thread_num())];
+#pragma omp for schedule(static)
+    for (std::size_t i = 0; i < m; ++i) {
+      const Vec3& x = queries[i];
+      const Vec3i c = cell_of(x);
+      // Distance from x to the lower and upper faces of its own cell, per axis, to skip neighbouring cells
+      // that lie entirely beyond the radius (most of the 20 edge and corner cells).
+      Vec3 low, high;
+      for (int a = 0; a < 3; ++a) {
+        const Scalar origin = (static_cast<Scalar>(c[a]) - static_cast<Scalar>(kCellOffset)) * cell;
+        low[a] = x[a] - origin;
+        high[a] = origin + cell - x[a];
+      }
+      const std::size_t first = local.size();
+      for (int dz = -1; dz <= 1; ++dz) {
+        const Scalar gz = dz < 0 ? low.z() : dz > 0 ? high.z() : 0.0;
+        for (int dy = -1; dy <= 1; ++dy) {
+          const Scalar gy = dy < 0 ? low.y() : dy > 0 ? high.y() : 0.0;
+          for (int dx = -1; dx <= 1; ++dx) {
+            const Scalar gx = dx < 0 ? low.x() : dx > 0 ? high.x() : 0.0;
+            if (gx * gx + gy * gy + gz * gz >= r2) continue;
+            std::uint32_t b, e;
+            if (!cell_range(c + Vec3i(dx, dy, dz), b, e)) continue;
+            for (std::uint32_t q = b; q < e; ++q) {
+              if ((m_points[q] - x).squaredNorm() >= r2) continue;
+              const Index j = m_sorted_index[q];
+              if (exclude_self && j == i) continue;
+              local.push_back(j);
+            }
+          }
+        }
+      }
+      out.offsets[i + 1] = static_cast<std::uint32_t>(local.size() - first);
+    }
+  }
+  for (std::size_t i = 0; i < m; ++i)
+    out.offsets[i + 1] += out.offsets[i];
+  out.indices.reserve(out.offsets[m]);
+  for (const IndexArray& local : buffers)
+    out.indices.insert(out.indices.end(), local.begin(), local.end());
+}
+
+}  // namespace drench

@@ -1,0 +1,73 @@
+#pragma once
+/// Fixed-radius neighbor search on a uniform grid of cells one support radius wide, with cells keyed by
+/// z-order (Morton) codes so that sorting particles by key also sorts them along a space-filling curve.
+
+#include <cstdint>
+
+#include "common/types.hpp"
+
+namespace drench {
+
+/// Neighbors of N query points in compressed rows: the neighbors of point i are
+/// indices[offsets[i] .. offsets[i + 1]), in a deterministic order (by cell, then by source index).
+struct NeighborList {
+  std::vector<std::uint32_t> offsets;  ///< N + 1
+  IndexArray indices;                  ///< indices into the source point set
+
+  std::size_t count(std::size_t i) const { return offsets[i + 1] - offsets[i]; }
+  const Index* begin(std::size_t i) const { return indices.data() + offsets[i]; }
+  const Index* end(std::size_t i) const { return indices.data() + offsets[i + 1]; }
+};
+
+/// Uniform-grid neighbor search. `build` sorts the source points into cells; `find` answers, for every query
+/// point, all source points at distance strictly less than the support radius. When the points' bounding box
+/// holds few enough cells (at most 4 per point), cells live in a dense array filled by a counting sort;
+/// otherwise (a jet spread far) in an open-addressing hash of their Morton keys, so the domain is unbounded
+/// (up to 2^20 cells from the origin on each axis; farther points are clamped into the outermost cells,
+/// which stays correct but slow).
+class NeighborSearch {
+ public:
+  /// @param support_radius  search radius and cell size (unit: m), > 0
+  explicit NeighborSearch(Scalar support_radius);
+
+  Scalar support_radius() const { return m_radius; }
+
+  /// Sorts `points` (N, unit: m, finite) into cells. The points are copied; later calls to `find` use them.
+  void build(const Vec3Array& points);
+
+  /// For each query point, the source points within the support radius.
+  /// @param queries  M points (unit: m, finite)
+  /// @param exclude_self  skip source index i for query i (queries and sources are the same set)
+  void find(const Vec3Array& queries, NeighborList& out, bool exclude_self) const;
+
+  /// Permutation that orders `points` along the z-order curve of their cells (ties by index): new position k
+  /// holds old index order[k].
+  IndexArray z_order(const Vec3Array& points) const;
+
+  /// Morton key of the cell holding `x`.
+  std::uint64_t cell_key(const Vec3& x) const;
+
+ private:
+  std::uint64_t key_of_cell(const Vec3i& cell) const;
+  Vec3i cell_of(const Vec3& x) const;
+  /// Slot of `key` in m_cell_keys, or -1.
+  std::int64_t lookup(std::uint64_t key) const;
+  /// Sorted-point range [begin, end) of a cell; false when the cell is empty or unknown.
+  bool cell_range(const Vec3i& cell, std::uint32_t& begin, std::uint32_t& end) const;
+  void build_dense(const std::vector<Vec3i>& cells, const Vec3i& lo, const Vec3i& dims);
+  void build_hashed(const Vec3Array& points);
+
+  Scalar m_radius;
+  Scalar m_inv_cell;
+  Vec3Array m_points;                       // source points in sorted (cell) order
+  IndexArray m_sorted_index;                // original index of each sorted point
+  std::vector<std::uint64_t> m_cell_keys;   // distinct keys, ascending
+  std::vector<std::uint32_t> m_cell_begin;  // first sorted point of each cell; one extra end entry
+  std::vector<std::int64_t> m_table;        // open-addressing hash: slot -> cell, -1 empty
+  std::uint64_t m_table_mask = 0;
+  bool m_dense = false;
+  Vec3i m_lo = Vec3i::Zero();    // dense mode: first cell of the grid
+  Vec3i m_dims = Vec3i::Zero();  // dense mode: cells per axis
+};
+
+}  // namespace drench

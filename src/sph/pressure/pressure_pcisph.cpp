@@ -1,0 +1,74 @@
+#include "sph/pressure/pressure_pcisph.hpp"
+
+#include <algorithm>
+
+namespace drench {
+
+PressurePcisph::PressurePcisph(const FluidSettings& settings) : m_settings(settings.pcisph) {
+  const Scalar s = settings.particle_spacing;
+  const CubicSplineKernel kernel(s);
+  Vec3 sum_gradient = Vec3::Zero();
+  Scalar sum_squared = 0.0;
+  for (int k = -2; k <= 2; ++k) {
+    for (int j = -2; j <= 2; ++j) {
+      for (int i = -2; i <= 2; ++i) {
+        const Vec3 g = kernel.gradient(-s * Vec3(i, j, k));
+        sum_gradient += g;
+        sum_squared += g.squaredNorm();
+      }
+    }
+  }
+  m_prototype_gradient_term = sum_gradient.squaredNorm() + sum_squared;
+}
+
+PressureStats PressurePcisph::solve(const FluidContext& ctx, const Vec3Array& velocities_adv, Scalar dt,
+                                    Vec3Array& accelerations) {
+  auto& particles = ctx.particles;
+  const std::size_t n = particles.size();
+  const Scalar rho0 = ctx.rest_density;
+  const Scalar mass = rho0 * ctx.particle_spacing * ctx.particle_spacing * ctx.particle_spacing;
+  const Scalar beta = 2.0 * (mass * dt / rho0) * (mass * dt / rho0);
+  const Scalar delta = 1.0 / (beta * m_prototype_gradient_term);
+
+  m_predicted.resize(n);
+  m_error.resize(n);
+  m_p_over_rho2.resize(n);
+  accelerations.resize(n);
+  PressureStats stats;
+  const Scalar inv_rho0_sq = 1.0 / (rho0 * rho0);
+  // Every solve starts from zero pressure, as Solenthaler & Pajarola and SPlisHSPlasH do. A warm start from
+  // the last sub-step's pressures needed 3x fewer iterations in a settled tank, but its leftover
+  // over-pressure kept the corner particles of the tank oscillating at 0.5 m/s (measured), so it is not used.
+  std::fill(particles.pressures.begin(), particles.pressures.end(), 0.0);
+  std::fill(accelerations.begin(), accelerations.end(), Vec3::Zero());
+  while (true) {
+#pragma omp parallel for schedule(static)
+    for (std::size_t i = 0; i < n; ++i) {
+      m_predicted[i] = particles.positions[i] + dt * (velocities_adv[i] + dt * accelerations[i]);
+    }
+#pragma omp parallel for schedule(static)
+    for (std::size_t i = 0; i < n; ++i) {
+      // Only compression is corrected (as SPlisHSPlasH's PCISPH): a free-surface particle lacks neighbours
+      // and its density deficit is no expansion to undo, so pressures only grow within a solve.
+      const Scalar rho = std::max(sph_density(ctx, m_predicted, i), rho0);
+      m_error[i] = rho;
+      particles.pressures[i] += delta * (rho - rho0);
+      m_p_over_rho2[i] = particles.pressures[i] * inv_rho0_sq;
+    }
+#pragma omp parallel for schedule(static)
+    for (std::size_t i = 0; i < n; ++i)
+      accelerations[i] = pressure_acceleration(ctx, m_p_over_rho2, i);
+
+    ++stats.iterations;
+    density_error_stats(m_error, rho0, stats);
+    const bool below = stats.average_density_error <= m_settings.eta;
+    if ((below && stats.iterations >= m_settings.min_iterations) ||
+        stats.iterations >= m_settings.max_iterations) {
+      stats.converged = below;
+      break;
+    }
+  }
+  return stats;
+}
+
+}  // namespace drench

@@ -1,0 +1,29 @@
+#pragma once
+
+#include "sph/pressure/pressure_solver.hpp"
+
+namespace drench {
+
+/// Predictive-corrective incompressible SPH, Solenthaler & Pajarola 2009. Each iteration predicts positions
+/// with the current pressure accelerations, evaluates the predicted density, raises pressures by
+/// delta (rho* - rho0) (eq. 8, pressures clamped at 0 for free surfaces) and recomputes the pressure
+/// accelerations, until the average compression is below eta (as SPlisHSPlasH's maxError) after at least
+/// min_iterations, or max_iterations are spent.
+class PressurePcisph final : public PressureSolver {
+ public:
+  explicit PressurePcisph(const FluidSettings& settings);
+
+  PressureStats solve(const FluidContext& ctx, const Vec3Array& velocities_adv, Scalar dt,
+                      Vec3Array& accelerations) override;
+
+ private:
+  PcisphSettings m_settings;
+  /// sum_j |grad W_ij|^2 + |sum_j grad W_ij|^2 over a prototype particle with a filled lattice neighborhood
+  /// (Solenthaler & Pajarola eq. 8) (unit: 1/m^8)
+  Scalar m_prototype_gradient_term;
+  Vec3Array m_predicted;
+  ScalarArray m_error;
+  ScalarArray m_p_over_rho2;
+};
+
+}  // namespace drench

@@ -1,0 +1,37 @@
+#include "sph/pressure/pressure_wcsph.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace drench {
+
+PressureWcsph::PressureWcsph(const FluidSettings& settings, Scalar speed_of_sound)
+    : m_speed_of_sound(speed_of_sound),
+      m_exponent(settings.wcsph.exponent),
+      m_stiffness(settings.rest_density * speed_of_sound * speed_of_sound / settings.wcsph.exponent) {}
+
+PressureStats PressureWcsph::solve(const FluidContext& ctx, const Vec3Array& /*velocities_adv*/,
+                                   Scalar /*dt*/, Vec3Array& accelerations) {
+  auto& particles = ctx.particles;
+  const std::size_t n = particles.size();
+  m_p_over_rho2.resize(n);
+  accelerations.resize(n);
+  const Scalar rho0 = ctx.rest_density;
+#pragma omp parallel for schedule(static)
+  for (std::size_t i = 0; i < n; ++i) {
+    const Scalar rho = particles.densities[i];
+    const Scalar p = std::max(0.0, m_stiffness * (std::pow(rho / rho0, m_exponent) - 1.0));
+    particles.pressures[i] = p;
+    m_p_over_rho2[i] = p / (rho * rho);
+  }
+#pragma omp parallel for schedule(static)
+  for (std::size_t i = 0; i < n; ++i)
+    accelerations[i] = pressure_acceleration(ctx, m_p_over_rho2, i);
+
+  PressureStats stats;
+  stats.iterations = 1;
+  density_error_stats(particles.densities, rho0, stats);
+  return stats;
+}
+
+}  // namespace drench

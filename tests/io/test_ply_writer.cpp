@@ -1,0 +1,72 @@
+#include <gtest/gtest.h>
+
+#include <cstdint>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "common/error.hpp"
+#include "io/atomic_file.hpp"
+#include "io/ply_writer.hpp"
+
+namespace drench {
+namespace {
+
+TEST(PlyWriter, WritesHeaderAndLittleEndianRecordsThatReadBack) {
+  ParticleSet particles;
+  particles.add(Vec3(1.0, -2.0, 0.5), Vec3(0.25, 0.0, -3.0), 0.001, 7);
+  particles.add(Vec3(0.0, 0.125, 4.0), Vec3(1.0, 2.0, 3.0), 0.001, 4000000000u);
+  particles.densities = {998.5, 1001.0};
+  particles.pressures = {12.5, 0.0};
+  const std::string ply = particles_to_ply(particles);
+
+  const std::string end = "end_header\n";
+  const std::size_t body = ply.find(end);
+  ASSERT_NE(body, std::string::npos);
+  const std::string header = ply.substr(0, body);
+  EXPECT_NE(header.find("format binary_little_endian 1.0"), std::string::npos);
+  EXPECT_NE(header.find("element vertex 2"), std::string::npos);
+  EXPECT_NE(header.find("property uint id"), std::string::npos);
+  const std::size_t record = 8 * 4 + 4;
+  ASSERT_EQ(ply.size(), body + end.size() + 2 * record);
+
+  const char* p = ply.data() + body + end.size() + record;  // second particle
+  float values[8];
+  std::memcpy(values, p, sizeof values);
+  std::uint32_t id;
+  std::memcpy(&id, p + 32, 4);
+  EXPECT_EQ(values[1], 0.125f);
+  EXPECT_EQ(values[2], 4.0f);
+  EXPECT_EQ(values[5], 3.0f);
+  EXPECT_EQ(values[6], 1001.0f);
+  EXPECT_EQ(id, 4000000000u);
+}
+
+TEST(AtomicFile, ReplacesWholeFileAndLeavesNoTemporary) {
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::temp_directory_path() / "drench_atomic_test";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const std::string path = (dir / "summary.json").string();
+  write_file_atomic(path, "old");
+  write_file_atomic(path, "new contents");
+  std::ifstream in(path);
+  std::stringstream text;
+  text << in.rdbuf();
+  EXPECT_EQ(text.str(), "new contents");
+  EXPECT_EQ(std::distance(fs::directory_iterator(dir), fs::directory_iterator()), 1);
+  fs::remove_all(dir);
+}
+
+TEST(AtomicFile, MissingFolderRaisesIoErrorNamingThePath) {
+  try {
+    write_file_atomic("/nonexistent-drench-dir/x.ply", "data");
+    FAIL() << "no exception";
+  } catch (const IoError& e) {
+    EXPECT_NE(std::string(e.what()).find("/nonexistent-drench-dir/x.ply"), std::string::npos) << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace drench

@@ -1,0 +1,861 @@
+#include "scene/scene_loader.hpp"
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <string>
+
+#include "common/error.hpp"
+
+namespace drench {
+namespace {
+
+using nlohmann::json;
+
+/// Passes when `function` throws exactly an `Exception` whose message contains `expected`; on failure the
+/// actual message is shown, which is most of the point of these tests.
+template <class Exception, class Function>
+testing::AssertionResult throws_containing(Function&& function, const std::string& expected) {
+  try {
+    function();
+  } catch (const Exception& e) {
+    const std::string message = e.what();
+    if (message.find(expected) != std::string::npos) return testing::AssertionSuccess();
+    return testing::AssertionFailure()
+           << "message \"" << message << "\" does not contain \"" << expected << "\"";
+  } catch (const std::exception& e) {
+    return testing::AssertionFailure() << "threw another exception type: " << e.what();
+  }
+  return testing::AssertionFailure() << "did not throw";
+}
+
+SceneConfig parse(const std::string& text) {
+  return parse_scene(json::parse(text), "x.json");
+}
+
+testing::AssertionResult scene_error(const std::string& text, const std::string& expected) {
+  return throws_containing<SceneError>([&] { parse(text); }, expected);
+}
+
+testing::AssertionResult override_error(const std::string& text, const std::string& assignment,
+                                        const std::string& expected) {
+  json document = json::parse(text);
+  return throws_containing<SceneError>([&] { apply_override(document, assignment); }, expected);
+}
+
+/// A scene file in the temp directory, named after the running test and this process so parallel ctest runs
+/// do not collide; removed at the end of the test.
+class TempFile {
+ public:
+  explicit TempFile(const std::string& contents) {
+    m_path = testing::TempDir() + "drench_" + testing::UnitTest::GetInstance()->current_test_info()->name() +
+             "_" + std::to_string(::getpid()) + ".json";
+    std::ofstream(m_path, std::ios::binary) << contents;
+  }
+  ~TempFile() { std::remove(m_path.c_str()); }
+  TempFile(const TempFile&) = delete;
+  TempFile& operator=(const TempFile&) = delete;
+  const std::string& path() const { return m_path; }
+
+ private:
+  std::string m_path;
+};
+
+constexpr const char* kFullScene = R"({
+  "gravity": [0, -9.8, 0.5],
+  "fluid": {
+    "rest_density": 998.2,
+    "particle_spacing": 0.02,
+    "pressure_solver": "wcsph",
+    "wcsph": {"speed_of_sound": 30, "exponent": 7},
+    "pcisph": {"eta": 0.01, "min_iterations": 2, "max_iterations": 50},
+    "viscosity": {"method": "artificial", "coefficient": 0.05},
+    "cfl": 0.25,
+    "sort_interval": 20
+  },
+  "emitters": [
+    {"type": "nozzle", "center": [0, 1, 0], "direction": [0, 0, -2], "radius": 0.03, "speed": 2.5,
+     "start_time": 0.1, "max_particles": 5000},
+    {"type": "box", "min": [0, 0, 0], "max": [0.5, 1, 0.5], "velocity": [1, 0, 0]}
+  ],
+  "boundaries": [
+    {"type": "box", "min": [-1, 0, -1], "max": [1, 2, 1], "open_top": true, "layers": 3},
+    {"type": "plane", "point": [0, 0, 0], "normal": [0, 3, 0], "size": [2, 4], "layers": 1}
+  ],
+  "kill_regions": [
+    {"type": "plane", "point": [0, -1, 0], "normal": [0, 0, 5]},
+    {"type": "box", "min": [-5, -5, -5], "max": [5, 5, 5]}
+  ],
+  "time": {"dt": 0.002, "duration": 3, "frame_rate": 60},
+  "effects": ["viscosity"]
+})";
+
+// ---------------------------------------------------------------------------------------------------------
+// Valid scenes
+
+TEST(SceneLoader, ParsesFullSceneIntoEveryMember) {
+  const SceneConfig c = parse(kFullScene);
+  EXPECT_EQ(c.source, "x.json");
+  EXPECT_EQ(c.gravity, Vec3(0, -9.8, 0.5));
+  EXPECT_DOUBLE_EQ(c.fluid.rest_density, 998.2);
+  EXPECT_DOUBLE_EQ(c.fluid.particle_spacing, 0.02);
+  EXPECT_EQ(c.fluid.pressure_solver, PressureSolverKind::WCSPH);
+  ASSERT_TRUE(c.fluid.wcsph.speed_of_sound.has_value());
+  EXPECT_DOUBLE_EQ(*c.fluid.wcsph.speed_of_sound, 30.0);
+  EXPECT_DOUBLE_EQ(c.fluid.wcsph.exponent, 7.0);
+  EXPECT_DOUBLE_EQ(c.fluid.pcisph.eta, 0.01);
+  EXPECT_EQ(c.fluid.pcisph.min_iterations, 2);
+  EXPECT_EQ(c.fluid.pcisph.max_iterations, 50);
+  EXPECT_EQ(c.fluid.viscosity.method, ViscosityKind::ARTIFICIAL);
+  EXPECT_DOUBLE_EQ(c.fluid.viscosity.coefficient, 0.05);
+  EXPECT_DOUBLE_EQ(c.fluid.cfl, 0.25);
+  EXPECT_EQ(c.fluid.sort_interval, 20);
+
+  ASSERT_EQ(c.emitters.size(), 2u);
+  EXPECT_EQ(c.emitters[0].kind, EmitterSettings::Kind::NOZZLE);
+  EXPECT_EQ(c.emitters[0].nozzle.center, Vec3(0, 1, 0));
+  EXPECT_EQ(c.emitters[0].nozzle.direction, Vec3(0, 0, -1));
+  EXPECT_DOUBLE_EQ(c.emitters[0].nozzle.radius, 0.03);
+  EXPECT_DOUBLE_EQ(c.emitters[0].nozzle.speed, 2.5);
+  EXPECT_DOUBLE_EQ(c.emitters[0].nozzle.start_time, 0.1);
+  EXPECT_EQ(c.emitters[0].nozzle.max_particles, 5000);
+  EXPECT_EQ(c.emitters[1].kind, EmitterSettings::Kind::BOX);
+  EXPECT_EQ(c.emitters[1].box.min, Vec3(0, 0, 0));
+  EXPECT_EQ(c.emitters[1].box.max, Vec3(0.5, 1, 0.5));
+  EXPECT_EQ(c.emitters[1].box.velocity, Vec3(1, 0, 0));
+
+  ASSERT_EQ(c.boundaries.size(), 2u);
+  EXPECT_EQ(c.boundaries[0].kind, BoundarySettings::Kind::BOX);
+  EXPECT_EQ(c.boundaries[0].min, Vec3(-1, 0, -1));
+  EXPECT_EQ(c.boundaries[0].max, Vec3(1, 2, 1));
+  EXPECT_TRUE(c.boundaries[0].open_top);
+  EXPECT_EQ(c.boundaries[0].layers, 3);
+  EXPECT_EQ(c.boundaries[1].kind, BoundarySettings::Kind::PLANE);
+  EXPECT_EQ(c.boundaries[1].normal, Vec3(0, 1, 0));
+  EXPECT_DOUBLE_EQ(c.boundaries[1].size[0], 2.0);
+  EXPECT_DOUBLE_EQ(c.boundaries[1].size[1], 4.0);
+  EXPECT_EQ(c.boundaries[1].layers, 1);
+
+  ASSERT_EQ(c.kill_regions.size(), 2u);
+  EXPECT_EQ(c.kill_regions[0].kind, KillRegionSettings::Kind::PLANE);
+  EXPECT_EQ(c.kill_regions[0].point, Vec3(0, -1, 0));
+  EXPECT_EQ(c.kill_regions[0].normal, Vec3(0, 0, 1));
+  EXPECT_EQ(c.kill_regions[1].kind, KillRegionSettings::Kind::BOX);
+  EXPECT_EQ(c.kill_regions[1].min, Vec3(-5, -5, -5));
+  EXPECT_EQ(c.kill_regions[1].max, Vec3(5, 5, 5));
+
+  EXPECT_DOUBLE_EQ(c.time.dt, 0.002);
+  EXPECT_DOUBLE_EQ(c.time.duration, 3.0);
+  EXPECT_DOUBLE_EQ(c.time.frame_rate, 60.0);
+  EXPECT_EQ(c.effects, std::vector<std::string>{"viscosity"});
+  EXPECT_TRUE(c.has_effect("viscosity"));
+}
+
+TEST(SceneLoader, EmptyObjectTakesStructDefaults) {
+  const SceneConfig c = parse("{}");
+  const SceneConfig d;
+  EXPECT_EQ(c.gravity, d.gravity);
+  EXPECT_EQ(c.fluid.rest_density, d.fluid.rest_density);
+  EXPECT_EQ(c.fluid.particle_spacing, d.fluid.particle_spacing);
+  EXPECT_EQ(c.fluid.pressure_solver, d.fluid.pressure_solver);
+  EXPECT_FALSE(c.fluid.wcsph.speed_of_sound.has_value());
+  EXPECT_EQ(c.fluid.pcisph.max_iterations, d.fluid.pcisph.max_iterations);
+  EXPECT_EQ(c.fluid.viscosity.method, d.fluid.viscosity.method);
+  EXPECT_EQ(c.fluid.cfl, d.fluid.cfl);
+  EXPECT_EQ(c.fluid.sort_interval, d.fluid.sort_interval);
+  EXPECT_TRUE(c.emitters.empty());
+  EXPECT_TRUE(c.boundaries.empty());
+  EXPECT_TRUE(c.kill_regions.empty());
+  EXPECT_EQ(c.time.dt, d.time.dt);
+  EXPECT_EQ(c.time.duration, d.time.duration);
+  EXPECT_EQ(c.time.frame_rate, d.time.frame_rate);
+  EXPECT_TRUE(c.effects.empty());
+  EXPECT_FALSE(c.has_effect("viscosity"));
+}
+
+TEST(SceneLoader, AbsentKeysInsideAnElementTakeDefaults) {
+  const SceneConfig c = parse(R"({"emitters": [{"type": "nozzle", "speed": 3}], "fluid": {"cfl": 1}})");
+  const NozzleEmitterSettings d;
+  EXPECT_EQ(c.emitters[0].nozzle.direction, d.direction);
+  EXPECT_EQ(c.emitters[0].nozzle.radius, d.radius);
+  EXPECT_EQ(c.emitters[0].nozzle.max_particles, d.max_particles);
+  EXPECT_DOUBLE_EQ(c.emitters[0].nozzle.speed, 3.0);
+  EXPECT_DOUBLE_EQ(c.fluid.cfl, 1.0);
+  EXPECT_EQ(c.fluid.pcisph.eta, PcisphSettings{}.eta);
+}
+
+TEST(SceneLoader, NormalisesNozzleDirection) {
+  const SceneConfig c = parse(R"({"emitters": [{"type": "nozzle", "direction": [3, 4, 0]}]})");
+  EXPECT_NEAR(c.emitters[0].nozzle.direction.x(), 0.6, 1e-15);
+  EXPECT_NEAR(c.emitters[0].nozzle.direction.y(), 0.8, 1e-15);
+  EXPECT_EQ(c.emitters[0].nozzle.direction.z(), 0.0);
+}
+
+TEST(SceneLoader, NormalisesTinyDirectionWithoutUnderflow) {
+  const SceneConfig c = parse(R"({"emitters": [{"type": "nozzle", "direction": [0, 1e-200, 0]}]})");
+  EXPECT_NEAR(c.emitters[0].nozzle.direction.y(), 1.0, 1e-15);
+}
+
+TEST(SceneLoader, NullSpeedOfSoundMeansAuto) {
+  EXPECT_FALSE(parse(R"({"fluid": {"wcsph": {"speed_of_sound": null}}})").fluid.wcsph.speed_of_sound);
+}
+
+TEST(SceneLoader, AcceptsZeroMaxParticlesAndZeroFrameRate) {
+  const SceneConfig c =
+      parse(R"({"emitters": [{"type": "nozzle", "max_particles": 0}], "time": {"frame_rate": 0}})");
+  EXPECT_EQ(c.emitters[0].nozzle.max_particles, 0);
+  EXPECT_EQ(c.time.frame_rate, 0.0);
+}
+
+TEST(SceneLoader, AcceptsDtEqualToDuration) {
+  EXPECT_EQ(parse(R"({"time": {"dt": 0.5, "duration": 0.5}})").time.dt, 0.5);
+}
+
+TEST(SceneLoader, AcceptsMaxParticlesBeyond32Bits) {
+  EXPECT_EQ(parse(R"({"emitters": [{"type": "nozzle", "max_particles": 5000000000}]})")
+                .emitters[0]
+                .nozzle.max_particles,
+            5000000000);
+}
+
+// ---------------------------------------------------------------------------------------------------------
+// Document-level errors
+
+TEST(SceneLoader, RejectsNonObjectTopLevel) {
+  EXPECT_TRUE(scene_error("[1, 2]", "the scene must be an object, got [1,2] (x.json)"));
+}
+
+TEST(SceneLoader, RejectsUnknownTopLevelKeyListingKnownKeys) {
+  EXPECT_TRUE(scene_error(R"({"gravty": [0, 0, 0]})",
+                          "gravty is not a known key (x.json); known: gravity, fluid, emitters, boundaries, "
+                          "kill_regions, time, effects"));
+}
+
+TEST(SceneLoader, RejectsMisspeltFluidKeyListingKnownKeys) {
+  EXPECT_TRUE(
+      scene_error(R"({"fluid": {"visocsity": {}}})",
+                  "fluid.visocsity is not a known key (x.json); known: rest_density, particle_spacing, "
+                  "pressure_solver, wcsph, pcisph, viscosity, cfl, sort_interval"));
+}
+
+TEST(SceneLoader, RejectsNonFiniteNumberInDocumentBuiltInCode) {
+  json document = {{"time", {{"dt", std::numeric_limits<double>::infinity()}}}};
+  EXPECT_TRUE(throws_containing<SceneError>([&] { parse_scene(document, "code"); },
+                                            "time.dt must be finite, got inf (code)"));
+}
+
+TEST(SceneLoader, RejectsNanInDocumentBuiltInCode) {
+  json document = {{"fluid", {{"cfl", std::nan("")}}}};
+  EXPECT_TRUE(throws_containing<SceneError>([&] { parse_scene(document, "code"); },
+                                            "fluid.cfl must be finite, got nan"));
+}
+
+// ---------------------------------------------------------------------------------------------------------
+// gravity
+
+TEST(SceneLoader, RejectsGravityWithTwoComponents) {
+  EXPECT_TRUE(scene_error(R"({"gravity": [0, -9.81]})",
+                          "gravity must be an array of 3 numbers, got [0,-9.81] (x.json)"));
+}
+
+TEST(SceneLoader, RejectsGravityComponentThatIsNotANumberNamingIndex) {
+  EXPECT_TRUE(
+      scene_error(R"({"gravity": [0, "down", 0]})", "gravity[1] must be a number, got \"down\" (x.json)"));
+}
+
+// ---------------------------------------------------------------------------------------------------------
+// fluid
+
+TEST(SceneLoader, RejectsFluidThatIsNotAnObject) {
+  EXPECT_TRUE(scene_error(R"({"fluid": 3})", "fluid must be an object, got 3 (x.json)"));
+}
+
+TEST(SceneLoader, RejectsNegativeParticleSpacingNamingPathAndValue) {
+  EXPECT_TRUE(scene_error(R"({"fluid": {"particle_spacing": -0.01}})",
+                          "fluid.particle_spacing must be > 0, got -0.01 (x.json)"));
+}
+
+TEST(SceneLoader, RejectsZeroRestDensity) {
+  EXPECT_TRUE(
+      scene_error(R"({"fluid": {"rest_density": 0}})", "fluid.rest_density must be > 0, got 0 (x.json)"));
+}
+
+TEST(SceneLoader, RejectsUnknownPressureSolverListingChoices) {
+  EXPECT_TRUE(
+      scene_error(R"({"fluid": {"pressure_solver": "iisph"}})",
+                  "fluid.pressure_solver must be one of \"pcisph\", \"wcsph\", got \"iisph\" (x.json)"));
+}
+
+TEST(SceneLoader, RejectsPressureSolverThatIsNotAString) {
+  EXPECT_TRUE(scene_error(R"({"fluid": {"pressure_solver": 1}})",
+                          "fluid.pressure_solver must be one of \"pcisph\", \"wcsph\", got 1 (x.json)"));
+}
+
+TEST(SceneLoader, RejectsZeroSpeedOfSound) {
+  EXPECT_TRUE(scene_error(R"({"fluid": {"wcsph": {"speed_of_sound": 0}}})",
+                          "fluid.wcsph.speed_of_sound must be > 0, got 0 (x.json)"));
+}
+
+TEST(SceneLoader, RejectsTaitExponentBelowOne) {
+  EXPECT_TRUE(scene_error(R"({"fluid": {"wcsph": {"exponent": 0.5}}})",
+                          "fluid.wcsph.exponent must be >= 1, got 0.5 (x.json)"));
+}
+
+TEST(SceneLoader, RejectsUnknownWcsphKey) {
+  EXPECT_TRUE(scene_error(R"({"fluid": {"wcsph": {"gamma": 7}}})",
+                          "fluid.wcsph.gamma is not a known key (x.json); known: speed_of_sound, exponent"));
+}
+
+TEST(SceneLoader, RejectsPcisphEtaOfOne) {
+  EXPECT_TRUE(scene_error(R"({"fluid": {"pcisph": {"eta": 1}}})",
+                          "fluid.pcisph.eta must be in (0, 1), got 1 (x.json)"));
+}
+
+TEST(SceneLoader, RejectsZeroPcisphEta) {
+  EXPECT_TRUE(scene_error(R"({"fluid": {"pcisph": {"eta": 0}}})",
+                          "fluid.pcisph.eta must be in (0, 1), got 0 (x.json)"));
+}
+
+TEST(SceneLoader, RejectsZeroMinIterations) {
+  EXPECT_TRUE(scene_error(R"({"fluid": {"pcisph": {"min_iterations": 0}}})",
+                          "fluid.pcisph.min_iterations must be >= 1, got 0 (x.json)"));
+}
+
+TEST(SceneLoader, RejectsMaxIterationsBelowMinIterations) {
+  EXPECT_TRUE(
+      scene_error(R"({"fluid": {"pcisph": {"min_iterations": 5, "max_iterations": 4}}})",
+                  "fluid.pcisph.max_iterations must be >= fluid.pcisph.min_iterations = 5, got 4 (x.json)"));
+}
+
+TEST(SceneLoader, RejectsMinIterationsAboveDefaultMaxOnTheKeyGiven) {
+  EXPECT_TRUE(
+      scene_error(R"({"fluid": {"pcisph": {"min_iterations": 200}}})",
+                  "fluid.pcisph.min_iterations must be <= fluid.pcisph.max_iterations = 100, got 200"));
+}
+
+TEST(SceneLoader, RejectsFractionalIterationCount) {
+  EXPECT_TRUE(scene_error(R"({"fluid": {"pcisph": {"max_iterations": 10.0}}})",
+                          "fluid.pcisph.max_iterations must be an integer, got 10.0 (x.json)"));
+}
+
+TEST(SceneLoader, RejectsUnknownViscosityMethod) {
+  EXPECT_TRUE(scene_error(
+      R"({"fluid": {"viscosity": {"method": "laminar"}}})",
+      "fluid.viscosity.method must be one of \"xsph\", \"artificial\", got \"laminar\" (x.json)"));
+}
+
+TEST(SceneLoader, RejectsNegativeViscosityCoefficient) {
+  EXPECT_TRUE(scene_error(R"({"fluid": {"viscosity": {"coefficient": -0.1}}})",
+                          "fluid.viscosity.coefficient must be >= 0, got -0.1 (x.json)"));
+}
+
+TEST(SceneLoader, RejectsZeroCfl) {
+  EXPECT_TRUE(scene_error(R"({"fluid": {"cfl": 0}})", "fluid.cfl must be in (0, 1], got 0 (x.json)"));
+}
+
+TEST(SceneLoader, RejectsCflAboveOne) {
+  EXPECT_TRUE(scene_error(R"({"fluid": {"cfl": 1.5}})", "fluid.cfl must be in (0, 1], got 1.5 (x.json)"));
+}
+
+TEST(SceneLoader, RejectsZeroSortInterval) {
+  EXPECT_TRUE(
+      scene_error(R"({"fluid": {"sort_interval": 0}})", "fluid.sort_interval must be >= 1, got 0 (x.json)"));
+}
+
+TEST(SceneLoader, RejectsSortIntervalBeyondIntRange) {
+  EXPECT_TRUE(scene_error(R"({"fluid": {"sort_interval": 3000000000}})",
+                          "fluid.sort_interval must be <= 2147483647, got 3000000000 (x.json)"));
+}
+
+TEST(SceneLoader, RejectsSortIntervalGivenAsString) {
+  EXPECT_TRUE(scene_error(R"({"fluid": {"sort_interval": "10"}})",
+                          "fluid.sort_interval must be an integer, got \"10\" (x.json)"));
+}
+
+// ---------------------------------------------------------------------------------------------------------
+// emitters
+
+TEST(SceneLoader, RejectsEmittersThatIsNotAnArray) {
+  EXPECT_TRUE(
+      scene_error(R"({"emitters": {"type": "box"}})", "emitters must be an array, got {\"type\":\"box\"}"));
+}
+
+TEST(SceneLoader, RejectsEmitterThatIsNotAnObject) {
+  EXPECT_TRUE(
+      scene_error(R"({"emitters": ["nozzle"]})", "emitters[0] must be an object, got \"nozzle\" (x.json)"));
+}
+
+TEST(SceneLoader, RejectsEmitterWithoutType) {
+  EXPECT_TRUE(scene_error(R"({"emitters": [{"speed": 1}]})",
+                          "emitters[0].type is missing; must be one of \"nozzle\", \"box\" (x.json)"));
+}
+
+TEST(SceneLoader, RejectsUnknownEmitterTypeNamingIndexAndChoices) {
+  EXPECT_TRUE(scene_error(R"({"emitters": [{"type": "box"}, {"type": "jet"}]})",
+                          "emitters[1].type must be one of \"nozzle\", \"box\", got \"jet\" (x.json)"));
+}
+
+TEST(SceneLoader, RejectsNozzleKeyOnBoxEmitter) {
+  EXPECT_TRUE(scene_error(R"({"emitters": [{"type": "box", "radius": 0.1}]})",
+                          "emitters[0].radius is not a known key (x.json); known: type, min, max, velocity"));
+}
+
+TEST(SceneLoader, RejectsBoxKeyOnNozzleEmitter) {
+  EXPECT_TRUE(
+      scene_error(R"({"emitters": [{"type": "nozzle", "velocity": [0, 0, 0]}]})",
+                  "emitters[0].velocity is not a known key (x.json); known: type, center, direction"));
+}
+
+TEST(SceneLoader, RejectsZeroNozzleDirection) {
+  EXPECT_TRUE(scene_error(R"({"emitters": [{"type": "nozzle", "direction": [0, 0, 0]}]})",
+                          "emitters[0].direction must be non-zero, got [0,0,0] (x.json)"));
+}
+
+TEST(SceneLoader, RejectsZeroNozzleRadius) {
+  EXPECT_TRUE(scene_error(R"({"emitters": [{"type": "nozzle", "radius": 0}]})",
+                          "emitters[0].radius must be > 0, got 0 (x.json)"));
+}
+
+TEST(SceneLoader, RejectsNegativeNozzleSpeed) {
+  EXPECT_TRUE(scene_error(R"({"emitters": [{"type": "nozzle", "speed": -1}]})",
+                          "emitters[0].speed must be > 0, got -1 (x.json)"));
+}
+
+TEST(SceneLoader, RejectsNegativeNozzleStartTime) {
+  EXPECT_TRUE(scene_error(R"({"emitters": [{"type": "nozzle", "start_time": -0.5}]})",
+                          "emitters[0].start_time must be >= 0, got -0.5 (x.json)"));
+}
+
+TEST(SceneLoader, RejectsFractionalMaxParticles) {
+  EXPECT_TRUE(scene_error(R"({"emitters": [{"type": "nozzle", "max_particles": 1.5}]})",
+                          "emitters[0].max_particles must be an integer, got 1.5 (x.json)"));
+}
+
+TEST(SceneLoader, RejectsNegativeMaxParticles) {
+  EXPECT_TRUE(scene_error(R"({"emitters": [{"type": "nozzle", "max_particles": -1}]})",
+                          "emitters[0].max_particles must be >= 0, got -1 (x.json)"));
+}
+
+TEST(SceneLoader, RejectsMaxParticlesBeyondInt64) {
+  EXPECT_TRUE(scene_error(R"({"emitters": [{"type": "nozzle", "max_particles": 18446744073709551615}]})",
+                          "emitters[0].max_particles must be <= 9223372036854775807"));
+}
+
+TEST(SceneLoader, RejectsBoxEmitterWithMaxNotAboveMinOnEveryAxis) {
+  EXPECT_TRUE(
+      scene_error(R"({"emitters": [{"type": "box", "min": [0, 0, 0], "max": [1, 0, 1]}]})",
+                  "emitters[0].max must be > emitters[0].min = [0.0,0.0,0.0] on every axis, got [1,0,1] "
+                  "(x.json)"));
+}
+
+TEST(SceneLoader, RejectsBoxEmitterMinAboveDefaultMaxOnTheKeyGiven) {
+  EXPECT_TRUE(
+      scene_error(R"({"emitters": [{"type": "box", "min": [2, 2, 2]}]})",
+                  "emitters[0].min must be < emitters[0].max = [1.0,1.0,1.0] on every axis, got [2,2,2]"));
+}
+
+TEST(SceneLoader, RejectsBoxEmitterVelocityOfWrongLength) {
+  EXPECT_TRUE(scene_error(R"({"emitters": [{"type": "box", "velocity": [1, 0, 0, 0]}]})",
+                          "emitters[0].velocity must be an array of 3 numbers, got [1,0,0,0] (x.json)"));
+}
+
+// ---------------------------------------------------------------------------------------------------------
+// boundaries
+
+TEST(SceneLoader, RejectsUnknownBoundaryType) {
+  EXPECT_TRUE(scene_error(R"({"boundaries": [{"type": "sphere"}]})",
+                          "boundaries[0].type must be one of \"box\", \"plane\", got \"sphere\" (x.json)"));
+}
+
+TEST(SceneLoader, RejectsBoundaryWithoutType) {
+  EXPECT_TRUE(scene_error(R"({"boundaries": [{"layers": 2}]})",
+                          "boundaries[0].type is missing; must be one of \"box\", \"plane\" (x.json)"));
+}
+
+TEST(SceneLoader, RejectsBoundaryBoxWithMaxNotAboveMin) {
+  EXPECT_TRUE(scene_error(
+      R"({"boundaries": [{"type": "box", "min": [0, 0, 0], "max": [1, 1, -1]}]})",
+      "boundaries[0].max must be > boundaries[0].min = [0.0,0.0,0.0] on every axis, got [1,1,-1]"));
+}
+
+TEST(SceneLoader, RejectsZeroBoundaryLayers) {
+  EXPECT_TRUE(scene_error(R"({"boundaries": [{"type": "box", "layers": 0}]})",
+                          "boundaries[0].layers must be >= 1, got 0 (x.json)"));
+}
+
+TEST(SceneLoader, RejectsOpenTopThatIsNotABoolean) {
+  EXPECT_TRUE(scene_error(R"({"boundaries": [{"type": "box", "open_top": "yes"}]})",
+                          "boundaries[0].open_top must be true or false, got \"yes\" (x.json)"));
+}
+
+TEST(SceneLoader, RejectsPlaneKeyOnBoundaryBox) {
+  EXPECT_TRUE(scene_error(
+      R"({"boundaries": [{"type": "box", "normal": [0, 1, 0]}]})",
+      "boundaries[0].normal is not a known key (x.json); known: type, min, max, open_top, layers"));
+}
+
+TEST(SceneLoader, RejectsZeroBoundaryPlaneNormal) {
+  EXPECT_TRUE(scene_error(R"({"boundaries": [{"type": "plane", "normal": [0, 0, 0]}]})",
+                          "boundaries[0].normal must be non-zero, got [0,0,0] (x.json)"));
+}
+
+TEST(SceneLoader, RejectsBoundaryPlaneSizeWithOneEntry) {
+  EXPECT_TRUE(scene_error(R"({"boundaries": [{"type": "plane", "size": [1]}]})",
+                          "boundaries[0].size must be an array of 2 numbers, got [1] (x.json)"));
+}
+
+TEST(SceneLoader, RejectsZeroBoundaryPlaneSizeNamingIndex) {
+  EXPECT_TRUE(scene_error(R"({"boundaries": [{"type": "plane", "size": [1, 0]}]})",
+                          "boundaries[0].size[1] must be > 0, got 0 (x.json)"));
+}
+
+// ---------------------------------------------------------------------------------------------------------
+// kill_regions
+
+TEST(SceneLoader, RejectsUnknownKillRegionType) {
+  EXPECT_TRUE(scene_error(R"({"kill_regions": [{"type": "sphere"}]})",
+                          "kill_regions[0].type must be one of \"plane\", \"box\", got \"sphere\" (x.json)"));
+}
+
+TEST(SceneLoader, RejectsZeroKillPlaneNormal) {
+  EXPECT_TRUE(scene_error(R"({"kill_regions": [{"type": "plane", "normal": [0, 0, 0]}]})",
+                          "kill_regions[0].normal must be non-zero, got [0,0,0] (x.json)"));
+}
+
+TEST(SceneLoader, RejectsBoxKeyOnKillPlane) {
+  EXPECT_TRUE(scene_error(R"({"kill_regions": [{"type": "plane", "min": [0, 0, 0]}]})",
+                          "kill_regions[0].min is not a known key (x.json); known: type, point, normal"));
+}
+
+TEST(SceneLoader, RejectsKillBoxWithMaxNotAboveMin) {
+  EXPECT_TRUE(scene_error(R"({"kill_regions": [{"type": "box", "min": [0, 0, 0], "max": [0, 1, 1]}]})",
+                          "kill_regions[0].max must be > kill_regions[0].min = [0.0,0.0,0.0] on every axis"));
+}
+
+// ---------------------------------------------------------------------------------------------------------
+// time
+
+TEST(SceneLoader, RejectsTimeStepGivenAsStringSayingNumberExpected) {
+  EXPECT_TRUE(scene_error(R"({"time": {"dt": "fast"}})", "time.dt must be a number, got \"fast\" (x.json)"));
+}
+
+TEST(SceneLoader, RejectsZeroTimeStep) {
+  EXPECT_TRUE(scene_error(R"({"time": {"dt": 0}})", "time.dt must be > 0, got 0 (x.json)"));
+}
+
+TEST(SceneLoader, RejectsNegativeDuration) {
+  EXPECT_TRUE(scene_error(R"({"time": {"duration": -1}})", "time.duration must be > 0, got -1 (x.json)"));
+}
+
+TEST(SceneLoader, RejectsNegativeFrameRate) {
+  EXPECT_TRUE(
+      scene_error(R"({"time": {"frame_rate": -30}})", "time.frame_rate must be >= 0, got -30 (x.json)"));
+}
+
+TEST(SceneLoader, RejectsTimeStepLongerThanDuration) {
+  EXPECT_TRUE(scene_error(R"({"time": {"dt": 0.5, "duration": 0.1}})",
+                          "time.duration must be >= time.dt = 0.5, got 0.1 (x.json)"));
+}
+
+TEST(SceneLoader, RejectsTimeStepLongerThanDefaultDurationOnTheKeyGiven) {
+  EXPECT_TRUE(scene_error(R"({"time": {"dt": 2}})", "time.dt must be <= time.duration = 1, got 2 (x.json)"));
+}
+
+TEST(SceneLoader, RejectsUnknownTimeKey) {
+  EXPECT_TRUE(scene_error(R"({"time": {"fps": 30}})",
+                          "time.fps is not a known key (x.json); known: dt, duration, frame_rate"));
+}
+
+// ---------------------------------------------------------------------------------------------------------
+// effects
+
+TEST(SceneLoader, RejectsUnknownEffectListingKnownEffects) {
+  EXPECT_TRUE(scene_error(R"({"effects": ["viscosity", "magic"]})",
+                          "effects[1] must be one of \"viscosity\", got \"magic\" (x.json)"));
+}
+
+TEST(SceneLoader, RejectsDuplicateEffectListingKnownEffects) {
+  EXPECT_TRUE(scene_error(
+      R"({"effects": ["viscosity", "viscosity"]})",
+      "effects[1] repeats effects[0]; list each of \"viscosity\" at most once, got \"viscosity\""));
+}
+
+TEST(SceneLoader, RejectsEffectsGivenAsString) {
+  EXPECT_TRUE(
+      scene_error(R"({"effects": "viscosity"})", "effects must be an array, got \"viscosity\" (x.json)"));
+}
+
+TEST(SceneLoader, RejectsEffectThatIsNotAString) {
+  EXPECT_TRUE(scene_error(R"({"effects": [1]})", "effects[0] must be a string, got 1 (x.json)"));
+}
+
+TEST(SceneLoader, ShortensHugeValuesInMessages) {
+  const std::string long_name(200, 'a');
+  EXPECT_TRUE(scene_error(R"({"effects": [")" + long_name + R"("]})",
+                          "got \"" + std::string(76, 'a') + "... (x.json)"));
+}
+
+// ---------------------------------------------------------------------------------------------------------
+// Overrides
+
+TEST(SceneOverride, SetsNestedNumber) {
+  json document = json::parse(kFullScene);
+  apply_override(document, "time.dt=0.004");
+  EXPECT_DOUBLE_EQ(parse_scene(document, "x.json").time.dt, 0.004);
+}
+
+TEST(SceneOverride, SetsArrayElementWithBrackets) {
+  json document = json::parse(kFullScene);
+  apply_override(document, "emitters[0].speed=5");
+  EXPECT_DOUBLE_EQ(parse_scene(document, "x.json").emitters[0].nozzle.speed, 5.0);
+}
+
+TEST(SceneOverride, SetsArrayElementWithDottedIndex) {
+  json document = json::parse(kFullScene);
+  apply_override(document, "emitters.0.speed=5");
+  EXPECT_DOUBLE_EQ(parse_scene(document, "x.json").emitters[0].nozzle.speed, 5.0);
+}
+
+TEST(SceneOverride, ReplacesWholeArrayElement) {
+  json document = json::parse(kFullScene);
+  apply_override(document, R"(emitters[1]={"type":"nozzle"})");
+  EXPECT_EQ(parse_scene(document, "x.json").emitters[1].kind, EmitterSettings::Kind::NOZZLE);
+}
+
+TEST(SceneOverride, SetsArrayValueFromJson) {
+  json document = json::parse("{}");
+  apply_override(document, R"(effects=["viscosity"])");
+  EXPECT_TRUE(parse_scene(document, "x.json").has_effect("viscosity"));
+}
+
+TEST(SceneOverride, TakesInvalidJsonValueAsString) {
+  json document = json::parse("{}");
+  apply_override(document, "fluid.pressure_solver=wcsph");
+  EXPECT_EQ(document["fluid"]["pressure_solver"], "wcsph");
+  EXPECT_EQ(parse_scene(document, "x.json").fluid.pressure_solver, PressureSolverKind::WCSPH);
+}
+
+TEST(SceneOverride, CreatesMissingIntermediateObjects) {
+  json document = json::parse("{}");
+  apply_override(document, "fluid.pcisph.eta=0.02");
+  EXPECT_DOUBLE_EQ(parse_scene(document, "x.json").fluid.pcisph.eta, 0.02);
+}
+
+TEST(SceneOverride, AddsNewKeyToExistingObject) {
+  json document = json::parse(R"({"fluid": {"cfl": 0.3}})");
+  apply_override(document, "fluid.sort_interval=4");
+  const SceneConfig c = parse_scene(document, "x.json");
+  EXPECT_DOUBLE_EQ(c.fluid.cfl, 0.3);
+  EXPECT_EQ(c.fluid.sort_interval, 4);
+}
+
+TEST(SceneOverride, LaterAssignmentWins) {
+  json document = json::parse("{}");
+  apply_override(document, "time.dt=0.01");
+  apply_override(document, "time.dt=0.02");
+  EXPECT_DOUBLE_EQ(parse_scene(document, "x.json").time.dt, 0.02);
+}
+
+TEST(SceneOverride, ValueMayContainEqualsSign) {
+  json document = json::parse("{}");
+  apply_override(document, "note=a=b");
+  EXPECT_EQ(document["note"], "a=b");
+}
+
+TEST(SceneOverride, NullResetsSpeedOfSoundToAuto) {
+  json document = json::parse(kFullScene);
+  apply_override(document, "fluid.wcsph.speed_of_sound=null");
+  EXPECT_FALSE(parse_scene(document, "x.json").fluid.wcsph.speed_of_sound.has_value());
+}
+
+TEST(SceneOverride, RejectsAssignmentWithoutEquals) {
+  EXPECT_TRUE(override_error("{}", "foo", "--set foo: expected json.path=value"));
+}
+
+TEST(SceneOverride, RejectsEmptyPath) {
+  EXPECT_TRUE(override_error("{}", "=5", "--set =5: expected json.path=value"));
+}
+
+TEST(SceneOverride, RejectsMalformedPath) {
+  EXPECT_TRUE(override_error("{}", "time..dt=1", "--set time..dt=1: malformed path \"time..dt\""));
+}
+
+TEST(SceneOverride, RejectsNonNumericBracketIndex) {
+  EXPECT_TRUE(override_error(kFullScene, "emitters[x].speed=1", "--set emitters[x].speed=1: malformed path"));
+}
+
+TEST(SceneOverride, RejectsArrayIndexPastTheEnd) {
+  EXPECT_TRUE(override_error(R"({"emitters": [{"type": "box"}]})", "emitters[3].speed=5",
+                             "--set emitters[3].speed=5: emitters has 1 element(s)"));
+}
+
+TEST(SceneOverride, RejectsDottedIndexPastTheEnd) {
+  EXPECT_TRUE(override_error(R"({"emitters": []})", "emitters.0.speed=5",
+                             "--set emitters.0.speed=5: emitters has 0 element(s)"));
+}
+
+TEST(SceneOverride, RejectsIndexIntoMissingArray) {
+  EXPECT_TRUE(
+      override_error("{}", "emitters[0].speed=5",
+                     "--set emitters[0].speed=5: emitters is missing; --set creates objects but not arrays"));
+}
+
+TEST(SceneOverride, RejectsIndexIntoObject) {
+  EXPECT_TRUE(
+      override_error(R"({"fluid": {}})", "fluid[0]=1", "--set fluid[0]=1: fluid is an object, not an array"));
+}
+
+TEST(SceneOverride, RejectsKeyIntoArray) {
+  EXPECT_TRUE(
+      override_error(kFullScene, "emitters.speed=1",
+                     "--set emitters.speed=1: emitters is an array; expected an index, e.g. emitters[0]"));
+}
+
+TEST(SceneOverride, RejectsPathThroughNumber) {
+  EXPECT_TRUE(override_error(R"({"time": {"dt": 0.004}})", "time.dt.x=1",
+                             "--set time.dt.x=1: time.dt is not an object or array, got 0.004"));
+}
+
+TEST(SceneOverride, RejectsInvalidUtf8) {
+  EXPECT_TRUE(override_error("{}", "note=\xff", "not valid UTF-8"));
+}
+
+TEST(SceneOverride, BadValueFailsWithSameValidationAsFile) {
+  json document = json::parse(kFullScene);
+  apply_override(document, "fluid.particle_spacing=-0.01");
+  EXPECT_TRUE(throws_containing<SceneError>([&] { parse_scene(document, "x.json"); },
+                                            "fluid.particle_spacing must be > 0, got -0.01 (x.json)"));
+}
+
+TEST(SceneOverride, MisspeltKeyIsReportedAsUnknown) {
+  json document = json::parse("{}");
+  apply_override(document, "fluid.visocsity=1");
+  EXPECT_TRUE(
+      throws_containing<SceneError>([&] { parse_scene(document, "x.json"); },
+                                    "fluid.visocsity is not a known key (x.json); known: rest_density"));
+}
+
+// ---------------------------------------------------------------------------------------------------------
+// Files
+
+TEST(SceneFile, LoadsSceneFromFile) {
+  const TempFile file(kFullScene);
+  const SceneConfig c = load_scene_file(file.path());
+  EXPECT_EQ(c.source, file.path());
+  EXPECT_EQ(c.emitters.size(), 2u);
+}
+
+TEST(SceneFile, AppliesOverridesAndNamesThemInSource) {
+  const TempFile file(kFullScene);
+  const SceneConfig c = load_scene_file(file.path(), {"time.dt=0.001", "emitters[0].speed=4"});
+  EXPECT_DOUBLE_EQ(c.time.dt, 0.001);
+  EXPECT_DOUBLE_EQ(c.emitters[0].nozzle.speed, 4.0);
+  EXPECT_EQ(c.source, file.path() + " with --set time.dt=0.001 --set emitters[0].speed=4");
+}
+
+TEST(SceneFile, RejectsBadOverrideValueNamingFileAndOverrides) {
+  const TempFile file(kFullScene);
+  EXPECT_TRUE(
+      throws_containing<SceneError>([&] { load_scene_file(file.path(), {"fluid.particle_spacing=-1"}); },
+                                    "fluid.particle_spacing must be > 0, got -1 (" + file.path() +
+                                        " with --set fluid.particle_spacing=-1)"));
+}
+
+TEST(SceneFile, RejectsOverflowingOverrideAsNonFinite) {
+  const TempFile file(kFullScene);
+  EXPECT_TRUE(
+      throws_containing<SceneError>([&] { load_scene_file(file.path(), {"time.dt=1e999"}); },
+                                    "time.dt must be finite, got inf (" + file.path() + " with --set"));
+}
+
+TEST(SceneFile, RejectsOverridePastArrayEndNamingFile) {
+  const TempFile file(R"({"emitters": [{"type": "box"}]})");
+  EXPECT_TRUE(throws_containing<SceneError>(
+      [&] { load_scene_file(file.path(), {"emitters[3].speed=5"}); },
+      "--set emitters[3].speed=5: emitters has 1 element(s) (" + file.path() + ")"));
+}
+
+TEST(SceneFile, MissingFileThrowsIoErrorNamingPath) {
+  const std::string path = testing::TempDir() + "drench_no_such_scene.json";
+  EXPECT_TRUE(throws_containing<IoError>([&] { load_scene_file(path); },
+                                         path + ": cannot read scene file: No such file or directory"));
+}
+
+TEST(SceneFile, DirectoryThrowsIoErrorNamingPath) {
+  const std::string path = testing::TempDir();
+  EXPECT_TRUE(
+      throws_containing<IoError>([&] { read_scene_document(path); }, path + ": cannot read scene file"));
+}
+
+TEST(SceneFile, MalformedJsonReportsLineAndColumn) {
+  const TempFile file("{\n  \"time\": {\"dt\": 0.1,}\n}\n");
+  EXPECT_TRUE(
+      throws_containing<SceneError>([&] { load_scene_file(file.path()); },
+                                    file.path() + ": malformed JSON at line 2, column 22: syntax error"));
+}
+
+TEST(SceneFile, MalformedJsonPositionAgreesWithParser) {
+  const std::string text = "{\n\"a\": [1,\n 2,,3]}";
+  const TempFile file(text);
+  std::string parser_position;
+  json unused;
+  try {
+    unused = json::parse(text);
+  } catch (const json::parse_error& e) {
+    const std::string what = e.what();
+    parser_position =
+        what.substr(what.find("line "), what.find(':', what.find("line ")) - what.find("line "));
+  }
+  EXPECT_EQ(parser_position, "line 3, column 4");
+  EXPECT_TRUE(throws_containing<SceneError>([&] { load_scene_file(file.path()); },
+                                            "malformed JSON at " + parser_position + ": "));
+}
+
+TEST(SceneFile, EmptyFileIsMalformedAtLineOneColumnOne) {
+  const TempFile file("");
+  EXPECT_TRUE(throws_containing<SceneError>([&] { load_scene_file(file.path()); },
+                                            file.path() + ": malformed JSON at line 1, column 1: "));
+}
+
+TEST(SceneFile, NumberOverflowInFileIsMalformed) {
+  const TempFile file(R"({"time": {"dt": 1e999}})");
+  EXPECT_TRUE(throws_containing<SceneError>([&] { load_scene_file(file.path()); },
+                                            file.path() + ": malformed JSON: number overflow"));
+}
+
+TEST(SceneFile, ReadDocumentAppliesOverridesWithoutValidating) {
+  const TempFile file(R"({"time": {"dt": 0.01}})");
+  const json document = read_scene_document(file.path(), {"time.dt=-5", "fluid.bogus=1"});
+  EXPECT_EQ(document["time"]["dt"], -5);
+  EXPECT_EQ(document["fluid"]["bogus"], 1);
+}
+
+// ---------------------------------------------------------------------------------------------------------
+// Canonical text and hashing
+
+TEST(SceneHash, CanonicalTextSortsKeysWithoutSpaces) {
+  const json document = json::parse(R"({"time": {"duration": 2, "dt": 0.5}, "effects": ["viscosity"]})");
+  EXPECT_EQ(canonical_scene_text(document), R"({"effects":["viscosity"],"time":{"dt":0.5,"duration":2}})");
+}
+
+TEST(SceneHash, CanonicalTextIgnoresFormattingAndKeyOrder) {
+  const json a = json::parse(R"({"b": 1, "a": [1, 2]})");
+  const json b = json::parse("{\n  \"a\": [1,2],\n  \"b\": 1\n}");
+  EXPECT_EQ(canonical_scene_text(a), canonical_scene_text(b));
+}
+
+TEST(SceneHash, Sha256OfAbcMatchesStandardVector) {
+  EXPECT_EQ(sha256_hex("abc"), "ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad");
+}
+
+TEST(SceneHash, Sha256OfEmptyStringMatchesStandardVector) {
+  EXPECT_EQ(sha256_hex(""), "e3b0c44298fc1c149afbf4c8996fb92427ae41e4649b934ca495991b7852b855");
+}
+
+}  // namespace
+}  // namespace drench

@@ -1,0 +1,88 @@
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+#include "sph/cubic_spline_kernel.hpp"
+
+namespace drench {
+namespace {
+
+TEST(CubicSplineKernel, SumOfValueTimesVolumeOverLatticeIsOne) {
+  // A particle inside a regular lattice of spacing s sees the kernel integrate to one: sum_j W_ij s^3 = 1.
+  for (const Scalar s : {0.005, 0.05, 1.0}) {
+    const CubicSplineKernel kernel(s);
+    Scalar sum = 0.0;
+    for (int k = -3; k <= 3; ++k)
+      for (int j = -3; j <= 3; ++j)
+        for (int i = -3; i <= 3; ++i)
+          sum += kernel.value(s * Vec3(i, j, k).norm()) * s * s * s;
+    EXPECT_NEAR(sum, 1.0, 0.005) << "spacing " << s;
+  }
+}
+
+TEST(CubicSplineKernel, SumOfGradientOverLatticeIsZero) {
+  const Scalar s = 0.02;
+  const CubicSplineKernel kernel(s);
+  Vec3 sum = Vec3::Zero();
+  Scalar magnitude = 0.0;
+  for (int k = -3; k <= 3; ++k)
+    for (int j = -3; j <= 3; ++j)
+      for (int i = -3; i <= 3; ++i) {
+        const Vec3 g = kernel.gradient(-s * Vec3(i, j, k));
+        sum += g;
+        magnitude += g.norm();
+      }
+  EXPECT_LT(sum.norm(), 1e-12 * magnitude);
+}
+
+TEST(CubicSplineKernel, IntegratesToOneOverItsSupport) {
+  // Radial quadrature of 4 pi r^2 W(r) over [0, 2h].
+  const CubicSplineKernel kernel(0.1);
+  const int n = 20000;
+  const Scalar dr = kernel.support_radius() / n;
+  Scalar integral = 0.0;
+  for (int i = 0; i < n; ++i) {
+    const Scalar r = (i + 0.5) * dr;
+    integral += 4.0 * M_PI * r * r * kernel.value(r) * dr;
+  }
+  EXPECT_NEAR(integral, 1.0, 1e-6);
+}
+
+TEST(CubicSplineKernel, GradientMatchesCentralFiniteDifferences) {
+  const Scalar h = 0.05;
+  const CubicSplineKernel kernel(h);
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<Scalar> coord(-2.1 * h, 2.1 * h);
+  const Scalar eps = 1e-7 * h;
+  int checked = 0;
+  for (int trial = 0; trial < 2000; ++trial) {
+    const Vec3 r(coord(rng), coord(rng), coord(rng));
+    const Scalar dist = r.norm();
+    // Skip the neighbourhood of the kink-free but curvature-changing points, where differencing is worst.
+    if (dist < 1e-3 * h || std::abs(dist - h) < 1e-4 * h || std::abs(dist - 2 * h) < 1e-4 * h) continue;
+    Vec3 fd;
+    for (int a = 0; a < 3; ++a) {
+      Vec3 plus = r, minus = r;
+      plus[a] += eps;
+      minus[a] -= eps;
+      fd[a] = (kernel.value(plus.norm()) - kernel.value(minus.norm())) / (2 * eps);
+    }
+    const Vec3 g = kernel.gradient(r);
+    // Relative to the kernel's gradient scale 1 / (pi h^4).
+    EXPECT_LT((g - fd).norm(), 1e-6 / (M_PI * std::pow(h, 4))) << "r = " << r.transpose();
+    ++checked;
+  }
+  EXPECT_GT(checked, 1500);
+}
+
+TEST(CubicSplineKernel, VanishesAtAndBeyondSupportRadius) {
+  const CubicSplineKernel kernel(0.01);
+  EXPECT_EQ(kernel.value(0.02), 0.0);
+  EXPECT_EQ(kernel.value(0.05), 0.0);
+  EXPECT_TRUE(kernel.gradient(Vec3(0.02, 0, 0)).isZero());
+  EXPECT_GT(kernel.value(0.0199), 0.0);
+}
+
+}  // namespace
+}  // namespace drench

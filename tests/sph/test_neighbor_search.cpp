@@ -1,0 +1,98 @@
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <random>
+
+#include "sph/neighbor_search.hpp"
+
+namespace drench {
+namespace {
+
+std::vector<IndexArray> brute_force(const Vec3Array& queries, const Vec3Array& sources, Scalar radius,
+                                    bool exclude_self) {
+  std::vector<IndexArray> result(queries.size());
+  for (std::size_t i = 0; i < queries.size(); ++i) {
+    for (std::size_t j = 0; j < sources.size(); ++j) {
+      if (exclude_self && i == j) continue;
+      if ((queries[i] - sources[j]).squaredNorm() < radius * radius)
+        result[i].push_back(static_cast<Index>(j));
+    }
+  }
+  return result;
+}
+
+void expect_same_sets(const NeighborList& list, const std::vector<IndexArray>& expected) {
+  ASSERT_EQ(list.offsets.size(), expected.size() + 1);
+  for (std::size_t i = 0; i < expected.size(); ++i) {
+    IndexArray got(list.begin(i), list.end(i));
+    std::sort(got.begin(), got.end());
+    ASSERT_EQ(got, expected[i]) << "query " << i;
+  }
+}
+
+Vec3Array random_points(std::size_t n, const Vec3& lo, const Vec3& hi, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<Scalar> u(0.0, 1.0);
+  Vec3Array points(n);
+  for (auto& p : points)
+    p = lo + (hi - lo).cwiseProduct(Vec3(u(rng), u(rng), u(rng)));
+  return points;
+}
+
+TEST(NeighborSearch, SelfQueryMatchesBruteForceOnRandomSets) {
+  for (unsigned seed = 1; seed <= 5; ++seed) {
+    const Vec3Array points = random_points(1500, Vec3(-0.3, -0.2, -0.1), Vec3(0.2, 0.3, 0.4), seed);
+    const Scalar radius = 0.05;
+    NeighborSearch search(radius);
+    search.build(points);
+    NeighborList list;
+    search.find(points, list, /*exclude_self=*/true);
+    expect_same_sets(list, brute_force(points, points, radius, true));
+  }
+}
+
+TEST(NeighborSearch, CrossQueryMatchesBruteForceIncludingNegativeAndFarCoordinates) {
+  // Sources around a point far from the origin: cells there have large Morton keys.
+  const Vec3Array sources = random_points(800, Vec3(990, -1010, 5), Vec3(990.5, -1009.5, 5.5), 11);
+  const Vec3Array queries = random_points(600, Vec3(989.9, -1010.1, 4.9), Vec3(990.6, -1009.4, 5.6), 12);
+  const Scalar radius = 0.08;
+  NeighborSearch search(radius);
+  search.build(sources);
+  NeighborList list;
+  search.find(queries, list, /*exclude_self=*/false);
+  expect_same_sets(list, brute_force(queries, sources, radius, false));
+}
+
+TEST(NeighborSearch, PointsExactlyAtTheRadiusAreNotNeighbors) {
+  const Vec3Array points = {Vec3(0, 0, 0), Vec3(0.1, 0, 0), Vec3(0, 0.0999999, 0)};
+  NeighborSearch search(0.1);
+  search.build(points);
+  NeighborList list;
+  search.find(points, list, true);
+  EXPECT_EQ(list.count(0), 1u);
+  EXPECT_EQ(*list.begin(0), 2u);
+}
+
+TEST(NeighborSearch, ZOrderIsAPermutationGroupingEachCell) {
+  const Vec3Array points = random_points(3000, Vec3(0, 0, 0), Vec3(1, 1, 1), 3);
+  NeighborSearch search(0.1);
+  const IndexArray order = search.z_order(points);
+  IndexArray sorted = order;
+  std::sort(sorted.begin(), sorted.end());
+  for (std::size_t k = 0; k < sorted.size(); ++k)
+    ASSERT_EQ(sorted[k], k);
+  for (std::size_t k = 1; k < order.size(); ++k) {
+    ASSERT_LE(search.cell_key(points[order[k - 1]]), search.cell_key(points[order[k]]));
+  }
+}
+
+TEST(NeighborSearch, EmptySourceSetGivesNoNeighbors) {
+  NeighborSearch search(0.1);
+  search.build({});
+  NeighborList list;
+  search.find({Vec3::Zero()}, list, false);
+  EXPECT_EQ(list.count(0), 0u);
+}
+
+}  // namespace
+}  // namespace drench
