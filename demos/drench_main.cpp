@@ -20,7 +20,8 @@ int run_command(const std::string& scene_path, const std::string& out_dir,
                 const std::vector<std::string>& overrides, std::int64_t steps, bool quiet) {
   // Everything is validated before the output folder is touched: a bad scene writes nothing.
   const nlohmann::json document = drench::read_scene_document(scene_path, overrides);
-  const drench::SceneConfig config = drench::load_scene_file(scene_path, overrides);
+  const drench::SceneConfig config =
+      drench::parse_scene(document, drench::scene_source(scene_path, overrides));
   drench::Simulation simulation(config);
 
   drench::RunOptions options;

@@ -573,12 +573,16 @@ nlohmann::json read_scene_document(const std::string& path, const std::vector<st
   return document;
 }
 
-SceneConfig load_scene_file(const std::string& path, const std::vector<std::string>& overrides) {
+std::string scene_source(const std::string& path, const std::vector<std::string>& overrides) {
   std::string source = path;
   if (!overrides.empty()) source += " with";
   for (const std::string& assignment : overrides)
     source += " --set " + assignment;
-  return parse_scene(read_scene_document(path, overrides), source);
+  return source;
+}
+
+SceneConfig load_scene_file(const std::string& path, const std::vector<std::string>& overrides) {
+  return parse_scene(read_scene_document(path, overrides), scene_source(path, overrides));
 }
 
 std::string sha256_hex(const std::string& bytes) {

@@ -20,6 +20,9 @@ namespace drench {
 ///         message names the file (and the override), the JSON path and the value.
 SceneConfig load_scene_file(const std::string& path, const std::vector<std::string>& overrides = {});
 
+/// How errors name a scene read from `path` with `overrides`: `<path> with --set a=1 --set b=2`.
+std::string scene_source(const std::string& path, const std::vector<std::string>& overrides);
+
 /// Validates an already parsed scene document. `source` names it in error messages.
 /// @throws SceneError as load_scene_file.
 SceneConfig parse_scene(const nlohmann::json& document, const std::string& source);

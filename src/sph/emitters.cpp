@@ -50,8 +50,10 @@ std::size_t NozzleEmitter::emit(Scalar t, Scalar dt, Scalar mass, ParticleSet& p
   while (m_emitted < m_settings.max_particles) {
     const Scalar release = m_settings.start_time + m_layers * layer_period;
     if (release > t_end) break;
-    // Released before the end of this step: it has travelled for the remainder of the step.
-    const Vec3 centre = m_settings.center + (t_end - release) * velocity;
+    // Placed where it would be at the start of the step had it left the nozzle at `release`, i.e. still
+    // upstream inside the nozzle when release > t: the fluid step that follows carries it to its place at
+    // t + dt, so layers end one spacing apart whatever dt is.
+    const Vec3 centre = m_settings.center + (t - release) * velocity;
     for (const Vec3& offset : m_disc) {
       if (m_emitted >= m_settings.max_particles) break;
       particles.add(centre + offset, velocity, mass, next_id++);

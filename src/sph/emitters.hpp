@@ -17,13 +17,15 @@ std::size_t emit_box(const BoxEmitterSettings& box, Scalar spacing, Scalar mass,
 
 /// A circular jet. Each time the fluid leaving the nozzle has advanced one spacing, a disc of particles
 /// (square lattice of spacing s clipped to the radius) is released at the nozzle, moving at `speed` along
-/// `direction`, and pushed ahead by the part of the step that elapsed since its release, so that layers stay
-/// one spacing apart whatever dt is. Emission stops at the particle budget, mid-disc if need be.
+/// `direction`. A disc released at time r inside the step (t, t + dt] is placed at centre + (t - r) v, upstream of
+/// the nozzle, so that the step's integration carries it to centre + (t + dt - r) v: layers stay one spacing
+/// apart whatever dt is. Emission stops at the particle budget, mid-disc if need be.
 class NozzleEmitter {
  public:
   NozzleEmitter(const NozzleEmitterSettings& settings, Scalar spacing);
 
-  /// Emits the layers due in the step (t, t + dt] (unit: s); returns particles added.
+  /// Emits the layers due in the step (t, t + dt] (unit: s), placed for the start of the step; returns
+  /// particles added. Call before the fluid advances by dt.
   std::size_t emit(Scalar t, Scalar dt, Scalar mass, ParticleSet& particles, std::uint32_t& next_id);
 
   std::int64_t emitted() const { return m_emitted; }

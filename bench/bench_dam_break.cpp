@@ -1,0 +1,94 @@
+// The reference dam break of issue 2, chosen to compare with SPlisHSPlasH 2.16: a water block at one end of a
+// 4 x 3 x 1.5 m box, rest density 1000, XSPH viscosity 0.01, PCISPH average density error 0.05%.
+// The block is 0.95 m (spacing 0.05) or 0.975 m (spacing 0.025) on a side so that it holds 19^3 = 6,859 and
+// 39^3 = 59,319 particles, the counts SPlisHSPlasH samples its 1 m block with.
+//
+//   build-bench/bench/bench_dam_break --benchmark_out=bench/results/<machine>/dam_break.csv \
+//       --benchmark_out_format=csv [--benchmark_filter=...]
+// Thread count: OMP_NUM_THREADS (the README's numbers: 1 and 2).
+
+#include <benchmark/benchmark.h>
+#include <omp.h>
+#include <sys/resource.h>
+
+#include <chrono>
+#include <string>
+
+#include "scene/scene_loader.hpp"
+#include "scene/simulation.hpp"
+
+namespace {
+
+drench::SceneConfig reference_dam_break(double spacing, const std::string& solver) {
+  const double block = spacing > 0.04 ? 0.95 : spacing > 0.02 ? 0.975 : 1.0;
+  const double dt = spacing > 0.04 ? 0.005 : 0.0025;
+  return drench::load_scene_file(std::string(DRENCH_SOURCE_DIR) + "/demos/scenes/dam_break.json",
+                                 {"fluid.particle_spacing=" + std::to_string(spacing),
+                                  "fluid.pressure_solver=" + solver, "fluid.pcisph.eta=0.0005",
+                                  "emitters[0].max=[" + std::to_string(block) + "," + std::to_string(block) +
+                                      "," + std::to_string(block) + "]",
+                                  "time.dt=" + std::to_string(dt), "time.frame_rate=0"});
+}
+
+/// Runs `sim_seconds` of the dam break once and reports per-step figures as counters.
+void run(benchmark::State& state, double spacing, const std::string& solver, double sim_seconds) {
+  const drench::SceneConfig config = reference_dam_break(spacing, solver);
+  for (auto _ : state) {
+    drench::Simulation sim(config);
+    const auto start = std::chrono::steady_clock::now();
+    const auto steps = static_cast<std::int64_t>(sim_seconds / config.time.dt + 0.5);
+    for (std::int64_t s = 0; s < steps; ++s) {
+      if (!sim.step().ok()) {
+        state.SkipWithError("non-finite state");
+        return;
+      }
+    }
+    const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    state.SetIterationTime(wall);
+    const auto& f = sim.fluid().statistics();
+    const double n = static_cast<double>(sim.particles().size());
+    state.counters["particles"] = n;
+    state.counters["threads"] = omp_get_max_threads();
+    state.counters["ms_per_step"] = 1e3 * wall / steps;
+    state.counters["particle_steps_per_s"] = n * steps / wall;
+    state.counters["particle_substeps_per_s"] = n * f.substeps / wall;
+    state.counters["substeps_per_step"] = static_cast<double>(f.substeps) / steps;
+    state.counters["pressure_iterations_per_substep"] =
+        static_cast<double>(f.pressure_iterations) / f.substeps;
+    state.counters["density_error_mean_pct"] = 100 * f.density_error_sum / f.substeps;
+    state.counters["density_error_max_pct"] = 100 * f.density_error_max;
+    state.counters["wall_s_per_sim_s"] = wall / (steps * config.time.dt);
+    state.counters["neighbors_share"] = f.timings_s.neighbors / f.timings_s.total;
+    state.counters["boundary_guards_per_step"] = static_cast<double>(f.boundary_guards) / steps;
+    rusage usage{};
+    getrusage(RUSAGE_SELF, &usage);
+    state.counters["peak_rss_mb"] = usage.ru_maxrss / 1024.0;
+  }
+}
+
+void pcisph_6k9(benchmark::State& s) {
+  run(s, 0.05, "pcisph", 1.0);
+}
+void pcisph_59k(benchmark::State& s) {
+  run(s, 0.025, "pcisph", 0.5);
+}
+void wcsph_6k9(benchmark::State& s) {
+  run(s, 0.05, "wcsph", 0.25);
+}
+void wcsph_59k(benchmark::State& s) {
+  run(s, 0.025, "wcsph", 0.1);
+}
+// 1M particles (1 m block at 0.01 m), 100 steps: the memory and scaling check.
+void pcisph_1m(benchmark::State& s) {
+  run(s, 0.01, "pcisph", 0.25);
+}
+
+}  // namespace
+
+BENCHMARK(pcisph_6k9)->Unit(benchmark::kSecond)->UseManualTime()->Iterations(1);
+BENCHMARK(pcisph_59k)->Unit(benchmark::kSecond)->UseManualTime()->Iterations(1);
+BENCHMARK(wcsph_6k9)->Unit(benchmark::kSecond)->UseManualTime()->Iterations(1);
+BENCHMARK(wcsph_59k)->Unit(benchmark::kSecond)->UseManualTime()->Iterations(1);
+BENCHMARK(pcisph_1m)->Unit(benchmark::kSecond)->UseManualTime()->Iterations(1);
+
+BENCHMARK_MAIN();

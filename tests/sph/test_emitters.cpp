@@ -1,0 +1,118 @@
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <set>
+
+#include "scene/simulation.hpp"
+#include "sph/emitters.hpp"
+
+namespace drench {
+namespace {
+
+TEST(BoxEmitter, FillsTheBoxWithALatticeWhoseVolumesTileIt) {
+  BoxEmitterSettings box;
+  box.min = Vec3(-0.1, 0.0, 0.2);
+  box.max = Vec3(0.85, 0.95, 1.15);
+  ParticleSet particles;
+  std::uint32_t next_id = 5;
+  EXPECT_EQ(emit_box(box, 0.05, 0.125, particles, next_id), 19u * 19u * 19u);
+  EXPECT_EQ(next_id, 5u + 19u * 19u * 19u);
+  for (const Vec3& x : particles.positions) {
+    EXPECT_TRUE((x.array() > box.min.array()).all() && (x.array() < box.max.array()).all());
+  }
+  EXPECT_NEAR(particles.positions.front().x(), -0.075, 1e-12);
+}
+
+TEST(NozzleEmitter, ReleasesDiscsOneSpacingApartAtTheJetSpeed) {
+  NozzleEmitterSettings settings;
+  settings.center = Vec3(0.1, 0.3, -0.2);
+  settings.direction = Vec3(0, -1, 0);
+  settings.radius = 0.02;
+  settings.speed = 3.0;
+  settings.max_particles = 1000000;
+  const Scalar spacing = 0.005;
+  NozzleEmitter nozzle(settings, spacing);
+  ParticleSet particles;
+  std::uint32_t next_id = 0;
+  // dt is not a multiple of the layer period (spacing / speed = 1/600 s): layers must still end one spacing
+  // apart once each step's motion (here free flight, as the fluid step would do) is applied.
+  const Scalar dt = 0.001;
+  for (int step = 0; step < 11; ++step) {  // 6.6 layer periods: no release falls on a step boundary
+    nozzle.emit(step * dt, dt, 1e-3, particles, next_id);
+    for (std::size_t i = 0; i < particles.size(); ++i)
+      particles.positions[i] += dt * particles.velocities[i];
+  }
+  std::set<long long> depths_nm;
+  for (std::size_t i = 0; i < particles.size(); ++i) {
+    EXPECT_TRUE(particles.velocities[i].isApprox(Vec3(0, -3, 0)));
+    const Vec3 offset = particles.positions[i] - settings.center;
+    EXPECT_LE(std::hypot(offset.x(), offset.z()), settings.radius + 1e-12);
+    depths_nm.insert(std::llround(-offset.y() * 1e9));
+  }
+  const std::vector<long long> depth(depths_nm.begin(), depths_nm.end());
+  ASSERT_EQ(depth.size(), 7u);  // releases at 0, 1/600, ..., 6/600 s
+  EXPECT_EQ(particles.size(), 7 * nozzle.disc_size());
+  for (std::size_t k = 1; k < depth.size(); ++k)
+    EXPECT_NEAR((depth[k] - depth[k - 1]) * 1e-9, spacing, 2e-9);
+  // The last layer left at 6/600 s and has flown until 0.011 s.
+  EXPECT_NEAR(depth.front() * 1e-9, (0.011 - 0.01) * settings.speed, 2e-9);
+}
+
+TEST(NozzleEmitter, StopsExactlyAtItsParticleBudget) {
+  NozzleEmitterSettings settings;
+  settings.radius = 0.02;
+  settings.speed = 2.0;
+  settings.max_particles = 100;
+  NozzleEmitter nozzle(settings, 0.005);
+  ASSERT_GT(nozzle.disc_size(), 40u);
+  ParticleSet particles;
+  std::uint32_t next_id = 0;
+  for (int step = 0; step < 50; ++step)
+    nozzle.emit(step * 0.001, 0.001, 1e-3, particles, next_id);
+  EXPECT_EQ(particles.size(), 100u);
+  EXPECT_EQ(nozzle.emitted(), 100);
+}
+
+TEST(NozzleEmitter, EmitsNothingBeforeItsStartTime) {
+  NozzleEmitterSettings settings;
+  settings.start_time = 0.5;
+  NozzleEmitter nozzle(settings, 0.01);
+  ParticleSet particles;
+  std::uint32_t next_id = 0;
+  EXPECT_EQ(nozzle.emit(0.0, 0.4, 1e-3, particles, next_id), 0u);
+  EXPECT_GT(nozzle.emit(0.4, 0.2, 1e-3, particles, next_id), 0u);
+}
+
+TEST(KillRegion, RemovesAndCountsEveryParticleThatCrossesThePlane) {
+  SceneConfig config;
+  config.gravity = Vec3::Zero();
+  config.fluid.particle_spacing = 0.02;
+  EmitterSettings e;
+  e.kind = EmitterSettings::Kind::BOX;
+  e.box.min = Vec3(0, 0, 0);
+  e.box.max = Vec3(0.1, 0.1, 0.1);
+  e.box.velocity = Vec3(0, -2, 0);
+  config.emitters.push_back(e);
+  KillRegionSettings kill;
+  kill.point = Vec3(0, -0.05, 0);
+  kill.normal = Vec3(0, 1, 0);
+  config.kill_regions.push_back(kill);
+  config.time.dt = 0.01;
+  config.time.duration = 0.2;
+  Simulation sim(config);
+  EXPECT_EQ(sim.created(), 125);
+  std::int64_t previous_removed = 0;
+  while (!sim.finished()) {
+    ASSERT_TRUE(sim.step().ok());
+    for (const Vec3& x : sim.particles().positions)
+      ASSERT_GE(x.y(), -0.05);
+    EXPECT_EQ(static_cast<std::int64_t>(sim.particles().size()) + sim.removed(), sim.created());
+    EXPECT_GE(sim.removed(), previous_removed);
+    previous_removed = sim.removed();
+  }
+  EXPECT_EQ(sim.removed(), 125);
+}
+
+}  // namespace
+}  // namespace drench
