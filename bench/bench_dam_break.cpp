@@ -3,7 +3,7 @@
 // The block is 0.95 m (spacing 0.05) or 0.975 m (spacing 0.025) on a side so that it holds 19^3 = 6,859 and
 // 39^3 = 59,319 particles, the counts SPlisHSPlasH samples its 1 m block with.
 //
-//   build-bench/bench/bench_dam_break --benchmark_out=bench/results/<machine>/dam_break.csv \
+//   build-bench/bench/bench_dam_break --benchmark_out=bench/results/<machine>/dam_break.csv
 //       --benchmark_out_format=csv [--benchmark_filter=...]
 // Thread count: OMP_NUM_THREADS (the README's numbers: 1 and 2).
 
