@@ -53,7 +53,7 @@ struct FluidSettings {
   /// CFL factor lambda (dimensionless), in (0, 1]: a fluid sub-step never exceeds lambda spacing / v_max,
   /// with v_max the fastest particle (plus the speed of sound for WCSPH).
   Scalar cfl = 0.4;
-  /// Steps between re-sorting particles along a z-order curve for cache locality, >= 1.
+  /// Fluid sub-steps between re-sorting particles along a z-order curve for cache locality, >= 1.
   int sort_interval = 10;
 };
 
