@@ -1,14 +1,24 @@
-// The drench command: `drench run SCENE.json --out DIR [--set json.path=value ...] [--steps N]`.
-// Exit status: 0 success; 1 bad input (scene, file, arguments); 2 the simulation became non-finite.
+// The drench command:
+//   drench run SCENE.json --out DIR [--set json.path=value ...] [--steps N]
+//   drench ccd FILE_OR_DIR... [--list]      point-triangle CCD against labelled queries (*.vf.txt)
+// Exit status: 0 success; 1 bad input (scene, file, arguments) or, for `ccd`, a missed collision; 2 the
+// simulation became non-finite.
 
 #include <omp.h>
 
 #include <CLI/CLI.hpp>
+#include <algorithm>
+#include <chrono>
 #include <cstdio>
+#include <filesystem>
 #include <iostream>
 #include <string>
+#include <system_error>
+#include <utility>
 #include <vector>
 
+#include "ccd/ccd_query_file.hpp"
+#include "ccd/point_triangle_ccd.hpp"
 #include "common/error.hpp"
 #include "scene/scene_loader.hpp"
 #include "scene/scene_runner.hpp"
@@ -51,6 +61,96 @@ int run_command(const std::string& scene_path, const std::string& out_dir,
   return 0;
 }
 
+/// One query file of `drench ccd`, with the figures of one pass of the solver over it.
+struct CcdFileRun {
+  std::string name;  ///< relative to the directory argument it was found in, else as given
+  std::vector<drench::ccd::CcdBenchmarkQuery> queries;
+  std::size_t false_negatives = 0, false_positives = 0, exact = 0;
+  double seconds = 0.0;             ///< wall time of the solver loop alone (unit: s)
+  std::vector<std::string> listed;  ///< `--list` lines: misses and false positives
+};
+
+/// Runs point_triangle_ccd over every query of `run` and fills in its figures.
+void run_ccd_file(CcdFileRun& run) {
+  using drench::ccd::CcdResult;
+  std::vector<CcdResult> results(run.queries.size());
+  // Only the solver is timed: parsing and bookkeeping stay outside, as in bench/bench_ccd.cpp.
+  const auto start = std::chrono::steady_clock::now();
+  for (std::size_t i = 0; i < run.queries.size(); ++i)
+    results[i] = drench::ccd::point_triangle_ccd(run.queries[i].query);
+  run.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+
+  for (std::size_t i = 0; i < results.size(); ++i) {
+    const drench::ccd::CcdBenchmarkQuery& q = run.queries[i];
+    if (results[i].path == drench::ccd::CcdPath::EXACT) ++run.exact;
+    if (q.collides && !results[i].hit) {
+      ++run.false_negatives;
+      run.listed.push_back("missed " + run.name + " " + q.id);
+    } else if (!q.collides && results[i].hit) {
+      ++run.false_positives;
+      run.listed.push_back("false-positive " + run.name + " " + q.id);
+    }
+  }
+}
+
+void print_ccd_row(int name_width, const std::string& name, std::size_t queries, std::size_t false_negatives,
+                   std::size_t false_positives, std::size_t exact, double seconds) {
+  char us_per_query[32] = "-";
+  if (queries > 0) std::snprintf(us_per_query, sizeof us_per_query, "%.3f", 1e6 * seconds / queries);
+  std::printf("%-*s %8zu %9zu %9zu %8zu %10s\n", name_width, name.c_str(), queries, false_negatives,
+              false_positives, exact, us_per_query);
+}
+
+int ccd_command(const std::vector<std::string>& paths, bool list) {
+  namespace fs = std::filesystem;
+  // Every file is read before the solver runs, so a bad file is reported before any figure is printed.
+  std::vector<CcdFileRun> runs;
+  for (const std::string& argument : paths) {
+    std::error_code error;
+    const bool directory = fs::is_directory(argument, error);
+    for (const std::string& file : drench::ccd::list_ccd_query_files(argument)) {
+      CcdFileRun run;
+      run.name = directory ? fs::path(file).lexically_relative(argument).generic_string() : file;
+      run.queries = drench::ccd::read_ccd_query_file(file);
+      runs.push_back(std::move(run));
+    }
+  }
+  for (CcdFileRun& run : runs)
+    run_ccd_file(run);
+
+  int name_width = 5;  // "total"
+  for (const CcdFileRun& run : runs)
+    name_width = std::max(name_width, static_cast<int>(run.name.size()));
+  std::printf("%-*s %8s %9s %9s %8s %10s\n", name_width, "file", "queries", "false-neg", "false-pos", "exact",
+              "us/query");
+  std::size_t queries = 0, positives = 0, false_negatives = 0, false_positives = 0, exact = 0;
+  double seconds = 0.0;
+  for (const CcdFileRun& run : runs) {
+    print_ccd_row(name_width, run.name, run.queries.size(), run.false_negatives, run.false_positives,
+                  run.exact, run.seconds);
+    queries += run.queries.size();
+    for (const auto& q : run.queries)
+      positives += q.collides ? 1 : 0;
+    false_negatives += run.false_negatives;
+    false_positives += run.false_positives;
+    exact += run.exact;
+    seconds += run.seconds;
+  }
+  // The total's time per query weighs files by their query count, as one run over all queries would.
+  print_ccd_row(name_width, "total", queries, false_negatives, false_positives, exact, seconds);
+  if (list) {
+    for (const CcdFileRun& run : runs) {
+      for (const std::string& line : run.listed)
+        std::printf("%s\n", line.c_str());
+    }
+  }
+  if (false_negatives > 0) {
+    std::fprintf(stderr, "drench: %zu of %zu collisions missed\n", false_negatives, positives);
+    return 1;
+  }
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -71,10 +171,20 @@ int main(int argc, char** argv) {
   run->add_option("--threads", threads, "OpenMP threads (default: all cores)")->check(CLI::PositiveNumber);
   run->add_flag("--quiet", quiet, "no banner and no progress line");
 
+  std::vector<std::string> ccd_paths;
+  bool ccd_list = false;
+  CLI::App* ccd = app.add_subcommand(
+      "ccd",
+      "check the point-triangle CCD against labelled queries: misses, false positives, time per query");
+  ccd->add_option("paths", ccd_paths, "query files (*.vf.txt) or folders searched for them recursively")
+      ->required();
+  ccd->add_flag("--list", ccd_list, "also print the ids of missed collisions and false positives");
+
   CLI11_PARSE(app, argc, argv);
   if (threads > 0) omp_set_num_threads(threads);
   try {
     if (run->parsed()) return run_command(scene_path, out_dir, overrides, steps, quiet);
+    if (ccd->parsed()) return ccd_command(ccd_paths, ccd_list);
   } catch (const drench::Error& e) {
     std::fprintf(stderr, "drench: %s\n", e.what());
     return 1;

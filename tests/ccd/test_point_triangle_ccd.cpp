@@ -1,0 +1,245 @@
+// The fast point-triangle CCD (eq. 5-6): analytic cases with a known answer, then random and adversarial
+// families checked against the exact rational reference.
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <functional>
+#include <limits>
+#include <string>
+
+#include "ccd/ccd_exact_reference.hpp"
+#include "ccd/point_triangle_ccd.hpp"
+#include "ccd_query_builders.hpp"
+
+namespace drench::ccd {
+namespace {
+
+using test::QueryGenerator;
+using test::static_triangle;
+using test::transformed;
+
+constexpr double kWeightTolerance = 1e-12;  // barycentric weights: >= -this, sum within this of 1
+
+/// Output invariants that hold for every query: finite numbers, toi in [0, 1], weights on the triangle.
+void expect_well_formed(const CcdResult& r) {
+  EXPECT_TRUE(std::isfinite(r.toi));
+  EXPECT_GE(r.toi, 0.0);
+  EXPECT_LE(r.toi, 1.0);
+  EXPECT_TRUE(r.barycentric.allFinite());
+  if (r.hit) {
+    EXPECT_GE(r.barycentric.minCoeff(), -kWeightTolerance);
+    EXPECT_NEAR(r.barycentric.sum(), 1.0, kWeightTolerance);
+  }
+}
+
+TEST(PointTriangleCcd, ReportsHeadOnCrossingAtItsTime) {
+  // Straight down through (0.25, 0.25) from z = 1 to z = -3: crosses z = 0 at t = 1/4.
+  const CcdResult r = point_triangle_ccd(static_triangle(Vec3(0.25, 0.25, 1), Vec3(0.25, 0.25, -3)));
+  ASSERT_TRUE(r.hit);
+  const CcdSettings defaults;
+  EXPECT_LE(r.toi, 0.25);
+  EXPECT_GE(r.toi, 0.25 - defaults.toi_tolerance);
+  EXPECT_NEAR(r.barycentric[0], 0.5, 1e-5);
+  EXPECT_NEAR(r.barycentric[1], 0.25, 1e-5);
+  EXPECT_NEAR(r.barycentric[2], 0.25, 1e-5);
+}
+
+TEST(PointTriangleCcd, ReportsNoContactBesideTheTriangle) {
+  EXPECT_FALSE(point_triangle_ccd(static_triangle(Vec3(0.6, 0.6, 1), Vec3(0.6, 0.6, -1))).hit);
+  EXPECT_FALSE(point_triangle_ccd(static_triangle(Vec3(-1e-9, 0.5, 1), Vec3(-1e-9, 0.5, -1))).hit);
+}
+
+TEST(PointTriangleCcd, ReportsNoContactWhenStoppingShortOfThePlane) {
+  EXPECT_FALSE(point_triangle_ccd(static_triangle(Vec3(0.2, 0.2, 1), Vec3(0.2, 0.2, 1e-300))).hit);
+}
+
+TEST(PointTriangleCcd, CountsTouchingAtTheEndOfTheStep) {
+  const CcdResult r = point_triangle_ccd(static_triangle(Vec3(0.2, 0.2, 1), Vec3(0.2, 0.2, 0)));
+  ASSERT_TRUE(r.hit);
+  EXPECT_GE(r.toi, 1.0 - CcdSettings{}.toi_tolerance);
+}
+
+TEST(PointTriangleCcd, CountsTouchingAtTheStartOfTheStep) {
+  const CcdResult r = point_triangle_ccd(static_triangle(Vec3(0.2, 0.2, 0), Vec3(0.2, 0.2, 1)));
+  ASSERT_TRUE(r.hit);
+  EXPECT_EQ(r.toi, 0.0);
+}
+
+TEST(PointTriangleCcd, ReportsContactForHeadOnApproachThroughEdge) {
+  const CcdResult r = point_triangle_ccd(static_triangle(Vec3(0.5, 0.5, 1), Vec3(0.5, 0.5, -1)));
+  ASSERT_TRUE(r.hit);
+  EXPECT_NEAR(r.barycentric[0], 0.0, 1e-6);
+  EXPECT_NEAR(r.toi, 0.5, 1e-5);
+}
+
+TEST(PointTriangleCcd, ReportsContactThroughAVertex) {
+  const CcdResult r = point_triangle_ccd(static_triangle(Vec3(1, 0, 1), Vec3(1, 0, -1)));
+  ASSERT_TRUE(r.hit);
+  EXPECT_NEAR(r.barycentric[1], 1.0, 1e-6);
+}
+
+TEST(PointTriangleCcd, ReportsGrazingTouchOfAnEdgeLine) {
+  // Slides along z = 0 on the line y = 0 from x = -1 to x = 2: on the closed edge ab for x in [0, 1].
+  const CcdResult r = point_triangle_ccd(static_triangle(Vec3(-1, 0, 0), Vec3(2, 0, 0)));
+  ASSERT_TRUE(r.hit);
+  EXPECT_NEAR(r.toi, 1.0 / 3.0, 1e-5);
+}
+
+TEST(PointTriangleCcd, ReportsPointSlidingIntoTheTriangleInItsPlane) {
+  const CcdResult r = point_triangle_ccd(static_triangle(Vec3(-1, 0.25, 0), Vec3(1, 0.25, 0)));
+  ASSERT_TRUE(r.hit);
+  EXPECT_NEAR(r.toi, 0.5, 1e-5);
+}
+
+TEST(PointTriangleCcd, ReportsNoContactForPointSlidingPastInThePlane) {
+  EXPECT_FALSE(point_triangle_ccd(static_triangle(Vec3(-1, -0.25, 0), Vec3(1, -0.25, 0))).hit);
+}
+
+TEST(PointTriangleCcd, ReportsTriangleMovingOntoAStillPoint) {
+  VertexFaceQuery q = static_triangle(Vec3(0.2, 0.3, 0.5), Vec3(0.2, 0.3, 0.5));
+  q.a_t1 = q.a_t0 + Vec3(0, 0, 1);
+  q.b_t1 = q.b_t0 + Vec3(0, 0, 1);
+  q.c_t1 = q.c_t0 + Vec3(0, 0, 1);
+  const CcdResult r = point_triangle_ccd(q);
+  ASSERT_TRUE(r.hit);
+  EXPECT_NEAR(r.toi, 0.5, 1e-5);
+}
+
+/// Triangle (0,0,0), (1,0,0), (0,1,z) with z: 1 -> -1 tilting about the x axis, and a point whose path makes
+/// eq. 6 equal to 2 (t - 1/2)^2 + gap: for gap = 0 a double root, the point touching the plane at t = 1/2
+/// without crossing it, at (0.1, 0.75, 0), inside the triangle.
+VertexFaceQuery tangential_touch(double gap) {
+  VertexFaceQuery q;
+  q.a_t0 = q.a_t1 = Vec3(0, 0, 0);
+  q.b_t0 = q.b_t1 = Vec3(1, 0, 0);
+  q.c_t0 = Vec3(0, 1, 1);
+  q.c_t1 = Vec3(0, 1, -1);
+  q.p_t0 = Vec3(0.1, 0.25, 0.75 + gap);
+  q.p_t1 = Vec3(0.1, 1.25, -0.75 + gap);
+  return q;
+}
+
+TEST(PointTriangleCcd, ReportsTangentialTouchAtADoubleRoot) {
+  const CcdResult r = point_triangle_ccd(tangential_touch(0.0));
+  ASSERT_TRUE(r.hit);
+  EXPECT_NEAR(r.toi, 0.5, 1e-5);
+  EXPECT_LE(r.toi, 0.5);
+}
+
+TEST(PointTriangleCcd, ReportsNoContactForANearMissAtADoubleRoot) {
+  EXPECT_FALSE(point_triangle_ccd(tangential_touch(0x1p-40)).hit);
+}
+
+TEST(PointTriangleCcd, ReportsZeroAreaTriangleOnlyWhereThePointMeetsIt) {
+  // A degenerate triangle (all vertices on the x axis): the point crosses the segment [0, 2] at x = 1.
+  VertexFaceQuery q;
+  q.a_t0 = q.a_t1 = Vec3(0, 0, 0);
+  q.b_t0 = q.b_t1 = Vec3(2, 0, 0);
+  q.c_t0 = q.c_t1 = Vec3(1, 0, 0);
+  q.p_t0 = Vec3(1, 1, 1);
+  q.p_t1 = Vec3(1, -1, -1);
+  EXPECT_TRUE(point_triangle_ccd(q).hit);
+  q.p_t0 = Vec3(3, 1, 1);
+  q.p_t1 = Vec3(3, -1, -1);
+  EXPECT_FALSE(point_triangle_ccd(q).hit);
+}
+
+TEST(PointTriangleCcd, RejectsNonFiniteCoordinatesNamingThem) {
+  VertexFaceQuery q = static_triangle(Vec3(0.2, 0.2, 1), Vec3(0.2, 0.2, -1));
+  q.b_t1[1] = std::numeric_limits<double>::quiet_NaN();
+  try {
+    point_triangle_ccd(q);
+    FAIL() << "expected InvalidQueryError";
+  } catch (const InvalidQueryError& e) {
+    EXPECT_NE(std::string(e.what()).find("b_t1.y"), std::string::npos) << e.what();
+  }
+  q.b_t1[1] = 0.0;
+  q.p_t0[2] = std::numeric_limits<double>::infinity();
+  EXPECT_THROW(point_triangle_ccd(q), InvalidQueryError);
+  EXPECT_THROW(point_triangle_ccd_exact(q), InvalidQueryError);
+}
+
+/// Runs `count` queries of a family through both solvers and asserts the same decision and a consistent toi.
+void expect_agreement_with_exact(const std::string& family, int count,
+                                 const std::function<VertexFaceQuery()>& make) {
+  int hits = 0;
+  int exact_path = 0;
+  const CcdSettings settings;
+  for (int i = 0; i < count; ++i) {
+    const VertexFaceQuery q = make();
+    const CcdResult fast = point_triangle_ccd(q, settings);
+    const ExactCcdResult exact = point_triangle_ccd_exact(q, 0.0, settings.toi_tolerance);
+    expect_well_formed(fast);
+    ASSERT_EQ(fast.hit, exact.hit) << family << " query " << i;
+    if (fast.hit) {
+      ++hits;
+      // The true first contact lies in [exact.toi_lower, exact.toi_upper] and in [fast.toi, fast.toi + tol].
+      EXPECT_LE(fast.toi, exact.toi_upper) << family << " query " << i;
+      EXPECT_GE(fast.toi + settings.toi_tolerance, exact.toi_lower) << family << " query " << i;
+    }
+    exact_path += fast.path == CcdPath::EXACT;
+  }
+  // Each family must exercise both answers, or it tests less than it claims.
+  EXPECT_GT(hits, 0) << family;
+  EXPECT_LT(hits, count) << family;
+  ::testing::Test::RecordProperty(family + "_hits", hits);
+  ::testing::Test::RecordProperty(family + "_exact_path", exact_path);
+}
+
+TEST(PointTriangleCcdProperty, AgreesWithExactOnAimedQueries) {
+  QueryGenerator gen(1);
+  expect_agreement_with_exact("aimed", 3000, [&] { return gen.aimed(); });
+}
+
+TEST(PointTriangleCcdProperty, AgreesWithExactWhenScaledBy1em3And1e3) {
+  QueryGenerator gen(2);
+  expect_agreement_with_exact("scaled_1e-3", 1000,
+                              [&] { return transformed(gen.aimed(), 1e-3, Vec3::Zero()); });
+  expect_agreement_with_exact("scaled_1e3", 1000,
+                              [&] { return transformed(gen.aimed(), 1e3, Vec3::Zero()); });
+}
+
+TEST(PointTriangleCcdProperty, AgreesWithExactTranslated1e3MetresFromTheOrigin) {
+  QueryGenerator gen(3);
+  expect_agreement_with_exact("translated_1e3", 1000,
+                              [&] { return transformed(gen.aimed(), 1.0, Vec3(1e3, -1e3, 1e3)); });
+}
+
+TEST(PointTriangleCcdProperty, AgreesWithExactForMotionsDownTo1em12) {
+  QueryGenerator gen(4);
+  expect_agreement_with_exact("tiny_motion", 1000, [&] { return gen.tiny_motion(); });
+}
+
+TEST(PointTriangleCcdProperty, AgreesWithExactOnGridQueriesWithExactContacts) {
+  QueryGenerator gen(5);
+  expect_agreement_with_exact("grid", 3000, [&] { return gen.grid(); });
+}
+
+TEST(PointTriangleCcdProperty, AgreesWithExactForZeroAreaTriangles) {
+  QueryGenerator gen(6);
+  expect_agreement_with_exact("zero_area", 1000, [&] { return gen.zero_area(); });
+}
+
+TEST(PointTriangleCcdProperty, AgreesWithExactForMotionInsideTheTrianglesPlane) {
+  QueryGenerator gen(7);
+  expect_agreement_with_exact("coplanar", 1000, [&] { return gen.coplanar(); });
+  expect_agreement_with_exact("sliding_in_tilted_plane", 1000, [&] { return gen.sliding_in_plane(); });
+}
+
+TEST(PointTriangleCcdProperty, AgreesWithExactThroughEdgesAndVertices) {
+  QueryGenerator gen(8);
+  int hits = 0;
+  for (int i = 0; i < 500; ++i) {
+    const VertexFaceQuery q = gen.through_edge_or_vertex();
+    const CcdResult fast = point_triangle_ccd(q);
+    expect_well_formed(fast);
+    ASSERT_TRUE(fast.hit) << "query " << i;  // every one passes exactly through the closed triangle
+    ASSERT_TRUE(point_triangle_ccd_exact(q).hit) << "query " << i;
+    hits += fast.hit;
+  }
+  EXPECT_EQ(hits, 500);
+}
+
+}  // namespace
+}  // namespace drench::ccd
