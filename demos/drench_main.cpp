@@ -17,6 +17,7 @@
 #include <utility>
 #include <vector>
 
+#include "bullet_adapter/bullet_cloth.hpp"
 #include "ccd/ccd_query_file.hpp"
 #include "ccd/point_triangle_ccd.hpp"
 #include "common/error.hpp"
@@ -32,7 +33,7 @@ int run_command(const std::string& scene_path, const std::string& out_dir,
   const nlohmann::json document = drench::read_scene_document(scene_path, overrides);
   const drench::SceneConfig config =
       drench::parse_scene(document, drench::scene_source(scene_path, overrides));
-  drench::Simulation simulation(config);
+  drench::Simulation simulation(config, drench::bullet::cloth_engine_factory());
 
   drench::RunOptions options;
   options.out_dir = out_dir;

@@ -508,6 +508,34 @@ Poly dot(const PolyVec& a, const PolyVec& b) {
   return add(add(mul(a[0], b[0]), mul(a[1], b[1])), mul(a[2], b[2]));
 }
 
+/// The query's linear motions as integer polynomials: all 24 coordinates times 2^k with one k (the largest k
+/// of their dyadic forms), which changes no sign and no root.
+std::array<PolyVec, 4> integer_motion(const VertexFaceQuery& query) {
+  // All 24 coordinates as integers times 2^-k with one k: the largest k of their dyadic forms.
+  const Vec3* vertices[8] = {&query.p_t0, &query.a_t0, &query.b_t0, &query.c_t0,
+                             &query.p_t1, &query.a_t1, &query.b_t1, &query.c_t1};
+  std::array<Dyadic, 24> coordinate;
+  unsigned long scale = 0;
+  for (int v = 0; v < 8; ++v) {
+    for (int k = 0; k < 3; ++k) {
+      coordinate[3 * v + k] = to_dyadic((*vertices[v])[k]);
+      scale = std::max(scale, coordinate[3 * v + k].k);
+    }
+  }
+  std::array<PolyVec, 4> motion;
+  for (int v = 0; v < 4; ++v) {
+    for (int k = 0; k < 3; ++k) {
+      const Dyadic& start = coordinate[3 * v + k];
+      const Dyadic& end = coordinate[3 * (v + 4) + k];
+      const mpz_class x_t0 = shifted(start.m, scale - start.k);
+      const mpz_class x_t1 = shifted(end.m, scale - end.k);
+      motion[v][k] = Poly{x_t0, x_t1 - x_t0};
+      trim(motion[v][k]);
+    }
+  }
+  return motion;
+}
+
 double round_down(const mpq_class& x) {
   double d = x.get_d();  // truncates toward zero, so d <= x for x >= 0
   if (mpq_class(d) > x) d = std::nextafter(d, -std::numeric_limits<double>::infinity());
@@ -532,28 +560,7 @@ ExactCcdResult point_triangle_ccd_exact(const VertexFaceQuery& query, double t_f
     throw InvalidQueryError("point_triangle_ccd_exact: toi_tolerance must be > 0, got " +
                             format_number(toi_tolerance));
   }
-  // All 24 coordinates as integers times 2^-k with one k: the largest k of their dyadic forms.
-  const Vec3* vertices[8] = {&query.p_t0, &query.a_t0, &query.b_t0, &query.c_t0,
-                             &query.p_t1, &query.a_t1, &query.b_t1, &query.c_t1};
-  std::array<Dyadic, 24> coordinate;
-  unsigned long scale = 0;
-  for (int v = 0; v < 8; ++v) {
-    for (int k = 0; k < 3; ++k) {
-      coordinate[3 * v + k] = to_dyadic((*vertices[v])[k]);
-      scale = std::max(scale, coordinate[3 * v + k].k);
-    }
-  }
-  std::array<PolyVec, 4> motion;  // p, a, b, c
-  for (int v = 0; v < 4; ++v) {
-    for (int k = 0; k < 3; ++k) {
-      const Dyadic& start = coordinate[3 * v + k];
-      const Dyadic& end = coordinate[3 * (v + 4) + k];
-      const mpz_class x_t0 = shifted(start.m, scale - start.k);
-      const mpz_class x_t1 = shifted(end.m, scale - end.k);
-      motion[v][k] = Poly{x_t0, x_t1 - x_t0};
-      trim(motion[v][k]);
-    }
-  }
+  const std::array<PolyVec, 4> motion = integer_motion(query);  // p, a, b, c
   const PolyVec& p = motion[0];
   const std::array<PolyVec, 3> tri = {motion[1], motion[2], motion[3]};
 
@@ -634,6 +641,63 @@ int coplanarity_sign_exact(const VertexFaceQuery& query, bool at_end) {
                         m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0]) +
                         m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]);
   return sgn(det);
+}
+
+bool transversal_crossing_exact(const VertexFaceQuery& query) {
+  check_query_finite(query);
+  const std::array<PolyVec, 4> motion = integer_motion(query);
+  const PolyVec& p = motion[0];
+  const std::array<PolyVec, 3> tri = {motion[1], motion[2], motion[3]};
+  const PolyVec n = cross(sub(tri[1], tri[0]), sub(tri[2], tri[0]));
+  const Poly f = dot(sub(p, tri[0]), n);  // eq. 6: the side of the triangle, up to the sign of n
+  if (degree(f) < 1) return false;        // never or always coplanar: no side changes
+  const Poly root_poly = square_free(f);
+  const Dyadic zero{mpz_class(0), 0};
+  const Dyadic one{mpz_class(1), 0};
+  for (const Root& root : isolate_roots(root_poly, zero, one)) {
+    if (root.exact() && (root.lo == zero || root.lo == one)) continue;  // at the ends: no "just after/before"
+    // The side changes exactly when the root has odd multiplicity in f.
+    bool odd = false;
+    if (root.exact()) {
+      Poly derivative_k = f;
+      int order = 0;
+      while (sign_at_exact(derivative_k, root.lo) == 0) {
+        derivative_k = derivative(derivative_k);
+        ++order;
+      }
+      odd = order % 2 == 1;
+    } else {
+      odd = sign_at(f, root.lo) * sign_at(f, root.hi) < 0;  // f has no other root in the interval
+    }
+    if (!odd) continue;
+    const auto zero_at = [&](const Poly& q) { return sign_at_root(root_poly, root, q) == 0; };
+    const auto nonnegative_at = [&](const Poly& q) { return sign_at_root(root_poly, root, q) >= 0; };
+    // In the closed triangle at the root: strictly or on the boundary of a non-degenerate face ...
+    std::array<int, 3> g_sign{};
+    for (int i = 0; i < 3; ++i) {
+      g_sign[i] =
+          sign_at_root(root_poly, root, dot(cross(sub(tri[(i + 1) % 3], p), sub(tri[(i + 2) % 3], p)), n));
+    }
+    if (g_sign[0] >= 0 && g_sign[1] >= 0 && g_sign[2] >= 0 && (g_sign[0] + g_sign[1] + g_sign[2]) > 0)
+      return true;
+    // ... or on an edge or a vertex of a degenerate one.
+    for (int i = 0; i < 3; ++i) {
+      const PolyVec& u = tri[i];
+      const PolyVec e = sub(tri[(i + 1) % 3], u);
+      const PolyVec r = sub(p, u);
+      const Poly ee = dot(e, e);
+      if (zero_at(ee)) {
+        if (zero_at(r[0]) && zero_at(r[1]) && zero_at(r[2])) return true;  // on the vertex u = w
+        continue;
+      }
+      const PolyVec c = cross(r, e);
+      const Poly along = dot(r, e);
+      if (zero_at(c[0]) && zero_at(c[1]) && zero_at(c[2]) && nonnegative_at(along) &&
+          nonnegative_at(sub(ee, along)))
+        return true;
+    }
+  }
+  return false;
 }
 
 }  // namespace drench::ccd

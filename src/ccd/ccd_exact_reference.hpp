@@ -33,3 +33,13 @@ namespace drench::ccd {
 int coplanarity_sign_exact(const VertexFaceQuery& query, bool at_end);
 
 }  // namespace drench::ccd
+
+namespace drench::ccd {
+
+/// Exact test for a transversal crossing (the leak of the coupling issue): at some t in the open (0, 1) the
+/// point lies in the closed triangle and the sign of eq. 6 (its side of the triangle) changes there. Touching
+/// and returning, starting or ending in the triangle, and motion inside its plane are not crossings.
+/// @throws InvalidQueryError for non-finite coordinates
+bool transversal_crossing_exact(const VertexFaceQuery& query);
+
+}  // namespace drench::ccd

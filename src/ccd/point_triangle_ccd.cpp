@@ -6,6 +6,7 @@
 #include <string>
 
 #include "ccd/ccd_exact_reference.hpp"
+#include "common/triangle_geometry.hpp"
 
 // Method: a certified floating-point filter in Bernstein form, with the exact rational reference as fallback.
 //
@@ -276,42 +277,12 @@ Vec3 at(const Vec3& x_t0, const Vec3& x_t1, double t) {
   return (1.0 - t) * x_t0 + t * x_t1;
 }
 
-/// Barycentric weights of the point of the closed triangle abc closest to p (>= 0, sum 1), also for zero-area
-/// triangles: the face projection when it falls inside, else the closest point on the three edges.
-Vec3 closest_barycentric(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c) {
-  const Vec3 n = (b - a).cross(c - a);
-  const double nn = n.squaredNorm();
-  if (nn > 0.0 && std::isfinite(nn)) {
-    const Vec3 w(n.dot((b - p).cross(c - p)) / nn, n.dot((c - p).cross(a - p)) / nn, 0.0);
-    const Vec3 weights(w[0], w[1], 1.0 - w[0] - w[1]);
-    if (weights.minCoeff() >= 0.0 && weights.allFinite()) return weights;
-  }
-  const std::array<const Vec3*, 3> v = {&a, &b, &c};
-  Vec3 best(1.0, 0.0, 0.0);
-  double best_distance = (p - a).squaredNorm();
-  for (int i = 0; i < 3; ++i) {
-    const Vec3& u = *v[i];
-    const Vec3 e = *v[(i + 1) % 3] - u;
-    const double ee = e.squaredNorm();
-    double s = ee > 0.0 ? (p - u).dot(e) / ee : 0.0;
-    s = std::isfinite(s) ? std::clamp(s, 0.0, 1.0) : 0.0;
-    const double distance = (p - (u + s * e)).squaredNorm();
-    if (distance < best_distance) {
-      best_distance = distance;
-      best = Vec3::Zero();
-      best[i] = 1.0 - s;
-      best[(i + 1) % 3] = s;
-    }
-  }
-  return best;
-}
-
 CcdResult contact_at(const VertexFaceQuery& q, double toi, CcdPath path) {
   CcdResult r;
   r.hit = true;
   r.toi = std::clamp(toi, 0.0, 1.0);
   r.path = path;
-  r.barycentric = closest_barycentric(at(q.p_t0, q.p_t1, r.toi), at(q.a_t0, q.a_t1, r.toi),
+  r.barycentric = closest_point_barycentric(at(q.p_t0, q.p_t1, r.toi), at(q.a_t0, q.a_t1, r.toi),
                                       at(q.b_t0, q.b_t1, r.toi), at(q.c_t0, q.c_t1, r.toi));
   return r;
 }

@@ -8,6 +8,8 @@
 #include <vector>
 
 #include "common/types.hpp"
+#include "coupling/cloth_engine.hpp"
+#include "coupling/coupling_settings.hpp"
 
 namespace drench {
 
@@ -123,13 +125,20 @@ struct SceneConfig {
   std::vector<BoundarySettings> boundaries;
   std::vector<KillRegionSettings> kill_regions;
   TimeSettings time;
+  /// The cloth (Bullet soft body through the adapter); absent: a fluid-only scene.
+  std::optional<ClothSettings> cloth;
+  /// Coupling of fluid and cloth; used when `effects` lists "coupling" (and "friction" for the tangential
+  /// boundary conditions).
+  CouplingSettings coupling;
   std::vector<std::string> effects;  ///< names from known_effects(), each at most once
 
   /// True when `effects` lists `name`, i.e. that optional physics is to be constructed.
   bool has_effect(const std::string& name) const;
 };
 
-/// The effect names a scene may list in `effects` (currently "viscosity"): the one list the loader checks.
+/// The effect names a scene may list in `effects`: "viscosity", "coupling" (repulsion and continuous
+/// handling, sec. 3.1-3.3), "friction" (tangential boundary conditions, sec. 3.4), "leak_audit" (counts
+/// particles crossing the cloth): the one list the loader checks.
 const std::vector<std::string>& known_effects();
 
 }  // namespace drench

@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <filesystem>
 #include <limits>
 #include <utility>
 
@@ -358,6 +359,58 @@ TimeSettings read_time(const Node& node) {
   return time;
 }
 
+ClothSettings read_cloth(const Node& node) {
+  ClothSettings cloth;
+  const ObjectReader r(node, {"mesh", "center", "size", "nodes", "area_density", "pinned",
+                              "position_iterations", "stretch_stiffness", "bending_stiffness", "damping"});
+  if (const Node mesh = r["mesh"]; mesh.present()) {
+    cloth.mesh = mesh.string();
+    if (cloth.mesh.empty()) mesh.fail("must be \"patch\" or the path of an OBJ file");
+  }
+  r.read("center", cloth.center);
+  if (const Node size = r["size"]; size.present()) {
+    if (!size.value().is_array() || size.value().size() != 2)
+      size.fail("must be an array of 2 numbers [x, z]");
+    cloth.size_x = size.element(0).number(kPositive);
+    cloth.size_z = size.element(1).number(kPositive);
+  }
+  if (const Node nodes = r["nodes"]; nodes.present()) {
+    if (!nodes.value().is_array() || nodes.value().size() != 2)
+      nodes.fail("must be an array of 2 integers [x, z]");
+    cloth.nodes_x = nodes.element(0).integer<int>(Range{2.0, false, 4096.0, false});
+    cloth.nodes_z = nodes.element(1).integer<int>(Range{2.0, false, 4096.0, false});
+  }
+  r.read("area_density", cloth.area_density, kPositive);
+  if (const Node pinned = r["pinned"]; pinned.present()) {
+    cloth.pinned = pinned.string();
+    if (cloth.pinned != "corners" && cloth.pinned != "corner" && cloth.pinned != "none")
+      pinned.fail("must be one of \"corners\", \"corner\", \"none\"");
+  }
+  r.read("position_iterations", cloth.position_iterations, Range{1.0, false, 1000.0, false});
+  r.read("stretch_stiffness", cloth.stretch_stiffness, Range{0.0, true, 1.0, false});
+  r.read("bending_stiffness", cloth.bending_stiffness, Range{0.0, false, 1.0, false});
+  r.read("damping", cloth.damping, Range{0.0, false, 1.0, false});
+  return cloth;
+}
+
+CouplingSettings read_coupling(const Node& node) {
+  CouplingSettings coupling;
+  const ObjectReader r(node, {"cloth_thickness", "repulsion_stiffness", "repulsion_sweeps", "continuous",
+                              "max_ccd_iterations", "slip", "friction_coefficient", "broad_phase"});
+  r.read("cloth_thickness", coupling.cloth_thickness, kPositive);
+  r.read("repulsion_stiffness", coupling.repulsion_stiffness, kNonNegative);
+  r.read("repulsion_sweeps", coupling.repulsion_sweeps, kAtLeastOne);
+  r.read("continuous", coupling.continuous);
+  r.read("max_ccd_iterations", coupling.max_ccd_iterations, kAtLeastOne);
+  r.read_choice(
+      "slip", coupling.slip,
+      Choices<SlipCondition>{{"friction", SlipCondition::FRICTION}, {"no_slip", SlipCondition::NO_SLIP}});
+  r.read("friction_coefficient", coupling.friction_coefficient, kNonNegative);
+  r.read_choice("broad_phase", coupling.broad_phase,
+                Choices<BroadPhaseKind>{{"grid", BroadPhaseKind::GRID}, {"fcl", BroadPhaseKind::FCL}});
+  return coupling;
+}
+
 std::vector<std::string> read_effects(const Node& node) {
   std::vector<std::string> effects;
   if (!node.present()) return effects;
@@ -479,8 +532,8 @@ json parse_override_value(const std::string& text, const std::string& assignment
 
 SceneConfig parse_scene(const nlohmann::json& document, const std::string& source) {
   const Node root(&document, "", source);
-  const ObjectReader r(root,
-                       {"gravity", "fluid", "emitters", "boundaries", "kill_regions", "time", "effects"});
+  const ObjectReader r(root, {"gravity", "fluid", "emitters", "boundaries", "kill_regions", "time", "cloth",
+                              "coupling", "effects"});
   SceneConfig config;
   config.source = source;
   r.read("gravity", config.gravity);
@@ -489,7 +542,29 @@ SceneConfig parse_scene(const nlohmann::json& document, const std::string& sourc
   config.boundaries = read_list(r["boundaries"], read_boundary);
   config.kill_regions = read_list(r["kill_regions"], read_kill_region);
   config.time = read_time(r["time"]);
+  if (r["cloth"].present()) config.cloth = read_cloth(r["cloth"]);
+  config.coupling = read_coupling(r["coupling"]);
   config.effects = read_effects(r["effects"]);
+  // An effect that needs something the scene lacks, or settings of an effect the scene does not run, would be
+  // silently ignored: both are errors.
+  const auto effect_node = [&](const std::string& name) {
+    const auto it = std::find(config.effects.begin(), config.effects.end(), name);
+    return r["effects"].element(static_cast<std::size_t>(it - config.effects.begin()));
+  };
+  for (const char* needs_cloth : {"coupling", "leak_audit"}) {
+    if (config.has_effect(needs_cloth) && !config.cloth)
+      effect_node(needs_cloth).fail("needs a cloth; the scene has no \"cloth\"");
+  }
+  if (config.has_effect("friction") && !config.has_effect("coupling"))
+    effect_node("friction").fail("needs the \"coupling\" effect");
+  const bool tangential =
+      config.coupling.slip == SlipCondition::NO_SLIP || config.coupling.friction_coefficient > 0;
+  if (tangential && !config.has_effect("friction")) {
+    const Node coupling = r["coupling"];
+    const Node key =
+        coupling.child("slip").present() ? coupling.child("slip") : coupling.child("friction_coefficient");
+    key.fail("asks for tangential boundary conditions, but effects does not list \"friction\"");
+  }
   return config;
 }
 
@@ -582,7 +657,12 @@ std::string scene_source(const std::string& path, const std::vector<std::string>
 }
 
 SceneConfig load_scene_file(const std::string& path, const std::vector<std::string>& overrides) {
-  return parse_scene(read_scene_document(path, overrides), scene_source(path, overrides));
+  SceneConfig config = parse_scene(read_scene_document(path, overrides), scene_source(path, overrides));
+  // A cloth OBJ named relative to the scene file lives next to it, wherever drench is run from.
+  if (config.cloth && config.cloth->mesh != "patch" && std::filesystem::path(config.cloth->mesh).is_relative()) {
+    config.cloth->mesh = (std::filesystem::path(path).parent_path() / config.cloth->mesh).string();
+  }
+  return config;
 }
 
 std::string sha256_hex(const std::string& bytes) {

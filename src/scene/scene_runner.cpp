@@ -17,9 +17,9 @@ namespace drench {
 
 namespace {
 
-std::string frame_name(std::int64_t frame) {
-  char name[32];
-  std::snprintf(name, sizeof name, "fluid_%04lld.ply", static_cast<long long>(frame));
+std::string frame_name(const char* what, std::int64_t frame) {
+  char name[48];
+  std::snprintf(name, sizeof name, "%s_%04lld.ply", what, static_cast<long long>(frame));
   return name;
 }
 
@@ -76,6 +76,25 @@ nlohmann::json make_summary(const Simulation& sim, double wall_seconds, const st
       sim.config().fluid.pressure_solver == PressureSolverKind::PCISPH ? "pcisph" : "wcsph";
   s["speed_of_sound_mps"] = sim.speed_of_sound();
   s["status"] = status.describe().empty() ? "ok" : status.describe();
+  if (const ClothEngine* cloth = sim.cloth()) {
+    const CouplingStepStats& c = sim.coupling_stats();
+    s["cloth_faces"] = cloth->mesh().triangle_count();
+    s["cloth_mass_kg"] = cloth->total_mass();
+    s["contacts"] = c.contacts;
+    s["ccd_impacts"] = c.ccd_impacts;
+    s["ccd_iterations"] = c.ccd_iterations;
+    s["failsafe_activations"] = c.failsafe_activations;
+    s["mean_contact_slip_mps"] = c.contacts > 0 ? c.slip_sum_mps / static_cast<double>(c.contacts) : 0.0;
+    s["coupling_status"] = sim.coupling_status();
+    s["timings_s"]["cloth"] = sim.cloth_seconds();
+    s["timings_s"]["coupling"] = sim.coupling_seconds();
+    s["timings_s"]["repulsion"] = c.seconds_repulsion;
+    s["timings_s"]["ccd"] = c.seconds_ccd;
+    if (sim.config().has_effect("leak_audit")) {
+      s["leaks"] = sim.leak_stats().leaks;
+      s["timings_s"]["leak_audit"] = sim.leak_stats().seconds;
+    }
+  }
   return s;
 }
 
@@ -99,7 +118,12 @@ RunResult run_scene(Simulation& sim, const RunOptions& options) {
     // A frame is due when the simulated time has reached its time, up to a thousandth of a step.
     while (frame / frame_rate <= sim.time() + 1e-3 * sim.config().time.dt) {
       ScopedTimer timer(output_seconds);
-      write_particles_ply((frames / frame_name(frame)).string(), sim.particles());
+      write_particles_ply((frames / frame_name("fluid", frame)).string(), sim.particles());
+      if (const ClothEngine* cloth = sim.cloth()) {
+        // Between steps positions_t1 is where the cloth is now (end_step wrote it back to the engine).
+        const ClothMesh& mesh = cloth->mesh();
+        write_mesh_ply((frames / frame_name("cloth", frame)).string(), mesh.positions_t1, mesh.triangles);
+      }
       ++frame;
     }
   };

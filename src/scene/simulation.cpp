@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 
+#include "common/error.hpp"
 #include "common/stopwatch.hpp"
 #include "sph/boundary_sampling.hpp"
 
@@ -59,7 +60,7 @@ BoundaryParticles sample_boundaries(const SceneConfig& config) {
 
 }  // namespace
 
-Simulation::Simulation(const SceneConfig& config)
+Simulation::Simulation(const SceneConfig& config, const ClothEngineFactory& cloth_factory)
     : m_config(config),
       m_speed_of_sound(config.fluid.wcsph.speed_of_sound.value_or(automatic_speed_of_sound(config))) {
   m_fluid =
@@ -74,6 +75,18 @@ Simulation::Simulation(const SceneConfig& config)
       m_nozzles.emplace_back(e.nozzle, m_config.fluid.particle_spacing);
     }
   }
+  if (m_config.cloth) {
+    if (!cloth_factory) {
+      throw SceneError(
+          "cloth: this program has no cloth engine; run the scene with the drench command, which "
+          "links the Bullet adapter (" +
+          m_config.source + ")");
+    }
+    m_cloth = cloth_factory(*m_config.cloth, m_config.gravity);
+    m_cloth->mesh().validate();
+  }
+  if (m_config.has_effect("coupling")) m_coupler = std::make_unique<Coupler>(m_config.coupling);
+  m_leak_audit = m_config.has_effect("leak_audit");
 }
 
 bool Simulation::finished() const {
@@ -88,7 +101,23 @@ StepStatus Simulation::step() {
       nozzle.emit(time(), dt, m_fluid->particle_mass(), m_fluid->particles(), m_next_id);
     }
   }
+  if (m_cloth) m_cloth->begin_step();
   const StepStatus status = m_fluid->step(dt);
+  if (m_cloth) {
+    {
+      ScopedTimer timer(m_cloth_seconds);
+      m_cloth->step(dt);
+    }
+    ParticleSet& p = m_fluid->particles();
+    if (m_coupler) {
+      ScopedTimer timer(m_coupling_seconds);
+      const FluidView view{&p.positions_t0, &p.positions, &p.velocities, &p.masses};
+      m_coupling_status |= m_coupler->step(view, m_cloth->mesh(), dt, m_coupling_stats);
+    }
+    if (m_leak_audit) audit_leaks(p.positions_t0, p.positions, m_cloth->mesh(), m_leak_stats);
+    ScopedTimer timer(m_cloth_seconds);
+    m_cloth->end_step(dt);
+  }
   ++m_steps;
   if (!m_config.kill_regions.empty()) {
     ScopedTimer timer(m_emit_seconds);

@@ -6,6 +6,9 @@
 #include <memory>
 #include <vector>
 
+#include "coupling/cloth_engine.hpp"
+#include "coupling/coupler.hpp"
+#include "coupling/leak_audit.hpp"
 #include "scene/scene_config.hpp"
 #include "sph/emitters.hpp"
 #include "sph/fluid_solver.hpp"
@@ -18,10 +21,15 @@ class Simulation {
   /// @throws SceneError when the scene cannot be built (e.g. no emitter ever creates a particle is fine, but
   /// a
   ///         non-finite derived quantity is not).
-  explicit Simulation(const SceneConfig& config);
+  /// @param cloth_factory  builds the scene's cloth (the Bullet adapter's cloth_engine_factory()); required
+  ///        when the scene has a `cloth`, else SceneError
+  explicit Simulation(const SceneConfig& config, const ClothEngineFactory& cloth_factory = {});
 
-  /// One step of the scene's dt: nozzles emit, the fluid advances (sub-stepping as it must), kill regions
-  /// remove the particles that left.
+  /// One step of the scene's dt, in the paper's pipeline order (sec. 5): the cloth records its start
+  /// positions; nozzles emit; the fluid advances alone (sub-stepping as it must); the cloth advances alone;
+  /// the coupling corrects both (repulsion, friction, continuous handling); the leak audit checks the final
+  /// motion; the cloth takes its corrections; kill regions remove the particles that left. Stages of effects
+  /// the scene does not list are never built.
   StepStatus step();
 
   /// True once the simulated time has reached the scene's duration (within a thousandth of a step).
@@ -46,6 +54,19 @@ class Simulation {
   /// Wall time spent emitting and removing particles (unit: s).
   double emit_seconds() const { return m_emit_seconds; }
 
+  /// The cloth, or nullptr for a fluid-only scene.
+  ClothEngine* cloth() { return m_cloth.get(); }
+  const ClothEngine* cloth() const { return m_cloth.get(); }
+  /// Coupling figures summed over all steps (zero without the "coupling" effect).
+  const CouplingStepStats& coupling_stats() const { return m_coupling_stats; }
+  /// Leak audit figures summed over all steps (zero without the "leak_audit" effect).
+  const LeakAuditStats& leak_stats() const { return m_leak_stats; }
+  /// Wall time of the cloth's own steps and of the whole coupling stage (unit: s).
+  double cloth_seconds() const { return m_cloth_seconds; }
+  double coupling_seconds() const { return m_coupling_seconds; }
+  /// COUPLING_* flags raised so far.
+  std::uint32_t coupling_status() const { return m_coupling_status; }
+
  private:
   void remove_killed();
 
@@ -58,6 +79,14 @@ class Simulation {
   std::int64_t m_total_steps = 0;
   std::int64_t m_removed = 0;
   double m_emit_seconds = 0;
+  std::unique_ptr<ClothEngine> m_cloth;
+  std::unique_ptr<Coupler> m_coupler;
+  bool m_leak_audit = false;
+  CouplingStepStats m_coupling_stats;
+  LeakAuditStats m_leak_stats;
+  std::uint32_t m_coupling_status = 0;
+  double m_cloth_seconds = 0;
+  double m_coupling_seconds = 0;
 };
 
 /// Speed of sound a scene gets when fluid.wcsph.speed_of_sound is unset: 10 (sqrt(2 |g| H) + v_emit) (unit:

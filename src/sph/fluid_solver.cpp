@@ -89,6 +89,7 @@ StepStatus FluidSolver::step(Scalar dt) {
   ScopedTimer timer(m_stats.timings_s.total);
   StepStatus status;
   ++m_stats.steps;
+  m_particles.positions_t0 = m_particles.positions;
   if (m_particles.empty()) return status;
   Scalar remaining = dt;
   int count = 0;

@@ -6,6 +6,7 @@ namespace drench {
 
 void ParticleSet::add(const Vec3& position, const Vec3& velocity, Scalar mass, std::uint32_t id) {
   positions.push_back(position);
+  positions_t0.push_back(position);
   velocities.push_back(velocity);
   densities.push_back(0.0);
   pressures.push_back(0.0);
@@ -42,6 +43,7 @@ void ParticleSet::permute(const IndexArray& order) {
   permute_array(pressures, order);
   permute_array(masses, order);
   permute_array(ids, order);
+  permute_array(positions_t0, order);
 }
 
 std::size_t ParticleSet::remove_flagged(const std::vector<std::uint8_t>& remove) {
@@ -53,6 +55,7 @@ std::size_t ParticleSet::remove_flagged(const std::vector<std::uint8_t>& remove)
   compact_array(pressures, remove);
   compact_array(masses, remove);
   compact_array(ids, remove);
+  compact_array(positions_t0, remove);
   return before - size();
 }
 
@@ -63,6 +66,7 @@ void ParticleSet::reserve(std::size_t n) {
   pressures.reserve(n);
   masses.reserve(n);
   ids.reserve(n);
+  positions_t0.reserve(n);
 }
 
 }  // namespace drench

@@ -17,6 +17,9 @@ struct ParticleSet {
   ScalarArray pressures;           ///< N (unit: Pa), from the last pressure solve
   ScalarArray masses;              ///< N (unit: kg), > 0
   std::vector<std::uint32_t> ids;  ///< N, unique, stable
+  /// N, positions at the start of the current step (unit: m): set by FluidSolver::step, read by the coupling
+  /// (Huber et al. 2013 sec. 5 needs start and end positions). Kept here so sorting keeps it aligned.
+  Vec3Array positions_t0;
 
   std::size_t size() const { return positions.size(); }
   bool empty() const { return positions.empty(); }

@@ -233,7 +233,7 @@ TEST(SceneLoader, RejectsNonObjectTopLevel) {
 TEST(SceneLoader, RejectsUnknownTopLevelKeyListingKnownKeys) {
   EXPECT_TRUE(scene_error(R"({"gravty": [0, 0, 0]})",
                           "gravty is not a known key (x.json); known: gravity, fluid, emitters, boundaries, "
-                          "kill_regions, time, effects"));
+                          "kill_regions, time, cloth, coupling, effects"));
 }
 
 TEST(SceneLoader, RejectsMisspeltFluidKeyListingKnownKeys) {
@@ -575,14 +575,17 @@ TEST(SceneLoader, RejectsUnknownTimeKey) {
 // effects
 
 TEST(SceneLoader, RejectsUnknownEffectListingKnownEffects) {
-  EXPECT_TRUE(scene_error(R"({"effects": ["viscosity", "magic"]})",
-                          "effects[1] must be one of \"viscosity\", got \"magic\" (x.json)"));
+  EXPECT_TRUE(
+      scene_error(R"({"effects": ["viscosity", "magic"]})",
+                  "effects[1] must be one of \"viscosity\", \"coupling\", \"friction\", \"leak_audit\", got "
+                  "\"magic\" (x.json)"));
 }
 
 TEST(SceneLoader, RejectsDuplicateEffectListingKnownEffects) {
-  EXPECT_TRUE(scene_error(
-      R"({"effects": ["viscosity", "viscosity"]})",
-      "effects[1] repeats effects[0]; list each of \"viscosity\" at most once, got \"viscosity\""));
+  EXPECT_TRUE(
+      scene_error(R"({"effects": ["viscosity", "viscosity"]})",
+                  "effects[1] repeats effects[0]; list each of \"viscosity\", \"coupling\", \"friction\", "
+                  "\"leak_audit\" at most once, got \"viscosity\""));
 }
 
 TEST(SceneLoader, RejectsEffectsGivenAsString) {
@@ -855,6 +858,48 @@ TEST(SceneHash, Sha256OfAbcMatchesStandardVector) {
 
 TEST(SceneHash, Sha256OfEmptyStringMatchesStandardVector) {
   EXPECT_EQ(sha256_hex(""), "e3b0c44298fc1c149afbf4c8996fb92427ae41e4649b934ca495991b7852b855");
+}
+
+TEST(SceneLoader, ReadsClothAndCoupling) {
+  const SceneConfig c = parse_scene(nlohmann::json::parse(R"({
+    "cloth": {"center": [0, 0.5, 0], "size": [0.3, 0.4], "nodes": [21, 11], "area_density": 0.1,
+              "pinned": "corner", "position_iterations": 8},
+    "coupling": {"cloth_thickness": 0.002, "slip": "no_slip", "broad_phase": "grid", "continuous": false},
+    "effects": ["coupling", "friction", "leak_audit"]})"),
+                                    "x.json");
+  ASSERT_TRUE(c.cloth.has_value());
+  EXPECT_EQ(c.cloth->center, Vec3(0, 0.5, 0));
+  EXPECT_EQ(c.cloth->size_x, 0.3);
+  EXPECT_EQ(c.cloth->size_z, 0.4);
+  EXPECT_EQ(c.cloth->nodes_x, 21);
+  EXPECT_EQ(c.cloth->nodes_z, 11);
+  EXPECT_EQ(c.cloth->pinned, "corner");
+  EXPECT_EQ(c.cloth->position_iterations, 8);
+  EXPECT_EQ(c.coupling.cloth_thickness, 0.002);
+  EXPECT_EQ(c.coupling.slip, SlipCondition::NO_SLIP);
+  EXPECT_FALSE(c.coupling.continuous);
+}
+
+TEST(SceneLoader, RejectsCouplingWithoutCloth) {
+  EXPECT_TRUE(scene_error(R"({"effects": ["coupling"]})",
+                          "effects[0] needs a cloth; the scene has no \"cloth\", got \"coupling\" (x.json)"));
+}
+
+TEST(SceneLoader, RejectsFrictionSettingsWithoutTheFrictionEffect) {
+  EXPECT_TRUE(scene_error(R"({"cloth": {}, "coupling": {"slip": "no_slip"}, "effects": ["coupling"]})",
+                          "coupling.slip asks for tangential boundary conditions, but effects does not list "
+                          "\"friction\", got \"no_slip\" (x.json)"));
+}
+
+TEST(SceneLoader, RejectsBadClothNodeCount) {
+  EXPECT_TRUE(
+      scene_error(R"({"cloth": {"nodes": [1, 5]}})", "cloth.nodes[0] must be in [2, 4096], got 1 (x.json)"));
+}
+
+TEST(SceneLoader, RejectsUnknownPinning) {
+  EXPECT_TRUE(
+      scene_error(R"({"cloth": {"pinned": "edges"}})",
+                  "cloth.pinned must be one of \"corners\", \"corner\", \"none\", got \"edges\" (x.json)"));
 }
 
 }  // namespace

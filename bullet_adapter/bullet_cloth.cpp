@@ -1,0 +1,158 @@
+#include "bullet_adapter/bullet_cloth.hpp"
+
+#include <BulletSoftBody/btSoftBody.h>
+#include <BulletSoftBody/btSoftBodyRigidBodyCollisionConfiguration.h>
+#include <BulletSoftBody/btSoftRigidDynamicsWorld.h>
+#include <btBulletDynamicsCommon.h>
+
+#include <cassert>
+
+#include "bullet_adapter/soft_body_builder.hpp"
+#include "common/error.hpp"
+
+namespace drench::bullet {
+
+/// Everything an owned cloth needs, in construction order; destroyed in reverse.
+struct BulletCloth::OwnedWorld {
+  btSoftBodyRigidBodyCollisionConfiguration configuration;
+  btCollisionDispatcher dispatcher{&configuration};
+  btDbvtBroadphase broadphase;
+  btSequentialImpulseConstraintSolver solver;
+  btSoftRigidDynamicsWorld world{&dispatcher, &broadphase, &solver, &configuration};
+  std::unique_ptr<btSoftBody> body;
+
+  ~OwnedWorld() {
+    if (body) world.removeSoftBody(body.get());
+  }
+};
+
+BulletCloth::BulletCloth(btSoftBody& body, btSoftRigidDynamicsWorld* world) : m_body(&body), m_world(world) {
+  read_topology();
+}
+
+BulletCloth::BulletCloth(const ClothSettings& settings, const Vec3& gravity) {
+  if (!gravity.allFinite()) {
+    throw SceneError("gravity must be finite, got (" + format_number(gravity.x()) + ", " +
+                     format_number(gravity.y()) + ", " + format_number(gravity.z()) + ")");
+  }
+  m_owned = std::make_unique<OwnedWorld>();
+  btSoftRigidDynamicsWorld& world = m_owned->world;
+  // Soft bodies ignore world.setGravity and take worldInfo.m_gravity (default (0, -10, 0)); rigid bodies the
+  // other way round. Set both.
+  world.setGravity(to_bt(gravity));
+  // (The world's constructor already gave worldInfo its broadphase, dispatcher and sparse SDF.)
+  btSoftBodyWorldInfo& info = world.getWorldInfo();
+  info.m_gravity = to_bt(gravity);
+
+  m_owned->body = create_cloth_body(info, settings);
+  m_owned->body->setActivationState(DISABLE_DEACTIVATION);
+  world.addSoftBody(m_owned->body.get());
+  m_body = m_owned->body.get();
+  m_world = &world;
+  read_topology();
+}
+
+BulletCloth::~BulletCloth() = default;
+
+void BulletCloth::read_topology() {
+  const btSoftBody& body = *m_body;
+  const int m = body.m_nodes.size();
+  m_mesh.positions_t0.resize(m);
+  for (int i = 0; i < m; ++i)
+    m_mesh.positions_t0[i] = to_vec3(body.m_nodes[i].m_x);
+  m_mesh.positions_t1 = m_mesh.positions_t0;
+  m_predicted = m_mesh.positions_t0;
+  m_mesh.triangles.resize(body.m_faces.size());
+  for (int f = 0; f < body.m_faces.size(); ++f) {
+    for (int k = 0; k < 3; ++k)
+      m_mesh.triangles[f][k] = static_cast<Index>(node_index(body, body.m_faces[f].m_n[k]));
+  }
+  read_inverse_masses();
+}
+
+void BulletCloth::read_inverse_masses() {
+  const btSoftBody& body = *m_body;
+  m_mesh.inverse_masses.resize(body.m_nodes.size());
+  for (int i = 0; i < body.m_nodes.size(); ++i)
+    m_mesh.inverse_masses[i] = body.m_nodes[i].m_im;
+}
+
+void BulletCloth::begin_step() {
+  const btSoftBody& body = *m_body;
+  if (static_cast<std::size_t>(body.m_nodes.size()) != m_mesh.node_count() ||
+      static_cast<std::size_t>(body.m_faces.size()) != m_mesh.triangle_count()) {
+    read_topology();
+  } else {
+    read_inverse_masses();
+  }
+  for (int i = 0; i < body.m_nodes.size(); ++i)
+    m_mesh.positions_t0[i] = to_vec3(body.m_nodes[i].m_x);
+}
+
+void BulletCloth::step(double dt) {
+  assert(dt > 0.0);
+  if (m_world != nullptr) m_world->stepSimulation(dt, 0);  // maxSubSteps 0: exactly one step of dt
+  capture_end();
+}
+
+void BulletCloth::capture_end() {
+  const btSoftBody& body = *m_body;
+  assert(static_cast<std::size_t>(body.m_nodes.size()) == m_mesh.node_count());
+  m_predicted.resize(body.m_nodes.size());
+  for (int i = 0; i < body.m_nodes.size(); ++i)
+    m_predicted[i] = to_vec3(body.m_nodes[i].m_x);
+  m_mesh.positions_t1 = m_predicted;
+}
+
+void BulletCloth::end_step(double dt) {
+  assert(dt > 0.0);
+  btSoftBody& body = *m_body;
+  assert(static_cast<std::size_t>(body.m_nodes.size()) == m_mesh.node_count());
+  bool moved = false;
+  for (int i = 0; i < body.m_nodes.size(); ++i) {
+    Vec3& corrected = m_mesh.positions_t1[i];
+    const Vec3& predicted = m_predicted[i];
+    if (corrected == predicted) continue;
+    btSoftBody::Node& node = body.m_nodes[i];
+    if (!corrected.allFinite()) {
+      ++m_non_finite;
+      corrected = predicted;
+      continue;
+    }
+    if (!(node.m_im > 0.0)) {
+      ++m_ignored_pinned;
+      corrected = predicted;
+      continue;
+    }
+    const Vec3 dv = (corrected - predicted) / dt;
+    node.m_x = to_bt(corrected);
+    node.m_v += to_bt(dv);
+    moved = true;
+  }
+  if (moved) {
+    body.updateNormals();
+    body.activate();
+  }
+}
+
+Vec3Array BulletCloth::velocities() const {
+  const btSoftBody& body = *m_body;
+  Vec3Array v(body.m_nodes.size());
+  for (int i = 0; i < body.m_nodes.size(); ++i)
+    v[i] = to_vec3(body.m_nodes[i].m_v);
+  return v;
+}
+
+double BulletCloth::total_mass() const {
+  return m_body->getTotalMass();
+}
+
+std::unique_ptr<ClothEngine> make_bullet_cloth_engine(const ClothSettings& settings, const Vec3& gravity) {
+  return std::make_unique<BulletCloth>(settings, gravity);
+}
+
+ClothEngineFactory cloth_engine_factory() {
+  return &make_bullet_cloth_engine;
+}
+
+}  // namespace drench::bullet

@@ -1,0 +1,132 @@
+#pragma once
+/// A Bullet world, a drench fluid and the cloth-fluid coupling, stepped together (Huber et al. 2013 sec. 5:
+/// each engine advances alone, then the coupler corrects both from their start and end positions).
+///
+/// One coupled step of dt, in this order (Simulation::step runs the same stages for `drench run`):
+///   1. cloth.begin_step()            node positions at the start of the step (positions_t0)
+///   2. nozzles emit                  layers due in (t, t + dt], placed for the start of the step
+///   3. fluid.step(dt)                SPH alone; records the particles' positions_t0, predicts positions and
+///   v
+///   4. world->stepSimulation(dt, 0)  exactly one Bullet step: cloth (and the user's rigid bodies) alone
+///   5. cloth.capture_end()           node positions at the end of the step, Bullet's prediction
+///   (positions_t1)
+///   6. coupler.step(...)             effect "coupling": repulsion (eq. 1-4), friction (eq. 7-8), continuous
+///                                    handling (eq. 5-6) correct particle and node end positions and
+///                                    velocities
+///   7. audit_leaks(...)              effect "leak_audit": particles that crossed the cloth in the final
+///   motion
+///   8. cloth.end_step(dt)            corrected node positions into m_x, velocity changes into m_v
+///   9. kill regions                  particles that left the region of interest are removed
+///
+/// Call CoupledWorld::step instead of world->stepSimulation. The coupling needs the cloth's start and end of
+/// exactly the step the fluid took: stepSimulation(dt) with its default fixed sub-step of 1/60 s would take
+/// zero, one or several Bullet steps per call, and a step taken outside this class has no fluid step beside
+/// it. Bullet's rigid bodies in the same world are stepped by stage 4 as usual.
+
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include "bullet_adapter/bullet_cloth.hpp"
+#include "coupling/coupler.hpp"
+#include "coupling/leak_audit.hpp"
+#include "scene/scene_config.hpp"
+#include "sph/emitters.hpp"
+#include "sph/fluid_solver.hpp"
+
+class btSoftBody;
+class btSoftRigidDynamicsWorld;
+
+namespace drench::bullet {
+
+/// What one coupled step did.
+struct CoupledStepReport {
+  StepStatus fluid;                      ///< the fluid's flags; NON_FINITE_STATE names the particle
+  std::uint32_t coupling = COUPLING_OK;  ///< COUPLING_* flags of coupler.step
+  CouplingStepStats coupling_stats;      ///< contacts, impacts, impulses of this step
+  LeakAuditStats leak_stats;             ///< crossings of the cloth in this step (effect "leak_audit")
+  /// Index of the first cloth node with a non-finite position after Bullet's step, or -1. The coupling is
+  /// then skipped (the state is no longer meaningful: lower dt, raise piterations, check stiffness and
+  /// masses).
+  std::int64_t non_finite_node = -1;
+  /// The coupler ran: the scene lists "coupling" and neither the fluid nor the cloth went non-finite.
+  bool coupled = false;
+  std::size_t emitted = 0;  ///< particles the nozzles added
+  std::size_t removed = 0;  ///< particles the kill regions removed
+  struct Seconds {
+    double emit = 0, fluid = 0, cloth = 0, coupling = 0, total = 0;
+  } seconds;  ///< wall time per stage (unit: s); coupling includes the leak audit
+
+  /// False when the fluid or the cloth became non-finite.
+  bool ok() const { return fluid.ok() && non_finite_node < 0; }
+};
+
+class CoupledWorld {
+ public:
+  /// Couples a world and a cloth the caller owns (and keeps alive, and no longer steps itself).
+  /// @param world  the caller's world, holding `cloth`; its soft-body gravity (getWorldInfo().m_gravity)
+  ///        must be the scene's gravity
+  /// @param cloth  the caller's soft body; its settings (margin, piterations, masses, pins) are left alone
+  /// @param scene  everything else, as a scene file gives it (docs/scenes.md) and Simulation reads it:
+  ///        gravity, fluid, emitters (boxes are filled now, nozzles emit per step), static boundaries, kill
+  ///        regions, time.dt (the dt of step()), coupling settings and effects ("viscosity", "coupling",
+  ///        "friction", "leak_audit"; a stage the scene does not list is not built). The speed of sound is
+  ///        the scene's or automatic_speed_of_sound(scene). scene.cloth is ignored: the cloth is the
+  ///        caller's.
+  /// @throws SceneError when the world's soft-body gravity differs from the scene's, the cloth is not in the
+  ///         world, the scene's dt or gravity is not finite or dt <= 0, or the coupling settings are out of
+  ///         range; drench::Error when the cloth's mesh is invalid (ClothMesh::validate)
+  CoupledWorld(btSoftRigidDynamicsWorld& world, btSoftBody& cloth, const SceneConfig& scene);
+
+  /// Owns its Bullet world and the cloth of scene.cloth in it (BulletCloth(*scene.cloth, scene.gravity)).
+  /// @throws SceneError as above, when the scene has no cloth, and as BulletCloth(settings, gravity)
+  explicit CoupledWorld(const SceneConfig& scene);
+
+  ~CoupledWorld();
+  CoupledWorld(const CoupledWorld&) = delete;
+  CoupledWorld& operator=(const CoupledWorld&) = delete;
+
+  /// One coupled step of dt (unit: s, > 0), in the order of this file's header. Never throws for numerical
+  /// trouble: see the report.
+  CoupledStepReport step(double dt);
+  /// One coupled step of the scene's time.dt.
+  CoupledStepReport step() { return step(m_scene.time.dt); }
+
+  const ParticleSet& particles() const { return m_fluid->particles(); }
+  FluidSolver& fluid() { return *m_fluid; }
+  BulletCloth& cloth() { return *m_cloth; }
+  const BulletCloth& cloth() const { return *m_cloth; }
+  /// The cloth as the coupling saw it in the last step (positions_t1 are the corrected end positions).
+  const ClothMesh& cloth_mesh() const { return m_cloth->mesh(); }
+  btSoftRigidDynamicsWorld& world() { return *m_cloth->world(); }
+  /// The coupler, or nullptr when the scene does not list "coupling".
+  Coupler* coupler() { return m_coupler.get(); }
+  const SceneConfig& scene() const { return m_scene; }
+
+  /// The speed of sound in use (unit: m/s): the scene's, or the automatic one.
+  Scalar speed_of_sound() const { return m_speed_of_sound; }
+  /// Simulated time (unit: s): the sum of the dt of every step.
+  double time() const { return m_time; }
+  std::int64_t steps() const { return m_steps; }
+  /// Particles ever created and ever removed.
+  std::int64_t created() const { return m_next_id; }
+  std::int64_t removed() const { return m_removed; }
+
+ private:
+  CoupledWorld(std::unique_ptr<BulletCloth> cloth, const SceneConfig& scene);
+  std::size_t remove_killed();
+
+  SceneConfig m_scene;
+  std::unique_ptr<BulletCloth> m_cloth;
+  Scalar m_speed_of_sound = 0;
+  std::unique_ptr<FluidSolver> m_fluid;
+  std::vector<NozzleEmitter> m_nozzles;
+  std::unique_ptr<Coupler> m_coupler;
+  bool m_leak_audit = false;
+  std::uint32_t m_next_id = 0;
+  double m_time = 0;
+  std::int64_t m_steps = 0;
+  std::int64_t m_removed = 0;
+};
+
+}  // namespace drench::bullet

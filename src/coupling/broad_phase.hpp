@@ -1,0 +1,59 @@
+#pragma once
+/// Broad phase of the coupling (Huber et al. 2013 sec. 5 uses spatial hashing [THM*03]): which particles can
+/// touch which triangles during a step. Boxes are swept over the step (start and end positions) and grown by
+/// a margin, so the same candidates serve the proximity test at the start (sec. 3.1) and the CCD (sec. 3.3).
+/// Two implementations behind one interface, measured side by side in bench/bench_coupling.cpp.
+
+#include <memory>
+#include <utility>
+#include <vector>
+
+#include "common/types.hpp"
+#include "coupling/cloth_mesh.hpp"
+#include "coupling/coupling_settings.hpp"
+
+namespace drench {
+
+/// An axis-aligned box (unit: m).
+struct Box3 {
+  Vec3 lo = Vec3::Constant(std::numeric_limits<double>::infinity());
+  Vec3 hi = Vec3::Constant(-std::numeric_limits<double>::infinity());
+
+  void extend(const Vec3& p) {
+    lo = lo.cwiseMin(p);
+    hi = hi.cwiseMax(p);
+  }
+  void grow(double margin) {
+    lo.array() -= margin;
+    hi.array() += margin;
+  }
+  bool overlaps(const Box3& o) const {
+    return (lo.array() <= o.hi.array()).all() && (o.lo.array() <= hi.array()).all();
+  }
+};
+
+/// Candidate (particle, triangle) pairs: every pair whose swept, grown boxes overlap, sorted by particle then
+/// triangle, each pair once. Implementations must return exactly this set (tests compare with brute force).
+class TriangleBroadPhase {
+ public:
+  virtual ~TriangleBroadPhase() = default;
+
+  /// @param particles_t0, particles_t1  N particle positions at the start and end of the step (unit: m)
+  /// @param cloth  the mesh, with positions_t0 and positions_t1
+  /// @param margin  growth of every box (unit: m), >= 0
+  /// @param only  when not null, N flags: pairs only for particles whose flag is set
+  /// @param pairs  output, replaced
+  virtual void find_pairs(const Vec3Array& particles_t0, const Vec3Array& particles_t1,
+                          const ClothMesh& cloth, double margin, const std::vector<std::uint8_t>* only,
+                          std::vector<std::pair<Index, Index>>& pairs) = 0;
+};
+
+/// The broad phase of a kind. FCL is linked privately; its types never appear in a header.
+std::unique_ptr<TriangleBroadPhase> make_broad_phase(BroadPhaseKind kind);
+
+/// Reference for tests: every pair tested, O(N F).
+void find_pairs_brute_force(const Vec3Array& particles_t0, const Vec3Array& particles_t1,
+                            const ClothMesh& cloth, double margin,
+                            std::vector<std::pair<Index, Index>>& pairs);
+
+}  // namespace drench

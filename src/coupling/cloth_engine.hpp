@@ -1,0 +1,60 @@
+#pragma once
+/// A cloth simulator seen from the coupled step (Huber et al. 2013 sec. 5): it advances alone, exposes start
+/// and end positions as a ClothMesh, and takes the coupling's corrections back. The core knows no engine; the
+/// Bullet adapter (bullet_adapter/) implements this for btSoftBody, and a scene runner receives engines from
+/// a factory.
+
+#include <functional>
+#include <memory>
+#include <string>
+
+#include "common/types.hpp"
+#include "coupling/cloth_mesh.hpp"
+
+namespace drench {
+
+/// A rectangular patch of cloth or a mesh from an OBJ file, as a scene describes it (docs/scenes.md,
+/// `cloth`).
+struct ClothSettings {
+  std::string mesh = "patch";      ///< "patch" (a regular grid) or the path of an OBJ file (triangulated)
+  Vec3 center = Vec3::Zero();      ///< patch centre (unit: m); the patch lies in the plane y = center.y
+  double size_x = 0.6;             ///< patch extent along x (unit: m), > 0
+  double size_z = 0.6;             ///< patch extent along z (unit: m), > 0
+  int nodes_x = 57;                ///< patch nodes along x, >= 2
+  int nodes_z = 57;                ///< patch nodes along z, >= 2
+  double area_density = 0.2;       ///< mass per area (unit: kg/m^2), > 0
+  std::string pinned = "corners";  ///< "corners", "none", or "corner" (one corner, x and z smallest)
+  int position_iterations = 4;     ///< Bullet's piterations, >= 4 (1 blows the 57 x 57 patch up at dt = 1 ms)
+  double stretch_stiffness = 1.0;  ///< Bullet's linear stiffness kLST, in (0, 1]
+  double bending_stiffness = 0.5;  ///< stiffness of the bending links (distance 2), in [0, 1]; 0 = none
+  double damping = 0.0;            ///< Bullet's kDP, in [0, 1]
+};
+
+/// One cloth in a coupled simulation.
+class ClothEngine {
+ public:
+  virtual ~ClothEngine() = default;
+
+  /// Records the node positions at the start of the step (mesh().positions_t0).
+  virtual void begin_step() = 0;
+  /// Advances the cloth alone by dt (unit: s); afterwards mesh().positions_t1 holds the predicted end
+  /// positions.
+  virtual void step(double dt) = 0;
+  /// Start and end positions, inverse masses, triangles. The coupler corrects positions_t1 in place.
+  virtual ClothMesh& mesh() = 0;
+  /// The same mesh, read-only (output, statistics).
+  const ClothMesh& mesh() const { return const_cast<ClothEngine*>(this)->mesh(); }
+  /// Takes the corrected end positions back: positions = positions_t1, velocity += (corrected - predicted) /
+  /// dt.
+  virtual void end_step(double dt) = 0;
+  /// Current node velocities (unit: m/s), M entries; for output and statistics.
+  virtual Vec3Array velocities() const = 0;
+  /// Total mass of the cloth (unit: kg).
+  virtual double total_mass() const = 0;
+};
+
+/// Builds the cloth engine of a scene. `gravity` in m/s^2. Throws SceneError for settings it cannot honour.
+using ClothEngineFactory =
+    std::function<std::unique_ptr<ClothEngine>(const ClothSettings& settings, const Vec3& gravity)>;
+
+}  // namespace drench

@@ -1,0 +1,414 @@
+#include "coupling/coupler.hpp"
+
+#include <omp.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <string>
+
+#include "ccd/ccd_exact_reference.hpp"
+#include "ccd/point_triangle_ccd.hpp"
+#include "common/error.hpp"
+#include "common/triangle_geometry.hpp"
+#include "coupling/broad_phase.hpp"
+
+// Impulses, not forces (Huber et al. 2013 sec. 3, after Bridson, Fedkiw, Anderson 2002): every correction is
+// an impulse J on a particle and -w_i J on the nodes of a triangle, w the barycentric weights of the contact
+// point. With velocities v = (x_t1 - x_t0) / dt on both sides, J changes the particle's end position by J / m
+// dt and node i's by -w_i J im_i dt. The impulse that changes the relative velocity at the contact point by
+// dv along a unit direction is dv / (1 / m + sum w_i^2 im_i): mass-weighted on both sides, so sum of m dv is
+// zero and linear momentum is conserved exactly; a pinned node (im = 0) takes its share without moving.
+//
+// Order within a step: proximity at the start positions (sec. 3.1) -> Gauss-Seidel sweeps of the inelastic
+// (eq. 2) and elastic (eq. 3-4) impulses -> friction (eq. 7-8) on the same contacts -> continuous handling
+// (sec. 3.3): CCD (eq. 5-6) on the corrected motion, an inelastic impulse at each particle's earliest impact,
+// repeated on the pairs that changed until none collides -> fail-safe: a particle still colliding moves with
+// its triangle's contact point, which a triangle cannot cross.
+//
+// Determinism: contacts and impacts are processed in particle order, then triangle order, on one thread; only
+// the pure parts (broad phase, narrow-phase CCD queries) run in parallel and write to per-pair slots. Results
+// are bit-identical for any thread count.
+
+namespace drench {
+namespace {
+
+using ccd::CcdResult;
+using ccd::VertexFaceQuery;
+using Clock = std::chrono::steady_clock;
+
+double seconds_since(Clock::time_point start) {
+  return std::chrono::duration<double>(Clock::now() - start).count();
+}
+
+/// A particle within the cloth thickness of a triangle at the start of the step (sec. 3.1).
+struct Contact {
+  Index particle = 0;
+  Index triangle = 0;
+  Vec3 weights = Vec3::Zero();         // barycentric weights of the closest point at t0
+  Vec3 normal = Vec3::Zero();          // unit, from the triangle towards the particle's side at t0
+  double overlap = 0.0;                // d of eq. 3: thickness - distance at t0 (unit: m), > 0
+  double inverse_mass = 0.0;           // 1 / m_p + sum w_i^2 im_i (unit: 1/kg)
+  double normal_impulse = 0.0;         // sum of the normal impulses given (unit: N s)
+  Vec3 tangential_pre = Vec3::Zero();  // relative tangential velocity before coupling (unit: m/s)
+};
+
+/// State shared by the stages of one step.
+class StepContext {
+ public:
+  StepContext(const FluidView& fluid, ClothMesh& cloth, double dt, CouplingStepStats& stats)
+      : m_x0(*fluid.positions_t0),
+        m_x1(*fluid.positions_t1),
+        m_v(*fluid.velocities),
+        m_mass(*fluid.masses),
+        m_cloth(cloth),
+        m_dt(dt),
+        m_stats(stats) {}
+
+  const Triangle& triangle(Index t) const { return m_cloth.triangles[t]; }
+  Vec3 particle_velocity(Index p) const { return (m_x1[p] - m_x0[p]) / m_dt; }
+  Vec3 point_velocity(Index t, const Vec3& w) const {
+    const Triangle& tri = triangle(t);
+    Vec3 v = Vec3::Zero();
+    for (int i = 0; i < 3; ++i)
+      v += w[i] * (m_cloth.positions_t1[tri[i]] - m_cloth.positions_t0[tri[i]]);
+    return v / m_dt;
+  }
+  Vec3 relative_velocity(Index p, Index t, const Vec3& w) const {
+    return particle_velocity(p) - point_velocity(t, w);
+  }
+  double inverse_mass(Index p, Index t, const Vec3& w) const {
+    const Triangle& tri = triangle(t);
+    double k = 1.0 / m_mass[p];
+    for (int i = 0; i < 3; ++i)
+      k += w[i] * w[i] * m_cloth.inverse_masses[tri[i]];
+    return k;
+  }
+
+  /// Impulse J (unit: N s) on particle p, -w_i J on the nodes of triangle t.
+  void apply(Index p, Index t, const Vec3& w, const Vec3& impulse) {
+    const Vec3 dv = impulse / m_mass[p];
+    m_x1[p] += dv * m_dt;
+    m_v[p] += dv;
+    const Triangle& tri = triangle(t);
+    for (int i = 0; i < 3; ++i) {
+      const double im = m_cloth.inverse_masses[tri[i]];
+      if (im > 0.0) {
+        m_cloth.positions_t1[tri[i]] -= (w[i] * im * m_dt) * impulse;
+        m_node_changed[tri[i]] = 1;
+      }
+    }
+    m_particle_changed[p] = 1;
+    m_stats.vertical_impulse_on_cloth -= impulse.y();
+  }
+
+  /// Moves particle p's end position (fail-safe), keeping velocity = displacement / dt.
+  void place(Index p, const Vec3& x_t1) {
+    m_v[p] += (x_t1 - m_x1[p]) / m_dt;
+    m_x1[p] = x_t1;
+    m_particle_changed[p] = 1;
+  }
+
+  VertexFaceQuery query(Index p, Index t) const {
+    const Triangle& tri = triangle(t);
+    const Vec3Array& c0 = m_cloth.positions_t0;
+    const Vec3Array& c1 = m_cloth.positions_t1;
+    return {m_x0[p], c0[tri[0]], c0[tri[1]], c0[tri[2]], m_x1[p], c1[tri[0]], c1[tri[1]], c1[tri[2]]};
+  }
+
+  void clear_changes() {
+    m_particle_changed.assign(m_x0.size(), 0);
+    m_node_changed.assign(m_cloth.node_count(), 0);
+  }
+  bool pair_changed(Index p, Index t) const {
+    const Triangle& tri = triangle(t);
+    return m_particle_changed[p] || m_node_changed[tri[0]] || m_node_changed[tri[1]] ||
+           m_node_changed[tri[2]];
+  }
+
+  const Vec3Array& x0() const { return m_x0; }
+  const Vec3Array& x1() const { return m_x1; }
+  ClothMesh& cloth() { return m_cloth; }
+  const ClothMesh& cloth() const { return m_cloth; }
+  double dt() const { return m_dt; }
+  CouplingStepStats& stats() { return m_stats; }
+
+ private:
+  const Vec3Array& m_x0;
+  Vec3Array& m_x1;
+  Vec3Array& m_v;
+  const ScalarArray& m_mass;
+  ClothMesh& m_cloth;
+  double m_dt;
+  CouplingStepStats& m_stats;
+  std::vector<std::uint8_t> m_particle_changed;
+  std::vector<std::uint8_t> m_node_changed;
+};
+
+/// Proximity (sec. 3.1): eq. 1's plane distance and barycentric inside test, extended to edges and vertices
+/// by taking the closest point of the closed triangle; all at the start positions, which also decide the side
+/// (sec. 3.2). A particle whose closest points on several triangles coincide (a shared edge or vertex) keeps
+/// one contact, the triangle of lowest index, so it is pushed once.
+std::vector<Contact> find_contacts(const StepContext& ctx, const std::vector<std::pair<Index, Index>>& pairs,
+                                   double thickness) {
+  std::vector<Contact> candidates(pairs.size());
+  std::vector<std::uint8_t> keep(pairs.size(), 0);
+  const ClothMesh& cloth = ctx.cloth();
+#pragma omp parallel for schedule(static)
+  for (std::size_t k = 0; k < pairs.size(); ++k) {
+    const auto [p, t] = pairs[k];
+    const Triangle& tri = cloth.triangles[t];
+    const Vec3& a = cloth.positions_t0[tri[0]];
+    const Vec3& b = cloth.positions_t0[tri[1]];
+    const Vec3& c = cloth.positions_t0[tri[2]];
+    const Vec3& x = ctx.x0()[p];
+    const Vec3 w = closest_point_barycentric(x, a, b, c);
+    const Vec3 closest = w[0] * a + w[1] * b + w[2] * c;
+    const Vec3 offset = x - closest;
+    const double distance = offset.norm();
+    if (!(distance < thickness)) continue;
+    Vec3 normal = (b - a).cross(c - a);
+    const double area2 = normal.norm();
+    if (distance > 1e-9 * thickness) {
+      normal = offset / distance;
+    } else if (area2 > 0.0) {
+      // Exactly on the triangle: the side is unknown, take the side the particle comes from.
+      normal /= area2;
+      if (normal.dot(ctx.relative_velocity(p, t, w)) > 0.0) normal = -normal;
+    } else {
+      continue;  // on a zero-area triangle: nothing defines a normal; the neighbours handle it
+    }
+    Contact& contact = candidates[k];
+    contact.particle = p;
+    contact.triangle = t;
+    contact.weights = w;
+    contact.normal = normal;
+    contact.overlap = thickness - distance;
+    contact.inverse_mass = ctx.inverse_mass(p, t, w);
+    const Vec3 v = ctx.relative_velocity(p, t, w);
+    contact.tangential_pre = v - v.dot(normal) * normal;
+    keep[k] = 1;
+  }
+  std::vector<Contact> contacts;
+  for (std::size_t k = 0; k < pairs.size(); ++k) {
+    if (!keep[k]) continue;
+    const Contact& c = candidates[k];
+    // Pairs come sorted by particle: earlier contacts of the same particle are at the back of `contacts`.
+    const Triangle& tri = cloth.triangles[c.triangle];
+    const Vec3 point = c.weights[0] * cloth.positions_t0[tri[0]] + c.weights[1] * cloth.positions_t0[tri[1]] +
+                       c.weights[2] * cloth.positions_t0[tri[2]];
+    bool duplicate = false;
+    for (auto it = contacts.rbegin(); it != contacts.rend() && it->particle == c.particle; ++it) {
+      const Triangle& other = cloth.triangles[it->triangle];
+      const Vec3 other_point = it->weights[0] * cloth.positions_t0[other[0]] +
+                               it->weights[1] * cloth.positions_t0[other[1]] +
+                               it->weights[2] * cloth.positions_t0[other[2]];
+      if ((point - other_point).norm() <= 1e-12 * (1.0 + point.norm())) duplicate = true;
+    }
+    if (!duplicate) contacts.push_back(c);
+  }
+  return contacts;
+}
+
+/// Repulsion (sec. 3.2) in Gauss-Seidel sweeps: the inelastic impulse of eq. 2 stops an approach; the elastic
+/// impulse of eq. 3-4, k d dt, pushes out of the cloth thickness, capped as in Bridson et al. 2002 (never
+/// faster than 0.1 d / dt) and given in the first sweep only, so it is one spring impulse per step.
+void repulse(StepContext& ctx, std::vector<Contact>& contacts, const CouplingSettings& settings) {
+  const double dt = ctx.dt();
+  for (int sweep = 0; sweep < settings.repulsion_sweeps; ++sweep) {
+    for (Contact& c : contacts) {
+      const double vn = ctx.relative_velocity(c.particle, c.triangle, c.weights).dot(c.normal);
+      double j = vn < 0.0 ? -vn / c.inverse_mass : 0.0;  // eq. 2
+      if (sweep == 0) {
+        const double vn_after = vn + j * c.inverse_mass;
+        const double cap = 0.1 * c.overlap / dt;
+        if (vn_after < cap) {
+          j += std::min(settings.repulsion_stiffness * c.overlap * dt,
+                        (cap - vn_after) / c.inverse_mass);  // eq. 4
+        }
+      }
+      if (j == 0.0) continue;
+      ctx.apply(c.particle, c.triangle, c.weights, j * c.normal);
+      c.normal_impulse += j;
+    }
+  }
+}
+
+/// Tangential boundary conditions (sec. 3.4): eq. 8, v_t = max(1 - mu dv_N / |v_t_pre|, 0) v_t_pre with dv_N
+/// the normal velocity change the repulsion gave the contact; no-slip (eq. 7) sets v_t = 0. mu = 0 is free
+/// slip: nothing to do.
+void apply_friction(StepContext& ctx, std::vector<Contact>& contacts, const CouplingSettings& settings) {
+  const bool no_slip = settings.slip == SlipCondition::NO_SLIP;
+  for (Contact& c : contacts) {
+    if (!no_slip && (settings.friction_coefficient == 0.0 || c.normal_impulse == 0.0)) continue;
+    const Vec3 v = ctx.relative_velocity(c.particle, c.triangle, c.weights);
+    const Vec3 vt = v - v.dot(c.normal) * c.normal;
+    Vec3 target = Vec3::Zero();
+    if (!no_slip) {
+      const double pre = c.tangential_pre.norm();
+      const double dv_n = c.normal_impulse * c.inverse_mass;
+      if (pre > 0.0)
+        target = std::max(1.0 - settings.friction_coefficient * dv_n / pre, 0.0) * c.tangential_pre;
+    }
+    const Vec3 change = target - vt;
+    if (change.squaredNorm() == 0.0) continue;
+    ctx.apply(c.particle, c.triangle, c.weights, change / c.inverse_mass);
+  }
+}
+
+/// Earliest impact per particle among `pairs` (queries in parallel, reduction in pair order).
+struct Impact {
+  Index triangle = 0;
+  CcdResult ccd;
+};
+
+void find_impacts(const StepContext& ctx, const std::vector<std::pair<Index, Index>>& pairs,
+                  std::vector<std::pair<Index, Impact>>& impacts) {
+  std::vector<CcdResult> results(pairs.size());
+#pragma omp parallel for schedule(dynamic, 256)
+  for (std::size_t k = 0; k < pairs.size(); ++k)
+    results[k] = ccd::point_triangle_ccd(ctx.query(pairs[k].first, pairs[k].second));
+  impacts.clear();
+  for (std::size_t k = 0; k < pairs.size(); ++k) {
+    if (!results[k].hit) continue;
+    // A particle that starts exactly in the triangle (distance 0: it has no side yet) touches at t = 0
+    // whatever it does next; pushing it would flip it back and forth. Repulsion handles it. Anything else at
+    // toi = 0 may be a contact just after the start (toi is a lower bound) and is resolved.
+    if (results[k].toi == 0.0 &&
+        ccd::coplanarity_sign_exact(ctx.query(pairs[k].first, pairs[k].second), false) == 0) {
+      continue;
+    }
+    const Index p = pairs[k].first;
+    if (!impacts.empty() && impacts.back().first == p) {
+      // One impact per particle: the earliest; a hit through a shared edge or vertex is handled once.
+      if (results[k].toi < impacts.back().second.ccd.toi)
+        impacts.back().second = {pairs[k].second, results[k]};
+      continue;
+    }
+    impacts.push_back({p, {pairs[k].second, results[k]}});
+  }
+}
+
+/// The inelastic impulse at an impact (sec. 3.3): the relative normal velocity at the contact point becomes a
+/// small separating speed, 1% of the cloth thickness per step, so the corrected motion stays on its side
+/// instead of ending exactly in the plane.
+void resolve_impact(StepContext& ctx, Index p, const Impact& impact, double thickness) {
+  const Triangle& tri = ctx.triangle(impact.triangle);
+  const ClothMesh& cloth = ctx.cloth();
+  const double t = impact.ccd.toi;
+  const Vec3& w = impact.ccd.barycentric;
+  const auto at = [&](Index node) {
+    return ((1.0 - t) * cloth.positions_t0[node] + t * cloth.positions_t1[node]).eval();
+  };
+  const Vec3 v = ctx.relative_velocity(p, impact.triangle, w);
+  const Vec3 start_point = w[0] * cloth.positions_t0[tri[0]] + w[1] * cloth.positions_t0[tri[1]] +
+                           w[2] * cloth.positions_t0[tri[2]];
+  const Vec3 start_offset = ctx.x0()[p] - start_point;  // decides the side
+  Vec3 normal = (at(tri[1]) - at(tri[0])).cross(at(tri[2]) - at(tri[0]));
+  const double length = normal.norm();
+  if (length > 0.0 && std::isfinite(length)) {
+    normal /= length;
+    // Towards the side the particle starts on; a particle starting in the plane keeps the side it comes from.
+    const double side = start_offset.dot(normal);
+    if (side < 0.0 || (side == 0.0 && v.dot(normal) > 0.0)) normal = -normal;
+  } else {
+    normal = v.norm() > 0.0 ? Vec3(-v.normalized()) : Vec3::UnitY();  // zero-area triangle: push back
+  }
+  // BFA02's inelastic response: the relative normal velocity at the contact point becomes a small separating
+  // speed (1% of the cloth thickness per step), so the corrected motion stays on its side instead of ending
+  // exactly in the plane.
+  const double target = 0.01 * thickness / ctx.dt();
+  const double vn = v.dot(normal);
+  if (vn >= target) return;
+  ctx.apply(p, impact.triangle, w, (target - vn) / ctx.inverse_mass(p, impact.triangle, w) * normal);
+}
+
+}  // namespace
+
+Coupler::Coupler(const CouplingSettings& settings) : m_settings(settings) {
+  const auto require = [](bool ok, const std::string& what) {
+    if (!ok) throw SceneError("coupling." + what);
+  };
+  require(settings.cloth_thickness > 0.0 && std::isfinite(settings.cloth_thickness),
+          "cloth_thickness must be > 0, got " + format_number(settings.cloth_thickness));
+  require(settings.repulsion_stiffness >= 0.0 && std::isfinite(settings.repulsion_stiffness),
+          "repulsion_stiffness must be >= 0, got " + format_number(settings.repulsion_stiffness));
+  require(settings.repulsion_sweeps >= 1,
+          "repulsion_sweeps must be >= 1, got " + std::to_string(settings.repulsion_sweeps));
+  require(settings.max_ccd_iterations >= 1,
+          "max_ccd_iterations must be >= 1, got " + std::to_string(settings.max_ccd_iterations));
+  require(settings.friction_coefficient >= 0.0 && std::isfinite(settings.friction_coefficient),
+          "friction_coefficient must be >= 0, got " + format_number(settings.friction_coefficient));
+  m_broad_phase = make_broad_phase(settings.broad_phase);
+}
+
+Coupler::~Coupler() = default;
+
+std::uint32_t Coupler::step(const FluidView& fluid, ClothMesh& cloth, double dt, CouplingStepStats& stats) {
+  std::uint32_t status = COUPLING_OK;
+  if (fluid.positions_t0->empty() || cloth.triangles.empty()) return status;
+  StepContext ctx(fluid, cloth, dt, stats);
+  ctx.clear_changes();
+  const double thickness = m_settings.cloth_thickness;
+  std::vector<std::pair<Index, Index>> pairs;
+
+  const auto repulsion_start = Clock::now();
+  // One broad phase serves proximity (start positions within the thickness) and the first CCD round.
+  m_broad_phase->find_pairs(ctx.x0(), ctx.x1(), cloth, thickness, nullptr, pairs);
+  std::vector<Contact> contacts = find_contacts(ctx, pairs, thickness);
+  stats.contacts += contacts.size();
+  repulse(ctx, contacts, m_settings);
+  apply_friction(ctx, contacts, m_settings);
+  for (const Contact& c : contacts) {
+    const Vec3 v = ctx.relative_velocity(c.particle, c.triangle, c.weights);
+    stats.slip_sum_mps += (v - v.dot(c.normal) * c.normal).norm();
+  }
+  stats.seconds_repulsion += seconds_since(repulsion_start);
+  if (!m_settings.continuous) return status;
+
+  const auto ccd_start = Clock::now();
+  std::vector<std::pair<Index, Impact>> impacts;
+  std::vector<std::pair<Index, Index>> changed;
+  bool first_round = true;
+  for (int iteration = 0; iteration <= m_settings.max_ccd_iterations; ++iteration) {
+    // After the first round only pairs whose motion changed can have a new impact.
+    m_broad_phase->find_pairs(ctx.x0(), ctx.x1(), cloth, 0.0, nullptr, pairs);
+    if (!first_round) {
+      changed.clear();
+      for (const auto& pair : pairs) {
+        if (ctx.pair_changed(pair.first, pair.second)) changed.push_back(pair);
+      }
+      pairs.swap(changed);
+    }
+    first_round = false;
+    ctx.clear_changes();
+    ++stats.ccd_iterations;
+    find_impacts(ctx, pairs, impacts);
+    if (impacts.empty()) break;
+    if (iteration == m_settings.max_ccd_iterations) {
+      // Fail-safe: the particle follows its triangle's contact point over the step, so that triangle cannot
+      // cross it; a last CCD round checks every pair again.
+      status |= COUPLING_FAILSAFE_USED;
+      for (const auto& [p, impact] : impacts) {
+        const Triangle& tri = cloth.triangles[impact.triangle];
+        const Vec3& w = impact.ccd.barycentric;
+        Vec3 shift = Vec3::Zero();
+        for (int i = 0; i < 3; ++i)
+          shift += w[i] * (cloth.positions_t1[tri[i]] - cloth.positions_t0[tri[i]]);
+        ctx.place(p, ctx.x0()[p] + shift);
+        ++stats.failsafe_activations;
+      }
+      m_broad_phase->find_pairs(ctx.x0(), ctx.x1(), cloth, 0.0, nullptr, pairs);
+      find_impacts(ctx, pairs, impacts);
+      if (!impacts.empty()) status |= COUPLING_UNRESOLVED;
+      break;
+    }
+    stats.ccd_impacts += impacts.size();
+    for (const auto& [p, impact] : impacts)
+      resolve_impact(ctx, p, impact, thickness);
+  }
+  stats.seconds_ccd += seconds_since(ccd_start);
+  return status;
+}
+
+}  // namespace drench

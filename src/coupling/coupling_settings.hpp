@@ -1,0 +1,39 @@
+#pragma once
+/// Settings of the cloth-fluid coupling (Huber et al. 2013 sec. 3). Plain values in SI units; the scene
+/// loader fills them from the scene's `coupling` object (docs/scenes.md).
+
+#include <cstdint>
+
+namespace drench {
+
+/// Tangential boundary condition at contact (sec. 3.4).
+enum class SlipCondition : std::uint8_t {
+  FRICTION = 0,  ///< eq. 8 with friction_coefficient; 0 is free slip (tangential velocity untouched)
+  NO_SLIP = 1,   ///< eq. 7: zero relative tangential velocity at contact
+};
+
+/// Which broad phase finds particle-triangle candidates; both give the same pairs (tests check it).
+enum class BroadPhaseKind : std::uint8_t {
+  GRID = 0,  ///< triangles binned into a uniform grid (measured faster, the default; see bench/)
+  FCL = 1,   ///< FCL DynamicAABBTreeCollisionManager of the triangles, updated each step
+};
+
+struct CouplingSettings {
+  /// The paper's h: the layer around the cloth where particles are repelled (unit: m), > 0.
+  double cloth_thickness = 0.001;
+  /// k of eq. 4 (unit: N/m), >= 0. The elastic impulse k d dt is capped as in Bridson et al. 2002 so that it
+  /// never pushes the pair apart faster than 0.1 d / dt.
+  double repulsion_stiffness = 50.0;
+  /// Gauss-Seidel sweeps over the contacts for the repulsion impulses (eq. 2-4), >= 1.
+  int repulsion_sweeps = 2;
+  /// Continuous intersection handling (sec. 3.3); off only to show leaks (the paper's Fig. 4, left).
+  bool continuous = true;
+  /// Rounds of CCD and impulses before the fail-safe takes the particles still colliding, >= 1.
+  int max_ccd_iterations = 8;
+  SlipCondition slip = SlipCondition::FRICTION;
+  /// mu of eq. 8, >= 0; 0 = free slip. Ignored under NO_SLIP.
+  double friction_coefficient = 0.0;
+  BroadPhaseKind broad_phase = BroadPhaseKind::GRID;
+};
+
+}  // namespace drench

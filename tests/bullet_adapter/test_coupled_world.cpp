@@ -1,0 +1,237 @@
+// CoupledWorld: one Bullet step per coupled step, the documented order, the attach-mode checks, and the
+// fluid built as the scene code builds it.
+
+#include "bullet_adapter/coupled_world.hpp"
+
+#include <BulletSoftBody/btSoftBodyHelpers.h>
+#include <BulletSoftBody/btSoftBodyRigidBodyCollisionConfiguration.h>
+#include <BulletSoftBody/btSoftRigidDynamicsWorld.h>
+#include <btBulletDynamicsCommon.h>
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+#include <limits>
+
+#include "bullet_test_helpers.hpp"
+#include "scene/simulation.hpp"
+
+namespace drench::bullet {
+namespace {
+
+using test::expect_scene_error;
+using test::patch_settings;
+
+constexpr double kDt = 1e-3;
+
+SceneConfig jet_scene(double nozzle_height = 0.8) {
+  SceneConfig scene;
+  scene.source = "test scene";
+  scene.fluid.particle_spacing = 0.01;
+  scene.time.dt = kDt;
+  EmitterSettings jet;
+  jet.kind = EmitterSettings::Kind::NOZZLE;
+  jet.nozzle.center = Vec3(0.1, nozzle_height, -0.2);
+  jet.nozzle.radius = 0.02;
+  jet.nozzle.speed = 1.5;
+  jet.nozzle.max_particles = 500;
+  scene.emitters.push_back(jet);
+  scene.effects = {"coupling", "leak_audit"};
+  return scene;
+}
+
+/// A user's world with a patch (corners pinned) and a free-falling rigid sphere, and a count of its steps.
+struct UserWorld {
+  btSoftBodyRigidBodyCollisionConfiguration configuration;
+  btCollisionDispatcher dispatcher{&configuration};
+  btDbvtBroadphase broadphase;
+  btSequentialImpulseConstraintSolver solver;
+  btSoftRigidDynamicsWorld world{&dispatcher, &broadphase, &solver, &configuration};
+  btSphereShape sphere_shape{0.05};
+  btDefaultMotionState motion_state{btTransform(btQuaternion::getIdentity(), btVector3(2, 5, 2))};
+  btRigidBody sphere{1.0, &motion_state, &sphere_shape, btVector3(0.001, 0.001, 0.001)};
+  btSoftBody* cloth = nullptr;
+  int steps = 0;
+
+  explicit UserWorld(const btVector3& gravity = btVector3(0, -9.81, 0)) {
+    world.setGravity(gravity);
+    world.getWorldInfo().m_gravity = gravity;
+    cloth = btSoftBodyHelpers::CreatePatch(world.getWorldInfo(), btVector3(-0.2, 0.5, -0.5),
+                                           btVector3(0.4, 0.5, -0.5), btVector3(-0.2, 0.5, 0.1),
+                                           btVector3(0.4, 0.5, 0.1), 13, 13, 1 + 2 + 4 + 8, true);
+    cloth->getCollisionShape()->setMargin(0.005);
+    cloth->m_cfg.piterations = 4;
+    cloth->setTotalMass(0.1);  // keeps the pins (fromfaces = false)
+    world.addSoftBody(cloth);
+    world.addRigidBody(&sphere);
+    world.setInternalTickCallback(
+        [](btDynamicsWorld* w, btScalar) { ++static_cast<UserWorld*>(w->getWorldUserInfo())->steps; }, this);
+  }
+  ~UserWorld() {
+    world.removeRigidBody(&sphere);
+    world.removeSoftBody(cloth);
+    delete cloth;
+  }
+};
+
+bool same_bits(const Vec3& a, const Vec3& b) {
+  return std::memcmp(a.data(), b.data(), 3 * sizeof(double)) == 0;
+}
+
+TEST(CoupledWorld, WithoutFluidTheClothStepsAsTheEngineAlone) {
+  SceneConfig scene;
+  scene.time.dt = kDt;
+  scene.cloth = patch_settings(21, 21);
+  scene.effects = {"coupling"};
+  CoupledWorld coupled(scene);
+  BulletCloth alone(patch_settings(21, 21), scene.gravity);
+  for (int n = 0; n < 20; ++n) {
+    const CoupledStepReport report = coupled.step();
+    EXPECT_TRUE(report.ok());
+    alone.begin_step();
+    alone.step(kDt);
+    alone.end_step(kDt);
+  }
+  for (int i = 0; i < alone.body().m_nodes.size(); ++i) {
+    ASSERT_TRUE(
+        same_bits(to_vec3(coupled.cloth().body().m_nodes[i].m_x), to_vec3(alone.body().m_nodes[i].m_x)));
+    ASSERT_TRUE(
+        same_bits(to_vec3(coupled.cloth().body().m_nodes[i].m_v), to_vec3(alone.body().m_nodes[i].m_v)));
+  }
+  EXPECT_EQ(coupled.steps(), 20);
+  EXPECT_NEAR(coupled.time(), 20 * kDt, 1e-15);
+}
+
+TEST(CoupledWorld, EachCoupledStepIsExactlyOneBulletStepOfTheUsersWorld) {
+  UserWorld user;
+  CoupledWorld coupled(user.world, *user.cloth, jet_scene());
+  for (int n = 1; n <= 5; ++n) {
+    coupled.step(kDt);
+    EXPECT_EQ(user.steps, n);
+    // The user's rigid bodies are stepped with the world: free fall, v = n g dt.
+    EXPECT_NEAR(user.sphere.getLinearVelocity().y(), -9.81 * n * kDt, 1e-12);
+  }
+}
+
+TEST(CoupledWorld, StepRecordsStartAndEndOfBothSides) {
+  UserWorld user;
+  CoupledWorld coupled(user.world, *user.cloth, jet_scene());
+  std::size_t emitted = 0;
+  for (int n = 0; n < 30; ++n) {
+    const Vec3 node_before = to_vec3(user.cloth->m_nodes[84].m_x);
+    const CoupledStepReport report = coupled.step();
+    ASSERT_TRUE(report.ok());
+    EXPECT_TRUE(report.coupled);
+    emitted += report.emitted;
+    // The cloth's start is where the node was before the step, its end where Bullet (and the coupling) put
+    // it.
+    EXPECT_TRUE(same_bits(coupled.cloth_mesh().positions_t0[84], node_before));
+    EXPECT_TRUE(same_bits(coupled.cloth_mesh().positions_t1[84], to_vec3(user.cloth->m_nodes[84].m_x)));
+  }
+  const ParticleSet& p = coupled.particles();
+  EXPECT_GT(p.size(), 0u);
+  EXPECT_EQ(static_cast<std::int64_t>(emitted), coupled.created());
+  EXPECT_EQ(p.positions_t0.size(), p.size());
+  for (std::size_t i = 0; i < p.size(); ++i)
+    EXPECT_LT(p.positions_t0[i].y(), 0.8 + 1e-12);  // at or below the nozzle at the step's start (unit: m)
+}
+
+TEST(CoupledWorld, FluidIsBuiltAsTheSceneRunnerBuildsIt) {
+  UserWorld user;
+  const SceneConfig scene = jet_scene(0.8);
+  CoupledWorld coupled(user.world, *user.cloth, scene);
+  EXPECT_EQ(coupled.speed_of_sound(), automatic_speed_of_sound(scene));
+  EXPECT_EQ(coupled.fluid().particle_mass(), 1000.0 * 0.01 * 0.01 * 0.01);
+
+  SceneConfig fixed = jet_scene();
+  fixed.fluid.wcsph.speed_of_sound = 42.0;
+  fixed.cloth = patch_settings(5, 5);
+  CoupledWorld chosen(fixed);
+  EXPECT_EQ(chosen.speed_of_sound(), 42.0);
+}
+
+TEST(CoupledWorld, StagesTheSceneDoesNotListAreNotBuilt) {
+  UserWorld user;
+  SceneConfig scene = jet_scene();
+  scene.effects = {};
+  CoupledWorld coupled(user.world, *user.cloth, scene);
+  EXPECT_EQ(coupled.coupler(), nullptr);
+  for (int n = 0; n < 5; ++n) {
+    const CoupledStepReport report = coupled.step();
+    EXPECT_TRUE(report.ok());
+    EXPECT_FALSE(report.coupled);
+    EXPECT_EQ(report.leak_stats.seconds, 0.0);
+  }
+  CoupledWorld listed(user.world, *user.cloth, jet_scene());
+  ASSERT_NE(listed.coupler(), nullptr);
+  const CoupledStepReport report = listed.step();
+  EXPECT_TRUE(report.coupled);
+  EXPECT_GT(report.leak_stats.seconds, 0.0);
+}
+
+TEST(CoupledWorld, KillRegionsRemoveParticlesAtTheEndOfTheStep) {
+  SceneConfig scene = jet_scene(0.8);
+  KillRegionSettings floor;
+  floor.kind = KillRegionSettings::Kind::PLANE;
+  floor.point = Vec3(0, 0.75, 0);
+  floor.normal = Vec3(0, 1, 0);
+  scene.kill_regions.push_back(floor);
+  scene.cloth = patch_settings(5, 5);
+  CoupledWorld coupled(scene);
+  std::size_t removed = 0;
+  for (int n = 0; n < 60; ++n)
+    removed += coupled.step().removed;
+  EXPECT_GT(removed, 0u);
+  EXPECT_EQ(static_cast<std::int64_t>(removed), coupled.removed());
+  const ParticleSet& p = coupled.particles();
+  EXPECT_EQ(p.positions_t0.size(), p.size());
+  for (const Vec3& x : p.positions)
+    EXPECT_GE(x.y(), 0.75);
+}
+
+TEST(CoupledWorld, NonFiniteClothIsReportedAndNotCoupled) {
+  UserWorld user;
+  CoupledWorld coupled(user.world, *user.cloth, jet_scene());
+  coupled.step();
+  user.cloth->m_nodes[100].m_v.setY(std::numeric_limits<double>::infinity());
+  const CoupledStepReport report = coupled.step();
+  EXPECT_FALSE(report.ok());
+  EXPECT_FALSE(report.coupled);
+  EXPECT_GE(report.non_finite_node, 0);
+}
+
+TEST(CoupledWorld, AttachRefusesASoftBodyGravityOtherThanTheScenes) {
+  UserWorld user(btVector3(0, -10, 0));  // Bullet's default soft-body gravity
+  expect_scene_error([&] { CoupledWorld(user.world, *user.cloth, jet_scene()); },
+                     {"gravity (0, -9.81", "(test scene) differs", "getWorldInfo().m_gravity (0, -10, 0)"});
+}
+
+TEST(CoupledWorld, AttachRefusesAClothThatIsNotInTheWorld) {
+  UserWorld user;
+  btSoftBody* stray =
+      btSoftBodyHelpers::CreatePatch(user.world.getWorldInfo(), btVector3(0, 0, 0), btVector3(1, 0, 0),
+                                     btVector3(0, 0, 1), btVector3(1, 0, 1), 3, 3, 0, false);
+  expect_scene_error([&] { CoupledWorld(user.world, *stray, jet_scene()); },
+                     {"not in the Bullet world", "addSoftBody"});
+  delete stray;
+}
+
+TEST(CoupledWorld, BadSceneTimeStepIsRefused) {
+  SceneConfig scene = jet_scene();
+  scene.time.dt = 0.0;
+  scene.cloth = patch_settings(5, 5);
+  expect_scene_error([&] { CoupledWorld{scene}; }, {"time.dt must be > 0", "got 0", "test scene"});
+  UserWorld user;
+  expect_scene_error([&] { CoupledWorld(user.world, *user.cloth, scene); }, {"time.dt"});
+}
+
+TEST(CoupledWorld, OwnedWorldNeedsTheScenesCloth) {
+  expect_scene_error([&] { CoupledWorld{jet_scene()}; }, {"cloth: the scene has none", "test scene"});
+  SceneConfig scene = jet_scene();
+  scene.cloth = patch_settings(5, 5);
+  scene.cloth->area_density = -1;
+  expect_scene_error([&] { CoupledWorld{scene}; }, {"cloth.area_density must be > 0", "got -1 (test scene)"});
+}
+
+}  // namespace
+}  // namespace drench::bullet

@@ -1,0 +1,217 @@
+// The coupler (Huber et al. 2013 sec. 3): no particle passes a triangle, momentum is conserved, friction
+// obeys eq. 7-8, repulsion keeps the cloth thickness.
+
+#include <gtest/gtest.h>
+
+#include <random>
+
+#include "ccd/ccd_exact_reference.hpp"
+#include "common/triangle_geometry.hpp"
+#include "coupling/coupler.hpp"
+#include "coupling_fixtures.hpp"
+
+namespace drench {
+namespace {
+
+using test::grid_mesh;
+using test::Particles;
+
+constexpr double kMass = 1.25e-4;  // one particle of water at 5 mm spacing (unit: kg)
+
+/// Signed distance of a point to the plane y = height of a horizontal mesh.
+double above(const Vec3& x, double height) {
+  return x.y() - height;
+}
+
+/// Fires one particle from 5 cm above at `speed` straight down through `target` (a point of the mesh plane
+/// y = 0) with dt = 0.01 s: it would end 5 cm below without coupling.
+void expect_stopped(ClothMesh mesh, const Vec3& target, double speed = 10.0, double dt = 0.01) {
+  Particles particles;
+  particles.add(target + Vec3(0, 0.05, 0), Vec3(0, -speed, 0), dt, kMass);
+  Coupler coupler(CouplingSettings{});
+  CouplingStepStats stats;
+  coupler.step(particles.view(), mesh, dt, stats);
+  EXPECT_GT(above(particles.x1[0], 0.0), 0.0)
+      << "particle passed the cloth: end at y = " << particles.x1[0].y();
+  EXPECT_GE(stats.ccd_impacts, 1u);
+  EXPECT_EQ(stats.failsafe_activations, 0u);
+}
+
+TEST(Coupler, StopsAParticleFiredAtAStaticTriangle) {
+  // 10 m/s, dt = 0.01: 10 cm per step, 100 cloth thicknesses; repulsion alone never sees it.
+  expect_stopped(grid_mesh(2, 1.0, 0.0, 0.0), Vec3(0.3, 0.0, 0.2));
+}
+
+TEST(Coupler, StopsAParticleFiredThroughASharedEdge) {
+  // The diagonal of the unit square is the edge shared by its two triangles.
+  expect_stopped(grid_mesh(2, 1.0, 0.0, 0.0), Vec3(0.5, 0.0, 0.5));
+}
+
+TEST(Coupler, StopsAParticleFiredThroughAVertex) {
+  // The centre node of a 3 x 3 grid is shared by six triangles.
+  expect_stopped(grid_mesh(3, 1.0, 0.0, 0.0), Vec3(0.5, 0.0, 0.5));
+}
+
+TEST(Coupler, StopsAParticleWhenTheTriangleMovesTowardsIt) {
+  ClothMesh mesh = grid_mesh(2, 1.0, 0.0, 1.0 / 0.01);  // light, free cloth moving up at 5 m/s
+  for (Vec3& x : mesh.positions_t1)
+    x.y() += 0.05;
+  Particles particles;
+  const double dt = 0.01;
+  particles.add(Vec3(0.3, 0.03, 0.2), Vec3(0, -10, 0), dt, kMass);
+  Coupler coupler(CouplingSettings{});
+  CouplingStepStats stats;
+  coupler.step(particles.view(), mesh, dt, stats);
+  // The mesh's end height at the particle's (x, z): all nodes move alike, so the plane is y = mean of the
+  // nodes.
+  double plane = 0.0;
+  for (const Vec3& x : mesh.positions_t1)
+    plane += x.y() / 4.0;
+  EXPECT_GT(particles.x1[0].y(), plane);
+  EXPECT_GE(stats.ccd_impacts, 1u);
+}
+
+TEST(Coupler, LetsAParticleBesideTheClothFallPast) {
+  Particles particles;
+  particles.add(Vec3(1.5, 0.05, 0.5), Vec3(0, -10, 0), 0.01, kMass);
+  ClothMesh mesh = grid_mesh(2, 1.0, 0.0, 0.0);
+  Coupler coupler(CouplingSettings{});
+  CouplingStepStats stats;
+  coupler.step(particles.view(), mesh, 0.01, stats);
+  EXPECT_DOUBLE_EQ(particles.x1[0].y(), 0.05 - 0.1);
+  EXPECT_EQ(stats.ccd_impacts, 0u);
+}
+
+TEST(Coupler, ConservesLinearMomentumWithoutPinsOrGravity) {
+  // A free cloth and a cloud of particles moving through it in all directions; g = 0, no pins, no damping.
+  ClothMesh mesh = grid_mesh(11, 0.1, 0.0, 1.0 / 2e-4);
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  for (std::size_t i = 0; i < mesh.node_count(); ++i)
+    mesh.positions_t1[i] += 0.001 * Vec3(u(rng), u(rng), u(rng));
+  Particles particles;
+  const double dt = 0.002;
+  for (int k = 0; k < 400; ++k) {
+    const Vec3 x(0.1 * (u(rng) + 1) / 2, 0.004 * u(rng), 0.1 * (u(rng) + 1) / 2);
+    particles.add(x, Vec3(0.5 * u(rng), 3.0 * u(rng), 0.5 * u(rng)), dt, kMass);
+  }
+  const auto momentum = [&] {
+    Vec3 total = Vec3::Zero();
+    for (std::size_t i = 0; i < particles.x0.size(); ++i)
+      total += particles.m[i] * (particles.x1[i] - particles.x0[i]) / dt;
+    for (std::size_t i = 0; i < mesh.node_count(); ++i)
+      total += (mesh.positions_t1[i] - mesh.positions_t0[i]) / dt / mesh.inverse_masses[i];
+    return total;
+  };
+  double scale = 0.0;  // sum of |m v|, the size rounding errors are relative to
+  for (std::size_t i = 0; i < particles.x0.size(); ++i)
+    scale += particles.m[i] * particles.v[i].norm();
+  const Vec3 before = momentum();
+  CouplingSettings settings;
+  settings.slip = SlipCondition::NO_SLIP;  // friction impulses too
+  Coupler coupler(settings);
+  CouplingStepStats stats;
+  coupler.step(particles.view(), mesh, dt, stats);
+  ASSERT_GT(stats.contacts + stats.ccd_impacts, 10u) << "the test must exercise the coupling";
+  ASSERT_EQ(stats.failsafe_activations, 0u)
+      << "the fail-safe moves particles alone and does not conserve momentum";
+  EXPECT_LE((momentum() - before).norm(), 1e-12 * scale);
+}
+
+/// One particle resting in contact (half a thickness above) on a triangle that slides along +x at 1 m/s; the
+/// particle moves along +z at 0.5 m/s and slightly down.
+struct SlidingContact {
+  ClothMesh mesh = grid_mesh(2, 1.0, 0.0, 1.0 / 0.01);
+  Particles particles;
+  double dt = 0.001;
+  CouplingStepStats stats;
+
+  explicit SlidingContact(const CouplingSettings& settings) {
+    for (Vec3& x : mesh.positions_t1)
+      x.x() += 1.0 * dt;
+    particles.add(Vec3(0.3, 0.0005, 0.3), Vec3(0, -0.2, 0.5), dt, kMass);
+    Coupler coupler(settings);
+    coupler.step(particles.view(), mesh, dt, stats);
+  }
+  /// At the contact point: triangle 0 of the grid, (0, 2, 1), holds (0.3, 0.3); the weights are those of the
+  /// closest point at the start, as the coupler takes them.
+  Vec3 relative_tangential_velocity() const {
+    const Triangle& tri = mesh.triangles[0];
+    const Vec3 w = closest_point_barycentric(particles.x0[0], mesh.positions_t0[tri[0]],
+                                             mesh.positions_t0[tri[1]], mesh.positions_t0[tri[2]]);
+    Vec3 cloth_velocity = Vec3::Zero();
+    for (int i = 0; i < 3; ++i)
+      cloth_velocity += w[i] * (mesh.positions_t1[tri[i]] - mesh.positions_t0[tri[i]]) / dt;
+    Vec3 v = (particles.x1[0] - particles.x0[0]) / dt - cloth_velocity;
+    v.y() = 0.0;
+    return v;
+  }
+};
+
+TEST(Coupler, NoSlipZeroesTheRelativeTangentialVelocity) {
+  CouplingSettings settings;
+  settings.slip = SlipCondition::NO_SLIP;
+  SlidingContact c(settings);
+  ASSERT_EQ(c.stats.contacts, 1u);
+  EXPECT_LE(c.relative_tangential_velocity().norm(), 1e-12);
+}
+
+TEST(Coupler, FreeSlipLeavesTheRelativeTangentialVelocity) {
+  SlidingContact c(CouplingSettings{});  // friction coefficient 0
+  ASSERT_EQ(c.stats.contacts, 1u);
+  EXPECT_NEAR(c.relative_tangential_velocity().x(), -1.0, 1e-12);
+  EXPECT_NEAR(c.relative_tangential_velocity().z(), 0.5, 1e-12);
+}
+
+TEST(Coupler, CoulombFrictionFollowsEquation8) {
+  CouplingSettings settings;
+  settings.friction_coefficient = 0.5;
+  SlidingContact c(settings);
+  ASSERT_EQ(c.stats.contacts, 1u);
+  // dv_N is what repulsion gave the relative normal velocity; eq. 8 scales v_t_pre by max(1 - mu dv_N/|v_t|,
+  // 0).
+  const Vec3 pre(-1.0, 0.0, 0.5);
+  const Vec3 now = c.relative_tangential_velocity();
+  EXPECT_LT(now.norm(), pre.norm());
+  EXPECT_NEAR(now.normalized().dot(pre.normalized()), 1.0, 1e-9) << "friction acts against v_t only";
+}
+
+TEST(Coupler, RepulsionStopsAnApproachWithinTheThickness) {
+  // Half a thickness above a pinned triangle, approaching at 0.1 m/s: eq. 2 stops it, eq. 4 pushes it out.
+  ClothMesh mesh = grid_mesh(2, 1.0, 0.0, 0.0);
+  Particles particles;
+  const double dt = 0.001;
+  particles.add(Vec3(0.3, 0.0005, 0.3), Vec3(0, -0.1, 0), dt, kMass);
+  Coupler coupler(CouplingSettings{});
+  CouplingStepStats stats;
+  coupler.step(particles.view(), mesh, dt, stats);
+  EXPECT_EQ(stats.contacts, 1u);
+  EXPECT_GE(particles.v[0].y(), 0.0);
+  EXPECT_LE(particles.v[0].y(), 0.1 * 0.0005 / dt + 1e-12) << "the elastic impulse is capped at 0.1 d / dt";
+}
+
+TEST(Coupler, NeverMovesPinnedNodes) {
+  ClothMesh mesh = grid_mesh(3, 1.0, 0.0, 1.0 / 0.01);
+  mesh.inverse_masses[4] = 0.0;  // the centre
+  Particles particles;
+  particles.add(Vec3(0.5, 0.05, 0.5), Vec3(0, -10, 0), 0.01, kMass);
+  Coupler coupler(CouplingSettings{});
+  CouplingStepStats stats;
+  coupler.step(particles.view(), mesh, 0.01, stats);
+  EXPECT_EQ(mesh.positions_t1[4], mesh.positions_t0[4]);
+  EXPECT_GT(particles.x1[0].y(), 0.0);
+}
+
+TEST(Coupler, RejectsBadSettingsNamingThem) {
+  CouplingSettings settings;
+  settings.cloth_thickness = -1.0;
+  try {
+    Coupler coupler(settings);
+    FAIL();
+  } catch (const SceneError& e) {
+    EXPECT_NE(std::string(e.what()).find("coupling.cloth_thickness"), std::string::npos) << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace drench
