@@ -301,15 +301,24 @@ void resolve_impact(StepContext& ctx, Index p, const Impact& impact, double thic
     return ((1.0 - t) * cloth.positions_t0[node] + t * cloth.positions_t1[node]).eval();
   };
   const Vec3 v = ctx.relative_velocity(p, impact.triangle, w);
-  const Vec3 start_point = w[0] * cloth.positions_t0[tri[0]] + w[1] * cloth.positions_t0[tri[1]] +
-                           w[2] * cloth.positions_t0[tri[2]];
-  const Vec3 start_offset = ctx.x0()[p] - start_point;  // decides the side
   Vec3 normal = (at(tri[1]) - at(tri[0])).cross(at(tri[2]) - at(tri[0]));
   const double length = normal.norm();
   if (length > 0.0 && std::isfinite(length)) {
     normal /= length;
-    // Towards the side the particle starts on; a particle starting in the plane keeps the side it comes from.
-    const double side = start_offset.dot(normal);
+    // Towards the side the particle comes from: the sign of eq. 6 just before the impact (not at the start of
+    // the step: the particle may pass the triangle's plane beside the triangle before it hits it, and a fast
+    // turning cloth may turn the plane under it).
+    const double before = 0.99 * t;
+    const auto before_at = [&](const Vec3& x0, const Vec3& x1) {
+      return ((1.0 - before) * x0 + before * x1).eval();
+    };
+    const Vec3 a = before_at(cloth.positions_t0[tri[0]], cloth.positions_t1[tri[0]]);
+    const Vec3 b = before_at(cloth.positions_t0[tri[1]], cloth.positions_t1[tri[1]]);
+    const Vec3 c = before_at(cloth.positions_t0[tri[2]], cloth.positions_t1[tri[2]]);
+    const Vec3 x = before_at(ctx.x0()[p], ctx.x1()[p]);
+    const Vec3 n_before = (b - a).cross(c - a);
+    const double side = (x - a).dot(n_before) * (n_before.dot(normal) >= 0.0 ? 1.0 : -1.0);
+    // A particle in the plane just before (an impact at t = 0, or grazing) keeps the side it comes from.
     if (side < 0.0 || (side == 0.0 && v.dot(normal) > 0.0)) normal = -normal;
   } else {
     normal = v.norm() > 0.0 ? Vec3(-v.normalized()) : Vec3::UnitY();  // zero-area triangle: push back

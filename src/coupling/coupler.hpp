@@ -28,6 +28,7 @@ struct CouplingStepStats {
   std::uint64_t ccd_impacts = 0;     ///< impacts found by the continuous handling and stopped (sec. 3.3)
   std::uint64_t ccd_iterations = 0;  ///< rounds of CCD run
   std::uint64_t failsafe_activations = 0;  ///< particles the fail-safe moved with their triangle
+  std::uint64_t obstacle_stops = 0;        ///< particles stopped by the cloth inside fluid sub-steps
   double slip_sum_mps = 0.0;  ///< sum over contacts of the relative tangential speed after coupling
   double vertical_impulse_on_cloth = 0.0;  ///< sum of the y components of the impulses on cloth nodes (N s)
   double seconds_repulsion = 0.0;          ///< wall time of proximity + repulsion + friction (unit: s)

@@ -28,6 +28,9 @@ struct CouplingSettings {
   int repulsion_sweeps = 2;
   /// Continuous intersection handling (sec. 3.3); off only to show leaks (the paper's Fig. 4, left).
   bool continuous = true;
+  /// The cloth, at its start-of-step position, stops particles inside the fluid's sub-steps too
+  /// (coupling/cloth_obstacle.hpp): needed at large steps, where one coupling per step piles layers up.
+  bool substep_obstacle = true;
   /// Rounds of CCD and impulses before the fail-safe takes the particles still colliding, >= 1.
   int max_ccd_iterations = 8;
   SlipCondition slip = SlipCondition::FRICTION;

@@ -396,11 +396,13 @@ ClothSettings read_cloth(const Node& node) {
 CouplingSettings read_coupling(const Node& node) {
   CouplingSettings coupling;
   const ObjectReader r(node, {"cloth_thickness", "repulsion_stiffness", "repulsion_sweeps", "continuous",
-                              "max_ccd_iterations", "slip", "friction_coefficient", "broad_phase"});
+                              "substep_obstacle", "max_ccd_iterations", "slip", "friction_coefficient",
+                              "broad_phase"});
   r.read("cloth_thickness", coupling.cloth_thickness, kPositive);
   r.read("repulsion_stiffness", coupling.repulsion_stiffness, kNonNegative);
   r.read("repulsion_sweeps", coupling.repulsion_sweeps, kAtLeastOne);
   r.read("continuous", coupling.continuous);
+  r.read("substep_obstacle", coupling.substep_obstacle);
   r.read("max_ccd_iterations", coupling.max_ccd_iterations, kAtLeastOne);
   r.read_choice(
       "slip", coupling.slip,

@@ -6,6 +6,7 @@
 
 #include "common/error.hpp"
 #include "common/stopwatch.hpp"
+#include "coupling/cloth_obstacle.hpp"
 #include "sph/boundary_sampling.hpp"
 
 namespace drench {
@@ -102,11 +103,23 @@ StepStatus Simulation::step() {
     }
   }
   if (m_cloth) m_cloth->begin_step();
-  const StepStatus status = m_fluid->step(dt);
+  // The cloth at its start positions is an obstacle inside the fluid's sub-steps
+  // (coupling/cloth_obstacle.hpp).
+  std::unique_ptr<ClothObstacle> obstacle;
+  if (m_coupler && m_config.coupling.continuous && m_config.coupling.substep_obstacle) {
+    obstacle = std::make_unique<ClothObstacle>(m_cloth->mesh(), m_cloth->velocities(),
+                                               m_config.coupling.cloth_thickness);
+  }
+  const StepStatus status = m_fluid->step(dt, obstacle.get());
   if (m_cloth) {
     {
       ScopedTimer timer(m_cloth_seconds);
       m_cloth->step(dt);
+    }
+    if (obstacle) {
+      obstacle->transfer_to(m_cloth->mesh(), dt);
+      m_coupling_stats.obstacle_stops += obstacle->stops();
+      m_coupling_stats.vertical_impulse_on_cloth += obstacle->vertical_impulse();
     }
     ParticleSet& p = m_fluid->particles();
     if (m_coupler) {

@@ -85,7 +85,7 @@ Scalar FluidSolver::cfl_limit() const {
   return m_settings.cfl * m_settings.particle_spacing / speed;
 }
 
-StepStatus FluidSolver::step(Scalar dt) {
+StepStatus FluidSolver::step(Scalar dt, SubstepConstraint* constraint) {
   ScopedTimer timer(m_stats.timings_s.total);
   StepStatus status;
   ++m_stats.steps;
@@ -99,7 +99,7 @@ StepStatus FluidSolver::step(Scalar dt) {
     const Scalar wanted = std::isfinite(limit) ? std::ceil(remaining / limit) : 1.0;
     const int n = static_cast<int>(std::clamp(wanted, 1.0, 1e6));
     const Scalar sub = n == 1 ? remaining : remaining / n;
-    status |= substep(sub);
+    status |= substep(sub, constraint);
     ++count;
     if (n == 1 || !status.ok()) break;
     remaining -= sub;
@@ -108,7 +108,7 @@ StepStatus FluidSolver::step(Scalar dt) {
   return status;
 }
 
-StepStatus FluidSolver::substep(Scalar dt) {
+StepStatus FluidSolver::substep(Scalar dt, SubstepConstraint* constraint) {
   update_neighbors();
   ++m_stats.substeps;
   const std::size_t n = m_particles.size();
@@ -146,6 +146,7 @@ StepStatus FluidSolver::substep(Scalar dt) {
   StepStatus status;
   if (!pressure.converged) status.flags |= StepStatus::PRESSURE_NOT_CONVERGED;
   ScopedTimer timer(m_stats.timings_s.integrate);
+  if (constraint) m_positions_before = m_particles.positions;
   std::size_t first_bad = n;
   std::int64_t guarded = 0;
 #pragma omp parallel for schedule(static) reduction(min : first_bad) reduction(+ : guarded)
@@ -160,6 +161,7 @@ StepStatus FluidSolver::substep(Scalar dt) {
     if (!v.allFinite() || !x.allFinite()) first_bad = std::min(first_bad, i);
   }
   m_stats.boundary_guards += guarded;
+  if (constraint) constraint->apply(m_positions_before, m_particles, dt);
   if (first_bad < n) {
     status.flags |= StepStatus::NON_FINITE_STATE;
     status.non_finite_particle = m_particles.ids[first_bad];

@@ -45,13 +45,25 @@ struct FluidStatistics {
   Scalar density_error_sum = 0;           ///< sum over sub-steps of the average density error
   Scalar density_error_max = 0;           ///< largest average density error of a sub-step
   Scalar particle_density_error_max = 0;  ///< largest density error of any particle in any sub-step
-  std::int64_t boundary_guards = 0;        ///< particles put back by enforce_boundary, over all sub-steps
+  std::int64_t boundary_guards = 0;       ///< particles put back by enforce_boundary, over all sub-steps
   struct Timings {
     double total = 0, neighbors = 0, density = 0, forces = 0, pressure = 0, integrate = 0;
   } timings_s;  ///< wall time per stage (unit: s)
 };
 
 /// An SPH fluid with static boundary particles.
+/// A constraint applied at the end of every fluid sub-step, after integration: the coupling uses it to let
+/// the fluid see the cloth inside its sub-steps (coupling/cloth_obstacle.hpp). The fluid solver knows nothing
+/// else about it.
+class SubstepConstraint {
+ public:
+  virtual ~SubstepConstraint() = default;
+  /// @param positions_before  N particle positions at the start of the sub-step (unit: m)
+  /// @param particles  after integration; positions and velocities may be changed
+  /// @param dt  the sub-step (unit: s)
+  virtual void apply(const Vec3Array& positions_before, ParticleSet& particles, Scalar dt) = 0;
+};
+
 class FluidSolver {
  public:
   /// @param gravity  (unit: m/s^2)
@@ -72,11 +84,12 @@ class FluidSolver {
   Scalar particle_mass() const;
 
   /// Advances the fluid by dt (unit: s, > 0), in as many equal-ish sub-steps as the CFL limit asks.
-  StepStatus step(Scalar dt);
+  /// @param constraint  optional, applied after every sub-step (must outlive the call)
+  StepStatus step(Scalar dt, SubstepConstraint* constraint = nullptr);
 
  private:
   void update_neighbors();
-  StepStatus substep(Scalar dt);
+  StepStatus substep(Scalar dt, SubstepConstraint* constraint);
   Scalar cfl_limit() const;
 
   FluidSettings m_settings;
@@ -90,6 +103,7 @@ class FluidSolver {
   NeighborSearch m_boundary_search;
   NeighborList m_fluid_neighbors;
   NeighborList m_boundary_neighbors;
+  Vec3Array m_positions_before;    // sub-step start positions, kept only for a SubstepConstraint
   Vec3Array m_fluid_gradients;     // per fluid neighbor pair, at the current positions
   Vec3Array m_boundary_gradients;  // per boundary neighbor pair
   std::unique_ptr<PressureSolver> m_pressure;

@@ -1,0 +1,92 @@
+#include "coupling/cloth_obstacle.hpp"
+
+#include <cmath>
+
+#include "ccd/point_triangle_ccd.hpp"
+
+namespace drench {
+
+ClothObstacle::ClothObstacle(const ClothMesh& cloth, const Vec3Array& velocities, double thickness)
+    : m_static(ClothMesh::rigid(cloth.positions_t0, cloth.triangles)),
+      m_inverse_masses(cloth.inverse_masses),
+      m_thickness(thickness),
+      m_node_velocities(velocities),
+      m_node_impulses(cloth.node_count(), Vec3::Zero()),
+      m_broad_phase(make_broad_phase(BroadPhaseKind::GRID)) {}
+
+void ClothObstacle::apply(const Vec3Array& positions_before, ParticleSet& particles, Scalar dt) {
+  if (m_static.triangles.empty() || particles.empty()) return;
+  m_broad_phase->find_pairs(positions_before, particles.positions, m_static, 0.0, nullptr, m_pairs);
+  std::vector<ccd::CcdResult> hits(m_pairs.size());
+#pragma omp parallel for schedule(dynamic, 256)
+  for (std::size_t k = 0; k < m_pairs.size(); ++k) {
+    const auto [p, t] = m_pairs[k];
+    const Triangle& tri = m_static.triangles[t];
+    const Vec3Array& x = m_static.positions_t0;
+    hits[k] = ccd::point_triangle_ccd({positions_before[p], x[tri[0]], x[tri[1]], x[tri[2]],
+                                       particles.positions[p], x[tri[0]], x[tri[1]], x[tri[2]]});
+  }
+  // In particle order, the earliest hit of each particle; its approach along the triangle's normal is stopped
+  // (a small separating speed keeps the motion off the plane), the rest of its velocity kept.
+  for (std::size_t k = 0; k < m_pairs.size();) {
+    const Index p = m_pairs[k].first;
+    std::size_t best = m_pairs.size();
+    for (; k < m_pairs.size() && m_pairs[k].first == p; ++k) {
+      if (hits[k].hit && (best == m_pairs.size() || hits[k].toi < hits[best].toi)) best = k;
+    }
+    if (best == m_pairs.size()) continue;
+    const Triangle& tri = m_static.triangles[m_pairs[best].second];
+    const Vec3Array& x = m_static.positions_t0;
+    Vec3 normal = (x[tri[1]] - x[tri[0]]).cross(x[tri[2]] - x[tri[0]]);
+    const double length = normal.norm();
+    if (!(length > 0.0)) continue;  // zero-area triangle: the coupler handles it at the end of the step
+    normal /= length;
+    const Vec3& w = hits[best].barycentric;
+    const Vec3 point = w[0] * x[tri[0]] + w[1] * x[tri[1]] + w[2] * x[tri[2]];
+    double side = (positions_before[p] - point).dot(normal);
+    if (side == 0.0) continue;  // starts in the plane: no side to keep
+    if (side < 0.0) {
+      normal = -normal;
+      side = -side;
+    }
+    Vec3& v = particles.velocities[p];
+    Vec3 cloth_velocity = Vec3::Zero();
+    double inverse_mass = 1.0 / particles.masses[p];
+    for (int i = 0; i < 3; ++i) {
+      cloth_velocity += w[i] * m_node_velocities[tri[i]];
+      inverse_mass += w[i] * w[i] * m_inverse_masses[tri[i]];
+    }
+    const double relative = (v - cloth_velocity).dot(normal);
+    const double target = 0.01 * m_thickness / dt;
+    if (relative >= target) continue;
+    const double j = (target - relative) / inverse_mass;  // eq. 2, mass-weighted (N s)
+    v += (j / particles.masses[p]) * normal;
+    for (int i = 0; i < 3; ++i) {
+      m_node_impulses[tri[i]] -= (w[i] * j) * normal;
+      m_node_velocities[tri[i]] -= (w[i] * j * m_inverse_masses[tri[i]]) * normal;
+    }
+    // The motion over the sub-step, kept on the particle's side of the start-of-step cloth: it may approach
+    // to 1% of the thickness (the coupler, which knows where the cloth went, settles the rest).
+    Vec3 step = dt * v;
+    const double room = std::max(side - 0.01 * m_thickness, 0.0);
+    const double along = step.dot(normal);
+    if (along < -room) step -= (along + room) * normal;
+    particles.positions[p] = positions_before[p] + step;
+    ++m_stops;
+  }
+}
+
+void ClothObstacle::transfer_to(ClothMesh& cloth, double dt) const {
+  for (std::size_t i = 0; i < cloth.node_count(); ++i) {
+    cloth.positions_t1[i] += (cloth.inverse_masses[i] * dt) * m_node_impulses[i];
+  }
+}
+
+double ClothObstacle::vertical_impulse() const {
+  double sum = 0.0;
+  for (const Vec3& j : m_node_impulses)
+    sum += j.y();
+  return sum;
+}
+
+}  // namespace drench
