@@ -92,9 +92,6 @@ inline Ev midpoint(Ev a, Ev b) {
 
 using V3 = std::array<Ev, 3>;
 
-inline V3 operator-(const V3& a, const V3& b) {
-  return {a[0] - b[0], a[1] - b[1], a[2] - b[2]};
-}
 inline V3 operator+(const V3& a, const V3& b) {
   return {a[0] + b[0], a[1] + b[1], a[2] + b[2]};
 }
