@@ -62,15 +62,28 @@ std::unique_ptr<BulletCloth> own(const SceneConfig& scene) {
   }
 }
 
-BoundaryParticles sample_boundaries(const SceneConfig& scene) {
-  const Scalar s = scene.fluid.particle_spacing;
-  BoundaryParticles all;
-  for (const auto& b : scene.boundaries) {
-    all.append(b.kind == BoundarySettings::Kind::BOX
-                   ? sample_box_container(b.min, b.max, s, b.layers, b.open_top)
-                   : sample_plane(b.point, b.normal, b.size, s, b.layers));
-  }
-  return all;
+/// a - b for the per-step figures of a report, from the simulation's running sums.
+CouplingStepStats difference(const CouplingStepStats& a, const CouplingStepStats& b) {
+  CouplingStepStats d;
+  d.contacts = a.contacts - b.contacts;
+  d.ccd_impacts = a.ccd_impacts - b.ccd_impacts;
+  d.ccd_iterations = a.ccd_iterations - b.ccd_iterations;
+  d.failsafe_activations = a.failsafe_activations - b.failsafe_activations;
+  d.obstacle_stops = a.obstacle_stops - b.obstacle_stops;
+  d.slip_sum_mps = a.slip_sum_mps - b.slip_sum_mps;
+  d.vertical_impulse_on_cloth = a.vertical_impulse_on_cloth - b.vertical_impulse_on_cloth;
+  d.seconds_repulsion = a.seconds_repulsion - b.seconds_repulsion;
+  d.seconds_ccd = a.seconds_ccd - b.seconds_ccd;
+  return d;
+}
+
+LeakAuditStats difference(const LeakAuditStats& a, const LeakAuditStats& b) {
+  LeakAuditStats d;
+  d.leaks = a.leaks - b.leaks;
+  d.pairs = a.pairs - b.pairs;
+  d.exact_checks = a.exact_checks - b.exact_checks;
+  d.seconds = a.seconds - b.seconds;
+  return d;
 }
 
 }  // namespace
@@ -81,23 +94,8 @@ CoupledWorld::CoupledWorld(btSoftRigidDynamicsWorld& world, btSoftBody& cloth, c
 CoupledWorld::CoupledWorld(const SceneConfig& scene) : CoupledWorld(own(scene), scene) {}
 
 CoupledWorld::CoupledWorld(std::unique_ptr<BulletCloth> cloth, const SceneConfig& scene)
-    : m_scene(scene),
-      m_cloth(std::move(cloth)),
-      m_speed_of_sound(scene.fluid.wcsph.speed_of_sound.value_or(automatic_speed_of_sound(scene))) {
-  m_cloth->mesh().validate();
-  m_fluid =
-      std::make_unique<FluidSolver>(m_scene.fluid, m_scene.gravity, sample_boundaries(m_scene),
-                                    m_scene.boundaries, m_scene.has_effect("viscosity"), m_speed_of_sound);
-  const Scalar mass = m_fluid->particle_mass();
-  for (const auto& e : m_scene.emitters) {
-    if (e.kind == EmitterSettings::Kind::BOX) {
-      emit_box(e.box, m_scene.fluid.particle_spacing, mass, m_fluid->particles(), m_next_id);
-    } else {
-      m_nozzles.emplace_back(e.nozzle, m_scene.fluid.particle_spacing);
-    }
-  }
-  if (m_scene.has_effect("coupling")) m_coupler = std::make_unique<Coupler>(m_scene.coupling);
-  m_leak_audit = m_scene.has_effect("leak_audit");
+    : m_cloth(cloth.get()) {
+  m_simulation = std::make_unique<Simulation>(scene, std::move(cloth));
 }
 
 CoupledWorld::~CoupledWorld() = default;
@@ -105,71 +103,31 @@ CoupledWorld::~CoupledWorld() = default;
 CoupledStepReport CoupledWorld::step(double dt) {
   assert(dt > 0.0);
   CoupledStepReport report;
-  ScopedTimer total(report.seconds.total);
-  BulletCloth& cloth = *m_cloth;
-  ParticleSet& p = m_fluid->particles();
-
-  cloth.begin_step();
+  Simulation& sim = *m_simulation;
+  const CouplingStepStats coupling_before = sim.coupling_stats();
+  const LeakAuditStats leaks_before = sim.leak_stats();
+  const std::int64_t created_before = sim.created();
+  const std::int64_t removed_before = sim.removed();
+  const double emit_before = sim.emit_seconds();
+  const double fluid_before = sim.fluid().statistics().timings_s.total;
+  const double cloth_before = sim.cloth_seconds();
+  const double coupling_before_s = sim.coupling_seconds() + leaks_before.seconds;
   {
-    ScopedTimer timer(report.seconds.emit);
-    for (auto& nozzle : m_nozzles)
-      report.emitted += nozzle.emit(m_time, dt, m_fluid->particle_mass(), p, m_next_id);
+    ScopedTimer total(report.seconds.total);
+    report.fluid = sim.step(dt);
   }
-  {
-    ScopedTimer timer(report.seconds.fluid);
-    report.fluid = m_fluid->step(dt);
-  }
-  {
-    ScopedTimer timer(report.seconds.cloth);
-    cloth.step(dt);  // one Bullet step, then the end positions are captured
-  }
-  const ClothMesh& mesh = cloth.mesh();
-  for (std::size_t i = 0; i < mesh.node_count(); ++i) {
-    if (!mesh.positions_t1[i].allFinite()) {
-      report.non_finite_node = static_cast<std::int64_t>(i);
-      break;
-    }
-  }
-  if (report.ok()) {
-    ScopedTimer timer(report.seconds.coupling);
-    if (m_coupler) {
-      const FluidView view{&p.positions_t0, &p.positions, &p.velocities, &p.masses};
-      report.coupling = m_coupler->step(view, cloth.mesh(), dt, report.coupling_stats);
-      report.coupled = true;
-    }
-    if (m_leak_audit) audit_leaks(p.positions_t0, p.positions, cloth.mesh(), report.leak_stats);
-  }
-  cloth.end_step(dt);
-  if (!m_scene.kill_regions.empty()) {
-    ScopedTimer timer(report.seconds.emit);
-    report.removed = remove_killed();
-  }
-  m_time += dt;
-  ++m_steps;
+  report.non_finite_node = sim.non_finite_cloth_node();
+  report.coupling = sim.last_coupling_status();
+  report.coupling_stats = difference(sim.coupling_stats(), coupling_before);
+  report.leak_stats = difference(sim.leak_stats(), leaks_before);
+  report.coupled = sim.config().has_effect("coupling") && report.ok();
+  report.emitted = static_cast<std::size_t>(sim.created() - created_before);
+  report.removed = static_cast<std::size_t>(sim.removed() - removed_before);
+  report.seconds.emit = sim.emit_seconds() - emit_before;
+  report.seconds.fluid = sim.fluid().statistics().timings_s.total - fluid_before;
+  report.seconds.cloth = sim.cloth_seconds() - cloth_before;
+  report.seconds.coupling = sim.coupling_seconds() + sim.leak_stats().seconds - coupling_before_s;
   return report;
-}
-
-std::size_t CoupledWorld::remove_killed() {
-  ParticleSet& particles = m_fluid->particles();
-  std::vector<std::uint8_t> remove(particles.size(), 0);
-  std::size_t flagged = 0;
-  for (std::size_t i = 0; i < particles.size(); ++i) {
-    const Vec3& x = particles.positions[i];
-    for (const auto& region : m_scene.kill_regions) {
-      const bool out = region.kind == KillRegionSettings::Kind::PLANE
-                           ? (x - region.point).dot(region.normal) < 0.0
-                           : ((x.array() < region.min.array()) || (x.array() > region.max.array())).any();
-      if (out) {
-        remove[i] = 1;
-        ++flagged;
-        break;
-      }
-    }
-  }
-  if (flagged == 0) return 0;
-  const std::size_t removed = particles.remove_flagged(remove);
-  m_removed += static_cast<std::int64_t>(removed);
-  return removed;
 }
 
 }  // namespace drench::bullet

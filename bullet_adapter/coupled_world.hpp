@@ -31,6 +31,7 @@
 #include "coupling/coupler.hpp"
 #include "coupling/leak_audit.hpp"
 #include "scene/scene_config.hpp"
+#include "scene/simulation.hpp"
 #include "sph/emitters.hpp"
 #include "sph/fluid_solver.hpp"
 
@@ -90,43 +91,35 @@ class CoupledWorld {
   /// trouble: see the report.
   CoupledStepReport step(double dt);
   /// One coupled step of the scene's time.dt.
-  CoupledStepReport step() { return step(m_scene.time.dt); }
+  CoupledStepReport step() { return step(m_simulation->config().time.dt); }
 
-  const ParticleSet& particles() const { return m_fluid->particles(); }
-  FluidSolver& fluid() { return *m_fluid; }
+  const ParticleSet& particles() const { return m_simulation->particles(); }
+  FluidSolver& fluid() { return m_simulation->fluid(); }
   BulletCloth& cloth() { return *m_cloth; }
   const BulletCloth& cloth() const { return *m_cloth; }
   /// The cloth as the coupling saw it in the last step (positions_t1 are the corrected end positions).
   const ClothMesh& cloth_mesh() const { return m_cloth->mesh(); }
   btSoftRigidDynamicsWorld& world() { return *m_cloth->world(); }
   /// The coupler, or nullptr when the scene does not list "coupling".
-  Coupler* coupler() { return m_coupler.get(); }
-  const SceneConfig& scene() const { return m_scene; }
+  Coupler* coupler() { return m_simulation->coupler(); }
+  /// The simulation behind this world: the same pipeline `drench run` steps (scene/simulation.hpp).
+  Simulation& simulation() { return *m_simulation; }
+  const SceneConfig& scene() const { return m_simulation->config(); }
 
   /// The speed of sound in use (unit: m/s): the scene's, or the automatic one.
-  Scalar speed_of_sound() const { return m_speed_of_sound; }
+  Scalar speed_of_sound() const { return m_simulation->speed_of_sound(); }
   /// Simulated time (unit: s): the sum of the dt of every step.
-  double time() const { return m_time; }
-  std::int64_t steps() const { return m_steps; }
+  double time() const { return m_simulation->time(); }
+  std::int64_t steps() const { return m_simulation->steps_done(); }
   /// Particles ever created and ever removed.
-  std::int64_t created() const { return m_next_id; }
-  std::int64_t removed() const { return m_removed; }
+  std::int64_t created() const { return m_simulation->created(); }
+  std::int64_t removed() const { return m_simulation->removed(); }
 
  private:
   CoupledWorld(std::unique_ptr<BulletCloth> cloth, const SceneConfig& scene);
-  std::size_t remove_killed();
 
-  SceneConfig m_scene;
-  std::unique_ptr<BulletCloth> m_cloth;
-  Scalar m_speed_of_sound = 0;
-  std::unique_ptr<FluidSolver> m_fluid;
-  std::vector<NozzleEmitter> m_nozzles;
-  std::unique_ptr<Coupler> m_coupler;
-  bool m_leak_audit = false;
-  std::uint32_t m_next_id = 0;
-  double m_time = 0;
-  std::int64_t m_steps = 0;
-  std::int64_t m_removed = 0;
+  BulletCloth* m_cloth;  // owned by m_simulation
+  std::unique_ptr<Simulation> m_simulation;
 };
 
 }  // namespace drench::bullet

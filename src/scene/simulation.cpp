@@ -61,9 +61,28 @@ BoundaryParticles sample_boundaries(const SceneConfig& config) {
 
 }  // namespace
 
+namespace {
+
+std::unique_ptr<ClothEngine> build_cloth(const SceneConfig& config, const ClothEngineFactory& factory) {
+  if (!config.cloth) return nullptr;
+  if (!factory) {
+    throw SceneError(
+        "cloth: this program has no cloth engine; run the scene with the drench command, which "
+        "links the Bullet adapter (" +
+        config.source + ")");
+  }
+  return factory(*config.cloth, config.gravity);
+}
+
+}  // namespace
+
 Simulation::Simulation(const SceneConfig& config, const ClothEngineFactory& cloth_factory)
+    : Simulation(config, build_cloth(config, cloth_factory)) {}
+
+Simulation::Simulation(const SceneConfig& config, std::unique_ptr<ClothEngine> cloth)
     : m_config(config),
-      m_speed_of_sound(config.fluid.wcsph.speed_of_sound.value_or(automatic_speed_of_sound(config))) {
+      m_speed_of_sound(config.fluid.wcsph.speed_of_sound.value_or(automatic_speed_of_sound(config))),
+      m_cloth(std::move(cloth)) {
   m_fluid =
       std::make_unique<FluidSolver>(m_config.fluid, m_config.gravity, sample_boundaries(m_config),
                                     m_config.boundaries, m_config.has_effect("viscosity"), m_speed_of_sound);
@@ -76,26 +95,16 @@ Simulation::Simulation(const SceneConfig& config, const ClothEngineFactory& clot
       m_nozzles.emplace_back(e.nozzle, m_config.fluid.particle_spacing);
     }
   }
-  if (m_config.cloth) {
-    if (!cloth_factory) {
-      throw SceneError(
-          "cloth: this program has no cloth engine; run the scene with the drench command, which "
-          "links the Bullet adapter (" +
-          m_config.source + ")");
-    }
-    m_cloth = cloth_factory(*m_config.cloth, m_config.gravity);
-    m_cloth->mesh().validate();
-  }
-  if (m_config.has_effect("coupling")) m_coupler = std::make_unique<Coupler>(m_config.coupling);
-  m_leak_audit = m_config.has_effect("leak_audit");
+  if (m_cloth) m_cloth->mesh().validate();
+  if (m_cloth && m_config.has_effect("coupling")) m_coupler = std::make_unique<Coupler>(m_config.coupling);
+  m_leak_audit = m_cloth && m_config.has_effect("leak_audit");
 }
 
 bool Simulation::finished() const {
   return m_steps >= m_total_steps;
 }
 
-StepStatus Simulation::step() {
-  const Scalar dt = m_config.time.dt;
+StepStatus Simulation::step(Scalar dt) {
   {
     ScopedTimer timer(m_emit_seconds);
     for (auto& nozzle : m_nozzles) {
@@ -110,11 +119,21 @@ StepStatus Simulation::step() {
     obstacle = std::make_unique<ClothObstacle>(m_cloth->mesh(), m_cloth->velocities(),
                                                m_config.coupling.cloth_thickness);
   }
-  const StepStatus status = m_fluid->step(dt, obstacle.get());
+  StepStatus status = m_fluid->step(dt, obstacle.get());
   if (m_cloth) {
     {
       ScopedTimer timer(m_cloth_seconds);
       m_cloth->step(dt);
+    }
+    m_non_finite_node = -1;
+    const ClothMesh& mesh = m_cloth->mesh();
+    for (std::size_t i = 0; i < mesh.node_count(); ++i) {
+      if (!mesh.positions_t1[i].allFinite()) {
+        m_non_finite_node = static_cast<std::int64_t>(i);
+        status.flags |= StepStatus::NON_FINITE_CLOTH;
+        status.non_finite_node = m_non_finite_node;
+        break;
+      }
     }
     if (obstacle) {
       obstacle->transfer_to(m_cloth->mesh(), dt);
@@ -122,16 +141,23 @@ StepStatus Simulation::step() {
       m_coupling_stats.vertical_impulse_on_cloth += obstacle->vertical_impulse();
     }
     ParticleSet& p = m_fluid->particles();
-    if (m_coupler) {
+    // A cloth or fluid that went non-finite is not coupled: its state means nothing any more.
+    const bool coupled = m_coupler && m_non_finite_node < 0 && status.ok();
+    m_last_coupling_status = 0;
+    if (coupled) {
       ScopedTimer timer(m_coupling_seconds);
       const FluidView view{&p.positions_t0, &p.positions, &p.velocities, &p.masses};
-      m_coupling_status |= m_coupler->step(view, m_cloth->mesh(), dt, m_coupling_stats);
+      m_last_coupling_status = m_coupler->step(view, m_cloth->mesh(), dt, m_coupling_stats);
+      m_coupling_status |= m_last_coupling_status;
     }
-    if (m_leak_audit) audit_leaks(p.positions_t0, p.positions, m_cloth->mesh(), m_leak_stats);
+    if (m_leak_audit && m_non_finite_node < 0 && status.ok()) {
+      audit_leaks(p.positions_t0, p.positions, m_cloth->mesh(), m_leak_stats);
+    }
     ScopedTimer timer(m_cloth_seconds);
     m_cloth->end_step(dt);
   }
   ++m_steps;
+  m_time += dt;
   if (!m_config.kill_regions.empty()) {
     ScopedTimer timer(m_emit_seconds);
     remove_killed();

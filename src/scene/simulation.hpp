@@ -25,19 +25,25 @@ class Simulation {
   ///        when the scene has a `cloth`, else SceneError
   explicit Simulation(const SceneConfig& config, const ClothEngineFactory& cloth_factory = {});
 
+  /// With a cloth engine built by the caller (e.g. attached to a Bullet world the caller owns); config.cloth
+  /// is then not used. `cloth` may be null for a fluid-only simulation.
+  Simulation(const SceneConfig& config, std::unique_ptr<ClothEngine> cloth);
+
   /// One step of the scene's dt, in the paper's pipeline order (sec. 5): the cloth records its start
   /// positions; nozzles emit; the fluid advances alone (sub-stepping as it must); the cloth advances alone;
   /// the coupling corrects both (repulsion, friction, continuous handling); the leak audit checks the final
   /// motion; the cloth takes its corrections; kill regions remove the particles that left. Stages of effects
   /// the scene does not list are never built.
-  StepStatus step();
+  StepStatus step() { return step(m_config.time.dt); }
+  /// The same with a step other than the scene's (unit: s, > 0).
+  StepStatus step(Scalar dt);
 
   /// True once the simulated time has reached the scene's duration (within a thousandth of a step).
   bool finished() const;
   /// Steps the scene's duration takes, round(duration / dt).
   std::int64_t total_steps() const { return m_total_steps; }
   std::int64_t steps_done() const { return m_steps; }
-  Scalar time() const { return m_steps * m_config.time.dt; }
+  Scalar time() const { return m_time; }
 
   const SceneConfig& config() const { return m_config; }
   FluidSolver& fluid() { return *m_fluid; }
@@ -54,6 +60,8 @@ class Simulation {
   /// Wall time spent emitting and removing particles (unit: s).
   double emit_seconds() const { return m_emit_seconds; }
 
+  /// The coupler, or nullptr when the scene does not list "coupling" (or has no cloth).
+  Coupler* coupler() { return m_coupler.get(); }
   /// The cloth, or nullptr for a fluid-only scene.
   ClothEngine* cloth() { return m_cloth.get(); }
   const ClothEngine* cloth() const { return m_cloth.get(); }
@@ -66,6 +74,11 @@ class Simulation {
   double coupling_seconds() const { return m_coupling_seconds; }
   /// COUPLING_* flags raised so far.
   std::uint32_t coupling_status() const { return m_coupling_status; }
+  /// COUPLING_* flags of the last step.
+  std::uint32_t last_coupling_status() const { return m_last_coupling_status; }
+  /// Index of the first cloth node that was not finite after the cloth's own last step, or -1; the coupling
+  /// was then skipped and the step reports NON_FINITE_STATE.
+  std::int64_t non_finite_cloth_node() const { return m_non_finite_node; }
 
  private:
   void remove_killed();
@@ -85,6 +98,9 @@ class Simulation {
   CouplingStepStats m_coupling_stats;
   LeakAuditStats m_leak_stats;
   std::uint32_t m_coupling_status = 0;
+  std::uint32_t m_last_coupling_status = 0;
+  std::int64_t m_non_finite_node = -1;
+  Scalar m_time = 0;
   double m_cloth_seconds = 0;
   double m_coupling_seconds = 0;
 };

@@ -12,6 +12,7 @@ namespace drench {
 StepStatus& StepStatus::operator|=(const StepStatus& other) {
   flags |= other.flags;
   if (non_finite_particle < 0) non_finite_particle = other.non_finite_particle;
+  if (non_finite_node < 0) non_finite_node = other.non_finite_node;
   return *this;
 }
 
@@ -24,6 +25,11 @@ std::string StepStatus::describe() const {
   if (flags & PRESSURE_NOT_CONVERGED) {
     if (!text.empty()) text += "; ";
     text += "PRESSURE_NOT_CONVERGED: PCISPH reached fluid.pcisph.max_iterations above eta";
+  }
+  if (flags & NON_FINITE_CLOTH) {
+    if (!text.empty()) text += "; ";
+    text += "NON_FINITE_CLOTH: cloth node " + std::to_string(non_finite_node) +
+            " has a NaN or infinite position (lower time.dt, raise cloth.position_iterations)";
   }
   return text;
 }

@@ -25,11 +25,15 @@ struct StepStatus {
     /// PCISPH stopped at max_iterations with the density error above eta in some sub-step. The step is still
     /// usable; raise max_iterations or lower dt if it persists.
     PRESSURE_NOT_CONVERGED = 1u << 1,
+    /// A cloth node's position became NaN or infinite after the cloth's own step; `non_finite_node` names it
+    /// and the coupling was skipped. Lower dt, raise the cloth's position iterations, check its masses.
+    NON_FINITE_CLOTH = 1u << 2,
   };
   std::uint32_t flags = 0;
   std::int64_t non_finite_particle = -1;  ///< id of the first non-finite particle, or -1
+  std::int64_t non_finite_node = -1;      ///< index of the first non-finite cloth node, or -1
 
-  bool ok() const { return (flags & NON_FINITE_STATE) == 0; }
+  bool ok() const { return (flags & (NON_FINITE_STATE | NON_FINITE_CLOTH)) == 0; }
   StepStatus& operator|=(const StepStatus& other);
   /// One line naming each raised flag (and the particle id), empty when no flag is raised.
   std::string describe() const;
