@@ -9,24 +9,6 @@
 namespace drench {
 namespace {
 
-Box3 particle_box(const Vec3& x_t0, const Vec3& x_t1, double margin) {
-  Box3 box;
-  box.extend(x_t0);
-  box.extend(x_t1);
-  box.grow(margin);
-  return box;
-}
-
-Box3 triangle_box(const ClothMesh& cloth, const Triangle& t, double margin) {
-  Box3 box;
-  for (Index v : t) {
-    box.extend(cloth.positions_t0[v]);
-    box.extend(cloth.positions_t1[v]);
-  }
-  box.grow(margin);
-  return box;
-}
-
 /// Triangles binned into a uniform grid of cells about one triangle box in size: a particle looks only at the
 /// cells its swept box covers. Keys are hashed cell coordinates, sorted once per step; a hash collision only
 /// adds candidates, which the exact box test removes.
@@ -124,6 +106,24 @@ class GridBroadPhase final : public TriangleBroadPhase {
 };
 
 }  // namespace
+
+Box3 particle_box(const Vec3& x_t0, const Vec3& x_t1, double margin) {
+  Box3 box;
+  box.extend(x_t0);
+  box.extend(x_t1);
+  box.grow(margin);
+  return box;
+}
+
+Box3 triangle_box(const ClothMesh& cloth, const Triangle& t, double margin) {
+  Box3 box;
+  for (Index v : t) {
+    box.extend(cloth.positions_t0[v]);
+    box.extend(cloth.positions_t1[v]);
+  }
+  box.grow(margin);
+  return box;
+}
 
 void find_pairs_brute_force(const Vec3Array& particles_t0, const Vec3Array& particles_t1,
                             const ClothMesh& cloth, double margin,

@@ -32,6 +32,12 @@ struct Box3 {
   }
 };
 
+/// A particle's box over the step: x_t0 and x_t1 grown by `margin` (unit: m).
+Box3 particle_box(const Vec3& x_t0, const Vec3& x_t1, double margin);
+
+/// A triangle's box over the step: its nodes at both ends grown by `margin` (unit: m).
+Box3 triangle_box(const ClothMesh& cloth, const Triangle& t, double margin);
+
 /// Candidate (particle, triangle) pairs: every pair whose swept, grown boxes overlap, sorted by particle then
 /// triangle, each pair once. Implementations must return exactly this set (tests compare with brute force).
 class TriangleBroadPhase {

@@ -16,6 +16,27 @@ ClothMesh ClothMesh::rigid(const Vec3Array& positions, std::vector<Triangle> tri
   return mesh;
 }
 
+ClothMesh ClothMesh::grid(int n, double size, double y, double inverse_mass, double x0, double z0) {
+  ClothMesh mesh;
+  for (int j = 0; j < n; ++j) {
+    for (int i = 0; i < n; ++i)
+      mesh.positions_t0.emplace_back(x0 + size * i / (n - 1), y, z0 + size * j / (n - 1));
+  }
+  mesh.positions_t1 = mesh.positions_t0;
+  mesh.inverse_masses.assign(mesh.positions_t0.size(), inverse_mass);
+  for (int j = 0; j + 1 < n; ++j) {
+    for (int i = 0; i + 1 < n; ++i) {
+      const auto a = static_cast<Index>(j * n + i);
+      const Index b = a + 1;
+      const Index c = a + static_cast<Index>(n);
+      const Index d = c + 1;
+      mesh.triangles.push_back({a, c, b});
+      mesh.triangles.push_back({b, c, d});
+    }
+  }
+  return mesh;
+}
+
 void ClothMesh::validate() const {
   const std::size_t m = positions_t0.size();
   if (positions_t1.size() != m || inverse_masses.size() != m) {

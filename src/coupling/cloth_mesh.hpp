@@ -28,6 +28,10 @@ struct ClothMesh {
   /// A static rigid mesh: both positions equal, every inverse mass 0 (the paper's V-shaped plane).
   static ClothMesh rigid(const Vec3Array& positions, std::vector<Triangle> triangles);
 
+  /// A square grid of n x n nodes (n >= 2) spanning [x0, x0 + size] x [z0, z0 + size] at height y (unit: m),
+  /// 2 (n - 1)^2 triangles with normal +y, not moving, every node of inverse mass `inverse_mass` (1/kg).
+  static ClothMesh grid(int n, double size, double y, double inverse_mass, double x0 = 0.0, double z0 = 0.0);
+
   /// Throws drench::Error naming the first problem: arrays of different lengths, an index out of range, a
   /// repeated index in a triangle, a negative or non-finite inverse mass, a non-finite position.
   void validate() const;

@@ -6,13 +6,14 @@
 
 namespace drench {
 
-ClothObstacle::ClothObstacle(const ClothMesh& cloth, const Vec3Array& velocities, double thickness)
+ClothObstacle::ClothObstacle(const ClothMesh& cloth, const Vec3Array& velocities, double thickness,
+                             BroadPhaseKind broad_phase)
     : m_static(ClothMesh::rigid(cloth.positions_t0, cloth.triangles)),
       m_inverse_masses(cloth.inverse_masses),
       m_thickness(thickness),
       m_node_velocities(velocities),
       m_node_impulses(cloth.node_count(), Vec3::Zero()),
-      m_broad_phase(make_broad_phase(BroadPhaseKind::GRID)) {}
+      m_broad_phase(make_broad_phase(broad_phase)) {}
 
 void ClothObstacle::apply(const Vec3Array& positions_before, ParticleSet& particles, Scalar dt) {
   if (m_static.triangles.empty() || particles.empty()) return;

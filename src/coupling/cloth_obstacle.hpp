@@ -22,7 +22,9 @@ class ClothObstacle final : public SubstepConstraint {
   /// @param cloth  its positions_t0 are the obstacle (copied); inverse masses and triangles are used
   /// @param thickness  the cloth thickness (unit: m), > 0: particles are stopped with a small separating
   /// speed
-  ClothObstacle(const ClothMesh& cloth, const Vec3Array& velocities, double thickness);
+  /// @param broad_phase  which broad phase finds the particles near the cloth
+  ClothObstacle(const ClothMesh& cloth, const Vec3Array& velocities, double thickness,
+                BroadPhaseKind broad_phase);
 
   void apply(const Vec3Array& positions_before, ParticleSet& particles, Scalar dt) override;
 

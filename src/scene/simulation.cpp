@@ -116,8 +116,9 @@ StepStatus Simulation::step(Scalar dt) {
   // (coupling/cloth_obstacle.hpp).
   std::unique_ptr<ClothObstacle> obstacle;
   if (m_coupler && m_config.coupling.continuous && m_config.coupling.substep_obstacle) {
-    obstacle = std::make_unique<ClothObstacle>(m_cloth->mesh(), m_cloth->velocities(),
-                                               m_config.coupling.cloth_thickness);
+    obstacle =
+        std::make_unique<ClothObstacle>(m_cloth->mesh(), m_cloth->velocities(),
+                                        m_config.coupling.cloth_thickness, m_config.coupling.broad_phase);
   }
   StepStatus status = m_fluid->step(dt, obstacle.get());
   if (m_cloth) {

@@ -1,7 +1,10 @@
 // Broad phases return exactly the brute-force set of (particle, triangle) pairs whose swept boxes overlap.
 
 #include <gtest/gtest.h>
+#include <omp.h>
 
+#include <algorithm>
+#include <memory>
 #include <random>
 
 #include "coupling/broad_phase.hpp"
@@ -33,6 +36,45 @@ void expect_same_pairs_as_brute_force(BroadPhaseKind kind) {
 
 TEST(BroadPhase, GridFindsExactlyTheBruteForcePairs) {
   expect_same_pairs_as_brute_force(BroadPhaseKind::GRID);
+}
+
+TEST(BroadPhase, FclFindsExactlyTheBruteForcePairs) {
+  expect_same_pairs_as_brute_force(BroadPhaseKind::FCL);
+}
+
+// One object kept over steps, as the coupler keeps it (the FCL tree is refitted, not rebuilt), with the
+// `only` flags, at 1 and 2 threads: still exactly the brute-force pairs of the flagged particles.
+TEST(BroadPhase, ReusedOverMovingStepsMatchesBruteForceAtAnyThreadCount) {
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  test::Particles particles;
+  for (int k = 0; k < 3000; ++k)
+    particles.add(Vec3(0.35 * u(rng) + 0.15, 0.02 * u(rng), 0.35 * u(rng) + 0.15),
+                  Vec3(u(rng), u(rng), u(rng)), 0.003, 1e-4);
+  std::vector<std::uint8_t> only(particles.x0.size());
+  for (auto& flag : only)
+    flag = u(rng) > 0.0 ? 1 : 0;
+  const int threads = omp_get_max_threads();
+  for (BroadPhaseKind kind : {BroadPhaseKind::GRID, BroadPhaseKind::FCL}) {
+    const std::unique_ptr<TriangleBroadPhase> broad_phase = make_broad_phase(kind);
+    ClothMesh mesh = test::grid_mesh(21, 0.3, 0.0, 1.0);
+    std::vector<std::pair<Index, Index>> expected, got;
+    for (int step = 0; step < 6; ++step) {
+      mesh.positions_t0 = mesh.positions_t1;
+      for (Vec3& x : mesh.positions_t1)
+        x += 0.01 * Vec3(u(rng), u(rng), u(rng));
+      const double margin = 0.002 * (step % 3);
+      find_pairs_brute_force(particles.x0, particles.x1, mesh, margin, expected);
+      expected.erase(std::remove_if(expected.begin(), expected.end(),
+                                    [&](const auto& pair) { return !only[pair.first]; }),
+                     expected.end());
+      ASSERT_GT(expected.size(), 100u);
+      omp_set_num_threads(1 + step % 2);
+      broad_phase->find_pairs(particles.x0, particles.x1, mesh, margin, &only, got);
+      omp_set_num_threads(threads);
+      EXPECT_EQ(got, expected) << "step " << step << ", broad phase " << static_cast<int>(kind);
+    }
+  }
 }
 
 }  // namespace
