@@ -38,38 +38,23 @@ class GridBroadPhase final : public TriangleBroadPhase {
     }
     std::sort(m_entries.begin(), m_entries.end());
 
-    const int threads = omp_get_max_threads();
-    std::vector<std::vector<std::pair<Index, Index>>> found(static_cast<std::size_t>(threads));
-#pragma omp parallel
-    {
-      std::vector<std::pair<Index, Index>>& mine = found[static_cast<std::size_t>(omp_get_thread_num())];
-      std::vector<Index> candidates;
-#pragma omp for schedule(static)
-      for (std::size_t p = 0; p < n; ++p) {
-        if (only && !(*only)[p]) continue;
-        const Box3 box = particle_box(particles_t0[p], particles_t1[p], margin);
-        candidates.assign(m_everywhere.begin(), m_everywhere.end());
-        const bool binned = for_cells(box, [&](std::uint64_t key) {
-          auto it =
-              std::lower_bound(m_entries.begin(), m_entries.end(), std::pair<std::uint64_t, Index>{key, 0});
-          for (; it != m_entries.end() && it->first == key; ++it)
-            candidates.push_back(it->second);
-        });
-        if (!binned) {
-          candidates.resize(f);
-          for (std::size_t t = 0; t < f; ++t)
-            candidates[t] = static_cast<Index>(t);
-        }
-        std::sort(candidates.begin(), candidates.end());
-        candidates.erase(std::unique(candidates.begin(), candidates.end()), candidates.end());
-        for (Index t : candidates) {
-          if (box.overlaps(m_boxes[t])) mine.emplace_back(static_cast<Index>(p), t);
-        }
-      }
-    }
-    // Static scheduling hands out particles in blocks in thread order: concatenating keeps particle order.
-    for (const auto& part : found)
-      pairs.insert(pairs.end(), part.begin(), part.end());
+    collect_pairs(
+        particles_t0, particles_t1, margin, only, m_boxes,
+        [&](const Box3& box, std::vector<Index>& candidates) {
+          candidates.assign(m_everywhere.begin(), m_everywhere.end());
+          const bool binned = for_cells(box, [&](std::uint64_t key) {
+            auto it =
+                std::lower_bound(m_entries.begin(), m_entries.end(), std::pair<std::uint64_t, Index>{key, 0});
+            for (; it != m_entries.end() && it->first == key; ++it)
+              candidates.push_back(it->second);
+          });
+          if (!binned) {
+            candidates.resize(f);
+            for (std::size_t t = 0; t < f; ++t)
+              candidates[t] = static_cast<Index>(t);
+          }
+        },
+        pairs);
   }
 
  private:
@@ -123,6 +108,36 @@ Box3 triangle_box(const ClothMesh& cloth, const Triangle& t, double margin) {
   }
   box.grow(margin);
   return box;
+}
+
+void collect_pairs(const Vec3Array& particles_t0, const Vec3Array& particles_t1, double margin,
+                   const std::vector<std::uint8_t>* only, const std::vector<Box3>& triangle_boxes,
+                   const std::function<void(const Box3& box, std::vector<Index>& candidates)>& propose,
+                   std::vector<std::pair<Index, Index>>& pairs) {
+  pairs.clear();
+  const std::size_t n = particles_t0.size();
+  const int threads = omp_get_max_threads();
+  std::vector<std::vector<std::pair<Index, Index>>> found(static_cast<std::size_t>(threads));
+#pragma omp parallel
+  {
+    std::vector<std::pair<Index, Index>>& mine = found[static_cast<std::size_t>(omp_get_thread_num())];
+    std::vector<Index> candidates;
+#pragma omp for schedule(static)
+    for (std::size_t p = 0; p < n; ++p) {
+      if (only && !(*only)[p]) continue;
+      const Box3 box = particle_box(particles_t0[p], particles_t1[p], margin);
+      candidates.clear();
+      propose(box, candidates);
+      std::sort(candidates.begin(), candidates.end());
+      candidates.erase(std::unique(candidates.begin(), candidates.end()), candidates.end());
+      for (Index t : candidates) {
+        if (box.overlaps(triangle_boxes[t])) mine.emplace_back(static_cast<Index>(p), t);
+      }
+    }
+  }
+  // Static scheduling hands out particles in blocks in thread order: concatenating keeps particle order.
+  for (const auto& part : found)
+    pairs.insert(pairs.end(), part.begin(), part.end());
 }
 
 void find_pairs_brute_force(const Vec3Array& particles_t0, const Vec3Array& particles_t1,

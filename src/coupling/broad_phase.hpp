@@ -4,6 +4,7 @@
 /// a margin, so the same candidates serve the proximity test at the start (sec. 3.1) and the CCD (sec. 3.3).
 /// Two implementations behind one interface, measured side by side in bench/bench_coupling.cpp.
 
+#include <functional>
 #include <memory>
 #include <utility>
 #include <vector>
@@ -37,6 +38,14 @@ Box3 particle_box(const Vec3& x_t0, const Vec3& x_t1, double margin);
 
 /// A triangle's box over the step: its nodes at both ends grown by `margin` (unit: m).
 Box3 triangle_box(const ClothMesh& cloth, const Triangle& t, double margin);
+
+/// What every broad phase shares, once: for each particle (in parallel; the result in particle order, so the
+/// same for any thread count) the triangles `propose` names for its swept, grown box, duplicates removed,
+/// kept when that box and the triangle's box in `triangle_boxes` overlap exactly. `propose` may over-report.
+void collect_pairs(const Vec3Array& particles_t0, const Vec3Array& particles_t1, double margin,
+                   const std::vector<std::uint8_t>* only, const std::vector<Box3>& triangle_boxes,
+                   const std::function<void(const Box3& box, std::vector<Index>& candidates)>& propose,
+                   std::vector<std::pair<Index, Index>>& pairs);
 
 /// Candidate (particle, triangle) pairs: every pair whose swept, grown boxes overlap, sorted by particle then
 /// triangle, each pair once. Implementations must return exactly this set (tests compare with brute force).

@@ -59,30 +59,14 @@ class FclBroadPhase final : public TriangleBroadPhase {
     if (f == 0 || n == 0) return;
     update_tree(cloth, margin);
 
-    const int threads = omp_get_max_threads();
-    std::vector<std::vector<std::pair<Index, Index>>> found(static_cast<std::size_t>(threads));
-#pragma omp parallel
-    {
-      std::vector<std::pair<Index, Index>>& mine = found[static_cast<std::size_t>(omp_get_thread_num())];
-      std::vector<Index> candidates;
-      BoxObject query;
-#pragma omp for schedule(static)
-      for (std::size_t p = 0; p < n; ++p) {
-        if (only && !(*only)[p]) continue;
-        const Box3 box = particle_box(particles_t0[p], particles_t1[p], margin);
-        query.set(box);
-        candidates.clear();
-        m_manager.collide(query.object(), &candidates, collect_triangle);
-        std::sort(candidates.begin(), candidates.end());
-        candidates.erase(std::unique(candidates.begin(), candidates.end()), candidates.end());
-        for (Index t : candidates) {
-          if (box.overlaps(m_boxes[t])) mine.emplace_back(static_cast<Index>(p), t);
-        }
-      }
-    }
-    // Static scheduling hands out particles in blocks in thread order: concatenating keeps particle order.
-    for (const auto& part : found)
-      pairs.insert(pairs.end(), part.begin(), part.end());
+    collect_pairs(
+        particles_t0, particles_t1, margin, only, m_boxes,
+        [&](const Box3& box, std::vector<Index>& candidates) {
+          thread_local BoxObject query;  // one FCL object per thread, reused
+          query.set(box);
+          m_manager.collide(query.object(), &candidates, collect_triangle);
+        },
+        pairs);
   }
 
  private:
