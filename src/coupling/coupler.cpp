@@ -362,7 +362,7 @@ std::uint32_t Coupler::step(const FluidView& fluid, ClothMesh& cloth, double dt,
   std::vector<std::pair<Index, Index>> pairs;
 
   const auto repulsion_start = Clock::now();
-  // One broad phase serves proximity (start positions within the thickness) and the first CCD round.
+  // Candidates for proximity: swept boxes grown by the thickness cover every start position within it.
   m_broad_phase->find_pairs(ctx.x0(), ctx.x1(), cloth, thickness, nullptr, pairs);
   std::vector<Contact> contacts = find_contacts(ctx, pairs, thickness);
   stats.contacts += contacts.size();
@@ -378,18 +378,17 @@ std::uint32_t Coupler::step(const FluidView& fluid, ClothMesh& cloth, double dt,
   const auto ccd_start = Clock::now();
   std::vector<std::pair<Index, Impact>> impacts;
   std::vector<std::pair<Index, Index>> changed;
-  bool first_round = true;
   for (int iteration = 0; iteration <= m_settings.max_ccd_iterations; ++iteration) {
-    // After the first round only pairs whose motion changed can have a new impact.
+    // Repulsion changed the motion, so the first round checks every pair; after it, only pairs whose motion
+    // changed in the previous round can have a new impact.
     m_broad_phase->find_pairs(ctx.x0(), ctx.x1(), cloth, 0.0, nullptr, pairs);
-    if (!first_round) {
+    if (iteration > 0) {
       changed.clear();
       for (const auto& pair : pairs) {
         if (ctx.pair_changed(pair.first, pair.second)) changed.push_back(pair);
       }
       pairs.swap(changed);
     }
-    first_round = false;
     ctx.clear_changes();
     ++stats.ccd_iterations;
     find_impacts(ctx, pairs, impacts);
