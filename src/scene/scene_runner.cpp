@@ -84,6 +84,7 @@ nlohmann::json make_summary(const Simulation& sim, double wall_seconds, const st
     s["ccd_impacts"] = c.ccd_impacts;
     s["ccd_iterations"] = c.ccd_iterations;
     s["failsafe_activations"] = c.failsafe_activations;
+    s["obstacle_stops"] = c.obstacle_stops;
     s["mean_contact_slip_mps"] = c.contacts > 0 ? c.slip_sum_mps / static_cast<double>(c.contacts) : 0.0;
     s["coupling_status"] = sim.coupling_status();
     s["timings_s"]["cloth"] = sim.cloth_seconds();
