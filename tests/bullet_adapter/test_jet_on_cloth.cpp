@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <string>
 
 #include "bullet_adapter/bullet_cloth.hpp"
 #include "common/triangle_geometry.hpp"
@@ -64,11 +65,11 @@ RunFigures run(const SceneConfig& config) {
   return r;
 }
 
-// DISABLED until the coupled jet is stable (issue 4 note, measured this session): on this light cloth (node mass
-// 4.1e-5 kg, a third of a particle's) the jet drives Bullet's nodes to 20 m/s within 20 ms of contact, after
-// which the fail-safe fires and particles leak (dt 1 ms: 39 leaks, 56 fail-safe activations, nodes at 1,554
-// m/s). The coupling stage itself never raised the kinetic energy in that run (checked step by step); the gain
-// is in the fluid and cloth solvers between couplings.
+// DISABLED until the coupled jet is stable (issue 4 note, measured this session): on this light cloth (node
+// mass 4.1e-5 kg, a third of a particle's) the jet drives Bullet's nodes to 20 m/s within 20 ms of contact,
+// after which the fail-safe fires and particles leak (dt 1 ms: 39 leaks, 56 fail-safe activations, nodes at
+// 1,554 m/s). The coupling stage itself never raised the kinetic energy in that run (checked step by step);
+// the gain is in the fluid and cloth solvers between couplings.
 TEST(JetOnCloth, DISABLED_NeverLeaksWithContinuousHandling) {
   // Nothing can go faster than twice the jet speed plus a free fall from the nozzle to the kill plane.
   const double speed_limit = 2.0 * (3.0 + std::sqrt(2.0 * 9.81 * 0.65));
@@ -108,7 +109,7 @@ SceneConfig puddle(bool with_water) {
   cloth.damping = 0.05;  // settles in the simulated time
   c.cloth = cloth;
   c.time.dt = 0.001;
-  c.time.duration = 0.6;
+  c.time.duration = 1.0;
   c.effects = {"viscosity", "coupling"};
   return c;
 }
@@ -126,20 +127,18 @@ double distance_to_cloth(const Vec3& x, const ClothMesh& mesh) {
   return best;
 }
 
-// DISABLED: measured -8.67e-4 N s per step against M g dt = 9.42e-4 (92%, the issue asks for 95-105%); sag and
-// resting distance pass. The cloth is probably still sagging at 0.4-0.6 s; to be settled next session.
-TEST(JetOnCloth, DISABLED_ARestingPuddlePassesItsWeightToTheCloth) {
+TEST(JetOnCloth, ARestingPuddlePassesItsWeightToTheCloth) {
   Simulation empty(puddle(false), bullet::cloth_engine_factory());
   Simulation wet(puddle(true), bullet::cloth_engine_factory());
   const double mass = wet.fluid().particle_mass() * static_cast<double>(wet.particles().size());
   ASSERT_GT(wet.particles().size(), 500u);
-  // Settle for 0.4 s, then average the vertical impulse on the cloth over the last 0.2 s.
+  // Settle for 0.8 s, then average the vertical impulse on the cloth over the last 0.2 s.
   double impulse_before = 0.0;
   std::int64_t steps_measured = 0;
   while (!wet.finished()) {
     ASSERT_TRUE(wet.step().ok());
     ASSERT_TRUE(empty.step().ok());
-    if (wet.time() <= 0.4 + 1e-9) {
+    if (wet.time() <= 0.8 + 1e-9) {
       impulse_before = wet.coupling_stats().vertical_impulse_on_cloth;
     } else {
       ++steps_measured;
@@ -149,6 +148,7 @@ TEST(JetOnCloth, DISABLED_ARestingPuddlePassesItsWeightToTheCloth) {
   const double per_step = (wet.coupling_stats().vertical_impulse_on_cloth - impulse_before) / steps_measured;
   // The cloth is pushed down by the water's weight: -M g dt in y per step, within 5%.
   EXPECT_NEAR(per_step, -mass * 9.81 * dt, 0.05 * mass * 9.81 * dt);
+  RecordProperty("impulse_per_step_over_m_g_dt", std::to_string(-per_step / (mass * 9.81 * dt)));
   EXPECT_EQ(wet.coupling_stats().failsafe_activations, 0u);
 
   // The wet cloth's centre node sags below the empty one's.
@@ -165,6 +165,7 @@ TEST(JetOnCloth, DISABLED_ARestingPuddlePassesItsWeightToTheCloth) {
   ASSERT_GT(bottom.size(), 50u);
   std::nth_element(bottom.begin(), bottom.begin() + bottom.size() / 2, bottom.end());
   const double median = bottom[bottom.size() / 2];
+  RecordProperty("median_distance_over_thickness", std::to_string(median / 0.001));
   EXPECT_GE(median, 0.5 * 0.001);
   EXPECT_LE(median, 1.5 * 0.001);
 }
