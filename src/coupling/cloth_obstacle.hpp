@@ -19,12 +19,17 @@ namespace drench {
 
 class ClothObstacle final : public SubstepConstraint {
  public:
-  /// @param cloth  its positions_t0 are the obstacle (copied); inverse masses and triangles are used
   /// @param thickness  the cloth thickness (unit: m), > 0: particles are stopped with a small separating
   /// speed
-  /// @param broad_phase  which broad phase finds the particles near the cloth
-  ClothObstacle(const ClothMesh& cloth, const Vec3Array& velocities, double thickness,
-                BroadPhaseKind broad_phase);
+  /// @param broad_phase  which broad phase finds the particles near the cloth (kept across steps, so FCL's
+  /// tree
+  ///        is refitted rather than rebuilt)
+  ClothObstacle(double thickness, BroadPhaseKind broad_phase);
+
+  /// Starts a step: the cloth's positions_t0 become the obstacle (copied); its inverse masses and triangles
+  /// are used; `velocities` are the node velocities at the start of the step (unit: m/s), M entries. Clears
+  /// the impulses and the counts of the previous step.
+  void begin_step(const ClothMesh& cloth, const Vec3Array& velocities);
 
   void apply(const Vec3Array& positions_before, ParticleSet& particles, Scalar dt) override;
 
@@ -32,9 +37,9 @@ class ClothObstacle final : public SubstepConstraint {
   /// J: N s), as an impulse on the node's velocity over the step. Pinned nodes take theirs without moving.
   void transfer_to(ClothMesh& cloth, double dt) const;
 
-  /// Particles stopped so far (summed over sub-steps).
+  /// Particles stopped in this step (summed over its sub-steps).
   std::uint64_t stops() const { return m_stops; }
-  /// Sum of the y components of the impulses on the cloth (unit: N s).
+  /// Sum of the y components of this step's impulses on the cloth (unit: N s).
   double vertical_impulse() const;
 
  private:

@@ -97,6 +97,10 @@ Simulation::Simulation(const SceneConfig& config, std::unique_ptr<ClothEngine> c
   }
   if (m_cloth) m_cloth->mesh().validate();
   if (m_cloth && m_config.has_effect("coupling")) m_coupler = std::make_unique<Coupler>(m_config.coupling);
+  if (m_coupler && m_config.coupling.continuous && m_config.coupling.substep_obstacle) {
+    m_obstacle =
+        std::make_unique<ClothObstacle>(m_config.coupling.cloth_thickness, m_config.coupling.broad_phase);
+  }
   m_leak_audit = m_cloth && m_config.has_effect("leak_audit");
 }
 
@@ -114,13 +118,8 @@ StepStatus Simulation::step(Scalar dt) {
   if (m_cloth) m_cloth->begin_step();
   // The cloth at its start positions is an obstacle inside the fluid's sub-steps
   // (coupling/cloth_obstacle.hpp).
-  std::unique_ptr<ClothObstacle> obstacle;
-  if (m_coupler && m_config.coupling.continuous && m_config.coupling.substep_obstacle) {
-    obstacle =
-        std::make_unique<ClothObstacle>(m_cloth->mesh(), m_cloth->velocities(),
-                                        m_config.coupling.cloth_thickness, m_config.coupling.broad_phase);
-  }
-  StepStatus status = m_fluid->step(dt, obstacle.get());
+  if (m_obstacle) m_obstacle->begin_step(m_cloth->mesh(), m_cloth->velocities());
+  StepStatus status = m_fluid->step(dt, m_obstacle.get());
   if (m_cloth) {
     {
       ScopedTimer timer(m_cloth_seconds);
@@ -136,10 +135,10 @@ StepStatus Simulation::step(Scalar dt) {
         break;
       }
     }
-    if (obstacle) {
-      obstacle->transfer_to(m_cloth->mesh(), dt);
-      m_coupling_stats.obstacle_stops += obstacle->stops();
-      m_coupling_stats.vertical_impulse_on_cloth += obstacle->vertical_impulse();
+    if (m_obstacle) {
+      m_obstacle->transfer_to(m_cloth->mesh(), dt);
+      m_coupling_stats.obstacle_stops += m_obstacle->stops();
+      m_coupling_stats.vertical_impulse_on_cloth += m_obstacle->vertical_impulse();
     }
     ParticleSet& p = m_fluid->particles();
     // A cloth or fluid that went non-finite is not coupled: its state means nothing any more.

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "coupling/cloth_engine.hpp"
+#include "coupling/cloth_obstacle.hpp"
 #include "coupling/coupler.hpp"
 #include "coupling/leak_audit.hpp"
 #include "scene/scene_config.hpp"
@@ -94,6 +95,7 @@ class Simulation {
   double m_emit_seconds = 0;
   std::unique_ptr<ClothEngine> m_cloth;
   std::unique_ptr<Coupler> m_coupler;
+  std::unique_ptr<ClothObstacle> m_obstacle;  // the cloth inside fluid sub-steps, kept across steps
   bool m_leak_audit = false;
   CouplingStepStats m_coupling_stats;
   LeakAuditStats m_leak_stats;
