@@ -24,7 +24,8 @@ struct ClothSettings {
   int nodes_z = 57;                ///< patch nodes along z, >= 2
   double area_density = 0.2;       ///< mass per area (unit: kg/m^2), > 0
   std::string pinned = "corners";  ///< "corners", "none", or "corner" (one corner, x and z smallest)
-  int position_iterations = 4;     ///< Bullet's piterations, >= 4 (1 blows the 57 x 57 patch up at dt = 1 ms)
+  int position_iterations = 4;     ///< Bullet's piterations, >= 4 (1 blows the 57 x 57 patch up at dt = 1 ms,
+                                   ///< ../shared/notes/bullet-and-fcl.md)
   double stretch_stiffness = 1.0;  ///< Bullet's linear stiffness kLST, in (0, 1]
   double bending_stiffness = 0.5;  ///< stiffness of the bending links (distance 2), in [0, 1]; 0 = none
   double damping = 0.0;            ///< Bullet's kDP, in [0, 1]
