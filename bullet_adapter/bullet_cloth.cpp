@@ -6,6 +6,8 @@
 #include <btBulletDynamicsCommon.h>
 
 #include <cassert>
+#include <stdexcept>
+#include <string>
 
 #include "bullet_adapter/soft_body_builder.hpp"
 #include "common/error.hpp"
@@ -48,6 +50,7 @@ BulletCloth::BulletCloth(const ClothSettings& settings, const Vec3& gravity) {
   m_owned->body->setActivationState(DISABLE_DEACTIVATION);
   world.addSoftBody(m_owned->body.get());
   m_body = m_owned->body.get();
+  m_substeps = settings.substeps;
   m_world = &world;
   read_topology();
 }
@@ -89,9 +92,25 @@ void BulletCloth::begin_step() {
     m_mesh.positions_t0[i] = to_vec3(body.m_nodes[i].m_x);
 }
 
+void BulletCloth::apply_impulses(const Vec3Array& impulses) {
+  btSoftBody& body = *m_body;
+  if (impulses.size() != static_cast<std::size_t>(body.m_nodes.size())) {
+    throw std::invalid_argument("BulletCloth::apply_impulses: " + std::to_string(impulses.size()) +
+                                " impulses for " + std::to_string(body.m_nodes.size()) + " nodes");
+  }
+  for (int i = 0; i < body.m_nodes.size(); ++i) {
+    btSoftBody::Node& node = body.m_nodes[i];
+    node.m_v += to_bt(impulses[i]) * node.m_im;
+  }
+}
+
 void BulletCloth::step(double dt) {
   assert(dt > 0.0);
-  if (m_world != nullptr) m_world->stepSimulation(dt, 0);  // maxSubSteps 0: exactly one step of dt
+  if (m_world != nullptr) {
+    // maxSubSteps 0: exactly one step of the given length each time (no accumulator, no interpolation).
+    for (int k = 0; k < m_substeps; ++k)
+      m_world->stepSimulation(dt / m_substeps, 0);
+  }
   capture_end();
 }
 

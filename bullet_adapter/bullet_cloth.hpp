@@ -4,7 +4,8 @@
 /// writes the coupling's corrections back as positions and velocities:
 ///
 ///   begin_step()   positions_t0 = m_x                       (and inverse masses, from m_im)
-///   step(dt)       world->stepSimulation(dt, 0): exactly one Bullet step; then capture_end()
+///   step(dt)       world->stepSimulation(dt / substeps, 0), substeps times (an owned cloth's
+///                  ClothSettings::substeps, else 1); then capture_end()
 ///   capture_end()  positions_t1 = m_x, remembered as the predicted end positions
 ///   (the coupler corrects mesh().positions_t1 in place)
 ///   end_step(dt)   for every node that can move: m_x = corrected, m_v += (corrected - predicted) / dt
@@ -56,7 +57,13 @@ class BulletCloth final : public ClothEngine {
   /// nodes between steps), triangles re-read when the body's node or face count changed.
   void begin_step() override;
 
-  /// With a world (owned, or given at attach): one stepSimulation(dt, 0) of it, which steps every body in
+  /// node.m_v += J m_im for every node: Bullet's next step integrates them with the cloth's links. Call
+  /// between begin_step() and the world's step.
+  /// @throws std::invalid_argument if `impulses` does not have one entry per node
+  void apply_impulses(const Vec3Array& impulses) override;
+
+  /// With a world (owned, or given at attach): stepSimulation(dt / substeps, 0) `substeps` times (an owned
+  /// cloth's ClothSettings::substeps, an attached one 1), which steps every body in
   /// that world, then capture_end(). Without one: capture_end() only; the caller has stepped the world by dt
   /// since begin_step().
   /// @param dt  (unit: s), > 0
@@ -105,6 +112,7 @@ class BulletCloth final : public ClothEngine {
 
   std::unique_ptr<OwnedWorld> m_owned;  // first: destroyed last, after nothing else points into it
   btSoftBody* m_body = nullptr;
+  int m_substeps = 1;  // owned cloth: ClothSettings::substeps; attached: 1
   btSoftRigidDynamicsWorld* m_world = nullptr;
   ClothMesh m_mesh;
   Vec3Array m_predicted;  // M, Bullet's end positions before the coupling

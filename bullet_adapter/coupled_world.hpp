@@ -3,24 +3,27 @@
 /// each engine advances alone, then the coupler corrects both from their start and end positions).
 ///
 /// One coupled step of dt is one Simulation::step (scene/simulation.hpp, the same stages `drench run` steps):
-///   1. cloth.begin_step()            node positions at the start of the step (positions_t0)
-///   2. nozzles emit                  layers due in (t, t + dt], placed for the start of the step
+///   1. nozzles emit                  layers due in (t, t + dt], placed for the start of the step
+///   2. cloth.begin_step()            node positions at the start of the step (positions_t0)
 ///   3. fluid.step(dt)                SPH alone; records positions_t0; with "coupling" the start-of-step
+///                                    cloth stops particles inside its sub-steps
+///                                    (coupling/cloth_obstacle.hpp)
+///   4. cloth.apply_impulses(...)     the obstacle's impulses on the nodes, into m_v before Bullet's step, so
+///                                    Bullet's links carry the load within the step
+///   5. world->stepSimulation(...)    dt / substeps, substeps times (ClothSettings::substeps, default 1):
 ///   cloth
-///                                    stops particles inside its sub-steps (coupling/cloth_obstacle.hpp)
-///   4. world->stepSimulation(dt, 0)  exactly one Bullet step: cloth (and the user's rigid bodies) alone;
-///                                    then the node end positions (positions_t1) and the obstacle's impulses
-///   5. coupler.step(...)             effect "coupling": repulsion (eq. 1-4), friction (eq. 7-8), continuous
+///                                    (and the user's rigid bodies) alone; then the node end positions
+///   6. coupler.step(...)             effect "coupling": repulsion (eq. 1-4), friction (eq. 7-8), continuous
 ///                                    handling (eq. 5-6) correct particle and node end positions, velocities
-///   6. audit_leaks(...)              effect "leak_audit": particles that crossed the cloth in the final
+///   7. audit_leaks(...)              effect "leak_audit": particles that crossed the cloth in the final
 ///   motion
-///   7. cloth.end_step(dt)            corrected node positions into m_x, velocity changes into m_v
-///   8. kill regions                  particles that left the region of interest are removed
+///   8. cloth.end_step(dt)            corrected node positions into m_x, velocity changes into m_v
+///   9. kill regions                  particles that left the region of interest are removed
 ///
 /// Call CoupledWorld::step instead of world->stepSimulation. The coupling needs the cloth's start and end of
 /// exactly the step the fluid took: stepSimulation(dt) with its default fixed sub-step of 1/60 s would take
 /// zero, one or several Bullet steps per call, and a step taken outside this class has no fluid step beside
-/// it. Bullet's rigid bodies in the same world are stepped by stage 4 as usual.
+/// it. Bullet's rigid bodies in the same world are stepped by stage 5 as usual.
 
 #include <cstdint>
 #include <memory>

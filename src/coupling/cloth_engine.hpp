@@ -26,6 +26,8 @@ struct ClothSettings {
   std::string pinned = "corners";  ///< "corners", "none", or "corner" (one corner, x and z smallest)
   int position_iterations = 4;     ///< Bullet's piterations, >= 4 (1 blows the 57 x 57 patch up at dt = 1 ms,
                                    ///< ../shared/notes/bullet-and-fcl.md)
+  int substeps = 1;  ///< cloth steps per simulation step, >= 1; the coupling still runs once per
+                     ///< step. A position-based cloth stretches less under load with smaller steps
   double stretch_stiffness = 1.0;  ///< Bullet's linear stiffness kLST, in (0, 1]
   double bending_stiffness = 0.5;  ///< stiffness of the bending links (distance 2), in [0, 1]; 0 = none
   double damping = 0.0;            ///< Bullet's kDP, in [0, 1]
@@ -38,6 +40,11 @@ class ClothEngine {
 
   /// Records the node positions at the start of the step (mesh().positions_t0).
   virtual void begin_step() = 0;
+  /// Adds impulses to the node velocities before step(): v += J / m per node, pinned nodes unchanged.
+  /// `impulses` has M entries (unit: N s). The cloth solver then carries them through its own constraints
+  /// within the step, so a load on a few nodes pulls the cloth around them along (drench's sub-step obstacle
+  /// uses this).
+  virtual void apply_impulses(const Vec3Array& impulses) = 0;
   /// Advances the cloth alone by dt (unit: s); afterwards mesh().positions_t1 holds the predicted end
   /// positions.
   virtual void step(double dt) = 0;

@@ -82,12 +82,6 @@ void ClothObstacle::apply(const Vec3Array& positions_before, ParticleSet& partic
   }
 }
 
-void ClothObstacle::transfer_to(ClothMesh& cloth, double dt) const {
-  for (std::size_t i = 0; i < cloth.node_count(); ++i) {
-    cloth.positions_t1[i] += (cloth.inverse_masses[i] * dt) * m_node_impulses[i];
-  }
-}
-
 double ClothObstacle::vertical_impulse() const {
   double sum = 0.0;
   for (const Vec3& j : m_node_impulses)

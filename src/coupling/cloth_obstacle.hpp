@@ -33,9 +33,9 @@ class ClothObstacle final : public SubstepConstraint {
 
   void apply(const Vec3Array& positions_before, ParticleSet& particles, Scalar dt) override;
 
-  /// Adds the impulses the particles gave the cloth to its end positions: x_t1 += J im dt per node (unit of
-  /// J: N s), as an impulse on the node's velocity over the step. Pinned nodes take theirs without moving.
-  void transfer_to(ClothMesh& cloth, double dt) const;
+  /// The impulses the particles gave the cloth in this step, one per node (unit: N s), for
+  /// ClothEngine::apply_impulses before the cloth steps.
+  const Vec3Array& impulses() const { return m_node_impulses; }
 
   /// Particles stopped in this step (summed over its sub-steps).
   std::uint64_t stops() const { return m_stops; }

@@ -361,8 +361,9 @@ TimeSettings read_time(const Node& node) {
 
 ClothSettings read_cloth(const Node& node) {
   ClothSettings cloth;
-  const ObjectReader r(node, {"mesh", "center", "size", "nodes", "area_density", "pinned",
-                              "position_iterations", "stretch_stiffness", "bending_stiffness", "damping"});
+  const ObjectReader r(
+      node, {"mesh", "center", "size", "nodes", "area_density", "pinned", "position_iterations", "substeps",
+             "stretch_stiffness", "bending_stiffness", "damping"});
   if (const Node mesh = r["mesh"]; mesh.present()) {
     cloth.mesh = mesh.string();
     if (cloth.mesh.empty()) mesh.fail("must be \"patch\" or the path of an OBJ file");
@@ -387,6 +388,7 @@ ClothSettings read_cloth(const Node& node) {
       pinned.fail("must be one of \"corners\", \"corner\", \"none\"");
   }
   r.read("position_iterations", cloth.position_iterations, Range{1.0, false, 1000.0, false});
+  r.read("substeps", cloth.substeps, Range{1.0, false, 1000.0, false});
   r.read("stretch_stiffness", cloth.stretch_stiffness, Range{0.0, true, 1.0, false});
   r.read("bending_stiffness", cloth.bending_stiffness, Range{0.0, false, 1.0, false});
   r.read("damping", cloth.damping, Range{0.0, false, 1.0, false});
@@ -395,9 +397,9 @@ ClothSettings read_cloth(const Node& node) {
 
 CouplingSettings read_coupling(const Node& node) {
   CouplingSettings coupling;
-  const ObjectReader r(node, {"cloth_thickness", "repulsion_stiffness", "repulsion_sweeps", "continuous",
-                              "substep_obstacle", "max_ccd_iterations", "slip", "friction_coefficient",
-                              "broad_phase"});
+  const ObjectReader r(
+      node, {"cloth_thickness", "repulsion_stiffness", "repulsion_sweeps", "continuous", "substep_obstacle",
+             "max_ccd_iterations", "slip", "friction_coefficient", "broad_phase"});
   r.read("cloth_thickness", coupling.cloth_thickness, kPositive);
   r.read("repulsion_stiffness", coupling.repulsion_stiffness, kNonNegative);
   r.read("repulsion_sweeps", coupling.repulsion_sweeps, kAtLeastOne);
@@ -661,7 +663,8 @@ std::string scene_source(const std::string& path, const std::vector<std::string>
 SceneConfig load_scene_file(const std::string& path, const std::vector<std::string>& overrides) {
   SceneConfig config = parse_scene(read_scene_document(path, overrides), scene_source(path, overrides));
   // A cloth OBJ named relative to the scene file lives next to it, wherever drench is run from.
-  if (config.cloth && config.cloth->mesh != "patch" && std::filesystem::path(config.cloth->mesh).is_relative()) {
+  if (config.cloth && config.cloth->mesh != "patch" &&
+      std::filesystem::path(config.cloth->mesh).is_relative()) {
     config.cloth->mesh = (std::filesystem::path(path).parent_path() / config.cloth->mesh).string();
   }
   return config;

@@ -121,6 +121,12 @@ StepStatus Simulation::step(Scalar dt) {
   if (m_obstacle) m_obstacle->begin_step(m_cloth->mesh(), m_cloth->velocities());
   StepStatus status = m_fluid->step(dt, m_obstacle.get());
   if (m_cloth) {
+    if (m_obstacle) {
+      // Before the cloth steps, so that its solver spreads the load over the cloth's links in this step.
+      m_cloth->apply_impulses(m_obstacle->impulses());
+      m_coupling_stats.obstacle_stops += m_obstacle->stops();
+      m_coupling_stats.vertical_impulse_on_cloth += m_obstacle->vertical_impulse();
+    }
     {
       ScopedTimer timer(m_cloth_seconds);
       m_cloth->step(dt);
@@ -134,11 +140,6 @@ StepStatus Simulation::step(Scalar dt) {
         status.non_finite_node = m_non_finite_node;
         break;
       }
-    }
-    if (m_obstacle) {
-      m_obstacle->transfer_to(m_cloth->mesh(), dt);
-      m_coupling_stats.obstacle_stops += m_obstacle->stops();
-      m_coupling_stats.vertical_impulse_on_cloth += m_obstacle->vertical_impulse();
     }
     ParticleSet& p = m_fluid->particles();
     // A cloth or fluid that went non-finite is not coupled: its state means nothing any more.

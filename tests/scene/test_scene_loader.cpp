@@ -863,7 +863,7 @@ TEST(SceneHash, Sha256OfEmptyStringMatchesStandardVector) {
 TEST(SceneLoader, ReadsClothAndCoupling) {
   const SceneConfig c = parse_scene(nlohmann::json::parse(R"({
     "cloth": {"center": [0, 0.5, 0], "size": [0.3, 0.4], "nodes": [21, 11], "area_density": 0.1,
-              "pinned": "corner", "position_iterations": 8},
+              "pinned": "corner", "position_iterations": 8, "substeps": 3},
     "coupling": {"cloth_thickness": 0.002, "slip": "no_slip", "broad_phase": "grid", "continuous": false},
     "effects": ["coupling", "friction", "leak_audit"]})"),
                                     "x.json");
@@ -875,6 +875,7 @@ TEST(SceneLoader, ReadsClothAndCoupling) {
   EXPECT_EQ(c.cloth->nodes_z, 11);
   EXPECT_EQ(c.cloth->pinned, "corner");
   EXPECT_EQ(c.cloth->position_iterations, 8);
+  EXPECT_EQ(c.cloth->substeps, 3);
   EXPECT_EQ(c.coupling.cloth_thickness, 0.002);
   EXPECT_EQ(c.coupling.slip, SlipCondition::NO_SLIP);
   EXPECT_FALSE(c.coupling.continuous);
