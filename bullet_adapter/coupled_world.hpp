@@ -3,22 +3,19 @@
 /// each engine advances alone, then the coupler corrects both from their start and end positions).
 ///
 /// One coupled step of dt is one Simulation::step (scene/simulation.hpp, the same stages `drench run` steps):
-///   1. nozzles emit                  layers due in (t, t + dt], placed for the start of the step
-///   2. cloth.begin_step()            node positions at the start of the step (positions_t0)
-///   3. fluid.step(dt)                SPH alone; records positions_t0; with "coupling" the start-of-step
-///                                    cloth stops particles inside its sub-steps
-///                                    (coupling/cloth_obstacle.hpp)
-///   4. cloth.apply_impulses(...)     the obstacle's impulses on the nodes, into m_v before Bullet's step, so
-///                                    Bullet's links carry the load within the step
-///   5. world->stepSimulation(...)    dt / substeps, substeps times (ClothSettings::substeps, default 1):
-///   cloth
-///                                    (and the user's rigid bodies) alone; then the node end positions
-///   6. coupler.step(...)             effect "coupling": repulsion (eq. 1-4), friction (eq. 7-8), continuous
-///                                    handling (eq. 5-6) correct particle and node end positions, velocities
-///   7. audit_leaks(...)              effect "leak_audit": particles that crossed the cloth in the final
-///   motion
-///   8. cloth.end_step(dt)            corrected node positions into m_x, velocity changes into m_v
-///   9. kill regions                  particles that left the region of interest are removed
+///   1. nozzles emit          layers due in (t, t + dt], placed for the start of the step
+///   2. cloth.begin_step()    node positions at the start of the step (positions_t0)
+///   3. fluid.step(dt)        SPH alone; records positions_t0; with "coupling" the start-of-step cloth stops
+///                            particles inside its sub-steps (coupling/cloth_obstacle.hpp)
+///   4. cloth.apply_impulses  the obstacle's impulses on the nodes, into m_v before Bullet's step, so that
+///                            Bullet's links carry the load within the step
+///   5. world stepSimulation  dt / substeps, substeps times (ClothSettings::substeps, default 1): the cloth
+///                            (and the user's rigid bodies) alone; then the node end positions
+///   6. coupler.step(...)     effect "coupling": repulsion (eq. 1-4), friction (eq. 7-8), continuous handling
+///                            (eq. 5-6) correct particle and node end positions and velocities
+///   7. audit_leaks(...)      effect "leak_audit": particles that crossed the cloth in the final motion
+///   8. cloth.end_step(dt)    corrected node positions into m_x, velocity changes into m_v
+///   9. kill regions          particles that left the region of interest are removed
 ///
 /// Call CoupledWorld::step instead of world->stepSimulation. The coupling needs the cloth's start and end of
 /// exactly the step the fluid took: stepSimulation(dt) with its default fixed sub-step of 1/60 s would take
