@@ -42,6 +42,13 @@ Scalar automatic_speed_of_sound(const SceneConfig& config) {
       include(b.point);
     }
   }
+  // A patch cloth is where a jet lands: its fall from the nozzle counts. An OBJ cloth's extent is known only
+  // once the engine has loaded it; scenes with one set the speed of sound or a boundary below.
+  if (config.cloth && config.cloth->mesh == "patch") {
+    const ClothSettings& cloth = *config.cloth;
+    const Vec3 half(0.5 * cloth.size_x, 0.0, 0.5 * cloth.size_z);
+    include_box(cloth.center - half, cloth.center + half);
+  }
   const Scalar height = high > low ? high - low : 0.0;
   return std::max(1.0, 10.0 * (std::sqrt(2.0 * g * height) + emit_speed));
 }

@@ -108,8 +108,8 @@ class Simulation {
 };
 
 /// Speed of sound a scene gets when fluid.wcsph.speed_of_sound is unset: 10 (sqrt(2 |g| H) + v_emit) (unit:
-/// m/s), H the scene's extent along gravity over its emitters and boundaries, v_emit the fastest nozzle;
-/// at least 1 m/s.
+/// m/s), H the scene's extent along gravity over its emitters, boundaries and patch cloth (not an OBJ cloth:
+/// its extent is unknown before the engine loads it), v_emit the fastest nozzle; at least 1 m/s.
 Scalar automatic_speed_of_sound(const SceneConfig& config);
 
 }  // namespace drench
