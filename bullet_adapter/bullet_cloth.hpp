@@ -54,7 +54,8 @@ class BulletCloth final : public ClothEngine {
   BulletCloth& operator=(const BulletCloth&) = delete;
 
   /// positions_t0 = current node positions; inverse masses re-read from Bullet (the caller may pin or unpin
-  /// nodes between steps), triangles re-read when the body's node or face count changed.
+  /// nodes between steps: with set_node_masses, not btSoftBody::setMass, which resets the rest lengths of a
+  /// stretched cloth; soft_body_builder.hpp), triangles re-read when the body's node or face count changed.
   void begin_step() override;
 
   /// node.m_v += J m_im for every node: Bullet's next step integrates them with the cloth's links. Call

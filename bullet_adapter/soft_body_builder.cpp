@@ -14,6 +14,7 @@
 #include <fstream>
 #include <iterator>
 #include <sstream>
+#include <stdexcept>
 #include <unordered_set>
 
 #include "common/error.hpp"
@@ -349,6 +350,26 @@ std::unique_ptr<btSoftBody> create_cloth_body(btSoftBodyWorldInfo& world_info,
   for (int i : pinned_nodes(*body, settings.pinned))
     body->setMass(i, 0.0);
   return body;
+}
+
+void set_node_masses(btSoftBody& body, const std::vector<std::pair<int, double>>& masses) {
+  for (const auto& [node, mass] : masses) {
+    if (node < 0 || node >= body.m_nodes.size()) {
+      throw std::invalid_argument("set_node_masses: node " + std::to_string(node) + " out of range [0, " +
+                                  std::to_string(body.m_nodes.size()) + ")");
+    }
+    if (!(mass >= 0.0) || !std::isfinite(mass)) {
+      throw std::invalid_argument("set_node_masses: node " + std::to_string(node) +
+                                  " mass must be >= 0, got " + format_number(mass));
+    }
+  }
+  for (const auto& [node, mass] : masses) {
+    btSoftBody::Node& n = body.m_nodes[node];
+    n.m_im = mass > 0.0 ? 1.0 / mass : 0.0;
+    // Bullet moves every node by its velocity, pinned or not: a node pinned while moving would drift on.
+    if (mass == 0.0) n.m_v.setZero();
+  }
+  body.updateLinkConstants();
 }
 
 }  // namespace drench::bullet

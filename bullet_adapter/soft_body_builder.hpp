@@ -7,6 +7,7 @@
 
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "bullet_adapter/bullet_conversions.hpp"
@@ -71,6 +72,19 @@ std::vector<int> pinned_nodes(const btSoftBody& body, const std::string& pinned)
 /// k nodes_x + i (i along x, k along z), with diagonal shear links; 2 (nodes_x - 1)(nodes_z - 1) triangles.
 /// @throws SceneError as validate_cloth_settings and load_obj_mesh
 std::unique_ptr<btSoftBody> create_cloth_body(btSoftBodyWorldInfo& world_info, const ClothSettings& settings);
+
+/// Sets node masses of a body that may already have moved, keeping every link's rest length. Use it instead
+/// of btSoftBody::setMass on a cloth that has stepped: setMass flags the body's constants for an update, and
+/// at its next step Bullet 3.24 (btSoftBody::updateConstants) resets every link's rest length to its current
+/// length, so a sagging cloth keeps its stretch for good, and a cloth whose masses change every step (a
+/// wetting cloth) creeps without bound (measured: a 21 x 21 patch under a jet, its node masses changed every
+/// step, had a link 14 times its rest length after 0.2 s). Here only the link constants that depend on the
+/// masses (Link::m_c0) are recomputed.
+/// @param masses  (node index, mass) pairs; mass in kg, >= 0 and finite; 0 pins the node where it is (its
+///        velocity is set to zero: Bullet moves a node by its velocity whatever its mass)
+/// @throws std::invalid_argument naming the first pair whose index is out of range or whose mass is negative
+///         or not finite; nothing is changed then
+void set_node_masses(btSoftBody& body, const std::vector<std::pair<int, double>>& masses);
 
 /// Index of a node of `body` from a pointer into its node array (Node::index is never set by Bullet).
 inline int node_index(const btSoftBody& body, const btSoftBody::Node* node) {

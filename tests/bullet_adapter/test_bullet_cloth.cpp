@@ -10,8 +10,12 @@
 #include <btBulletDynamicsCommon.h>
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstring>
 #include <limits>
+#include <stdexcept>
+#include <string>
+#include <vector>
 
 #include "bullet_adapter/soft_body_builder.hpp"
 #include "bullet_test_helpers.hpp"
@@ -417,6 +421,88 @@ TEST(BulletCloth, UserPinsBetweenStepsAreSeenAtBeginStep) {
   user.cloth->setMass(40, 0.0);
   cloth.begin_step();
   EXPECT_EQ(cloth.mesh().inverse_masses[40], 0.0);
+}
+
+/// Steps an owned 11 x 11 patch, pinned at its corners, for 0.1 s with 20 g hung on its centre node, so that
+/// its links are longer than their rest lengths. Returns the centre node's index.
+int stretch_a_loaded_patch(BulletCloth& cloth, double dt) {
+  btSoftBody& body = cloth.body();
+  const int centre = 5 * 11 + 5;
+  Vec3Array load(body.m_nodes.size(), Vec3::Zero());
+  load[centre] = Vec3(0.0, -0.02 * 9.81 * dt, 0.0);
+  for (int k = 0; k < 100; ++k) {
+    cloth.begin_step();
+    cloth.apply_impulses(load);
+    cloth.step(dt);
+    cloth.end_step(dt);
+  }
+  return centre;
+}
+
+std::vector<double> rest_lengths(const btSoftBody& body) {
+  std::vector<double> rl;
+  for (int i = 0; i < body.m_links.size(); ++i)
+    rl.push_back(body.m_links[i].m_rl);
+  return rl;
+}
+
+TEST(BulletCloth, SetNodeMassesKeepsRestLengthsWhereSetMassResetsThem) {
+  const double dt = 0.001;
+  // Bullet's own setMass: the next step makes the current (stretched) lengths the rest lengths.
+  BulletCloth reference(patch_settings(11, 11), kGravity);
+  const int centre = stretch_a_loaded_patch(reference, dt);
+  const std::vector<double> before = rest_lengths(reference.body());
+  double longest = 0.0;  // current length over rest length: the patch is stretched
+  for (int i = 0; i < reference.body().m_links.size(); ++i) {
+    const btSoftBody::Link& l = reference.body().m_links[i];
+    longest = std::max(longest, (l.m_n[0]->m_x - l.m_n[1]->m_x).length() / l.m_rl);
+  }
+  ASSERT_GT(longest, 1.001);
+  reference.body().setMass(centre, 0.0);
+  reference.begin_step();
+  reference.step(dt);
+  EXPECT_NE(rest_lengths(reference.body()), before);
+
+  // set_node_masses: rest lengths bit-identical, the node pinned, the link constants follow the masses.
+  BulletCloth cloth(patch_settings(11, 11), kGravity);
+  stretch_a_loaded_patch(cloth, dt);
+  btSoftBody& body = cloth.body();
+  ASSERT_EQ(rest_lengths(body), before);  // same steps, same state
+  const Vec3 pinned_at = to_vec3(body.m_nodes[centre].m_x);
+  set_node_masses(body, {{centre, 0.0}, {centre + 1, 0.5}});
+  EXPECT_EQ(body.m_nodes[centre].m_im, 0.0);
+  EXPECT_EQ(body.m_nodes[centre + 1].m_im, 2.0);
+  for (int k = 0; k < 10; ++k) {
+    cloth.begin_step();
+    cloth.step(dt);
+    cloth.end_step(dt);
+  }
+  EXPECT_EQ(rest_lengths(body), before);
+  EXPECT_EQ(to_vec3(body.m_nodes[centre].m_x), pinned_at);
+  for (int i = 0; i < body.m_links.size(); ++i) {
+    const btSoftBody::Link& l = body.m_links[i];
+    EXPECT_EQ(l.m_c0, (l.m_n[0]->m_im + l.m_n[1]->m_im) / l.m_material->m_kLST) << "link " << i;
+  }
+}
+
+TEST(BulletCloth, SetNodeMassesRefusesBadPairsAndChangesNothing) {
+  BulletCloth cloth(patch_settings(5, 5), kGravity);
+  btSoftBody& body = cloth.body();
+  const double im = body.m_nodes[3].m_im;
+  const auto expect_refused = [&](const std::vector<std::pair<int, double>>& masses,
+                                  const std::string& what) {
+    try {
+      set_node_masses(body, masses);
+      ADD_FAILURE() << "no exception for " << what;
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find(what), std::string::npos) << e.what();
+    }
+    EXPECT_EQ(body.m_nodes[3].m_im, im);
+  };
+  expect_refused({{3, 1.0}, {25, 1.0}}, "node 25 out of range [0, 25)");
+  expect_refused({{3, 1.0}, {-1, 1.0}}, "node -1 out of range");
+  expect_refused({{3, 1.0}, {4, -0.5}}, "node 4 mass must be >= 0, got -0.5");
+  expect_refused({{3, 1.0}, {4, std::nan("")}}, "node 4 mass must be >= 0, got nan");
 }
 
 TEST(BulletCloth, FactoryBuildsAnOwnedBulletCloth) {
