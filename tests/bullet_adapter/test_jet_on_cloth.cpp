@@ -73,11 +73,11 @@ RunFigures run(const SceneConfig& config) {
 // energy 30-300% per step once the coupler's corrections move a wet node 20-60 mm against its links per step;
 // the coupler then lowers it again, a two-step oscillation that grows (partitioned coupling of a light
 // structure with a heavy fluid: the added-mass instability). Branch wip/carried-sub meets this test's speed,
-// leak and fail-safe bounds at dt 1 ms in a probe (particles 5.4 m/s, nodes 4.4 m/s, 0 leaks, 0 fail-safe; 4
-// cloth sub-steps) with the fluid side seeing the cloth as kinematic, the cloth's share of every impulse given
-// at its next step, and the water near the cloth carried as node mass (rest lengths kept, as set_node_masses
-// does). At dt 4 ms particles still reach 18 m/s, splashing off the jet's impact in the fluid step; a nearly
-// rigid cloth (1,000 kg/m^2) splashes at 20 m/s there too.
+// leak and fail-safe bounds at dt 1 ms in a probe (particles 5.4 m/s, nodes 4.4 m/s, 0 leaks, 0 fail-safe;
+// 4 cloth sub-steps) with the fluid side seeing the cloth as kinematic, the cloth's share of every impulse
+// given at its next step, and the water near the cloth carried as node mass (rest lengths kept, as
+// set_node_masses does). At dt 4 ms particles still reach 18 m/s, splashing off the jet's impact in the fluid
+// step; a nearly rigid cloth (1,000 kg/m^2) splashes at 20 m/s there too.
 TEST(JetOnCloth, DISABLED_NeverLeaksWithContinuousHandling) {
   // Nothing can go faster than twice the jet speed plus a free fall from the nozzle to the kill plane.
   const double speed_limit = 2.0 * (3.0 + std::sqrt(2.0 * 9.81 * 0.65));
