@@ -63,6 +63,16 @@ void settle(BulletCloth& cloth, int steps) {
   }
 }
 
+/// Steps `steps` times by kDt with `impulses` (one per node, unit: N s) applied before each step.
+void step_under_load(BulletCloth& cloth, const Vec3Array& impulses, int steps) {
+  for (int n = 0; n < steps; ++n) {
+    cloth.begin_step();
+    cloth.apply_impulses(impulses);
+    cloth.step(kDt);
+    cloth.end_step(kDt);
+  }
+}
+
 /// A world the way a user builds it, for attach mode.
 struct UserWorld {
   btSoftBodyRigidBodyCollisionConfiguration configuration;
@@ -258,12 +268,7 @@ double stretch_under_load(int substeps, int steps) {
   const Vec3Array rest = cloth.mesh().positions_t0;
   Vec3Array impulses(rest.size(), Vec3::Zero());
   impulses[10 * 21 + 10] = 0.2 * kGravity * kDt;
-  for (int k = 0; k < steps; ++k) {
-    cloth.begin_step();
-    cloth.apply_impulses(impulses);
-    cloth.step(kDt);
-    cloth.end_step(kDt);
-  }
+  step_under_load(cloth, impulses, steps);
   double worst = 0.0;
   const ClothMesh& m = cloth.mesh();
   for (const Triangle& t : m.triangles) {
@@ -425,17 +430,11 @@ TEST(BulletCloth, UserPinsBetweenStepsAreSeenAtBeginStep) {
 
 /// Steps an owned 11 x 11 patch, pinned at its corners, for 0.1 s with 20 g hung on its centre node, so that
 /// its links are longer than their rest lengths. Returns the centre node's index.
-int stretch_a_loaded_patch(BulletCloth& cloth, double dt) {
-  btSoftBody& body = cloth.body();
+int stretch_a_loaded_patch(BulletCloth& cloth) {
   const int centre = 5 * 11 + 5;
-  Vec3Array load(body.m_nodes.size(), Vec3::Zero());
-  load[centre] = Vec3(0.0, -0.02 * 9.81 * dt, 0.0);
-  for (int k = 0; k < 100; ++k) {
-    cloth.begin_step();
-    cloth.apply_impulses(load);
-    cloth.step(dt);
-    cloth.end_step(dt);
-  }
+  Vec3Array load(cloth.mesh().node_count(), Vec3::Zero());
+  load[centre] = Vec3(0.0, -0.02 * 9.81 * kDt, 0.0);
+  step_under_load(cloth, load, 100);
   return centre;
 }
 
@@ -447,10 +446,9 @@ std::vector<double> rest_lengths(const btSoftBody& body) {
 }
 
 TEST(BulletCloth, SetNodeMassesKeepsRestLengthsWhereSetMassResetsThem) {
-  const double dt = 0.001;
   // Bullet's own setMass: the next step makes the current (stretched) lengths the rest lengths.
   BulletCloth reference(patch_settings(11, 11), kGravity);
-  const int centre = stretch_a_loaded_patch(reference, dt);
+  const int centre = stretch_a_loaded_patch(reference);
   const std::vector<double> before = rest_lengths(reference.body());
   double longest = 0.0;  // current length over rest length: the patch is stretched
   for (int i = 0; i < reference.body().m_links.size(); ++i) {
@@ -460,23 +458,19 @@ TEST(BulletCloth, SetNodeMassesKeepsRestLengthsWhereSetMassResetsThem) {
   ASSERT_GT(longest, 1.001);
   reference.body().setMass(centre, 0.0);
   reference.begin_step();
-  reference.step(dt);
+  reference.step(kDt);
   EXPECT_NE(rest_lengths(reference.body()), before);
 
   // set_node_masses: rest lengths bit-identical, the node pinned, the link constants follow the masses.
   BulletCloth cloth(patch_settings(11, 11), kGravity);
-  stretch_a_loaded_patch(cloth, dt);
+  stretch_a_loaded_patch(cloth);
   btSoftBody& body = cloth.body();
   ASSERT_EQ(rest_lengths(body), before);  // same steps, same state
   const Vec3 pinned_at = to_vec3(body.m_nodes[centre].m_x);
   set_node_masses(body, {{centre, 0.0}, {centre + 1, 0.5}});
   EXPECT_EQ(body.m_nodes[centre].m_im, 0.0);
   EXPECT_EQ(body.m_nodes[centre + 1].m_im, 2.0);
-  for (int k = 0; k < 10; ++k) {
-    cloth.begin_step();
-    cloth.step(dt);
-    cloth.end_step(dt);
-  }
+  settle(cloth, 10);
   EXPECT_EQ(rest_lengths(body), before);
   EXPECT_EQ(to_vec3(body.m_nodes[centre].m_x), pinned_at);
   for (int i = 0; i < body.m_links.size(); ++i) {
