@@ -21,9 +21,8 @@ class ClothObstacle final : public SubstepConstraint {
  public:
   /// @param thickness  the cloth thickness (unit: m), > 0: particles are stopped with a small separating
   /// speed
-  /// @param broad_phase  which broad phase finds the particles near the cloth (kept across steps, so FCL's
-  /// tree
-  ///        is refitted rather than rebuilt)
+  /// @param broad_phase  which broad phase finds the particles near the cloth (kept across steps, so
+  ///        FCL's tree is refitted rather than rebuilt)
   ClothObstacle(double thickness, BroadPhaseKind broad_phase);
 
   /// Starts a step: the cloth's positions_t0 become the obstacle (copied); its inverse masses and triangles
