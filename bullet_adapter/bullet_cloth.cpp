@@ -104,6 +104,30 @@ void BulletCloth::apply_impulses(const Vec3Array& impulses) {
   }
 }
 
+void BulletCloth::set_carried_masses(const ScalarArray& carried) {
+  btSoftBody& body = *m_body;
+  if (carried.size() != static_cast<std::size_t>(body.m_nodes.size())) {
+    throw std::invalid_argument("BulletCloth::set_carried_masses: " + std::to_string(carried.size()) +
+                                " masses for " + std::to_string(body.m_nodes.size()) + " nodes");
+  }
+  restore_masses();
+  for (int i = 0; i < body.m_nodes.size(); ++i) {
+    btSoftBody::Node& node = body.m_nodes[i];
+    if (!(node.m_im > 0.0) || !(carried[i] > 0.0)) continue;
+    m_saved_inverse_masses.emplace_back(i, node.m_im);
+    node.m_im = 1.0 / (1.0 / node.m_im + carried[i]);
+  }
+  if (!m_saved_inverse_masses.empty()) body.updateLinkConstants();
+}
+
+void BulletCloth::restore_masses() {
+  if (m_saved_inverse_masses.empty()) return;
+  for (const auto& [i, im] : m_saved_inverse_masses)
+    m_body->m_nodes[i].m_im = im;
+  m_saved_inverse_masses.clear();
+  m_body->updateLinkConstants();
+}
+
 void BulletCloth::step(double dt) {
   assert(dt > 0.0);
   if (m_world != nullptr) {
@@ -115,6 +139,7 @@ void BulletCloth::step(double dt) {
 }
 
 void BulletCloth::capture_end() {
+  restore_masses();
   const btSoftBody& body = *m_body;
   assert(static_cast<std::size_t>(body.m_nodes.size()) == m_mesh.node_count());
   m_predicted.resize(body.m_nodes.size());

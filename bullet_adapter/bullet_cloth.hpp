@@ -21,6 +21,8 @@
 
 #include <cstdint>
 #include <memory>
+#include <utility>
+#include <vector>
 
 #include "bullet_adapter/bullet_conversions.hpp"
 #include "coupling/cloth_engine.hpp"
@@ -63,6 +65,13 @@ class BulletCloth final : public ClothEngine {
   /// @throws std::invalid_argument if `impulses` does not have one entry per node
   void apply_impulses(const Vec3Array& impulses) override;
 
+  /// node.m_im = 1 / (m + carried) for every node with m_im > 0, until capture_end() puts the saved m_im
+  /// back bit for bit. updateLinkConstants() follows both changes: the links' m_c0 depend on m_im. Never
+  /// setMass, whose flag makes Bullet's next step reset every rest length to the current length
+  /// (set_node_masses in soft_body_builder.hpp). Call between begin_step() and the world's step.
+  /// @throws std::invalid_argument if `carried` does not have one entry per node
+  void set_carried_masses(const ScalarArray& carried) override;
+
   /// With a world (owned, or given at attach): stepSimulation(dt / substeps, 0) `substeps` times (an owned
   /// cloth's ClothSettings::substeps, an attached one 1), which steps every body in
   /// that world, then capture_end(). Without one: capture_end() only; the caller has stepped the world by dt
@@ -70,7 +79,8 @@ class BulletCloth final : public ClothEngine {
   /// @param dt  (unit: s), > 0
   void step(double dt) override;
 
-  /// positions_t1 = current node positions, remembered as Bullet's prediction for end_step.
+  /// positions_t1 = current node positions, remembered as Bullet's prediction for end_step; the node masses
+  /// set_carried_masses changed are the body's own again.
   void capture_end();
 
   ClothMesh& mesh() override { return m_mesh; }
@@ -110,10 +120,12 @@ class BulletCloth final : public ClothEngine {
 
   void read_topology();
   void read_inverse_masses();
+  void restore_masses();
 
   std::unique_ptr<OwnedWorld> m_owned;  // first: destroyed last, after nothing else points into it
   btSoftBody* m_body = nullptr;
   int m_substeps = 1;  // owned cloth: ClothSettings::substeps; attached: 1
+  std::vector<std::pair<int, double>> m_saved_inverse_masses;  // node, its own m_im, while carrying water
   btSoftRigidDynamicsWorld* m_world = nullptr;
   ClothMesh m_mesh;
   Vec3Array m_predicted;  // M, Bullet's end positions before the coupling

@@ -45,6 +45,13 @@ class ClothEngine {
   /// within the step, so a load on a few nodes pulls the cloth around them along (drench's sub-step obstacle
   /// uses this).
   virtual void apply_impulses(const Vec3Array& impulses) = 0;
+  /// For the next step() only, node i moves as if it weighed m_i + carried[i] (unit: kg, M entries, >= 0):
+  /// the water resting on it (coupling/carried_water.hpp), which the engine's constraints must accelerate
+  /// with the node. Nodes with inverse mass 0 stay pinned. After step() the node masses are the engine's own
+  /// again, exactly, and nothing else about the cloth (rest lengths) has changed. Call between begin_step()
+  /// and step(); an engine whose nodes are all pinned may ignore it.
+  /// @throws std::invalid_argument if `carried` does not have one entry per node
+  virtual void set_carried_masses(const ScalarArray& carried) = 0;
   /// Advances the cloth alone by dt (unit: s); afterwards mesh().positions_t1 holds the predicted end
   /// positions.
   virtual void step(double dt) = 0;

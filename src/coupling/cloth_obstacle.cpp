@@ -6,15 +6,21 @@
 
 namespace drench {
 
-ClothObstacle::ClothObstacle(double thickness, BroadPhaseKind broad_phase)
-    : m_thickness(thickness), m_broad_phase(make_broad_phase(broad_phase)) {}
+ClothObstacle::ClothObstacle(double thickness, BroadPhaseKind broad_phase, bool kinematic_cloth)
+    : m_thickness(thickness),
+      m_kinematic_cloth(kinematic_cloth),
+      m_broad_phase(make_broad_phase(broad_phase)) {}
 
 void ClothObstacle::begin_step(const ClothMesh& cloth, const Vec3Array& velocities) {
   m_static.positions_t0 = cloth.positions_t0;
   m_static.positions_t1 = cloth.positions_t0;  // not moving
   m_static.inverse_masses.assign(cloth.node_count(), 0.0);
   m_static.triangles = cloth.triangles;
-  m_inverse_masses = cloth.inverse_masses;
+  if (m_kinematic_cloth) {
+    m_inverse_masses.assign(cloth.node_count(), 0.0);
+  } else {
+    m_inverse_masses = cloth.inverse_masses;
+  }
   m_node_velocities = velocities;
   m_node_impulses.assign(cloth.node_count(), Vec3::Zero());
   m_stops = 0;

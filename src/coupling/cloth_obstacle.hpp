@@ -23,11 +23,15 @@ class ClothObstacle final : public SubstepConstraint {
   /// speed
   /// @param broad_phase  which broad phase finds the particles near the cloth (kept across steps, so
   ///        FCL's tree is refitted rather than rebuilt)
-  ClothObstacle(double thickness, BroadPhaseKind broad_phase);
+  /// @param kinematic_cloth  true: particles are stopped against the cloth's start velocity, which their
+  ///        impulses do not change within the step (CouplingScheme::CARRIED_WATER: one heavy particle would
+  ///        otherwise throw a light node within a single sub-step: its bookkept velocity reached -36 m/s in
+  ///        one 4 ms step of the reduced Fig. 3 jet); false: eq. 2 mass-weighted on both sides
+  ClothObstacle(double thickness, BroadPhaseKind broad_phase, bool kinematic_cloth = false);
 
-  /// Starts a step: the cloth's positions_t0 become the obstacle (copied); its inverse masses and triangles
-  /// are used; `velocities` are the node velocities at the start of the step (unit: m/s), M entries. Clears
-  /// the impulses and the counts of the previous step.
+  /// Starts a step: the cloth's positions_t0 become the obstacle (copied); its inverse masses (unless
+  /// kinematic) and triangles are used; `velocities` are the node velocities at the start of the step (unit:
+  /// m/s), M entries. Clears the impulses and the counts of the previous step.
   void begin_step(const ClothMesh& cloth, const Vec3Array& velocities);
 
   void apply(const Vec3Array& positions_before, ParticleSet& particles, Scalar dt) override;
@@ -45,6 +49,7 @@ class ClothObstacle final : public SubstepConstraint {
   ClothMesh m_static;  // the cloth at its start positions, not moving
   ScalarArray m_inverse_masses;
   double m_thickness;
+  bool m_kinematic_cloth;
   Vec3Array m_node_velocities;  // start velocity plus the impulses so far, over the mass
   Vec3Array m_node_impulses;
   std::uint64_t m_stops = 0;

@@ -56,14 +56,16 @@ struct Contact {
 /// State shared by the stages of one step.
 class StepContext {
  public:
-  StepContext(const FluidView& fluid, ClothMesh& cloth, double dt, CouplingStepStats& stats)
+  StepContext(const FluidView& fluid, ClothMesh& cloth, double dt, CouplingStepStats& stats,
+              Vec3Array& node_impulses)
       : m_x0(*fluid.positions_t0),
         m_x1(*fluid.positions_t1),
         m_v(*fluid.velocities),
         m_mass(*fluid.masses),
         m_cloth(cloth),
         m_dt(dt),
-        m_stats(stats) {}
+        m_stats(stats),
+        m_node_impulses(node_impulses) {}
 
   const Triangle& triangle(Index t) const { return m_cloth.triangles[t]; }
   Vec3 particle_velocity(Index p) const { return (m_x1[p] - m_x0[p]) / m_dt; }
@@ -93,6 +95,7 @@ class StepContext {
     const Triangle& tri = triangle(t);
     for (int i = 0; i < 3; ++i) {
       const double im = m_cloth.inverse_masses[tri[i]];
+      m_node_impulses[tri[i]] -= w[i] * impulse;
       if (im > 0.0) {
         m_cloth.positions_t1[tri[i]] -= (w[i] * im * m_dt) * impulse;
         m_node_changed[tri[i]] = 1;
@@ -143,6 +146,7 @@ class StepContext {
   CouplingStepStats& m_stats;
   std::vector<std::uint8_t> m_particle_changed;
   std::vector<std::uint8_t> m_node_changed;
+  Vec3Array& m_node_impulses;  // what every node received, inverse mass 0 or not (unit: N s)
 };
 
 /// Proximity (sec. 3.1): eq. 1's plane distance and barycentric inside test, extended to edges and vertices
@@ -355,8 +359,9 @@ Coupler::~Coupler() = default;
 
 std::uint32_t Coupler::step(const FluidView& fluid, ClothMesh& cloth, double dt, CouplingStepStats& stats) {
   std::uint32_t status = COUPLING_OK;
+  m_node_impulses.assign(cloth.node_count(), Vec3::Zero());
   if (fluid.positions_t0->empty() || cloth.triangles.empty()) return status;
-  StepContext ctx(fluid, cloth, dt, stats);
+  StepContext ctx(fluid, cloth, dt, stats, m_node_impulses);
   ctx.clear_changes();
   const double thickness = m_settings.cloth_thickness;
   std::vector<std::pair<Index, Index>> pairs;

@@ -66,8 +66,14 @@ class Coupler {
 
   const CouplingSettings& settings() const { return m_settings; }
 
+  /// The impulse each cloth node received in the last step() (unit: N s), M entries, nodes with inverse
+  /// mass 0 included: a caller that stepped a moving cloth as kinematic (inverse masses 0) hands these to
+  /// the cloth itself (CouplingScheme::CARRIED_WATER), so momentum is still exchanged.
+  const Vec3Array& node_impulses() const { return m_node_impulses; }
+
  private:
   CouplingSettings m_settings;
+  Vec3Array m_node_impulses;
   std::unique_ptr<TriangleBroadPhase> m_broad_phase;
 };
 

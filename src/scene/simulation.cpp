@@ -104,10 +104,18 @@ Simulation::Simulation(const SceneConfig& config, std::unique_ptr<ClothEngine> c
   }
   if (m_cloth) m_cloth->mesh().validate();
   if (m_cloth && m_config.has_effect("coupling")) m_coupler = std::make_unique<Coupler>(m_config.coupling);
+  const bool carried_water = m_config.coupling.scheme == CouplingScheme::CARRIED_WATER;
   if (m_coupler && m_config.coupling.continuous && m_config.coupling.substep_obstacle) {
-    m_obstacle =
-        std::make_unique<ClothObstacle>(m_config.coupling.cloth_thickness, m_config.coupling.broad_phase);
+    m_obstacle = std::make_unique<ClothObstacle>(m_config.coupling.cloth_thickness,
+                                                 m_config.coupling.broad_phase, carried_water);
   }
+  if (m_coupler && carried_water) {
+    // The bottom layer of water rests about one thickness above the cloth; half a spacing more takes it all.
+    m_carried = std::make_unique<CarriedWater>(
+        m_config.coupling.cloth_thickness + 0.5 * m_config.fluid.particle_spacing,
+        m_config.coupling.broad_phase);
+  }
+  if (m_cloth) m_pending_cloth_impulses.assign(m_cloth->mesh().node_count(), Vec3::Zero());
   m_leak_audit = m_cloth && m_config.has_effect("leak_audit");
 }
 
@@ -127,43 +135,7 @@ StepStatus Simulation::step(Scalar dt) {
   // (coupling/cloth_obstacle.hpp).
   if (m_obstacle) m_obstacle->begin_step(m_cloth->mesh(), m_cloth->velocities());
   StepStatus status = m_fluid->step(dt, m_obstacle.get());
-  if (m_cloth) {
-    if (m_obstacle) {
-      // Before the cloth steps, so that its solver spreads the load over the cloth's links in this step.
-      m_cloth->apply_impulses(m_obstacle->impulses());
-      m_coupling_stats.obstacle_stops += m_obstacle->stops();
-      m_coupling_stats.vertical_impulse_on_cloth += m_obstacle->vertical_impulse();
-    }
-    {
-      ScopedTimer timer(m_cloth_seconds);
-      m_cloth->step(dt);
-    }
-    m_non_finite_node = -1;
-    const ClothMesh& mesh = m_cloth->mesh();
-    for (std::size_t i = 0; i < mesh.node_count(); ++i) {
-      if (!mesh.positions_t1[i].allFinite()) {
-        m_non_finite_node = static_cast<std::int64_t>(i);
-        status.flags |= StepStatus::NON_FINITE_CLOTH;
-        status.non_finite_node = m_non_finite_node;
-        break;
-      }
-    }
-    ParticleSet& p = m_fluid->particles();
-    // A cloth or fluid that went non-finite is not coupled: its state means nothing any more.
-    const bool coupled = m_coupler && m_non_finite_node < 0 && status.ok();
-    m_last_coupling_status = 0;
-    if (coupled) {
-      ScopedTimer timer(m_coupling_seconds);
-      const FluidView view{&p.positions_t0, &p.positions, &p.velocities, &p.masses};
-      m_last_coupling_status = m_coupler->step(view, m_cloth->mesh(), dt, m_coupling_stats);
-      m_coupling_status |= m_last_coupling_status;
-    }
-    if (m_leak_audit && m_non_finite_node < 0 && status.ok()) {
-      audit_leaks(p.positions_t0, p.positions, m_cloth->mesh(), m_leak_stats);
-    }
-    ScopedTimer timer(m_cloth_seconds);
-    m_cloth->end_step(dt);
-  }
+  if (m_cloth) step_cloth_and_couple(dt, status);
   ++m_steps;
   m_time += dt;
   if (!m_config.kill_regions.empty()) {
@@ -171,6 +143,89 @@ StepStatus Simulation::step(Scalar dt) {
     remove_killed();
   }
   return status;
+}
+
+void Simulation::step_cloth_and_couple(Scalar dt, StepStatus& status) {
+  ParticleSet& p = m_fluid->particles();
+  ClothMesh& mesh = m_cloth->mesh();
+  // CouplingScheme::CARRIED_WATER: the water near the cloth weighs on its nodes through the engine's step.
+  const bool carry = m_carried && status.ok();
+  Vec3Array before_impulses;
+  if (carry) {
+    ScopedTimer timer(m_coupling_seconds);
+    m_carried->attach(mesh, p.positions, p.masses);
+    m_cloth->set_carried_masses(m_carried->carried_masses());
+    before_impulses = m_cloth->velocities();
+  }
+  // Before the cloth steps, so that its solver spreads the load over the cloth's links in this step: what
+  // the previous step owes the cloth, and what the particles gave it inside the fluid's sub-steps.
+  Vec3Array impulses = m_pending_cloth_impulses.size() == mesh.node_count()
+                           ? m_pending_cloth_impulses
+                           : Vec3Array(mesh.node_count(), Vec3::Zero());
+  std::fill(m_pending_cloth_impulses.begin(), m_pending_cloth_impulses.end(), Vec3::Zero());
+  if (m_obstacle) {
+    const Vec3Array& stopped = m_obstacle->impulses();
+    for (std::size_t i = 0; i < impulses.size(); ++i)
+      impulses[i] += stopped[i];
+    m_coupling_stats.obstacle_stops += m_obstacle->stops();
+    m_coupling_stats.vertical_impulse_on_cloth += m_obstacle->vertical_impulse();
+  }
+  if (carry) {
+    // The engine applies gravity to the carried mass too, but the water fell in the fluid's step already.
+    const ScalarArray& carried = m_carried->carried_masses();
+    for (std::size_t i = 0; i < impulses.size(); ++i)
+      impulses[i] -= (carried[i] * dt) * m_config.gravity;
+  }
+  m_cloth->apply_impulses(impulses);
+  {
+    ScopedTimer timer(m_cloth_seconds);
+    m_cloth->step(dt);
+  }
+  m_non_finite_node = -1;
+  for (std::size_t i = 0; i < mesh.node_count(); ++i) {
+    if (!mesh.positions_t1[i].allFinite()) {
+      m_non_finite_node = static_cast<std::int64_t>(i);
+      status.flags |= StepStatus::NON_FINITE_CLOTH;
+      status.non_finite_node = m_non_finite_node;
+      break;
+    }
+  }
+  if (m_pending_cloth_impulses.size() != mesh.node_count())
+    m_pending_cloth_impulses.assign(mesh.node_count(), Vec3::Zero());
+  if (carry && m_non_finite_node < 0) {
+    ScopedTimer timer(m_coupling_seconds);
+    const Vec3 given = m_carried->hand_back(before_impulses, m_cloth->velocities(), mesh, dt, p.positions,
+                                            p.velocities, p.masses);
+    m_coupling_stats.vertical_impulse_on_cloth -= given.y();
+  }
+  // A cloth or fluid that went non-finite is not coupled: its state means nothing any more.
+  const bool coupled = m_coupler && m_non_finite_node < 0 && status.ok();
+  m_last_coupling_status = 0;
+  if (coupled) {
+    ScopedTimer timer(m_coupling_seconds);
+    const FluidView view{&p.positions_t0, &p.positions, &p.velocities, &p.masses};
+    if (m_carried) {
+      // The particles are corrected against the cloth where its engine put it; the cloth's share of every
+      // impulse reaches it at its next step (moving a light node with heavy water here is what the links
+      // would snap back).
+      const ScalarArray inverse_masses = mesh.inverse_masses;
+      std::fill(mesh.inverse_masses.begin(), mesh.inverse_masses.end(), 0.0);
+      m_last_coupling_status = m_coupler->step(view, mesh, dt, m_coupling_stats);
+      mesh.inverse_masses = inverse_masses;
+      const Vec3Array& given = m_coupler->node_impulses();
+      for (std::size_t i = 0; i < given.size(); ++i) {
+        if (inverse_masses[i] > 0.0) m_pending_cloth_impulses[i] += given[i];
+      }
+    } else {
+      m_last_coupling_status = m_coupler->step(view, mesh, dt, m_coupling_stats);
+    }
+    m_coupling_status |= m_last_coupling_status;
+  }
+  if (m_leak_audit && m_non_finite_node < 0 && status.ok()) {
+    audit_leaks(p.positions_t0, p.positions, mesh, m_leak_stats);
+  }
+  ScopedTimer timer(m_cloth_seconds);
+  m_cloth->end_step(dt);
 }
 
 void Simulation::remove_killed() {

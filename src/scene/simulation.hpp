@@ -6,6 +6,7 @@
 #include <memory>
 #include <vector>
 
+#include "coupling/carried_water.hpp"
 #include "coupling/cloth_engine.hpp"
 #include "coupling/cloth_obstacle.hpp"
 #include "coupling/coupler.hpp"
@@ -80,8 +81,14 @@ class Simulation {
   /// Index of the first cloth node that was not finite after the cloth's own last step, or -1; the coupling
   /// was then skipped and the step reports NON_FINITE_STATE.
   std::int64_t non_finite_cloth_node() const { return m_non_finite_node; }
+  /// Impulses the last step owes the cloth, given at the start of its next step (unit: N s), M entries
+  /// (CouplingScheme::CARRIED_WATER; zero otherwise). Part of the total momentum between steps.
+  const Vec3Array& pending_cloth_impulses() const { return m_pending_cloth_impulses; }
 
  private:
+  /// The cloth's side of a step, after the fluid's: impulses, the engine's step, the coupling (sec. 3,
+  /// 5), the leak audit, the corrections back into the engine.
+  void step_cloth_and_couple(Scalar dt, StepStatus& status);
   void remove_killed();
 
   SceneConfig m_config;
@@ -96,6 +103,8 @@ class Simulation {
   std::unique_ptr<ClothEngine> m_cloth;
   std::unique_ptr<Coupler> m_coupler;
   std::unique_ptr<ClothObstacle> m_obstacle;  // the cloth inside fluid sub-steps, kept across steps
+  std::unique_ptr<CarriedWater> m_carried;    // CouplingScheme::CARRIED_WATER only
+  Vec3Array m_pending_cloth_impulses;         // M, owed to the cloth at its next step (unit: N s)
   bool m_leak_audit = false;
   CouplingStepStats m_coupling_stats;
   LeakAuditStats m_leak_stats;

@@ -258,6 +258,51 @@ TEST(BulletCloth, AppliedImpulseIsAVelocityChangeOfJOverMass) {
   EXPECT_THROW(cloth.apply_impulses(Vec3Array(3, Vec3::Zero())), std::invalid_argument);
 }
 
+TEST(BulletCloth, CarriedMassesWeighOnTheNodesForOneStepOnly) {
+  // Water carried through Bullet's step (coupling/carried_water.hpp): node i moves as m_i + carried_i, pinned
+  // nodes stay pinned, and afterwards masses, link constants and rest lengths are the body's own, bit for
+  // bit (no setMass: its flag would make Bullet reset every rest length to the stretched length).
+  BulletCloth cloth(patch_settings(9, 9, "corners"), kGravity);
+  settle(cloth, 3);
+  const btSoftBody& body = cloth.body();
+  std::vector<double> own_im, rest, c0;
+  for (int i = 0; i < body.m_nodes.size(); ++i)
+    own_im.push_back(body.m_nodes[i].m_im);
+  for (int k = 0; k < body.m_links.size(); ++k) {
+    rest.push_back(body.m_links[k].m_rl);
+    c0.push_back(body.m_links[k].m_c0);
+  }
+  cloth.begin_step();
+  const int wet = 40, corner = 8;
+  ScalarArray carried(cloth.mesh().node_count(), 0.0);
+  carried[wet] = 0.01;  // kg, 30 times the node's own mass
+  carried[corner] = 0.5;
+  cloth.set_carried_masses(carried);
+  EXPECT_TRUE(same_bits(body.m_nodes[wet].m_im, 1.0 / (1.0 / own_im[wet] + 0.01)));
+  EXPECT_EQ(body.m_nodes[corner].m_im, 0.0);
+  for (int k = 0; k < body.m_links.size(); ++k) {
+    const btSoftBody::Link& link = body.m_links[k];
+    ASSERT_EQ(link.m_c0, (link.m_n[0]->m_im + link.m_n[1]->m_im) / link.m_material->m_kLST) << "link " << k;
+  }
+  // An impulse on the wet node moves node and water together.
+  Vec3Array impulses(cloth.mesh().node_count(), Vec3::Zero());
+  impulses[wet] = Vec3(0.0, -1e-3, 0.0);
+  const double vy = body.m_nodes[wet].m_v.y();
+  cloth.apply_impulses(impulses);
+  EXPECT_NEAR(body.m_nodes[wet].m_v.y() - vy, -1e-3 / (1.0 / own_im[wet] + 0.01), 1e-15);
+  cloth.step(kDt);
+  cloth.end_step(kDt);
+  for (int i = 0; i < body.m_nodes.size(); ++i)
+    ASSERT_TRUE(same_bits(body.m_nodes[i].m_im, own_im[i])) << "node " << i;
+  for (int k = 0; k < body.m_links.size(); ++k) {
+    ASSERT_TRUE(same_bits(body.m_links[k].m_rl, rest[k])) << "link " << k;
+    ASSERT_TRUE(same_bits(body.m_links[k].m_c0, c0[k])) << "link " << k;
+  }
+  for (std::size_t i = 0; i < cloth.mesh().node_count(); ++i)
+    ASSERT_TRUE(same_bits(cloth.mesh().inverse_masses[i], own_im[i])) << "node " << i;
+  EXPECT_THROW(cloth.set_carried_masses(ScalarArray(3, 0.0)), std::invalid_argument);
+}
+
 /// Largest ratio of a triangle edge's length to its length at construction, after `steps` steps of a 21 x 21
 /// patch pinned at its corners with a 200 g weight (four times its own mass) hung from its centre node (as
 /// impulses before each step).

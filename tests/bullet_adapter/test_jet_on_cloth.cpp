@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <string>
 
 #include "bullet_adapter/bullet_cloth.hpp"
@@ -65,32 +66,96 @@ RunFigures run(const SceneConfig& config) {
   return r;
 }
 
-// DISABLED until the coupled jet is stable (issue 4 notes). On this light cloth (node mass 4.1e-5 kg, a third
-// of a particle's) the jet drives Bullet's nodes and the particles far past the speed bound within 0.1 s of
-// contact. Measured with the obstacle's impulses entering before Bullet's step: dt 1 ms, 13 leaks, 103
-// fail-safe activations, particles at 319 m/s, nodes at 930 m/s; dt 4 ms, 175 leaks, 749 fail-safe, nodes at
-// 2,506 m/s. Step by step (a probe on branch wip/carried-water): Bullet's step raises the cloth's kinetic
-// energy 30-300% per step once the coupler's corrections move a wet node 20-60 mm against its links per step;
-// the coupler then lowers it again, a two-step oscillation that grows (partitioned coupling of a light
-// structure with a heavy fluid: the added-mass instability). Branch wip/carried-sub meets this test's speed,
-// leak and fail-safe bounds at dt 1 ms in a probe (particles 5.4 m/s, nodes 4.4 m/s, 0 leaks, 0 fail-safe;
-// 4 cloth sub-steps) with the fluid side seeing the cloth as kinematic, the cloth's share of every impulse
-// given at its next step, and the water near the cloth carried as node mass (rest lengths kept, as
-// set_node_masses does). At dt 4 ms particles still reach 18 m/s, splashing off the jet's impact in the fluid
-// step; a nearly rigid cloth (1,000 kg/m^2) splashes at 20 m/s there too.
-TEST(JetOnCloth, DISABLED_NeverLeaksWithContinuousHandling) {
-  // Nothing can go faster than twice the jet speed plus a free fall from the nozzle to the kill plane.
+/// The bounds every coupled jet run must meet: no leak, particles conserved, contact happened, the fail-safe
+/// rare, and nothing faster than twice the jet speed plus a free fall from the nozzle to the kill plane.
+void expect_sound_jet(const RunFigures& r, const std::string& label) {
   const double speed_limit = 2.0 * (3.0 + std::sqrt(2.0 * 9.81 * 0.65));
-  for (double dt : {0.001, 0.004}) {
-    const RunFigures r = run(reduced_jet_on_cloth(dt, true));
-    EXPECT_EQ(r.leaks, 0u) << "dt " << dt;
-    EXPECT_EQ(r.created, 2000u) << "dt " << dt;
-    EXPECT_EQ(r.alive + r.removed, r.created) << "particles are conserved except kill-plane removals";
-    EXPECT_GT(r.ccd_impacts + r.obstacle_stops, 0u) << "dt " << dt;
-    EXPECT_LE(1000 * r.failsafe, r.ccd_impacts) << "fail-safe at most 0.1% of impacts, dt " << dt;
-    EXPECT_LT(r.fastest_particle, speed_limit) << "dt " << dt;
-    EXPECT_LT(r.fastest_node, speed_limit) << "dt " << dt;
-    RecordProperty("ccd_impacts_dt_" + std::to_string(dt), static_cast<int>(r.ccd_impacts));
+  EXPECT_EQ(r.leaks, 0u) << label;
+  EXPECT_EQ(r.created, 2000u) << label;
+  EXPECT_EQ(r.alive + r.removed, r.created)
+      << "particles are conserved except kill-plane removals, " << label;
+  EXPECT_GT(r.ccd_impacts + r.obstacle_stops, 0u) << label;
+  EXPECT_LE(1000 * r.failsafe, r.ccd_impacts) << "fail-safe at most 0.1% of impacts, " << label;
+  EXPECT_LT(r.fastest_particle, speed_limit) << label;
+  EXPECT_LT(r.fastest_node, speed_limit) << label;
+  ::testing::Test::RecordProperty("fastest_particle_mps_" + label, std::to_string(r.fastest_particle));
+  ::testing::Test::RecordProperty("fastest_node_mps_" + label, std::to_string(r.fastest_node));
+  ::testing::Test::RecordProperty("ccd_impacts_" + label, static_cast<int>(r.ccd_impacts));
+}
+
+// On this light cloth (node mass 4.1e-5 kg, a third of a particle's) the paper's scheme (impulses to both
+// sides after both solvers, CouplingScheme::IMPULSES) is unstable: with it this test measured particles at
+// 11,693 m/s and nodes at 56,841 m/s (WCSPH), 195 and 726 m/s (PCISPH), with leaks and the fail-safe used
+// 5-18 times as often as the bound allows. CouplingScheme::CARRIED_WATER (the default) holds it.
+// The cloth takes 4 sub-steps: a position-based cloth under load stretches less.
+TEST(JetOnCloth, NeverLeaksWithContinuousHandling) {
+  for (auto solver : {PressureSolverKind::WCSPH, PressureSolverKind::PCISPH}) {
+    SceneConfig config = reduced_jet_on_cloth(0.001, true);
+    config.cloth->substeps = 4;
+    config.fluid.pressure_solver = solver;
+    expect_sound_jet(run(config), solver == PressureSolverKind::WCSPH ? "wcsph" : "pcisph");
+  }
+}
+
+// DISABLED: at dt 4 ms particles still reach 18 m/s (branch wip/carried-sub, 16 cloth sub-steps, carrying 2.5
+// spacings), splashing sideways off the jet's impact inside the fluid step; a nearly rigid cloth (1,000
+// kg/m^2) splashes at 20 m/s there too, so the bound fails on the fluid side at the impact, not the cloth.
+TEST(JetOnCloth, DISABLED_NeverLeaksWithContinuousHandlingAtALargeStep) {
+  SceneConfig config = reduced_jet_on_cloth(0.004, true);
+  config.cloth->substeps = 4;
+  expect_sound_jet(run(config), "dt_4ms");
+}
+
+/// Total linear momentum of particles, cloth nodes (their own masses) and the impulses owed to the cloth.
+Vec3 total_momentum(const Simulation& sim) {
+  Vec3 total = Vec3::Zero();
+  const ParticleSet& p = sim.particles();
+  for (std::size_t i = 0; i < p.size(); ++i)
+    total += p.masses[i] * p.velocities[i];
+  const ClothMesh& mesh = sim.cloth()->mesh();
+  const Vec3Array v = sim.cloth()->velocities();
+  for (std::size_t i = 0; i < mesh.node_count(); ++i)
+    total += v[i] / mesh.inverse_masses[i];
+  for (const Vec3& j : sim.pending_cloth_impulses())
+    total += j;
+  return total;
+}
+
+// CouplingScheme::CARRIED_WATER exchanges momentum exactly: on a free cloth (nothing pinned, nothing killed,
+// no viscosity) the total changes only by what the jet brings in and by gravity on fluid and cloth.
+TEST(JetOnCloth, CarriedWaterConservesLinearMomentum) {
+  for (double g : {0.0, -9.81}) {
+    SceneConfig config = reduced_jet_on_cloth(0.001, true);
+    config.cloth->pinned = "none";
+    config.cloth->substeps = 4;
+    config.fluid.pressure_solver = PressureSolverKind::WCSPH;
+    config.kill_regions.clear();
+    config.effects = {"coupling"};
+    config.gravity = Vec3(0, g, 0);
+    config.time.duration = 0.12;  // the jet reaches the cloth at 0.05 s
+    Simulation sim(config, bullet::cloth_engine_factory());
+    const double particle_mass = sim.fluid().particle_mass();
+    const double cloth_mass = sim.cloth()->total_mass();
+    Vec3 expected = total_momentum(sim);
+    double largest_error = 0.0;
+    while (!sim.finished()) {
+      const auto before = sim.created();
+      ASSERT_TRUE(sim.step().ok());
+      const auto emitted = static_cast<double>(sim.created() - before);
+      expected += emitted * particle_mass * Vec3(0, -3.0, 0);
+      expected += (static_cast<double>(sim.particles().size()) * particle_mass + cloth_mass) *
+                  config.time.dt * config.gravity;
+      largest_error = std::max(largest_error, (total_momentum(sim) - expected).norm());
+    }
+    ASSERT_GT(sim.coupling_stats().ccd_impacts + sim.coupling_stats().obstacle_stops, 0u);
+    ASSERT_EQ(sim.coupling_stats().failsafe_activations, 0u) << "the fail-safe moves particles without a "
+                                                                "counter-impulse";
+    // Rounding, and Bullet stepping the cloth by float(dt) (1 + 4.7e-8 at 1 ms): far below 1e-6 of the
+    // jet's momentum (2,000 x 1.25e-4 kg x 3 m/s = 0.75 N s).
+    EXPECT_LT(largest_error, 1e-6 * 0.75) << "g " << g;
+    char figure[32];
+    std::snprintf(figure, sizeof figure, "%.3e", largest_error);
+    ::testing::Test::RecordProperty(g == 0.0 ? "momentum_error_Ns_no_gravity" : "momentum_error_Ns", figure);
   }
 }
 
@@ -156,7 +221,8 @@ TEST(JetOnCloth, ARestingPuddlePassesItsWeightToTheCloth) {
   const double per_step = (wet.coupling_stats().vertical_impulse_on_cloth - impulse_before) / steps_measured;
   // The cloth is pushed down by the water's weight: -M g dt in y per step, within 5%.
   EXPECT_NEAR(per_step, -mass * 9.81 * dt, 0.05 * mass * 9.81 * dt);
-  RecordProperty("impulse_per_step_over_m_g_dt", std::to_string(-per_step / (mass * 9.81 * dt)));
+  ::testing::Test::RecordProperty("impulse_per_step_over_m_g_dt",
+                                  std::to_string(-per_step / (mass * 9.81 * dt)));
   EXPECT_EQ(wet.coupling_stats().failsafe_activations, 0u);
 
   // The wet cloth's centre node sags below the empty one's.
@@ -173,7 +239,7 @@ TEST(JetOnCloth, ARestingPuddlePassesItsWeightToTheCloth) {
   ASSERT_GT(bottom.size(), 50u);
   std::nth_element(bottom.begin(), bottom.begin() + bottom.size() / 2, bottom.end());
   const double median = bottom[bottom.size() / 2];
-  RecordProperty("median_distance_over_thickness", std::to_string(median / 0.001));
+  ::testing::Test::RecordProperty("median_distance_over_thickness", std::to_string(median / 0.001));
   EXPECT_GE(median, 0.5 * 0.001);
   EXPECT_LE(median, 1.5 * 0.001);
 }

@@ -21,6 +21,7 @@ class RigidPatch final : public ClothEngine {
   }
   void begin_step() override { m_mesh.positions_t0 = m_mesh.positions_t1; }
   void apply_impulses(const Vec3Array&) override {}
+  void set_carried_masses(const ScalarArray&) override {}
   void step(double) override {}
   ClothMesh& mesh() override { return m_mesh; }
   void end_step(double) override {}

@@ -864,7 +864,8 @@ TEST(SceneLoader, ReadsClothAndCoupling) {
   const SceneConfig c = parse_scene(nlohmann::json::parse(R"({
     "cloth": {"center": [0, 0.5, 0], "size": [0.3, 0.4], "nodes": [21, 11], "area_density": 0.1,
               "pinned": "corner", "position_iterations": 8, "substeps": 3},
-    "coupling": {"cloth_thickness": 0.002, "slip": "no_slip", "broad_phase": "grid", "continuous": false},
+    "coupling": {"cloth_thickness": 0.002, "slip": "no_slip", "broad_phase": "grid", "continuous": false,
+                 "scheme": "impulses"},
     "effects": ["coupling", "friction", "leak_audit"]})"),
                                     "x.json");
   ASSERT_TRUE(c.cloth.has_value());
@@ -879,6 +880,14 @@ TEST(SceneLoader, ReadsClothAndCoupling) {
   EXPECT_EQ(c.coupling.cloth_thickness, 0.002);
   EXPECT_EQ(c.coupling.slip, SlipCondition::NO_SLIP);
   EXPECT_FALSE(c.coupling.continuous);
+  EXPECT_EQ(c.coupling.scheme, CouplingScheme::IMPULSES);
+  EXPECT_EQ(CouplingSettings().scheme, CouplingScheme::CARRIED_WATER);
+}
+
+TEST(SceneLoader, RejectsUnknownCouplingScheme) {
+  EXPECT_TRUE(scene_error(R"({"cloth": {}, "coupling": {"scheme": "implicit"}})",
+                          "coupling.scheme must be one of \"carried_water\", \"impulses\", got \"implicit\" "
+                          "(x.json)"));
 }
 
 TEST(SceneLoader, RejectsCouplingWithoutCloth) {
