@@ -1,0 +1,93 @@
+// The paper's Fig. 3 scene (demos/scenes/jet_on_cloth.json: a 3 m/s jet of up to 15,000 particles onto a
+// 0.6 m cloth of 57 x 57 Bullet nodes, dt 1 ms, 0.5 s), timed per stage as the paper's Tables 1 and 2 (cloth,
+// fluid, coupling; repulsion and continuous handling within the coupling), and its Fig. 4 leak comparison
+// (repulsion only against continuous handling, dt 1 ms).
+//
+//   build-bench/bench/bench_jet_on_cloth --benchmark_out=bench/results/<machine>/jet_on_cloth.csv
+//       --benchmark_out_format=csv [--benchmark_filter=...]
+// Thread count: OMP_NUM_THREADS (issue 4's targets are for 2). One iteration per row: a row is a whole run.
+
+#include <benchmark/benchmark.h>
+#include <omp.h>
+
+#include <chrono>
+#include <string>
+#include <vector>
+
+#include "bullet_adapter/bullet_cloth.hpp"
+#include "scene/scene_loader.hpp"
+#include "scene/simulation.hpp"
+
+namespace {
+
+/// Runs the jet_on_cloth scene with `overrides` (docs/scenes.md paths) once; reports the stage times (unit:
+/// s) and the coupling's figures as counters.
+void run(benchmark::State& state, const std::vector<std::string>& overrides) {
+  std::vector<std::string> all = {"time.frame_rate=0"};
+  all.insert(all.end(), overrides.begin(), overrides.end());
+  const drench::SceneConfig config =
+      drench::load_scene_file(std::string(DRENCH_SOURCE_DIR) + "/demos/scenes/jet_on_cloth.json", all);
+  for (auto _ : state) {
+    drench::Simulation sim(config, drench::bullet::cloth_engine_factory());
+    const auto start = std::chrono::steady_clock::now();
+    while (!sim.finished()) {
+      if (!sim.step().ok()) {
+        state.SkipWithError("non-finite state");
+        return;
+      }
+    }
+    const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    state.SetIterationTime(wall);
+    const drench::CouplingStepStats& c = sim.coupling_stats();
+    const double steps = static_cast<double>(sim.steps_done());
+    const double fluid = sim.fluid().statistics().timings_s.total;
+    state.counters["threads"] = omp_get_max_threads();
+    state.counters["particles"] = static_cast<double>(sim.particles().size());
+    state.counters["cloth_s"] = sim.cloth_seconds();
+    state.counters["fluid_s"] = fluid;
+    state.counters["coupling_s"] = sim.coupling_seconds();
+    state.counters["repulsion_s"] = c.seconds_repulsion;
+    state.counters["ccd_s"] = c.seconds_ccd;
+    state.counters["coupling_ms_per_step"] = 1e3 * sim.coupling_seconds() / steps;
+    state.counters["coupling_over_fluid"] = sim.coupling_seconds() / fluid;
+    state.counters["fluid_substeps_per_step"] =
+        static_cast<double>(sim.fluid().statistics().substeps) / steps;
+    state.counters["leaks"] = static_cast<double>(sim.leak_stats().leaks);
+    state.counters["ccd_impacts"] = static_cast<double>(c.ccd_impacts);
+    state.counters["failsafe"] = static_cast<double>(c.failsafe_activations);
+    state.counters["mean_contact_slip_mps"] = c.contacts > 0 ? c.slip_sum_mps / c.contacts : 0.0;
+  }
+}
+
+// Table 1 and 2: cloth thickness (the paper's h) 0.5, 1 and 5 mm, no-slip off and on.
+void table_thickness_0p5mm(benchmark::State& s) {
+  run(s, {"coupling.cloth_thickness=0.0005"});
+}
+void table_thickness_1mm(benchmark::State& s) {
+  run(s, {"coupling.cloth_thickness=0.001"});
+}
+void table_thickness_1mm_no_slip(benchmark::State& s) {
+  run(s, {"coupling.cloth_thickness=0.001", "coupling.slip=\"no_slip\"",
+          R"(effects=["viscosity","coupling","friction","leak_audit"])"});
+}
+void table_thickness_5mm(benchmark::State& s) {
+  run(s, {"coupling.cloth_thickness=0.005"});
+}
+
+// Fig. 4: repulsion only against continuous handling (thickness 1 mm).
+void leaks_repulsion_only_dt_1ms(benchmark::State& s) {
+  run(s, {"coupling.continuous=false"});
+}
+// Not yet: dt 4 ms. The coupled jet throws particles past 18 m/s at the impact at that step (issue 4 note,
+// tests/bullet_adapter/test_jet_on_cloth.cpp), and the fluid's CFL sub-steps then make a run take tens of
+// minutes.
+
+}  // namespace
+
+BENCHMARK(table_thickness_0p5mm)->UseManualTime()->Iterations(1)->Unit(benchmark::kSecond);
+BENCHMARK(table_thickness_1mm)->UseManualTime()->Iterations(1)->Unit(benchmark::kSecond);
+BENCHMARK(table_thickness_1mm_no_slip)->UseManualTime()->Iterations(1)->Unit(benchmark::kSecond);
+BENCHMARK(table_thickness_5mm)->UseManualTime()->Iterations(1)->Unit(benchmark::kSecond);
+BENCHMARK(leaks_repulsion_only_dt_1ms)->UseManualTime()->Iterations(1)->Unit(benchmark::kSecond);
+
+BENCHMARK_MAIN();
