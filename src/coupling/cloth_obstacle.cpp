@@ -39,7 +39,8 @@ void ClothObstacle::apply(const Vec3Array& positions_before, ParticleSet& partic
                                        particles.positions[p], x[tri[0]], x[tri[1]], x[tri[2]]});
   }
   // In particle order, the earliest hit of each particle; its approach along the triangle's normal is stopped
-  // (a small separating speed keeps the motion off the plane), the rest of its velocity kept.
+  // (eq. 2: the relative normal velocity becomes zero; the position clamp below keeps the motion off the
+  // plane), the rest of its velocity kept.
   for (std::size_t k = 0; k < m_pairs.size();) {
     const Index p = m_pairs[k].first;
     std::size_t best = m_pairs.size();
@@ -69,9 +70,11 @@ void ClothObstacle::apply(const Vec3Array& positions_before, ParticleSet& partic
       inverse_mass += w[i] * w[i] * m_inverse_masses[tri[i]];
     }
     const double relative = (v - cloth_velocity).dot(normal);
-    const double target = 0.01 * m_thickness / dt;
-    if (relative >= target) continue;
-    const double j = (target - relative) / inverse_mass;  // eq. 2, mass-weighted (N s)
+    // No separating speed: one of 1% of the thickness per sub-step grew as the fluid's CFL sub-steps shrank,
+    // feeding the fast particles that shrink them (full jet, 3 mm thickness: particles at 47 m/s, 12
+    // without).
+    if (relative >= 0.0) continue;
+    const double j = -relative / inverse_mass;  // eq. 2, mass-weighted (N s)
     v += (j / particles.masses[p]) * normal;
     for (int i = 0; i < 3; ++i) {
       m_node_impulses[tri[i]] -= (w[i] * j) * normal;
