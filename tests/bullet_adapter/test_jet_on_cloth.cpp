@@ -274,5 +274,46 @@ TEST(JetOnCloth, ARestingPuddlePassesItsWeightToTheCloth) {
   EXPECT_LE(median, 1.5 * 0.001);
 }
 
+// Stress (issue 4): a layer of water laid on the cloth so that its particles sit above the cloth's
+// vertices and edges (the lattice of 5 mm spacing meets the 15 mm node grid on every third particle, and
+// every particle on a grid line is above an edge, to rounding), one thickness up, or within the thickness:
+// the closest points are the degenerate barycentric cases. It must settle without a leak, non-finite value or
+// a fast particle.
+TEST(JetOnCloth, WaterRestingOnVerticesAndEdgesStaysPut) {
+  for (double height : {0.001, 0.0005}) {
+    SceneConfig c = puddle(false);
+    EmitterSettings layer;
+    layer.kind = EmitterSettings::Kind::BOX;
+    // Points at min + 5 mm (i + 1/2): x, z = -75 mm + 5 mm i, on the nodes' -150 mm + 15 mm n every third.
+    layer.box.min = Vec3(-0.0775, height - 0.0025, -0.0775);
+    layer.box.max = Vec3(0.0775, height + 0.0025, 0.0775);
+    c.emitters.push_back(layer);
+    c.cloth->damping = 0.0;
+    c.cloth->substeps = 4;
+    c.time.duration = 0.3;
+    c.effects = {"viscosity", "coupling", "leak_audit"};
+    Simulation sim(c, bullet::cloth_engine_factory());
+    ASSERT_EQ(sim.particles().size(), 31u * 31u);
+    // Twice the speed of a free fall over the cloth's half width (0.15 m), which bounds its sag.
+    const double speed_limit = 2.0 * std::sqrt(2.0 * 9.81 * 0.15);
+    double fastest_particle = 0.0, fastest_node = 0.0;
+    while (!sim.finished()) {
+      ASSERT_TRUE(sim.step().ok()) << "t " << sim.time();
+      for (const Vec3& v : sim.particles().velocities)
+        fastest_particle = std::max(fastest_particle, v.norm());
+      for (const Vec3& v : sim.cloth()->velocities())
+        fastest_node = std::max(fastest_node, v.norm());
+    }
+    EXPECT_EQ(sim.leak_stats().leaks, 0u) << "height " << height;
+    EXPECT_EQ(sim.particles().size(), 31u * 31u);
+    EXPECT_LT(fastest_particle, speed_limit) << "height " << height;
+    EXPECT_LT(fastest_node, speed_limit) << "height " << height;
+    ::testing::Test::RecordProperty("fastest_particle_mps_h" + std::to_string(height),
+                                    std::to_string(fastest_particle));
+    ::testing::Test::RecordProperty("fastest_node_mps_h" + std::to_string(height),
+                                    std::to_string(fastest_node));
+  }
+}
+
 }  // namespace
 }  // namespace drench
