@@ -55,7 +55,9 @@ BulletCloth::BulletCloth(const ClothSettings& settings, const Vec3& gravity) {
   read_topology();
 }
 
-BulletCloth::~BulletCloth() = default;
+BulletCloth::~BulletCloth() {
+  restore_masses();  // an attached body outlives us: it keeps its own masses
+}
 
 void BulletCloth::read_topology() {
   const btSoftBody& body = *m_body;
@@ -81,6 +83,7 @@ void BulletCloth::read_inverse_masses() {
 }
 
 void BulletCloth::begin_step() {
+  restore_masses();  // carried masses set for a step that never ran are not the cloth's
   const btSoftBody& body = *m_body;
   if (static_cast<std::size_t>(body.m_nodes.size()) != m_mesh.node_count() ||
       static_cast<std::size_t>(body.m_faces.size()) != m_mesh.triangle_count()) {

@@ -7,15 +7,19 @@
 ///   2. cloth.begin_step()    node positions at the start of the step (positions_t0)
 ///   3. fluid.step(dt)        SPH alone; records positions_t0; with "coupling" the start-of-step cloth stops
 ///                            particles inside its sub-steps (coupling/cloth_obstacle.hpp)
-///   4. cloth.apply_impulses  the obstacle's impulses on the nodes, into m_v before Bullet's step, so that
-///                            Bullet's links carry the load within the step
-///   5. world stepSimulation  dt / substeps, substeps times (ClothSettings::substeps, default 1): the cloth
-///                            (and the user's rigid bodies) alone; then the node end positions
-///   6. coupler.step(...)     effect "coupling": repulsion (eq. 1-4), friction (eq. 7-8), continuous handling
-///                            (eq. 5-6) correct particle and node end positions and velocities
-///   7. audit_leaks(...)      effect "leak_audit": particles that crossed the cloth in the final motion
-///   8. cloth.end_step(dt)    corrected node positions into m_x, velocity changes into m_v
-///   9. kill regions          particles that left the region of interest are removed
+///   4. carried water         coupling.scheme "carried_water" (the default): the water near the cloth becomes
+///                            node mass for Bullet's step (BulletCloth::set_carried_masses)
+///   5. cloth.apply_impulses  into m_v before Bullet's step, so that Bullet's links carry the load within the
+///                            step: what the last step's coupling owes the cloth, and the obstacle's impulses
+///   6. world stepSimulation  dt / substeps, substeps times (ClothSettings::substeps, default 1): the cloth
+///                            (and the user's rigid bodies) alone; then the node end positions, the masses
+///                            restored, and the carried water's share of the velocity change handed back
+///   7. coupler.step(...)     effect "coupling": repulsion (eq. 1-4), friction (eq. 7-8), continuous handling
+///                            (eq. 5-6) correct the particles; the cloth's share is kept for step 5 of the
+///                            next step ("carried_water") or moves the node end positions ("impulses")
+///   8. audit_leaks(...)      effect "leak_audit": particles that crossed the cloth in the final motion
+///   9. cloth.end_step(dt)    corrected node positions into m_x, velocity changes into m_v
+///  10. kill regions          particles that left the region of interest are removed
 ///
 /// Call CoupledWorld::step instead of world->stepSimulation. The coupling needs the cloth's start and end of
 /// exactly the step the fluid took: stepSimulation(dt) with its default fixed sub-step of 1/60 s would take

@@ -48,8 +48,10 @@ class ClothEngine {
   /// For the next step() only, node i moves as if it weighed m_i + carried[i] (unit: kg, M entries, >= 0):
   /// the water resting on it (coupling/carried_water.hpp), which the engine's constraints must accelerate
   /// with the node. Nodes with inverse mass 0 stay pinned. After step() the node masses are the engine's own
-  /// again, exactly, and nothing else about the cloth (rest lengths) has changed. Call between begin_step()
-  /// and step(); an engine whose nodes are all pinned may ignore it.
+  /// again, exactly, and nothing else about the cloth (rest lengths) has changed. The engine applies its
+  /// gravity (the scene's) to the carried mass too; the caller removes that with an impulse, since the water
+  /// fell in the fluid's step. Call between begin_step() and step(); an engine whose nodes are all pinned may
+  /// ignore it.
   /// @throws std::invalid_argument if `carried` does not have one entry per node
   virtual void set_carried_masses(const ScalarArray& carried) = 0;
   /// Advances the cloth alone by dt (unit: s); afterwards mesh().positions_t1 holds the predicted end

@@ -19,8 +19,8 @@ namespace drench {
 
 class ClothObstacle final : public SubstepConstraint {
  public:
-  /// @param thickness  the cloth thickness (unit: m), > 0: a stopped particle stays 1% of it off the
-  ///        cloth's plane
+  /// @param thickness  the cloth thickness (unit: m), > 0: a stopped particle that started more than 1% of
+  ///        it off the cloth's plane ends no closer than that
   /// @param broad_phase  which broad phase finds the particles near the cloth (kept across steps, so
   ///        FCL's tree is refitted rather than rebuilt)
   /// @param kinematic_cloth  true: particles are stopped against the cloth's start velocity, which their

@@ -11,6 +11,28 @@
 
 namespace drench {
 
+namespace {
+
+/// Holds a mesh's inverse masses at 0 while it lives (the cloth kinematic for the coupler), then puts them
+/// back, also when the coupler throws.
+class KinematicCloth {
+ public:
+  explicit KinematicCloth(ClothMesh& mesh) : m_mesh(mesh) {
+    m_own.swap(mesh.inverse_masses);
+    mesh.inverse_masses.assign(m_own.size(), 0.0);
+  }
+  ~KinematicCloth() { m_mesh.inverse_masses.swap(m_own); }
+  KinematicCloth(const KinematicCloth&) = delete;
+  KinematicCloth& operator=(const KinematicCloth&) = delete;
+  const ScalarArray& own_inverse_masses() const { return m_own; }
+
+ private:
+  ClothMesh& m_mesh;
+  ScalarArray m_own;
+};
+
+}  // namespace
+
 Scalar automatic_speed_of_sound(const SceneConfig& config) {
   const Scalar g = config.gravity.norm();
   const Vec3 up = g > 0.0 ? Vec3(-config.gravity / g) : Vec3::UnitY();
@@ -208,13 +230,11 @@ void Simulation::step_cloth_and_couple(Scalar dt, StepStatus& status) {
       // The particles are corrected against the cloth where its engine put it; the cloth's share of every
       // impulse reaches it at its next step (moving a light node with heavy water here is what the links
       // would snap back).
-      const ScalarArray inverse_masses = mesh.inverse_masses;
-      std::fill(mesh.inverse_masses.begin(), mesh.inverse_masses.end(), 0.0);
+      const KinematicCloth kinematic(mesh);
       m_last_coupling_status = m_coupler->step(view, mesh, dt, m_coupling_stats);
-      mesh.inverse_masses = inverse_masses;
       const Vec3Array& given = m_coupler->node_impulses();
       for (std::size_t i = 0; i < given.size(); ++i) {
-        if (inverse_masses[i] > 0.0) m_pending_cloth_impulses[i] += given[i];
+        if (kinematic.own_inverse_masses()[i] > 0.0) m_pending_cloth_impulses[i] += given[i];
       }
     } else {
       m_last_coupling_status = m_coupler->step(view, mesh, dt, m_coupling_stats);

@@ -32,9 +32,11 @@ class Simulation {
   Simulation(const SceneConfig& config, std::unique_ptr<ClothEngine> cloth);
 
   /// One step of the scene's dt, in the paper's pipeline order (sec. 5): the cloth records its start
-  /// positions; nozzles emit; the fluid advances alone (sub-stepping as it must); the cloth advances alone;
-  /// the coupling corrects both (repulsion, friction, continuous handling); the leak audit checks the final
-  /// motion; the cloth takes its corrections; kill regions remove the particles that left. Stages of effects
+  /// positions; nozzles emit; the fluid advances alone (sub-stepping as it must); the cloth advances alone
+  /// (with "carried_water", carrying the water near it and handing its share back); the coupling corrects
+  /// the particles and, per coupling.scheme, the cloth now or at its next step (repulsion, friction,
+  /// continuous handling); the leak audit checks the final motion; the cloth takes its corrections; kill
+  /// regions remove the particles that left. Stages of effects
   /// the scene does not list are never built.
   StepStatus step() { return step(m_config.time.dt); }
   /// The same with a step other than the scene's (unit: s, > 0).

@@ -3,6 +3,7 @@
 
 #include <gtest/gtest.h>
 
+#include "common/triangle_geometry.hpp"
 #include "coupling/carried_water.hpp"
 #include "coupling_fixtures.hpp"
 
@@ -73,6 +74,23 @@ TEST(CarriedWater, HandsBackExactlyTheWatersShareOfTheClothsMomentumChange) {
         << "particle " << p << " moves by its velocity change over the step";
   }
   EXPECT_LT((received - held).norm(), 1e-18);
+  // Each carried particle gets the velocity change of its own closest point on the cloth.
+  for (std::size_t p : {std::size_t{0}, std::size_t{3}}) {
+    Vec3 expected = Vec3::Zero();
+    double closest = 1e300;
+    for (const Triangle& tri : s.cloth.triangles) {
+      const Vec3Array& c = s.cloth.positions_t0;
+      const Vec3 w = closest_point_barycentric(s.x[p], c[tri[0]], c[tri[1]], c[tri[2]]);
+      const double d = (s.x[p] - (w[0] * c[tri[0]] + w[1] * c[tri[1]] + w[2] * c[tri[2]])).norm();
+      if (d < closest) {
+        closest = d;
+        expected = Vec3::Zero();
+        for (int i = 0; i < 3; ++i)
+          expected += w[i] * (end[tri[i]] - before[tri[i]]);
+      }
+    }
+    EXPECT_LT((v[p] - Vec3(0.0, -1.0, 0.0) - expected).norm(), 1e-15) << "particle " << p;
+  }
   EXPECT_EQ(v[1], Vec3(0.0, -1.0, 0.0)) << "not carried: untouched";
   EXPECT_EQ(v[2], Vec3(0.0, -1.0, 0.0)) << "at the pinned node: untouched";
   EXPECT_NE(v[0], Vec3(0.0, -1.0, 0.0));
