@@ -181,10 +181,10 @@ void Simulation::step_cloth_and_couple(Scalar dt, StepStatus& status) {
   }
   // Before the cloth steps, so that its solver spreads the load over the cloth's links in this step: what
   // the previous step owes the cloth, and what the particles gave it inside the fluid's sub-steps.
-  Vec3Array impulses = m_pending_cloth_impulses.size() == mesh.node_count()
-                           ? m_pending_cloth_impulses
-                           : Vec3Array(mesh.node_count(), Vec3::Zero());
-  std::fill(m_pending_cloth_impulses.begin(), m_pending_cloth_impulses.end(), Vec3::Zero());
+  // (An engine whose node count changed since has lost what it was owed: begin_step re-read its mesh.)
+  Vec3Array impulses(mesh.node_count(), Vec3::Zero());
+  if (m_pending_cloth_impulses.size() == impulses.size()) impulses.swap(m_pending_cloth_impulses);
+  m_pending_cloth_impulses.assign(mesh.node_count(), Vec3::Zero());
   if (m_obstacle) {
     const Vec3Array& stopped = m_obstacle->impulses();
     for (std::size_t i = 0; i < impulses.size(); ++i)
@@ -212,8 +212,6 @@ void Simulation::step_cloth_and_couple(Scalar dt, StepStatus& status) {
       break;
     }
   }
-  if (m_pending_cloth_impulses.size() != mesh.node_count())
-    m_pending_cloth_impulses.assign(mesh.node_count(), Vec3::Zero());
   if (carry && m_non_finite_node < 0) {
     ScopedTimer timer(m_coupling_seconds);
     const Vec3 given = m_carried->hand_back(before_impulses, m_cloth->velocities(), mesh, dt, p.positions,
