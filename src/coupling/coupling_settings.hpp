@@ -26,7 +26,7 @@ enum class CouplingScheme : std::uint8_t {
   /// the sub-step obstacle correct the particles against the cloth as the cloth engine moved it; the
   /// cloth's share of every impulse reaches it at the start of its next step, and the water resting on
   /// the cloth moves with it through the engine's step as node mass. The default: with the paper's
-  /// scheme the reduced Fig. 3 jet drove nodes to 726-56,841 m/s (added-mass instability,
+  /// scheme the reduced Fig. 3 jet drove nodes to 526-10,399 m/s (added-mass instability,
   /// tests/bullet_adapter/test_jet_on_cloth.cpp).
   CARRIED_WATER = 0,
   /// The paper as written (sec. 3.2, 5): impulses move both sides' end positions within the step,

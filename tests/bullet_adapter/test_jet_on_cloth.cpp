@@ -96,8 +96,8 @@ void expect_sound_jet(const RunFigures& r, const std::string& label) {
 
 // On this light cloth (node mass 4.1e-5 kg, a third of a particle's) the paper's scheme (impulses to both
 // sides after both solvers, CouplingScheme::IMPULSES) is unstable: with it this test measured particles at
-// 11,693 m/s and nodes at 56,841 m/s (WCSPH), 195 and 726 m/s (PCISPH), with leaks and the fail-safe used
-// 5-18 times as often as the bound allows. CouplingScheme::CARRIED_WATER (the default) holds it.
+// 1,519 m/s and nodes at 10,399 m/s (WCSPH), 271 and 526 m/s (PCISPH), with leaks and the fail-safe used
+// 3-13 times as often as the bound allows. CouplingScheme::CARRIED_WATER (the default) holds it.
 // The cloth takes 4 sub-steps: a position-based cloth under load stretches less.
 TEST(JetOnCloth, NeverLeaksWithContinuousHandling) {
   for (auto solver : {PressureSolverKind::WCSPH, PressureSolverKind::PCISPH}) {
