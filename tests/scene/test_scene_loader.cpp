@@ -73,7 +73,7 @@ constexpr const char* kFullScene = R"({
     "particle_spacing": 0.02,
     "pressure_solver": "wcsph",
     "wcsph": {"speed_of_sound": 30, "exponent": 7},
-    "pcisph": {"eta": 0.01, "min_iterations": 2, "max_iterations": 50},
+    "pcisph": {"eta": 0.01, "min_iterations": 2, "max_iterations": 50, "max_compression_per_iteration": 0.1},
     "viscosity": {"method": "artificial", "coefficient": 0.05},
     "cfl": 0.25,
     "sort_interval": 20
@@ -110,6 +110,8 @@ TEST(SceneLoader, ParsesFullSceneIntoEveryMember) {
   EXPECT_DOUBLE_EQ(c.fluid.wcsph.exponent, 7.0);
   EXPECT_DOUBLE_EQ(c.fluid.pcisph.eta, 0.01);
   EXPECT_EQ(c.fluid.pcisph.min_iterations, 2);
+  ASSERT_TRUE(c.fluid.pcisph.max_compression_per_iteration.has_value());
+  EXPECT_DOUBLE_EQ(*c.fluid.pcisph.max_compression_per_iteration, 0.1);
   EXPECT_EQ(c.fluid.pcisph.max_iterations, 50);
   EXPECT_EQ(c.fluid.viscosity.method, ViscosityKind::ARTIFICIAL);
   EXPECT_DOUBLE_EQ(c.fluid.viscosity.coefficient, 0.05);
@@ -203,6 +205,17 @@ TEST(SceneLoader, NormalisesTinyDirectionWithoutUnderflow) {
 
 TEST(SceneLoader, NullSpeedOfSoundMeansAuto) {
   EXPECT_FALSE(parse(R"({"fluid": {"wcsph": {"speed_of_sound": null}}})").fluid.wcsph.speed_of_sound);
+}
+
+TEST(SceneLoader, NullMaxCompressionPerIterationMeansNoLimit) {
+  EXPECT_EQ(parse("{}").fluid.pcisph.max_compression_per_iteration, 0.05);
+  EXPECT_FALSE(parse(R"({"fluid": {"pcisph": {"max_compression_per_iteration": null}}})")
+                   .fluid.pcisph.max_compression_per_iteration);
+}
+
+TEST(SceneLoader, RejectsZeroMaxCompressionPerIteration) {
+  EXPECT_TRUE(scene_error(R"({"fluid": {"pcisph": {"max_compression_per_iteration": 0}}})",
+                          "fluid.pcisph.max_compression_per_iteration must be > 0, got 0 (x.json)"));
 }
 
 TEST(SceneLoader, AcceptsZeroMaxParticlesAndZeroFrameRate) {

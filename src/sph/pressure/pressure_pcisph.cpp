@@ -1,6 +1,7 @@
 #include "sph/pressure/pressure_pcisph.hpp"
 
 #include <algorithm>
+#include <limits>
 
 namespace drench {
 
@@ -36,6 +37,9 @@ PressureStats PressurePcisph::solve(const FluidContext& ctx, const Vec3Array& ve
   accelerations.resize(n);
   PressureStats stats;
   const Scalar inv_rho0_sq = 1.0 / (rho0 * rho0);
+  const Scalar max_excess = m_settings.max_compression_per_iteration
+                                ? *m_settings.max_compression_per_iteration * rho0
+                                : std::numeric_limits<Scalar>::infinity();
   // Every solve starts from zero pressure, as Solenthaler & Pajarola and SPlisHSPlasH do. A warm start from
   // the last sub-step's pressures needed 3x fewer iterations in a settled tank, but its leftover
   // over-pressure kept the corner particles of the tank oscillating at 0.5 m/s (measured), so it is not used.
@@ -52,7 +56,7 @@ PressureStats PressurePcisph::solve(const FluidContext& ctx, const Vec3Array& ve
       // and its density deficit is no expansion to undo, so pressures only grow within a solve.
       const Scalar rho = std::max(sph_density(ctx, m_predicted, i), rho0);
       m_error[i] = rho;
-      particles.pressures[i] += delta * (rho - rho0);
+      particles.pressures[i] += delta * std::min(rho - rho0, max_excess);
       m_p_over_rho2[i] = particles.pressures[i] * inv_rho0_sq;
     }
 #pragma omp parallel for schedule(static)

@@ -8,7 +8,9 @@ namespace drench {
 /// with the current pressure accelerations, evaluates the predicted density, raises pressures by
 /// delta (rho* - rho0) (eq. 8, pressures clamped at 0 for free surfaces) and recomputes the pressure
 /// accelerations, until the average compression is below eta (as SPlisHSPlasH's maxError) after at least
-/// min_iterations, or max_iterations are spent.
+/// min_iterations, or max_iterations are spent. With PcisphSettings::max_compression_per_iteration set (the
+/// default, a drench addition), one iteration raises a particle's pressure by at most delta times that
+/// compression.
 class PressurePcisph final : public PressureSolver {
  public:
   explicit PressurePcisph(const FluidSettings& settings);
