@@ -21,22 +21,7 @@ class GridBroadPhase final : public TriangleBroadPhase {
     const std::size_t f = cloth.triangles.size();
     const std::size_t n = particles_t0.size();
     if (f == 0 || n == 0) return;
-    m_boxes.resize(f);
-    double extent_sum = 0.0;
-    for (std::size_t t = 0; t < f; ++t) {
-      m_boxes[t] = triangle_box(cloth, cloth.triangles[t], margin);
-      extent_sum += (m_boxes[t].hi - m_boxes[t].lo).maxCoeff();
-    }
-    m_cell = std::max(extent_sum / static_cast<double>(f), 1e-9);
-    m_entries.clear();
-    m_everywhere.clear();  // triangles too large for the grid: candidates of every particle
-    for (std::size_t t = 0; t < f; ++t) {
-      const bool binned = for_cells(m_boxes[t], [&](std::uint64_t key) {
-        m_entries.push_back({key, static_cast<Index>(t)});
-      });
-      if (!binned) m_everywhere.push_back(static_cast<Index>(t));
-    }
-    std::sort(m_entries.begin(), m_entries.end());
+    if (!m_built_for.same_as_last(cloth, margin)) bin_triangles(cloth, margin);
 
     collect_pairs(
         particles_t0, particles_t1, margin, only, m_boxes,
@@ -58,6 +43,26 @@ class GridBroadPhase final : public TriangleBroadPhase {
   }
 
  private:
+  void bin_triangles(const ClothMesh& cloth, double margin) {
+    const std::size_t f = cloth.triangles.size();
+    m_boxes.resize(f);
+    double extent_sum = 0.0;
+    for (std::size_t t = 0; t < f; ++t) {
+      m_boxes[t] = triangle_box(cloth, cloth.triangles[t], margin);
+      extent_sum += (m_boxes[t].hi - m_boxes[t].lo).maxCoeff();
+    }
+    m_cell = std::max(extent_sum / static_cast<double>(f), 1e-9);
+    m_entries.clear();
+    m_everywhere.clear();  // triangles too large for the grid: candidates of every particle
+    for (std::size_t t = 0; t < f; ++t) {
+      const bool binned = for_cells(m_boxes[t], [&](std::uint64_t key) {
+        m_entries.push_back({key, static_cast<Index>(t)});
+      });
+      if (!binned) m_everywhere.push_back(static_cast<Index>(t));
+    }
+    std::sort(m_entries.begin(), m_entries.end());
+  }
+
   /// Visits the keys of the cells the box covers; returns false, visiting nothing, when they are too many (a
   /// particle flying across the domain in one step), and the caller tests every triangle instead.
   template <class Visit>
@@ -88,9 +93,23 @@ class GridBroadPhase final : public TriangleBroadPhase {
   std::vector<Box3> m_boxes;
   std::vector<std::pair<std::uint64_t, Index>> m_entries;
   std::vector<Index> m_everywhere;
+  TriangleBoxKey m_built_for;
 };
 
 }  // namespace
+
+bool TriangleBoxKey::same_as_last(const ClothMesh& cloth, double margin) {
+  if (m_valid && margin == m_margin && cloth.positions_t0 == m_positions_t0 &&
+      cloth.positions_t1 == m_positions_t1 && cloth.triangles == m_triangles) {
+    return true;
+  }
+  m_valid = true;
+  m_margin = margin;
+  m_positions_t0 = cloth.positions_t0;
+  m_positions_t1 = cloth.positions_t1;
+  m_triangles = cloth.triangles;
+  return false;
+}
 
 Box3 particle_box(const Vec3& x_t0, const Vec3& x_t1, double margin) {
   Box3 box;

@@ -1,6 +1,7 @@
-// The FCL broad phase: the cloth's triangles in an fcl::DynamicAABBTreeCollisionManager, refitted every call,
-// queried with each particle's swept, grown box. FCL only proposes candidates; the same exact box test as the
-// grid (Box3::overlaps) decides, so the pairs are exactly the brute-force set. FCL stays inside this file.
+// The FCL broad phase: the cloth's triangles in an fcl::DynamicAABBTreeCollisionManager, refitted when the
+// cloth or the margin changed, queried with each particle's swept, grown box. FCL only proposes candidates;
+// the same exact box test as the grid (Box3::overlaps) decides, so the pairs are exactly the brute-force set.
+// FCL stays inside this file.
 
 #include <fcl/broadphase/broadphase_dynamic_AABB_tree.h>
 #include <fcl/geometry/shape/box.h>
@@ -57,7 +58,7 @@ class FclBroadPhase final : public TriangleBroadPhase {
     const std::size_t f = cloth.triangles.size();
     const std::size_t n = particles_t0.size();
     if (f == 0 || n == 0) return;
-    update_tree(cloth, margin);
+    if (!m_built_for.same_as_last(cloth, margin)) update_tree(cloth, margin);
 
     collect_pairs(
         particles_t0, particles_t1, margin, only, m_boxes,
@@ -103,6 +104,7 @@ class FclBroadPhase final : public TriangleBroadPhase {
   std::vector<std::unique_ptr<BoxObject>> m_objects;  // F, triangle t's object (outlives the manager)
   std::vector<Box3> m_boxes;                          // F, triangle t's swept, grown box
   fcl::DynamicAABBTreeCollisionManagerd m_manager;    // leaves point into m_objects
+  TriangleBoxKey m_built_for;
 };
 
 }  // namespace

@@ -77,5 +77,40 @@ TEST(BroadPhase, ReusedOverMovingStepsMatchesBruteForceAtAnyThreadCount) {
   }
 }
 
+// The triangle boxes are kept while the cloth and the margin stay the same (TriangleBoxKey): queried again
+// with other particles it must still be exact, and any change (the margin, one node moved by 1 mm, one
+// triangle's nodes) must be seen.
+TEST(BroadPhase, KeepsItsTriangleBoxesOnlyWhileClothAndMarginStayTheSame) {
+  std::mt19937_64 rng(8);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  const auto random_particles = [&] {
+    test::Particles particles;
+    for (int k = 0; k < 2000; ++k)
+      particles.add(Vec3(0.35 * u(rng) + 0.15, 0.01 * u(rng), 0.35 * u(rng) + 0.15),
+                    Vec3(u(rng), u(rng), u(rng)), 0.003, 1e-4);
+    return particles;
+  };
+  for (BroadPhaseKind kind : {BroadPhaseKind::GRID, BroadPhaseKind::FCL}) {
+    const std::unique_ptr<TriangleBroadPhase> broad_phase = make_broad_phase(kind);
+    ClothMesh mesh = test::grid_mesh(21, 0.3, 0.0, 1.0);
+    std::vector<std::pair<Index, Index>> expected, got;
+    const auto check = [&](const test::Particles& particles, double margin, const char* what) {
+      find_pairs_brute_force(particles.x0, particles.x1, mesh, margin, expected);
+      broad_phase->find_pairs(particles.x0, particles.x1, mesh, margin, nullptr, got);
+      EXPECT_EQ(got, expected) << what << ", broad phase " << static_cast<int>(kind);
+    };
+    const test::Particles first = random_particles();
+    check(first, 0.001, "first call");
+    check(random_particles(), 0.001, "same cloth, other particles");
+    check(first, 0.004, "margin changed");
+    mesh.positions_t1[220] += Vec3(0.0, 0.001, 0.0);
+    check(first, 0.004, "one node moved at the end of the step");
+    mesh.positions_t0[100] += Vec3(0.0, -0.001, 0.0);
+    check(first, 0.004, "one node moved at the start of the step");
+    std::swap(mesh.triangles[7], mesh.triangles[300]);
+    check(first, 0.004, "two triangles swapped");
+  }
+}
+
 }  // namespace
 }  // namespace drench
