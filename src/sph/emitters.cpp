@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <utility>
+#include <vector>
 
 namespace drench {
 
@@ -31,14 +33,32 @@ NozzleEmitter::NozzleEmitter(const NozzleEmitterSettings& settings, Scalar spaci
   }
   const Vec3 first = d.cross(Vec3::Unit(least)).normalized();
   const Vec3 second = d.cross(first);
-  const int n = static_cast<int>(std::floor(settings.radius / spacing));
-  const Scalar r2 = settings.radius * settings.radius;
-  for (int j = -n; j <= n; ++j) {
-    for (int i = -n; i <= n; ++i) {
-      const Vec3 offset = spacing * (i * first + j * second);
-      if (offset.squaredNorm() <= r2) m_disc.push_back(offset);
+  // A hexagonal lattice with one particle per s^2 of the nozzle's area (neighbours 1.075 s apart, never
+  // closer than s), of which the round(pi r^2 / s^2) points nearest the axis make a disc: layers one spacing
+  // apart then carry rho pi r^2 v, the jet's mass flux, to half a particle per layer. (A square lattice
+  // clipped to the radius held 49 particles for the 50.3 of Fig. 3's nozzle, 2.5% short: 14,749 particles in
+  // 0.5 s where the scene asks for 15,000.)
+  const Scalar pitch = spacing * std::sqrt(2.0 / std::sqrt(3.0));
+  const Scalar row = pitch * std::sqrt(3.0) / 2.0;
+  const auto wanted = static_cast<std::size_t>(
+      std::max(1.0, std::round(M_PI * settings.radius * settings.radius / (spacing * spacing))));
+  const int rows = static_cast<int>(std::ceil(settings.radius / row)) + 2;
+  const int columns = static_cast<int>(std::ceil(settings.radius / pitch)) + 2;
+  std::vector<std::pair<Scalar, Vec3>> candidates;  // (distance to the axis, offset)
+  for (int j = -rows; j <= rows; ++j) {
+    for (int i = -columns; i <= columns; ++i) {
+      const Vec3 offset = (i + 0.5 * (j & 1)) * pitch * first + j * row * second;
+      candidates.emplace_back(offset.norm(), offset);
     }
   }
+  // Ties (a ring of the lattice cut by the count) go by angle, so that the disc is the same on every run.
+  std::sort(candidates.begin(), candidates.end(), [&](const auto& a, const auto& b) {
+    if (a.first != b.first) return a.first < b.first;
+    return std::atan2(a.second.dot(second), a.second.dot(first)) <
+           std::atan2(b.second.dot(second), b.second.dot(first));
+  });
+  for (std::size_t k = 0; k < wanted && k < candidates.size(); ++k)
+    m_disc.push_back(candidates[k].second);
 }
 
 std::size_t NozzleEmitter::emit(Scalar t, Scalar dt, Scalar mass, ParticleSet& particles,

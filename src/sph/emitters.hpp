@@ -15,11 +15,13 @@ namespace drench {
 std::size_t emit_box(const BoxEmitterSettings& box, Scalar spacing, Scalar mass, ParticleSet& particles,
                      std::uint32_t& next_id);
 
-/// A circular jet. Each time the fluid leaving the nozzle has advanced one spacing, a disc of particles
-/// (square lattice of spacing s clipped to the radius) is released at the nozzle, moving at `speed` along
-/// `direction`. A disc released at time r inside the step (t, t + dt] is placed at centre + (t - r) v, upstream of
-/// the nozzle, so that the step's integration carries it to centre + (t + dt - r) v: layers stay one spacing
-/// apart whatever dt is. Emission stops at the particle budget, mid-disc if need be.
+/// A circular jet. Each time the fluid leaving the nozzle has advanced one spacing s, a disc of
+/// round(pi r^2 / s^2) particles (at least one) is released at the nozzle, moving at `speed` along
+/// `direction`: the points nearest the axis of a hexagonal lattice with one point per s^2 (neighbours 1.075 s
+/// apart), so that the jet carries rho pi r^2 v. A disc released at time r inside the step (t, t + dt] is
+/// placed at centre + (t - r) v, upstream of the nozzle, so that the step's integration carries it to
+/// centre + (t + dt - r) v: layers stay one spacing apart whatever dt is. Emission stops at the particle
+/// budget, mid-disc if need be.
 class NozzleEmitter {
  public:
   NozzleEmitter(const NozzleEmitterSettings& settings, Scalar spacing);
