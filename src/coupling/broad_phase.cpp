@@ -21,7 +21,7 @@ class GridBroadPhase final : public TriangleBroadPhase {
     const std::size_t f = cloth.triangles.size();
     const std::size_t n = particles_t0.size();
     if (f == 0 || n == 0) return;
-    if (!m_built_for.same_as_last(cloth, margin)) bin_triangles(cloth, margin);
+    if (!m_built_for.same_as_last(cloth)) bin_triangles(cloth);
 
     collect_pairs(
         particles_t0, particles_t1, margin, only, m_boxes,
@@ -43,12 +43,12 @@ class GridBroadPhase final : public TriangleBroadPhase {
   }
 
  private:
-  void bin_triangles(const ClothMesh& cloth, double margin) {
+  void bin_triangles(const ClothMesh& cloth) {
     const std::size_t f = cloth.triangles.size();
     m_boxes.resize(f);
     double extent_sum = 0.0;
     for (std::size_t t = 0; t < f; ++t) {
-      m_boxes[t] = triangle_box(cloth, cloth.triangles[t], margin);
+      m_boxes[t] = triangle_box(cloth, cloth.triangles[t], 0.0);
       extent_sum += (m_boxes[t].hi - m_boxes[t].lo).maxCoeff();
     }
     m_cell = std::max(extent_sum / static_cast<double>(f), 1e-9);
@@ -98,13 +98,12 @@ class GridBroadPhase final : public TriangleBroadPhase {
 
 }  // namespace
 
-bool TriangleBoxKey::same_as_last(const ClothMesh& cloth, double margin) {
-  if (m_valid && margin == m_margin && cloth.positions_t0 == m_positions_t0 &&
-      cloth.positions_t1 == m_positions_t1 && cloth.triangles == m_triangles) {
+bool TriangleBoxKey::same_as_last(const ClothMesh& cloth) {
+  if (m_valid && cloth.positions_t0 == m_positions_t0 && cloth.positions_t1 == m_positions_t1 &&
+      cloth.triangles == m_triangles) {
     return true;
   }
   m_valid = true;
-  m_margin = margin;
   m_positions_t0 = cloth.positions_t0;
   m_positions_t1 = cloth.positions_t1;
   m_triangles = cloth.triangles;
@@ -144,7 +143,7 @@ void collect_pairs(const Vec3Array& particles_t0, const Vec3Array& particles_t1,
 #pragma omp for schedule(static)
     for (std::size_t p = 0; p < n; ++p) {
       if (only && !(*only)[p]) continue;
-      const Box3 box = particle_box(particles_t0[p], particles_t1[p], margin);
+      const Box3 box = particle_box(particles_t0[p], particles_t1[p], 2.0 * margin);
       candidates.clear();
       propose(box, candidates);
       std::sort(candidates.begin(), candidates.end());
@@ -165,9 +164,9 @@ void find_pairs_brute_force(const Vec3Array& particles_t0, const Vec3Array& part
   pairs.clear();
   std::vector<Box3> boxes;
   for (const Triangle& t : cloth.triangles)
-    boxes.push_back(triangle_box(cloth, t, margin));
+    boxes.push_back(triangle_box(cloth, t, 0.0));
   for (std::size_t p = 0; p < particles_t0.size(); ++p) {
-    const Box3 box = particle_box(particles_t0[p], particles_t1[p], margin);
+    const Box3 box = particle_box(particles_t0[p], particles_t1[p], 2.0 * margin);
     for (std::size_t t = 0; t < boxes.size(); ++t) {
       if (box.overlaps(boxes[t])) pairs.emplace_back(static_cast<Index>(p), static_cast<Index>(t));
     }

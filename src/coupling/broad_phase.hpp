@@ -2,6 +2,8 @@
 /// Broad phase of the coupling (Huber et al. 2013 sec. 5 uses spatial hashing [THM*03]): which particles can
 /// touch which triangles during a step. Boxes are swept over the step (start and end positions) and grown by
 /// a margin, so the same candidates serve the proximity test at the start (sec. 3.1) and the CCD (sec. 3.3).
+/// Two boxes each grown by m overlap exactly when one grown by 2 m overlaps the other bare: the triangles'
+/// boxes are kept bare, so that one tree serves every margin.
 /// Two implementations behind one interface, measured side by side in bench/bench_coupling.cpp.
 
 #include <functional>
@@ -40,31 +42,33 @@ Box3 particle_box(const Vec3& x_t0, const Vec3& x_t1, double margin);
 Box3 triangle_box(const ClothMesh& cloth, const Triangle& t, double margin);
 
 /// The cloth a broad phase last built its triangle boxes for. Within one step the same cloth is queried many
-/// times (every fluid sub-step's obstacle, every CCD round of a kinematic cloth); rebuilding its boxes each
-/// time cost about 0.9 ms per call on the 57 x 57 cloth (FCL refit), a third of the coupling's step.
+/// times (every fluid sub-step's obstacle and the carried water's search, every CCD round of a kinematic
+/// cloth); rebuilding its boxes each time cost about 0.9 ms per call on the 57 x 57 cloth (FCL refit).
 class TriangleBoxKey {
  public:
-  /// True when `cloth` (both position sets, triangles) and `margin` equal, bit for bit, those of the last
-  /// call that returned false; else remembers them and returns false.
-  bool same_as_last(const ClothMesh& cloth, double margin);
+  /// True when `cloth` (both position sets, triangles) equals, bit for bit, that of the last call that
+  /// returned false; else remembers it and returns false.
+  bool same_as_last(const ClothMesh& cloth);
 
  private:
   bool m_valid = false;
-  double m_margin = 0.0;
   Vec3Array m_positions_t0, m_positions_t1;
   std::vector<Triangle> m_triangles;
 };
 
 /// What every broad phase shares, once: for each particle (in parallel; the result in particle order, so the
-/// same for any thread count) the triangles `propose` names for its swept, grown box, duplicates removed,
-/// kept when that box and the triangle's box in `triangle_boxes` overlap exactly. `propose` may over-report.
+/// same for any thread count) the triangles `propose` names for its swept box grown by 2 margin, duplicates
+/// removed, kept when that box and the triangle's bare box in `triangle_boxes` overlap exactly. `propose` may
+/// over-report.
 void collect_pairs(const Vec3Array& particles_t0, const Vec3Array& particles_t1, double margin,
                    const std::vector<std::uint8_t>* only, const std::vector<Box3>& triangle_boxes,
                    const std::function<void(const Box3& box, std::vector<Index>& candidates)>& propose,
                    std::vector<std::pair<Index, Index>>& pairs);
 
-/// Candidate (particle, triangle) pairs: every pair whose swept, grown boxes overlap, sorted by particle then
-/// triangle, each pair once. Implementations must return exactly this set (tests compare with brute force).
+/// Candidate (particle, triangle) pairs: every pair whose swept boxes, each grown by the margin, overlap
+/// (tested as the particle's grown by twice the margin against the triangle's bare box), sorted by particle
+/// then triangle, each pair once. Implementations must return exactly this set (tests compare with brute
+/// force).
 class TriangleBroadPhase {
  public:
   virtual ~TriangleBroadPhase() = default;

@@ -1,7 +1,7 @@
 // The FCL broad phase: the cloth's triangles in an fcl::DynamicAABBTreeCollisionManager, refitted when the
-// cloth or the margin changed, queried with each particle's swept, grown box. FCL only proposes candidates;
-// the same exact box test as the grid (Box3::overlaps) decides, so the pairs are exactly the brute-force set.
-// FCL stays inside this file.
+// cloth changed (bare boxes: the margin grows the query), queried with each particle's swept, grown box. FCL
+// only proposes candidates; the same exact box test as the grid (Box3::overlaps) decides, so the pairs are
+// exactly the brute-force set. FCL stays inside this file.
 
 #include <fcl/broadphase/broadphase_dynamic_AABB_tree.h>
 #include <fcl/geometry/shape/box.h>
@@ -58,7 +58,7 @@ class FclBroadPhase final : public TriangleBroadPhase {
     const std::size_t f = cloth.triangles.size();
     const std::size_t n = particles_t0.size();
     if (f == 0 || n == 0) return;
-    if (!m_built_for.same_as_last(cloth, margin)) update_tree(cloth, margin);
+    if (!m_built_for.same_as_last(cloth)) update_tree(cloth);
 
     collect_pairs(
         particles_t0, particles_t1, margin, only, m_boxes,
@@ -73,7 +73,7 @@ class FclBroadPhase final : public TriangleBroadPhase {
  private:
   /// Sets every triangle's object to its swept, grown box. The first call (or a mesh with another triangle
   /// count) builds the tree top-down; later calls refit it and let FCL rebalance (manager update()).
-  void update_tree(const ClothMesh& cloth, double margin) {
+  void update_tree(const ClothMesh& cloth) {
     const std::size_t f = cloth.triangles.size();
     const bool rebuild = m_objects.size() != f;
     if (rebuild) {
@@ -87,7 +87,7 @@ class FclBroadPhase final : public TriangleBroadPhase {
     }
     m_boxes.resize(f);
     for (std::size_t t = 0; t < f; ++t) {
-      m_boxes[t] = triangle_box(cloth, cloth.triangles[t], margin);
+      m_boxes[t] = triangle_box(cloth, cloth.triangles[t], 0.0);
       m_objects[t]->set(m_boxes[t]);
     }
     if (rebuild) {

@@ -2,14 +2,18 @@
 
 #include <algorithm>
 #include <cassert>
+#include <utility>
 
 #include "common/triangle_geometry.hpp"
 
 namespace drench {
 
 CarriedWater::CarriedWater(double carry_distance, BroadPhaseKind broad_phase)
-    : m_distance(carry_distance), m_broad_phase(make_broad_phase(broad_phase)) {
-  assert(carry_distance > 0.0);
+    : CarriedWater(carry_distance, make_broad_phase(broad_phase)) {}
+
+CarriedWater::CarriedWater(double carry_distance, std::shared_ptr<TriangleBroadPhase> broad_phase)
+    : m_distance(carry_distance), m_broad_phase(std::move(broad_phase)) {
+  assert(carry_distance > 0.0 && m_broad_phase);
 }
 
 CarriedWater::~CarriedWater() = default;

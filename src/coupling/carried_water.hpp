@@ -29,6 +29,9 @@ class CarriedWater {
   ///        layer, which rests about one thickness above the cloth.
   /// @param broad_phase  which broad phase finds the particles near the cloth (kept across steps)
   CarriedWater(double carry_distance, BroadPhaseKind broad_phase);
+  /// As above with a broad phase shared with the sub-step obstacle (ClothObstacle), which queries the same
+  /// start-of-step cloth: one refit of its triangle boxes per step serves both. @param broad_phase not null
+  CarriedWater(double carry_distance, std::shared_ptr<TriangleBroadPhase> broad_phase);
   ~CarriedWater();
   CarriedWater(const CarriedWater&) = delete;
   CarriedWater& operator=(const CarriedWater&) = delete;
@@ -73,7 +76,7 @@ class CarriedWater {
     Vec3 weights;
   };
   double m_distance;
-  std::unique_ptr<TriangleBroadPhase> m_broad_phase;
+  std::shared_ptr<TriangleBroadPhase> m_broad_phase;
   ClothMesh m_static;  // the cloth at its start positions, not moving (what the broad phase sees)
   std::vector<std::pair<Index, Index>> m_pairs;
   std::vector<Link> m_links;

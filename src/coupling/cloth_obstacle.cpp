@@ -1,15 +1,21 @@
 #include "coupling/cloth_obstacle.hpp"
 
+#include <cassert>
 #include <cmath>
+#include <utility>
 
 #include "ccd/point_triangle_ccd.hpp"
 
 namespace drench {
 
 ClothObstacle::ClothObstacle(double thickness, BroadPhaseKind broad_phase, bool kinematic_cloth)
-    : m_thickness(thickness),
-      m_kinematic_cloth(kinematic_cloth),
-      m_broad_phase(make_broad_phase(broad_phase)) {}
+    : ClothObstacle(thickness, make_broad_phase(broad_phase), kinematic_cloth) {}
+
+ClothObstacle::ClothObstacle(double thickness, std::shared_ptr<TriangleBroadPhase> broad_phase,
+                             bool kinematic_cloth)
+    : m_thickness(thickness), m_kinematic_cloth(kinematic_cloth), m_broad_phase(std::move(broad_phase)) {
+  assert(m_broad_phase);
+}
 
 void ClothObstacle::begin_step(const ClothMesh& cloth, const Vec3Array& velocities) {
   m_static.positions_t0 = cloth.positions_t0;

@@ -28,6 +28,11 @@ class ClothObstacle final : public SubstepConstraint {
   ///        otherwise throw a light node within a single sub-step: its bookkept velocity reached -36 m/s in
   ///        one 4 ms step of the reduced Fig. 3 jet); false: eq. 2 mass-weighted on both sides
   ClothObstacle(double thickness, BroadPhaseKind broad_phase, bool kinematic_cloth = false);
+  /// As above with a broad phase shared with other users of the same start-of-step cloth (CarriedWater): it
+  /// keeps its triangle boxes while the cloth is unchanged, so one refit per step serves all of them.
+  /// @param broad_phase  not null
+  ClothObstacle(double thickness, std::shared_ptr<TriangleBroadPhase> broad_phase,
+                bool kinematic_cloth = false);
 
   /// Starts a step: the cloth's positions_t0 become the obstacle (copied); its inverse masses (unless
   /// kinematic) and triangles are used; `velocities` are the node velocities at the start of the step (unit:
@@ -53,7 +58,7 @@ class ClothObstacle final : public SubstepConstraint {
   Vec3Array m_node_velocities;  // start velocity plus the impulses so far, over the mass
   Vec3Array m_node_impulses;
   std::uint64_t m_stops = 0;
-  std::unique_ptr<TriangleBroadPhase> m_broad_phase;
+  std::shared_ptr<TriangleBroadPhase> m_broad_phase;
   std::vector<std::pair<Index, Index>> m_pairs;
 };
 

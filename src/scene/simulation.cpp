@@ -127,15 +127,17 @@ Simulation::Simulation(const SceneConfig& config, std::unique_ptr<ClothEngine> c
   if (m_cloth) m_cloth->mesh().validate();
   if (m_cloth && m_config.has_effect("coupling")) m_coupler = std::make_unique<Coupler>(m_config.coupling);
   const bool carried_water = m_config.coupling.scheme == CouplingScheme::CARRIED_WATER;
+  // The obstacle and the carried water query the same start-of-step cloth: one broad phase, one refit.
+  const std::shared_ptr<TriangleBroadPhase> start_of_step_cloth =
+      make_broad_phase(m_config.coupling.broad_phase);
   if (m_coupler && m_config.coupling.continuous && m_config.coupling.substep_obstacle) {
-    m_obstacle = std::make_unique<ClothObstacle>(m_config.coupling.cloth_thickness,
-                                                 m_config.coupling.broad_phase, carried_water);
+    m_obstacle = std::make_unique<ClothObstacle>(m_config.coupling.cloth_thickness, start_of_step_cloth,
+                                                 carried_water);
   }
   if (m_coupler && carried_water) {
     // The bottom layer of water rests about one thickness above the cloth; half a spacing more takes it all.
     m_carried = std::make_unique<CarriedWater>(
-        m_config.coupling.cloth_thickness + 0.5 * m_config.fluid.particle_spacing,
-        m_config.coupling.broad_phase);
+        m_config.coupling.cloth_thickness + 0.5 * m_config.fluid.particle_spacing, start_of_step_cloth);
   }
   if (m_cloth) m_pending_cloth_impulses.assign(m_cloth->mesh().node_count(), Vec3::Zero());
   m_leak_audit = m_cloth && m_config.has_effect("leak_audit");
