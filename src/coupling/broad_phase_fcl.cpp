@@ -71,7 +71,7 @@ class FclBroadPhase final : public TriangleBroadPhase {
   }
 
  private:
-  /// Sets every triangle's object to its swept, grown box. The first call (or a mesh with another triangle
+  /// Sets every triangle's object to its swept (bare) box. The first call (or a mesh with another triangle
   /// count) builds the tree top-down; later calls refit it and let FCL rebalance (manager update()).
   void update_tree(const ClothMesh& cloth) {
     const std::size_t f = cloth.triangles.size();
@@ -102,7 +102,7 @@ class FclBroadPhase final : public TriangleBroadPhase {
   }
 
   std::vector<std::unique_ptr<BoxObject>> m_objects;  // F, triangle t's object (outlives the manager)
-  std::vector<Box3> m_boxes;                          // F, triangle t's swept, grown box
+  std::vector<Box3> m_boxes;                          // F, triangle t's swept (bare) box
   fcl::DynamicAABBTreeCollisionManagerd m_manager;    // leaves point into m_objects
   TriangleBoxKey m_built_for;
 };

@@ -128,8 +128,8 @@ Simulation::Simulation(const SceneConfig& config, std::unique_ptr<ClothEngine> c
   if (m_cloth && m_config.has_effect("coupling")) m_coupler = std::make_unique<Coupler>(m_config.coupling);
   const bool carried_water = m_config.coupling.scheme == CouplingScheme::CARRIED_WATER;
   // The obstacle and the carried water query the same start-of-step cloth: one broad phase, one refit.
-  const std::shared_ptr<TriangleBroadPhase> start_of_step_cloth =
-      make_broad_phase(m_config.coupling.broad_phase);
+  std::shared_ptr<TriangleBroadPhase> start_of_step_cloth;
+  if (m_coupler) start_of_step_cloth = make_broad_phase(m_config.coupling.broad_phase);
   if (m_coupler && m_config.coupling.continuous && m_config.coupling.substep_obstacle) {
     m_obstacle = std::make_unique<ClothObstacle>(m_config.coupling.cloth_thickness, start_of_step_cloth,
                                                  carried_water);
