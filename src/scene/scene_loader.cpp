@@ -267,19 +267,23 @@ FluidSettings read_fluid(const Node& node) {
     fluid.wcsph.speed_of_sound = c.number(kPositive);
   wcsph.read("exponent", fluid.wcsph.exponent, kAtLeastOne);
 
-  const ObjectReader pcisph(r["pcisph"],
-                            {"eta", "min_iterations", "max_iterations", "max_compression_per_iteration"});
+  const ObjectReader pcisph(r["pcisph"], {"eta", "min_iterations", "max_iterations",
+                                          "max_compression_per_iteration", "max_relief_per_substep"});
   pcisph.read("eta", fluid.pcisph.eta, Range{0.0, true, 1.0, true});
   pcisph.read("min_iterations", fluid.pcisph.min_iterations, kAtLeastOne);
   pcisph.read("max_iterations", fluid.pcisph.max_iterations, kAtLeastOne);
   pcisph.require_order("min_iterations", fluid.pcisph.min_iterations, "max_iterations",
                        fluid.pcisph.max_iterations);
   // null is "no limit" (the published PCISPH), so that --set can undo the default.
-  if (const Node c = pcisph["max_compression_per_iteration"]; c.present()) {
-    if (c.value().is_null()) {
-      fluid.pcisph.max_compression_per_iteration.reset();
-    } else {
-      fluid.pcisph.max_compression_per_iteration = c.number(kPositive);
+  for (auto [key, limit] :
+       {std::pair{"max_compression_per_iteration", &fluid.pcisph.max_compression_per_iteration},
+        std::pair{"max_relief_per_substep", &fluid.pcisph.max_relief_per_substep}}) {
+    if (const Node c = pcisph[key]; c.present()) {
+      if (c.value().is_null()) {
+        limit->reset();
+      } else {
+        *limit = c.number(kPositive);
+      }
     }
   }
 

@@ -73,7 +73,8 @@ constexpr const char* kFullScene = R"({
     "particle_spacing": 0.02,
     "pressure_solver": "wcsph",
     "wcsph": {"speed_of_sound": 30, "exponent": 7},
-    "pcisph": {"eta": 0.01, "min_iterations": 2, "max_iterations": 50, "max_compression_per_iteration": 0.1},
+    "pcisph": {"eta": 0.01, "min_iterations": 2, "max_iterations": 50, "max_compression_per_iteration": 0.1,
+               "max_relief_per_substep": 0.2},
     "viscosity": {"method": "artificial", "coefficient": 0.05},
     "cfl": 0.25,
     "sort_interval": 20
@@ -112,6 +113,8 @@ TEST(SceneLoader, ParsesFullSceneIntoEveryMember) {
   EXPECT_EQ(c.fluid.pcisph.min_iterations, 2);
   ASSERT_TRUE(c.fluid.pcisph.max_compression_per_iteration.has_value());
   EXPECT_DOUBLE_EQ(*c.fluid.pcisph.max_compression_per_iteration, 0.1);
+  ASSERT_TRUE(c.fluid.pcisph.max_relief_per_substep.has_value());
+  EXPECT_DOUBLE_EQ(*c.fluid.pcisph.max_relief_per_substep, 0.2);
   EXPECT_EQ(c.fluid.pcisph.max_iterations, 50);
   EXPECT_EQ(c.fluid.viscosity.method, ViscosityKind::ARTIFICIAL);
   EXPECT_DOUBLE_EQ(c.fluid.viscosity.coefficient, 0.05);
@@ -216,6 +219,17 @@ TEST(SceneLoader, NullMaxCompressionPerIterationMeansNoLimit) {
 TEST(SceneLoader, RejectsZeroMaxCompressionPerIteration) {
   EXPECT_TRUE(scene_error(R"({"fluid": {"pcisph": {"max_compression_per_iteration": 0}}})",
                           "fluid.pcisph.max_compression_per_iteration must be > 0, got 0 (x.json)"));
+}
+
+TEST(SceneLoader, NullMaxReliefPerSubstepMeansNoLimit) {
+  EXPECT_EQ(parse("{}").fluid.pcisph.max_relief_per_substep, 0.05);
+  EXPECT_FALSE(parse(R"({"fluid": {"pcisph": {"max_relief_per_substep": null}}})")
+                   .fluid.pcisph.max_relief_per_substep);
+}
+
+TEST(SceneLoader, RejectsNegativeMaxReliefPerSubstep) {
+  EXPECT_TRUE(scene_error(R"({"fluid": {"pcisph": {"max_relief_per_substep": -0.1}}})",
+                          "fluid.pcisph.max_relief_per_substep must be > 0, got -0.1 (x.json)"));
 }
 
 TEST(SceneLoader, AcceptsZeroMaxParticlesAndZeroFrameRate) {

@@ -33,6 +33,7 @@ PressureStats PressurePcisph::solve(const FluidContext& ctx, const Vec3Array& ve
 
   m_predicted.resize(n);
   m_error.resize(n);
+  m_target.assign(n, rho0);
   m_p_over_rho2.resize(n);
   accelerations.resize(n);
   PressureStats stats;
@@ -40,6 +41,11 @@ PressureStats PressurePcisph::solve(const FluidContext& ctx, const Vec3Array& ve
   const Scalar max_excess = m_settings.max_compression_per_iteration
                                 ? *m_settings.max_compression_per_iteration * rho0
                                 : std::numeric_limits<Scalar>::infinity();
+  const Scalar max_relief = m_settings.max_relief_per_substep ? *m_settings.max_relief_per_substep * rho0
+                                                              : std::numeric_limits<Scalar>::infinity();
+  // The convergence test measures the error against each particle's target density; the reported errors
+  // are against the rest density (the fluid's real compression).
+  PressureStats to_target;
   // Every solve starts from zero pressure, as Solenthaler & Pajarola and SPlisHSPlasH do. A warm start from
   // the last sub-step's pressures needed 3x fewer iterations in a settled tank, but its leftover
   // over-pressure kept the corner particles of the tank oscillating at 0.5 m/s (measured), so it is not used.
@@ -55,8 +61,11 @@ PressureStats PressurePcisph::solve(const FluidContext& ctx, const Vec3Array& ve
       // Only compression is corrected (as SPlisHSPlasH's PCISPH): a free-surface particle lacks neighbours
       // and its density deficit is no expansion to undo, so pressures only grow within a solve.
       const Scalar rho = std::max(sph_density(ctx, m_predicted, i), rho0);
+      // The first prediction (no pressure yet) fixes what this sub-step may relieve: all of it, unless the
+      // particle entered it compressed by more than max_relief.
+      if (stats.iterations == 0) m_target[i] = std::max(rho0, rho - max_relief);
       m_error[i] = rho;
-      particles.pressures[i] += delta * std::min(rho - rho0, max_excess);
+      particles.pressures[i] += delta * std::min(std::max(rho - m_target[i], 0.0), max_excess);
       m_p_over_rho2[i] = particles.pressures[i] * inv_rho0_sq;
     }
 #pragma omp parallel for schedule(static)
@@ -65,7 +74,15 @@ PressureStats PressurePcisph::solve(const FluidContext& ctx, const Vec3Array& ve
 
     ++stats.iterations;
     density_error_stats(m_error, rho0, stats);
-    const bool below = stats.average_density_error <= m_settings.eta;
+    bool below = stats.average_density_error <= m_settings.eta;
+    if (m_settings.max_relief_per_substep) {
+      // rho - target + rho0 >= rho0 (the prediction only falls below the target once relieved)
+#pragma omp parallel for schedule(static)
+      for (std::size_t i = 0; i < n; ++i)
+        m_error[i] = std::max(m_error[i] - m_target[i], 0.0) + rho0;
+      density_error_stats(m_error, rho0, to_target);
+      below = to_target.average_density_error <= m_settings.eta;
+    }
     if ((below && stats.iterations >= m_settings.min_iterations) ||
         stats.iterations >= m_settings.max_iterations) {
       stats.converged = below;

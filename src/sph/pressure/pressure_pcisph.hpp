@@ -10,7 +10,10 @@ namespace drench {
 /// accelerations, until the average compression is below eta (as SPlisHSPlasH's maxError) after at least
 /// min_iterations, or max_iterations are spent. With PcisphSettings::max_compression_per_iteration set (the
 /// default, a drench addition), one iteration raises a particle's pressure by at most delta times that
-/// compression.
+/// compression. With PcisphSettings::max_relief_per_substep set (the default, a drench addition), a
+/// particle whose first prediction in a sub-step is compressed by more than that fraction is driven to
+/// (prediction - max_relief) instead of the rest density, and the stopping rule measures the error against
+/// that target.
 class PressurePcisph final : public PressureSolver {
  public:
   explicit PressurePcisph(const FluidSettings& settings);
@@ -25,6 +28,7 @@ class PressurePcisph final : public PressureSolver {
   Scalar m_prototype_gradient_term;
   Vec3Array m_predicted;
   ScalarArray m_error;
+  ScalarArray m_target;  // N, the density each particle is driven to in this sub-step (unit: kg/m^3)
   ScalarArray m_p_over_rho2;
 };
 
