@@ -7,7 +7,7 @@
 ///   2. cloth.begin_step()    node positions at the start of the step (positions_t0)
 ///   3. fluid.step(dt)        SPH alone; records positions_t0; with "coupling" the start-of-step cloth stops
 ///                            particles inside its sub-steps (coupling/cloth_obstacle.hpp)
-///   4. carried water         coupling.scheme "carried_water" (the default): the water near the cloth becomes
+///   4. carried water         coupling.scheme "carried_water" (the default): the water in contact becomes
 ///                            node mass for Bullet's step (BulletCloth::set_carried_masses)
 ///   5. cloth.apply_impulses  into m_v before Bullet's step, so that Bullet's links carry the load within the
 ///                            step: what the last step's coupling owes the cloth, and the obstacle's impulses

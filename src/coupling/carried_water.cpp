@@ -1,60 +1,44 @@
 #include "coupling/carried_water.hpp"
 
 #include <algorithm>
-#include <cassert>
-#include <utility>
-
-#include "common/triangle_geometry.hpp"
 
 namespace drench {
 
-CarriedWater::CarriedWater(double carry_distance, BroadPhaseKind broad_phase)
-    : CarriedWater(carry_distance, make_broad_phase(broad_phase)) {}
-
-CarriedWater::CarriedWater(double carry_distance, std::shared_ptr<TriangleBroadPhase> broad_phase)
-    : m_distance(carry_distance), m_broad_phase(std::move(broad_phase)) {
-  assert(carry_distance > 0.0 && m_broad_phase);
-}
-
-CarriedWater::~CarriedWater() = default;
-
-void CarriedWater::attach(const ClothMesh& cloth, const Vec3Array& positions, const ScalarArray& masses) {
-  m_static.positions_t0 = cloth.positions_t0;
-  m_static.positions_t1 = cloth.positions_t0;
-  m_static.inverse_masses = cloth.inverse_masses;
-  m_static.triangles = cloth.triangles;
+void CarriedWater::attach(const ClothMesh& cloth, const ScalarArray& masses,
+                          const std::vector<std::uint32_t>& ids, ImpulseLinks links) {
   m_carried.assign(cloth.node_count(), 0.0);
   m_links.clear();
-  if (cloth.triangles.empty() || positions.empty()) return;
-  m_broad_phase->find_pairs(positions, positions, m_static, m_distance, nullptr, m_pairs);
-  // Distances in parallel, one slot per pair; the choice and the sums in particle order (deterministic).
-  std::vector<double> distance(m_pairs.size());
-  std::vector<Vec3> weights(m_pairs.size());
-  const Vec3Array& x = m_static.positions_t0;
-#pragma omp parallel for schedule(dynamic, 256)
-  for (std::size_t k = 0; k < m_pairs.size(); ++k) {
-    const auto [p, t] = m_pairs[k];
-    const Triangle& tri = m_static.triangles[t];
-    const Vec3 w = closest_point_barycentric(positions[p], x[tri[0]], x[tri[1]], x[tri[2]]);
-    weights[k] = w;
-    distance[k] = (positions[p] - (w[0] * x[tri[0]] + w[1] * x[tri[1]] + w[2] * x[tri[2]])).norm();
-  }
-  for (std::size_t k = 0; k < m_pairs.size();) {
-    const Index p = m_pairs[k].first;
-    std::size_t best = m_pairs.size();
-    for (; k < m_pairs.size() && m_pairs[k].first == p; ++k) {
-      if (distance[k] <= m_distance && (best == m_pairs.size() || distance[k] < distance[best])) best = k;
-    }
-    if (best == m_pairs.size()) continue;
-    const Triangle& tri = m_static.triangles[m_pairs[best].second];
+  links.erase(std::remove_if(links.begin(), links.end(),
+                             [&](const ImpulseLink& l) { return l.triangle >= cloth.triangle_count(); }),
+              links.end());
+  if (links.empty() || ids.empty()) return;
+  // One link per particle id: its largest impulse (ties: the lower triangle index), so the order of the
+  // links given does not matter.
+  std::sort(links.begin(), links.end(), [](const ImpulseLink& a, const ImpulseLink& b) {
+    if (a.particle_id != b.particle_id) return a.particle_id < b.particle_id;
+    if (a.impulse != b.impulse) return a.impulse > b.impulse;
+    return a.triangle < b.triangle;
+  });
+  links.erase(
+      std::unique(links.begin(), links.end(),
+                  [](const ImpulseLink& a, const ImpulseLink& b) { return a.particle_id == b.particle_id; }),
+      links.end());
+  // In particle order, so that the sums per node do not depend on the links' order.
+  for (std::size_t p = 0; p < ids.size(); ++p) {
+    const auto link =
+        std::lower_bound(links.begin(), links.end(), ids[p],
+                         [](const ImpulseLink& l, std::uint32_t id) { return l.particle_id < id; });
+    if (link == links.end() || link->particle_id != ids[p] || link->triangle >= cloth.triangle_count())
+      continue;
+    const Triangle& tri = cloth.triangles[link->triangle];
     bool carried = false;
     for (int i = 0; i < 3; ++i) {
-      if (m_static.inverse_masses[tri[i]] > 0.0 && weights[best][i] > 0.0) {
-        m_carried[tri[i]] += weights[best][i] * masses[p];
+      if (cloth.inverse_masses[tri[i]] > 0.0 && link->weights[i] > 0.0) {
+        m_carried[tri[i]] += link->weights[i] * masses[p];
         carried = true;
       }
     }
-    if (carried) m_links.push_back({p, m_pairs[best].second, weights[best]});
+    if (carried) m_links.push_back({static_cast<Index>(p), link->triangle, link->weights});
   }
 }
 

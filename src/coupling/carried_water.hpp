@@ -1,49 +1,45 @@
 #pragma once
-/// Water resting on the cloth moves with it through the cloth engine's step: a drench addition to Huber et
-/// al. 2013, part of CouplingScheme::CARRIED_WATER. The paper steps fluid and cloth apart and couples them by
-/// impulses afterwards (sec. 5). With a light cloth under heavy water (the paper's Fig. 3 cloth: 4.1e-5 kg
+/// Water in contact with the cloth moves with it through the cloth engine's step: a drench addition to Huber
+/// et al. 2013, part of CouplingScheme::CARRIED_WATER. The paper steps fluid and cloth apart and couples them
+/// by impulses afterwards (sec. 5). With a light cloth under heavy water (the paper's Fig. 3 cloth: 4.1e-5 kg
 /// per node of the 57 x 57 patch, a 5 mm particle 1.25e-4 kg) that splitting is unstable on a position-based
 /// cloth (the added-mass instability of partitioned fluid-structure coupling): the coupling moves a wet node
 /// with its water, the cloth's links snap it back at tens of m/s, and the oscillation grows every step.
-/// Here, for the cloth's step only, each node weighs its own mass plus the water resting on it, so the
-/// links accelerate node and water together; afterwards the water gets its share of what the links did.
+/// Here the particles see the cloth as kinematic (they are stopped against it in full), and the cloth takes
+/// their impulses at its next step with those particles' mass on its nodes: node and water then share each
+/// impulse as eq. 2 between them would, and the links accelerate both together; afterwards the water gets its
+/// share of what the links did.
+///
+/// What is carried is the contact set: the particles whose impulse the cloth takes in this step (the
+/// coupler's of the previous step, the sub-step obstacle's of this one). Water that is only near the cloth
+/// is not: carried, it would lend a node its mass at the node's velocity, not its own, and a node moving
+/// through water would push its neighbours with momentum no water has (the cloth swinging through a pool:
+/// nodes at 9.8-20 m/s for carry distances of 1.2-6 mm, 2.6 m/s for the contact set; its dry swing 2.9).
 ///
 /// Per step: attach() after the fluid step, ClothEngine::set_carried_masses(carried_masses()), the impulses
 /// and the engine's step, then hand_back().
 
 #include <cstdint>
-#include <memory>
-#include <utility>
 #include <vector>
 
 #include "common/types.hpp"
-#include "coupling/broad_phase.hpp"
 #include "coupling/cloth_mesh.hpp"
+#include "coupling/impulse_link.hpp"
 
 namespace drench {
 
 class CarriedWater {
  public:
-  /// @param carry_distance  a particle within this distance (unit: m, > 0) of the cloth is carried by its
-  ///        closest triangle. drench uses cloth thickness + half a particle spacing: the water's bottom
-  ///        layer, which rests about one thickness above the cloth.
-  /// @param broad_phase  which broad phase finds the particles near the cloth (kept across steps)
-  CarriedWater(double carry_distance, BroadPhaseKind broad_phase);
-  /// As above with a broad phase shared with the sub-step obstacle (ClothObstacle), which queries the same
-  /// start-of-step cloth: one refit of its triangle boxes per step serves both. @param broad_phase not null
-  CarriedWater(double carry_distance, std::shared_ptr<TriangleBroadPhase> broad_phase);
-  ~CarriedWater();
-  CarriedWater(const CarriedWater&) = delete;
-  CarriedWater& operator=(const CarriedWater&) = delete;
-
-  /// Finds the carried particles: every particle within the carry distance of the cloth at its start
-  /// positions (positions_t0), with the barycentric weights of its closest point on the closest triangle
-  /// (the first in triangle order when two are equally close). Only nodes with inverse mass > 0 carry water;
-  /// a particle whose closest point has weight only on pinned nodes is not carried.
-  /// @param cloth  validated mesh (positions_t0, inverse masses, triangles)
-  /// @param positions  N particle positions (unit: m)
+  /// Carries every particle of `links` by its link's triangle and weights (the largest impulse when a
+  /// particle has several), on the nodes with inverse mass > 0 and weight > 0; a particle whose link weighs
+  /// only on pinned nodes is not carried. Links to particles not present (removed by a kill region) or to
+  /// triangles out of range (the mesh changed) are ignored: their impulse meets the bare node.
+  /// @param cloth  validated mesh (inverse masses, triangles)
   /// @param masses  N particle masses (unit: kg), > 0
-  void attach(const ClothMesh& cloth, const Vec3Array& positions, const ScalarArray& masses);
+  /// @param ids  N particle ids (ParticleSet::ids), unique
+  /// @param links  in any order, repeats allowed
+  void attach(const ClothMesh& cloth, const ScalarArray& masses, const std::vector<std::uint32_t>& ids,
+              ImpulseLinks links);
 
   /// Carried mass per node after attach() (unit: kg), M entries: the sum over carried particles of weight
   /// times mass.
@@ -75,10 +71,6 @@ class CarriedWater {
     Index triangle;
     Vec3 weights;
   };
-  double m_distance;
-  std::shared_ptr<TriangleBroadPhase> m_broad_phase;
-  ClothMesh m_static;  // the cloth at its start positions, not moving (what the broad phase sees)
-  std::vector<std::pair<Index, Index>> m_pairs;
   std::vector<Link> m_links;
   ScalarArray m_carried;
 };

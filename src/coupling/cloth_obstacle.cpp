@@ -9,13 +9,9 @@
 namespace drench {
 
 ClothObstacle::ClothObstacle(double thickness, BroadPhaseKind broad_phase, bool kinematic_cloth)
-    : ClothObstacle(thickness, make_broad_phase(broad_phase), kinematic_cloth) {}
-
-ClothObstacle::ClothObstacle(double thickness, std::shared_ptr<TriangleBroadPhase> broad_phase,
-                             bool kinematic_cloth)
-    : m_thickness(thickness), m_kinematic_cloth(kinematic_cloth), m_broad_phase(std::move(broad_phase)) {
-  assert(m_broad_phase);
-}
+    : m_thickness(thickness),
+      m_kinematic_cloth(kinematic_cloth),
+      m_broad_phase(make_broad_phase(broad_phase)) {}
 
 void ClothObstacle::begin_step(const ClothMesh& cloth, const Vec3Array& velocities) {
   m_static.positions_t0 = cloth.positions_t0;
@@ -29,6 +25,7 @@ void ClothObstacle::begin_step(const ClothMesh& cloth, const Vec3Array& velociti
   }
   m_node_velocities = velocities;
   m_node_impulses.assign(cloth.node_count(), Vec3::Zero());
+  m_impulse_links.clear();
   m_stops = 0;
 }
 
@@ -93,6 +90,7 @@ void ClothObstacle::apply(const Vec3Array& positions_before, ParticleSet& partic
     const double along = step.dot(normal);
     if (along < -room) step -= (along + room) * normal;
     particles.positions[p] = positions_before[p] + step;
+    m_impulse_links.push_back({particles.ids[p], m_pairs[best].second, w, j});
     ++m_stops;
   }
 }

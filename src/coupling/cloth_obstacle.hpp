@@ -13,6 +13,7 @@
 
 #include "coupling/broad_phase.hpp"
 #include "coupling/cloth_mesh.hpp"
+#include "coupling/impulse_link.hpp"
 #include "sph/fluid_solver.hpp"
 
 namespace drench {
@@ -28,11 +29,6 @@ class ClothObstacle final : public SubstepConstraint {
   ///        otherwise throw a light node within a single sub-step: its bookkept velocity reached -36 m/s in
   ///        one 4 ms step of the reduced Fig. 3 jet); false: eq. 2 mass-weighted on both sides
   ClothObstacle(double thickness, BroadPhaseKind broad_phase, bool kinematic_cloth = false);
-  /// As above with a broad phase shared with other users of the same start-of-step cloth (CarriedWater): it
-  /// keeps its triangle boxes while the cloth is unchanged, so one refit per step serves all of them.
-  /// @param broad_phase  not null
-  ClothObstacle(double thickness, std::shared_ptr<TriangleBroadPhase> broad_phase,
-                bool kinematic_cloth = false);
 
   /// Starts a step: the cloth's positions_t0 become the obstacle (copied); its inverse masses (unless
   /// kinematic) and triangles are used; `velocities` are the node velocities at the start of the step (unit:
@@ -44,6 +40,10 @@ class ClothObstacle final : public SubstepConstraint {
   /// The impulses the particles gave the cloth in this step, one per node (unit: N s), for
   /// ClothEngine::apply_impulses before the cloth steps.
   const Vec3Array& impulses() const { return m_node_impulses; }
+
+  /// Every stop of this step, in the order made (a particle stopped in several sub-steps appears once per
+  /// stop), for CarriedWater::attach.
+  const ImpulseLinks& impulse_links() const { return m_impulse_links; }
 
   /// Particles stopped in this step (summed over its sub-steps).
   std::uint64_t stops() const { return m_stops; }
@@ -57,8 +57,9 @@ class ClothObstacle final : public SubstepConstraint {
   bool m_kinematic_cloth;
   Vec3Array m_node_velocities;  // start velocity plus the impulses so far, over the mass
   Vec3Array m_node_impulses;
+  ImpulseLinks m_impulse_links;
   std::uint64_t m_stops = 0;
-  std::shared_ptr<TriangleBroadPhase> m_broad_phase;
+  std::unique_ptr<TriangleBroadPhase> m_broad_phase;
   std::vector<std::pair<Index, Index>> m_pairs;
 };
 

@@ -57,7 +57,7 @@ struct Contact {
 class StepContext {
  public:
   StepContext(const FluidView& fluid, ClothMesh& cloth, double dt, CouplingStepStats& stats,
-              Vec3Array& node_impulses)
+              Vec3Array& node_impulses, ImpulseLinks* largest)
       : m_x0(*fluid.positions_t0),
         m_x1(*fluid.positions_t1),
         m_v(*fluid.velocities),
@@ -65,7 +65,8 @@ class StepContext {
         m_cloth(cloth),
         m_dt(dt),
         m_stats(stats),
-        m_node_impulses(node_impulses) {}
+        m_node_impulses(node_impulses),
+        m_largest(largest) {}
 
   const Triangle& triangle(Index t) const { return m_cloth.triangles[t]; }
   Vec3 particle_velocity(Index p) const { return (m_x1[p] - m_x0[p]) / m_dt; }
@@ -103,6 +104,11 @@ class StepContext {
     }
     m_particle_changed[p] = 1;
     m_stats.vertical_impulse_on_cloth -= impulse.y();
+    if (m_largest != nullptr) {
+      ImpulseLink& link = (*m_largest)[p];
+      const double size = impulse.norm();
+      if (size > link.impulse) link = {0, t, w, size};
+    }
   }
 
   /// Moves particle p's end position (fail-safe), keeping velocity = displacement / dt.
@@ -147,6 +153,7 @@ class StepContext {
   std::vector<std::uint8_t> m_particle_changed;
   std::vector<std::uint8_t> m_node_changed;
   Vec3Array& m_node_impulses;  // what every node received, inverse mass 0 or not (unit: N s)
+  ImpulseLinks* m_largest;     // N, each particle's largest impulse so far (impulse 0: none), or null
 };
 
 /// Proximity (sec. 3.1): eq. 1's plane distance and barycentric inside test, extended to edges and vertices
@@ -358,10 +365,26 @@ Coupler::Coupler(const CouplingSettings& settings) : m_settings(settings) {
 Coupler::~Coupler() = default;
 
 std::uint32_t Coupler::step(const FluidView& fluid, ClothMesh& cloth, double dt, CouplingStepStats& stats) {
-  std::uint32_t status = COUPLING_OK;
   m_node_impulses.assign(cloth.node_count(), Vec3::Zero());
-  if (fluid.positions_t0->empty() || cloth.triangles.empty()) return status;
-  StepContext ctx(fluid, cloth, dt, stats, m_node_impulses);
+  m_impulse_links.clear();
+  if (fluid.positions_t0->empty() || cloth.triangles.empty()) return COUPLING_OK;
+  const bool record = fluid.ids != nullptr;
+  if (record) m_largest.assign(fluid.positions_t0->size(), ImpulseLink{});
+  const std::uint32_t status = correct(fluid, cloth, dt, stats);
+  if (record) {
+    for (std::size_t p = 0; p < m_largest.size(); ++p) {
+      if (m_largest[p].impulse == 0.0) continue;
+      m_impulse_links.push_back(m_largest[p]);
+      m_impulse_links.back().particle_id = (*fluid.ids)[p];
+    }
+  }
+  return status;
+}
+
+std::uint32_t Coupler::correct(const FluidView& fluid, ClothMesh& cloth, double dt,
+                               CouplingStepStats& stats) {
+  std::uint32_t status = COUPLING_OK;
+  StepContext ctx(fluid, cloth, dt, stats, m_node_impulses, fluid.ids != nullptr ? &m_largest : nullptr);
   ctx.clear_changes();
   const double thickness = m_settings.cloth_thickness;
   std::vector<std::pair<Index, Index>> pairs;

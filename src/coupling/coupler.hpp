@@ -11,6 +11,7 @@
 #include "common/types.hpp"
 #include "coupling/cloth_mesh.hpp"
 #include "coupling/coupling_settings.hpp"
+#include "coupling/impulse_link.hpp"
 
 namespace drench {
 
@@ -20,6 +21,9 @@ struct FluidView {
   Vec3Array* positions_t1 = nullptr;        ///< N, predicted end positions, corrected in place (m)
   Vec3Array* velocities = nullptr;          ///< N, end-of-step velocities, changed by the impulses (m/s)
   const ScalarArray* masses = nullptr;      ///< N, > 0 (unit: kg)
+  /// N particle ids, or null; given, the coupler reports each particle's largest impulse
+  /// (Coupler::impulse_links)
+  const std::vector<std::uint32_t>* ids = nullptr;
 };
 
 /// What one coupling step did; accumulated into the run's summary.json.
@@ -71,9 +75,19 @@ class Coupler {
   /// the cloth itself (CouplingScheme::CARRIED_WATER), so momentum is still exchanged.
   const Vec3Array& node_impulses() const { return m_node_impulses; }
 
+  /// For every particle that received an impulse in the last step() (in particle order), the triangle, the
+  /// weights and the size of its largest one; empty unless FluidView::ids was given. With node_impulses(),
+  /// what CarriedWater::attach needs to carry each particle with the nodes its impulse goes to.
+  const ImpulseLinks& impulse_links() const { return m_impulse_links; }
+
  private:
+  /// step() after its set-up: repulsion, friction, continuous handling.
+  std::uint32_t correct(const FluidView& fluid, ClothMesh& cloth, double dt, CouplingStepStats& stats);
+
   CouplingSettings m_settings;
   Vec3Array m_node_impulses;
+  ImpulseLinks m_largest;  // N, scratch of step()
+  ImpulseLinks m_impulse_links;
   std::unique_ptr<TriangleBroadPhase> m_broad_phase;
 };
 

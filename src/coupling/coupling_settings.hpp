@@ -24,8 +24,9 @@ enum class BroadPhaseKind : std::uint8_t {
 enum class CouplingScheme : std::uint8_t {
   /// drench's scheme for a light cloth under heavy water (coupling/carried_water.hpp): the coupler and
   /// the sub-step obstacle correct the particles against the cloth as the cloth engine moved it; the
-  /// cloth's share of every impulse reaches it at the start of its next step, and the water resting on
-  /// the cloth moves with it through the engine's step as node mass. The default: with the paper's
+  /// cloth's share of every impulse reaches it at the start of its next step, and the particles that gave
+  /// those impulses (the water in contact) move with it through the engine's step as node mass. The default:
+  /// with the paper's
   /// scheme the reduced Fig. 3 jet drove nodes to 526-10,399 m/s (added-mass instability,
   /// tests/bullet_adapter/test_jet_on_cloth.cpp).
   CARRIED_WATER = 0,

@@ -127,18 +127,11 @@ Simulation::Simulation(const SceneConfig& config, std::unique_ptr<ClothEngine> c
   if (m_cloth) m_cloth->mesh().validate();
   if (m_cloth && m_config.has_effect("coupling")) m_coupler = std::make_unique<Coupler>(m_config.coupling);
   const bool carried_water = m_config.coupling.scheme == CouplingScheme::CARRIED_WATER;
-  // The obstacle and the carried water query the same start-of-step cloth: one broad phase, one refit.
-  std::shared_ptr<TriangleBroadPhase> start_of_step_cloth;
-  if (m_coupler) start_of_step_cloth = make_broad_phase(m_config.coupling.broad_phase);
   if (m_coupler && m_config.coupling.continuous && m_config.coupling.substep_obstacle) {
-    m_obstacle = std::make_unique<ClothObstacle>(m_config.coupling.cloth_thickness, start_of_step_cloth,
-                                                 carried_water);
+    m_obstacle = std::make_unique<ClothObstacle>(m_config.coupling.cloth_thickness,
+                                                 m_config.coupling.broad_phase, carried_water);
   }
-  if (m_coupler && carried_water) {
-    // The bottom layer of water rests about one thickness above the cloth; half a spacing more takes it all.
-    m_carried = std::make_unique<CarriedWater>(
-        m_config.coupling.cloth_thickness + 0.5 * m_config.fluid.particle_spacing, start_of_step_cloth);
-  }
+  if (m_coupler && carried_water) m_carried = std::make_unique<CarriedWater>();
   if (m_cloth) m_pending_cloth_impulses.assign(m_cloth->mesh().node_count(), Vec3::Zero());
   m_leak_audit = m_cloth && m_config.has_effect("leak_audit");
 }
@@ -177,7 +170,13 @@ void Simulation::step_cloth_and_couple(Scalar dt, StepStatus& status) {
   Vec3Array before_impulses;
   if (carry) {
     ScopedTimer timer(m_coupling_seconds);
-    m_carried->attach(mesh, p.positions, p.masses);
+    // The particles whose impulses the cloth takes in this step (coupling/carried_water.hpp).
+    ImpulseLinks links = m_pending_links;
+    if (m_obstacle) {
+      const ImpulseLinks& stops = m_obstacle->impulse_links();
+      links.insert(links.end(), stops.begin(), stops.end());
+    }
+    m_carried->attach(mesh, p.masses, p.ids, std::move(links));
     m_cloth->set_carried_masses(m_carried->carried_masses());
     before_impulses = m_cloth->velocities();
   }
@@ -187,6 +186,7 @@ void Simulation::step_cloth_and_couple(Scalar dt, StepStatus& status) {
   Vec3Array impulses(mesh.node_count(), Vec3::Zero());
   if (m_pending_cloth_impulses.size() == impulses.size()) impulses.swap(m_pending_cloth_impulses);
   m_pending_cloth_impulses.assign(mesh.node_count(), Vec3::Zero());
+  m_pending_links.clear();
   if (m_obstacle) {
     const Vec3Array& stopped = m_obstacle->impulses();
     for (std::size_t i = 0; i < impulses.size(); ++i)
@@ -225,7 +225,8 @@ void Simulation::step_cloth_and_couple(Scalar dt, StepStatus& status) {
   m_last_coupling_status = 0;
   if (coupled) {
     ScopedTimer timer(m_coupling_seconds);
-    const FluidView view{&p.positions_t0, &p.positions, &p.velocities, &p.masses};
+    const FluidView view{&p.positions_t0, &p.positions, &p.velocities, &p.masses,
+                         m_carried ? &p.ids : nullptr};
     if (m_carried) {
       // The particles are corrected against the cloth where its engine put it; the cloth's share of every
       // impulse reaches it at its next step (moving a light node with heavy water here is what the links
@@ -236,6 +237,7 @@ void Simulation::step_cloth_and_couple(Scalar dt, StepStatus& status) {
       for (std::size_t i = 0; i < given.size(); ++i) {
         if (kinematic.own_inverse_masses()[i] > 0.0) m_pending_cloth_impulses[i] += given[i];
       }
+      m_pending_links = m_coupler->impulse_links();
     } else {
       m_last_coupling_status = m_coupler->step(view, mesh, dt, m_coupling_stats);
     }

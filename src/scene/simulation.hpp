@@ -107,6 +107,7 @@ class Simulation {
   std::unique_ptr<ClothObstacle> m_obstacle;  // the cloth inside fluid sub-steps, kept across steps
   std::unique_ptr<CarriedWater> m_carried;    // CouplingScheme::CARRIED_WATER only
   Vec3Array m_pending_cloth_impulses;         // M, owed to the cloth at its next step (unit: N s)
+  ImpulseLinks m_pending_links;               // the particles that gave them, carried in that step
   bool m_leak_audit = false;
   CouplingStepStats m_coupling_stats;
   LeakAuditStats m_leak_stats;

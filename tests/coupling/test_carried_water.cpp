@@ -1,56 +1,64 @@
-// CarriedWater (CouplingScheme::CARRIED_WATER): which particles a cloth carries through its step, as how
-// much mass on which node, and the exact momentum hand-back afterwards.
+// CarriedWater (CouplingScheme::CARRIED_WATER): which particles a cloth carries through its step (those whose
+// impulse it takes), as how much mass on which node, and the exact momentum hand-back afterwards.
 
 #include <gtest/gtest.h>
 
-#include "common/triangle_geometry.hpp"
 #include "coupling/carried_water.hpp"
 #include "coupling_fixtures.hpp"
 
 namespace drench {
 namespace {
 
-constexpr double kThickness = 0.001;        // m
-constexpr double kSpacing = 0.005;          // m
 constexpr double kParticleMass = 1.25e-4;   // kg
 constexpr double kNodeInverseMass = 1.0e4;  // 1/kg
 constexpr double kDt = 0.001;               // s
 
-/// A 3 x 3 grid, 0.2 m wide, in the plane y = 0, node 0 (at x = z = 0) pinned, and four particles: two within
-/// thickness + half a spacing of the cloth, one above that, one whose closest cloth point is the pinned node.
+/// A 3 x 3 grid, 0.2 m wide, in the plane y = 0, node 0 (at x = z = 0) pinned, and four particles (ids
+/// 10-13): 10 gave two impulses (the larger to triangle 5), 11 one whose weight is all on the pinned node, 12
+/// none (near the cloth, but near is not contact), 13 one to triangle 2.
 struct Scene {
   ClothMesh cloth = test::grid_mesh(3, 0.2, 0.0, kNodeInverseMass);
-  Vec3Array x{Vec3(0.13, 0.001, 0.07), Vec3(0.13, 0.01, 0.07), Vec3(-0.001, 0.001, -0.001),
+  Vec3Array x{Vec3(0.13, 0.001, 0.07), Vec3(0.0, 0.001, 0.0), Vec3(0.07, 0.001, 0.07),
               Vec3(0.07, -0.002, 0.16)};
   ScalarArray m{kParticleMass, kParticleMass, kParticleMass, 2.0 * kParticleMass};
+  std::vector<std::uint32_t> ids{10, 11, 12, 13};
+  ImpulseLinks links{{10, 1, Vec3(0.2, 0.3, 0.5), 1e-4},   {13, 2, Vec3(0.6, 0.1, 0.3), 2e-4},
+                     {10, 5, Vec3(0.5, 0.25, 0.25), 3e-4}, {11, 0, Vec3(1.0, 0.0, 0.0), 1e-4},
+                     {99, 3, Vec3(0.2, 0.3, 0.5), 1e-4},   {13, 800, Vec3(0.2, 0.3, 0.5), 1e-3}};
   Scene() { cloth.inverse_masses[0] = 0.0; }
 };
 
-TEST(CarriedWater, CarriesTheParticlesNearTheCloth) {
+TEST(CarriedWater, CarriesTheParticlesWhoseImpulseTheClothTakes) {
   Scene s;
-  CarriedWater water(kThickness + 0.5 * kSpacing, BroadPhaseKind::GRID);
-  water.attach(s.cloth, s.x, s.m);
-  EXPECT_EQ(water.carried_count(), 2u);  // the first and the last
+  ASSERT_EQ(s.cloth.triangles[0][0], 0u) << "triangle 0 starts at the pinned node";
+  CarriedWater water;
+  water.attach(s.cloth, s.m, s.ids, s.links);
+  EXPECT_EQ(water.carried_count(), 2u) << "10 and 13; not 11 (pinned), 12 (no impulse), 99 (absent)";
+  ScalarArray expected(s.cloth.node_count(), 0.0);
+  const auto add = [&](Index t, const Vec3& w, double mass) {
+    for (int i = 0; i < 3; ++i) {
+      if (s.cloth.inverse_masses[s.cloth.triangles[t][i]] > 0.0)
+        expected[s.cloth.triangles[t][i]] += w[i] * mass;
+    }
+  };
+  add(5, Vec3(0.5, 0.25, 0.25), s.m[0]);  // particle 10's largest impulse
+  add(2, Vec3(0.6, 0.1, 0.3), s.m[3]);    // particle 13 (its link to triangle 800 is out of range)
   const ScalarArray& carried = water.carried_masses();
   ASSERT_EQ(carried.size(), s.cloth.node_count());
   EXPECT_EQ(carried[0], 0.0) << "a pinned node carries nothing";
-  double total = 0.0;
-  Vec3 moment = Vec3::Zero();
-  for (std::size_t i = 0; i < carried.size(); ++i) {
-    total += carried[i];
-    moment += carried[i] * s.cloth.positions_t0[i];
-  }
-  // All of both particles' mass, on the nodes around their closest points: the carried mass's centre is the
-  // mass-weighted mean of the two closest points (their projections onto y = 0).
-  EXPECT_NEAR(total, s.m[0] + s.m[3], 1e-18);
-  const Vec3 expected = s.m[0] * Vec3(0.13, 0.0, 0.07) + s.m[3] * Vec3(0.07, 0.0, 0.16);
-  EXPECT_LT((moment - expected).norm(), 1e-18);
+  for (std::size_t i = 0; i < carried.size(); ++i)
+    EXPECT_NEAR(carried[i], expected[i], 1e-20) << "node " << i;
+  // The links' order does not matter, to the bit.
+  ImpulseLinks reversed(s.links.rbegin(), s.links.rend());
+  CarriedWater other;
+  other.attach(s.cloth, s.m, s.ids, reversed);
+  EXPECT_EQ(other.carried_masses(), carried);
 }
 
 TEST(CarriedWater, HandsBackExactlyTheWatersShareOfTheClothsMomentumChange) {
   Scene s;
-  CarriedWater water(kThickness + 0.5 * kSpacing, BroadPhaseKind::FCL);
-  water.attach(s.cloth, s.x, s.m);
+  CarriedWater water;
+  water.attach(s.cloth, s.m, s.ids, s.links);
   const std::size_t nodes = s.cloth.node_count();
   Vec3Array before(nodes), end(nodes);
   for (std::size_t i = 0; i < nodes; ++i) {
@@ -74,26 +82,17 @@ TEST(CarriedWater, HandsBackExactlyTheWatersShareOfTheClothsMomentumChange) {
         << "particle " << p << " moves by its velocity change over the step";
   }
   EXPECT_LT((received - held).norm(), 1e-18);
-  // Each carried particle gets the velocity change of its own closest point on the cloth.
-  for (std::size_t p : {std::size_t{0}, std::size_t{3}}) {
-    Vec3 expected = Vec3::Zero();
-    double closest = 1e300;
-    for (const Triangle& tri : s.cloth.triangles) {
-      const Vec3Array& c = s.cloth.positions_t0;
-      const Vec3 w = closest_point_barycentric(s.x[p], c[tri[0]], c[tri[1]], c[tri[2]]);
-      const double d = (s.x[p] - (w[0] * c[tri[0]] + w[1] * c[tri[1]] + w[2] * c[tri[2]])).norm();
-      if (d < closest) {
-        closest = d;
-        expected = Vec3::Zero();
-        for (int i = 0; i < 3; ++i)
-          expected += w[i] * (end[tri[i]] - before[tri[i]]);
-      }
-    }
-    EXPECT_LT((v[p] - Vec3(0.0, -1.0, 0.0) - expected).norm(), 1e-15) << "particle " << p;
-  }
-  EXPECT_EQ(v[1], Vec3(0.0, -1.0, 0.0)) << "not carried: untouched";
-  EXPECT_EQ(v[2], Vec3(0.0, -1.0, 0.0)) << "at the pinned node: untouched";
-  EXPECT_NE(v[0], Vec3(0.0, -1.0, 0.0));
+  // Each carried particle gets the velocity change of its link's point on the cloth.
+  const auto point_change = [&](Index t, const Vec3& w) {
+    Vec3 dv = Vec3::Zero();
+    for (int i = 0; i < 3; ++i)
+      dv += w[i] * (end[s.cloth.triangles[t][i]] - before[s.cloth.triangles[t][i]]);
+    return dv;
+  };
+  EXPECT_LT((v[0] - Vec3(0.0, -1.0, 0.0) - point_change(5, Vec3(0.5, 0.25, 0.25))).norm(), 1e-15);
+  EXPECT_LT((v[3] - Vec3(0.0, -1.0, 0.0) - point_change(2, Vec3(0.6, 0.1, 0.3))).norm(), 1e-15);
+  EXPECT_EQ(v[1], Vec3(0.0, -1.0, 0.0)) << "its impulse went to the pinned node: untouched";
+  EXPECT_EQ(v[2], Vec3(0.0, -1.0, 0.0)) << "no impulse: untouched";
 }
 
 }  // namespace

@@ -118,6 +118,43 @@ TEST(Coupler, ConservesLinearMomentumWithoutPinsOrGravity) {
   EXPECT_LE((momentum() - before).norm(), 1e-12 * scale);
 }
 
+// CouplingScheme::CARRIED_WATER carries each particle with the triangle its largest impulse went to
+// (coupling/impulse_link.hpp): given the particles' ids, the coupler names it.
+TEST(Coupler, NamesEachParticlesLargestImpulseWhenGivenIds) {
+  const ClothMesh start = grid_mesh(2, 1.0, 0.0, 0.0);
+  Particles particles;
+  const double dt = 0.01;
+  particles.add(Vec3(0.3, 0.05, 0.2), Vec3(0, -10.0, 0), dt, kMass);        // through triangle 0
+  particles.add(Vec3(0.7, 0.05, 0.2), Vec3(0.0, 1.0, 0.0), dt, 2 * kMass);  // moving away: no impulse
+  const Vec3Array v0 = particles.v;
+  Coupler coupler(CouplingSettings{});
+  CouplingStepStats stats;
+  ClothMesh mesh = start;
+  coupler.step(particles.view(), mesh, dt, stats);
+  EXPECT_TRUE(coupler.impulse_links().empty()) << "no ids, no links";
+
+  particles = Particles{};
+  particles.add(Vec3(0.3, 0.05, 0.2), Vec3(0, -10.0, 0), dt, kMass);
+  particles.add(Vec3(0.7, 0.05, 0.2), Vec3(0.0, 1.0, 0.0), dt, 2 * kMass);
+  const std::vector<std::uint32_t> ids{41, 7};
+  FluidView view = particles.view();
+  view.ids = &ids;
+  mesh = start;
+  coupler.step(view, mesh, dt, stats);
+  ASSERT_EQ(coupler.impulse_links().size(), 1u);
+  const ImpulseLink& link = coupler.impulse_links()[0];
+  EXPECT_EQ(link.particle_id, 41u);
+  // One impulse (the impact's): its size is the particle's momentum change.
+  EXPECT_NEAR(link.impulse, kMass * (particles.v[0] - v0[0]).norm(), 1e-15 * kMass * 10.0);
+  ASSERT_LT(link.triangle, mesh.triangle_count());
+  const Triangle& tri = mesh.triangles[link.triangle];
+  const Vec3 point = link.weights[0] * mesh.positions_t0[tri[0]] +
+                     link.weights[1] * mesh.positions_t0[tri[1]] +
+                     link.weights[2] * mesh.positions_t0[tri[2]];
+  EXPECT_LT((point - Vec3(0.3, 0.0, 0.2)).norm(), 1e-9) << "the weights name the point it hit";
+  EXPECT_EQ(particles.v[1], v0[1]);
+}
+
 /// One particle resting in contact (half a thickness above) on a triangle that slides along +x at 1 m/s; the
 /// particle moves along +z at 0.5 m/s and slightly down.
 struct SlidingContact {
