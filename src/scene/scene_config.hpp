@@ -41,14 +41,14 @@ struct PcisphSettings {
   std::optional<Scalar> max_compression_per_iteration = 0.05;
   /// The largest compression (fraction of rest density, > 0) one sub-step relieves for one particle; unset
   /// = all of it, as published. A drench addition: a particle that enters a sub-step compressed by more
-  /// (its density predicted before any pressure) is driven to that prediction minus this limit, the rest
-  /// left to the next sub-steps. A fluid that moves under its own forces compresses by about eta per
-  /// sub-step (CFL-limited) and never reaches it. What does reach it is compression made between the
-  /// fluid's steps: the cloth coupling stopping water against a moving cloth stacks particles (measured up
-  /// to 2.1x rest density at the start of a 4 ms step of the reduced Fig. 3 jet), and undoing that inside
-  /// one 0.3 ms CFL sub-step threw particles at 15-17 m/s. Measured with 0.05 (carried water of the contact
-  /// set, PCISPH, 0.5 s of jet_on_cloth.json): dt 1 ms 5.7 m/s, dt 4 ms 9.6 m/s (without: blew up at
-  /// 0.356 s). Source: none; docs/scenes.md has its cost.
+  /// (its density at the sub-step's start) is driven to that density minus this limit instead of the rest
+  /// density, the rest left to the next sub-steps; the compression its motion within the sub-step would
+  /// add is resisted in full, as published. What the fluid's own forces leave stays near eta; what the
+  /// cloth coupling makes between the fluid's steps does not: stopping water against a moving cloth stacks
+  /// particles (up to 2.1 x rest density at the start of a 4 ms step of the reduced Fig. 3 jet, 3.5 x in
+  /// the 20 m/s jet), and undoing that inside one CFL sub-step threw particles at 15-17 m/s (82 m/s).
+  /// Measured with 0.05 (PCISPH, 0.5 s of jet_on_cloth.json): dt 1 ms 6.4 m/s, dt 4 ms 7.5 m/s (without:
+  /// blew up at t = 0.356 s). Source: none; docs/scenes.md has its cost.
   std::optional<Scalar> max_relief_per_substep = 0.05;
 };
 

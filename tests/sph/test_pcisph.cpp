@@ -66,7 +66,7 @@ TEST(Pcisph, ReliefPerSubstepIsLimited) {
   ASSERT_EQ(limited.before, published.before);
   // As published, PCISPH undoes nearly all of it in one sub-step (measured: 0.32 -> 0.02 of rest density).
   EXPECT_LT(published.after, 0.25 * published.before);
-  // With the limit the particle is driven to 0.05 below its first prediction; its neighbours, compressed by
+  // With the limit the particle is driven to 0.05 below its density; its neighbours, compressed by
   // it, relieve their own share and push it further (measured: 0.32 -> 0.22). It still relieves, by less
   // than half of what published PCISPH does, and the pressure throws nothing as fast.
   const double relief_limited = limited.before - limited.after;

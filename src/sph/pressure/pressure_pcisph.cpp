@@ -61,9 +61,10 @@ PressureStats PressurePcisph::solve(const FluidContext& ctx, const Vec3Array& ve
       // Only compression is corrected (as SPlisHSPlasH's PCISPH): a free-surface particle lacks neighbours
       // and its density deficit is no expansion to undo, so pressures only grow within a solve.
       const Scalar rho = std::max(sph_density(ctx, m_predicted, i), rho0);
-      // The first prediction (no pressure yet) fixes what this sub-step may relieve: all of it, unless the
-      // particle entered it compressed by more than max_relief.
-      if (stats.iterations == 0) m_target[i] = std::max(rho0, rho - max_relief);
+      // Fixed at the first prediction (no pressure yet): what the motion of this sub-step would add is undone
+      // in full, what the particle entered it with only down to (density - max_relief).
+      if (stats.iterations == 0)
+        m_target[i] = std::max(rho0, std::min(rho, particles.densities[i] - max_relief));
       m_error[i] = rho;
       particles.pressures[i] += delta * std::min(std::max(rho - m_target[i], 0.0), max_excess);
       m_p_over_rho2[i] = particles.pressures[i] * inv_rho0_sq;

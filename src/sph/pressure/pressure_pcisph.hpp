@@ -11,9 +11,9 @@ namespace drench {
 /// min_iterations, or max_iterations are spent. With PcisphSettings::max_compression_per_iteration set (the
 /// default, a drench addition), one iteration raises a particle's pressure by at most delta times that
 /// compression. With PcisphSettings::max_relief_per_substep set (the default, a drench addition), a
-/// particle whose first prediction in a sub-step is compressed by more than that fraction is driven to
-/// (prediction - max_relief) instead of the rest density, and the stopping rule measures the error against
-/// that target.
+/// particle that enters a sub-step compressed by more than that fraction is driven to (its density -
+/// max_relief), or to its first prediction if lower, instead of the rest density, and the stopping rule
+/// measures the error against that target.
 class PressurePcisph final : public PressureSolver {
  public:
   explicit PressurePcisph(const FluidSettings& settings);
