@@ -55,6 +55,13 @@ int run_command(const std::string& scene_path, const std::string& out_dir,
       s["particles"].get<long long>(), s["removed"].get<long long>(),
       100 * s["density_error"]["mean"].get<double>(), 100 * s["density_error"]["max"].get<double>(),
       s["frames"].get<long long>(), out_dir.c_str());
+  if (s.contains("contacts")) {
+    std::printf("coupling: %lld contacts, %lld sub-step stops, %lld CCD impacts, %lld fail-safe",
+                s["contacts"].get<long long>(), s["obstacle_stops"].get<long long>(),
+                s["ccd_impacts"].get<long long>(), s["failsafe_activations"].get<long long>());
+    if (s.contains("leaks")) std::printf(", %lld leaks", s["leaks"].get<long long>());
+    std::printf("\n");
+  }
   if (!result.status.ok()) {
     std::fprintf(stderr, "drench: simulation stopped: %s\n", result.status.describe().c_str());
     return 2;

@@ -221,6 +221,19 @@ TEST(SceneLoader, RejectsZeroMaxCompressionPerIteration) {
                           "fluid.pcisph.max_compression_per_iteration must be > 0, got 0 (x.json)"));
 }
 
+// The scenes shipped in demos/scenes/ obey the loader's rules (README and docs/scenes.md point users at
+// them).
+TEST(SceneLoader, EveryDemoSceneLoads) {
+  const std::filesystem::path dir = std::filesystem::path(DRENCH_SOURCE_DIR) / "demos" / "scenes";
+  int scenes = 0;
+  for (const auto& entry : std::filesystem::directory_iterator(dir)) {
+    if (entry.path().extension() != ".json") continue;
+    ++scenes;
+    EXPECT_NO_THROW(load_scene_file(entry.path().string(), {})) << entry.path();
+  }
+  EXPECT_GE(scenes, 6) << "dam_break, hydrostatic_tank, jet_on_cloth, no_slip, free_slip, leak_comparison";
+}
+
 TEST(SceneLoader, NullMaxReliefPerSubstepMeansNoLimit) {
   EXPECT_EQ(parse("{}").fluid.pcisph.max_relief_per_substep, 0.05);
   EXPECT_FALSE(parse(R"({"fluid": {"pcisph": {"max_relief_per_substep": null}}})")
