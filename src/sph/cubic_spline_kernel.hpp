@@ -29,12 +29,15 @@ class CubicSplineKernel {
 
   /// grad_i W(x_i - x_j) for r_vec = x_i - x_j (unit: m); unit 1/m^4. Zero at r = 0, where the kernel is
   /// smooth and symmetric.
-  Vec3 gradient(const Vec3& r_vec) const {
-    const Scalar r2 = r_vec.squaredNorm();
-    if (r2 <= 0.0) return Vec3::Zero();
+  Vec3 gradient(const Vec3& r_vec) const { return gradient_factor(r_vec.squaredNorm()) * r_vec; }
+
+  /// The scalar f with grad W = f (x_i - x_j), from r2 = |x_i - x_j|^2 (unit: m^2); unit 1/m^5. Zero at r = 0
+  /// and beyond the support. Lets a solver keep one number per neighbor pair instead of a vector.
+  Scalar gradient_factor(Scalar r2) const {
+    if (r2 <= 0.0) return 0.0;
     const Scalar r = std::sqrt(r2);
     const Scalar q = r * m_inv_h;
-    if (q >= 2.0) return Vec3::Zero();
+    if (q >= 2.0) return 0.0;
     Scalar dw_dq;
     if (q < 1.0) {
       dw_dq = m_sigma * (-3.0 * q + 2.25 * q * q);
@@ -42,7 +45,7 @@ class CubicSplineKernel {
       const Scalar a = 2.0 - q;
       dw_dq = -m_sigma * 0.75 * a * a;
     }
-    return (dw_dq * m_inv_h / r) * r_vec;
+    return dw_dq * m_inv_h / r;
   }
 
  private:

@@ -20,10 +20,12 @@ struct FluidContext {
   const ScalarArray& boundary_psi;         ///< Akinci's Psi_b = rho0 V_b (unit: kg)
   Scalar rest_density;                     ///< (unit: kg/m^3)
   Scalar particle_spacing;                 ///< (unit: m)
-  /// grad W(x_i - x_j) for every entry of fluid_neighbors.indices, at the current positions (unit: 1/m^4)
-  const Vec3Array& fluid_gradients;
-  /// grad W(x_i - x_b) for every entry of boundary_neighbors.indices (unit: 1/m^4)
-  const Vec3Array& boundary_gradients;
+  /// For every entry of fluid_neighbors.indices, f with grad W(x_i - x_j) = f (x_i - x_j) at the current
+  /// positions (unit: 1/m^5). One number instead of a 3-vector per pair: PCISPH's pressure loop streams these
+  /// every iteration and was memory-bound on 3-vectors (34% of its sub-step, measured).
+  const ScalarArray& fluid_gradient_factors;
+  /// The same for every entry of boundary_neighbors.indices, with x_b in place of x_j (unit: 1/m^5)
+  const ScalarArray& boundary_gradient_factors;
 };
 
 /// SPH density of particle i at positions `x` (N, unit: m): sum_j m_j W_ij over fluid neighbors and itself,
@@ -49,16 +51,20 @@ inline Scalar sph_density(const FluidContext& ctx, const Vec3Array& x, std::size
 /// noisy pressures (both measured).
 inline Vec3 pressure_acceleration(const FluidContext& ctx, const ScalarArray& p_over_rho2, std::size_t i) {
   const Scalar pi = p_over_rho2[i];
+  const Vec3Array& x = ctx.particles.positions;
   Vec3 a = Vec3::Zero();
   const auto& fn = ctx.fluid_neighbors;
   for (std::uint32_t n = fn.offsets[i]; n < fn.offsets[i + 1]; ++n) {
     const Index j = fn.indices[n];
-    a -= ctx.particles.masses[j] * (pi + p_over_rho2[j]) * ctx.fluid_gradients[n];
+    const Vec3 gradient = ctx.fluid_gradient_factors[n] * (x[i] - x[j]);
+    a -= ctx.particles.masses[j] * (pi + p_over_rho2[j]) * gradient;
   }
   if (pi != 0.0) {
     const auto& bn = ctx.boundary_neighbors;
     for (std::uint32_t n = bn.offsets[i]; n < bn.offsets[i + 1]; ++n) {
-      a -= ctx.boundary_psi[bn.indices[n]] * pi * ctx.boundary_gradients[n];
+      const Index b = bn.indices[n];
+      const Vec3 gradient = ctx.boundary_gradient_factors[n] * (x[i] - ctx.boundary_positions[b]);
+      a -= ctx.boundary_psi[b] * pi * gradient;
     }
   }
   return a;

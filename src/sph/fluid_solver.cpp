@@ -67,15 +67,17 @@ void FluidSolver::update_neighbors() {
 
   // Kernel gradients at the current positions, once per sub-step: PCISPH reuses them in every iteration.
   const auto& x = m_particles.positions;
-  m_fluid_gradients.resize(m_fluid_neighbors.indices.size());
-  m_boundary_gradients.resize(m_boundary_neighbors.indices.size());
+  m_fluid_gradient_factors.resize(m_fluid_neighbors.indices.size());
+  m_boundary_gradient_factors.resize(m_boundary_neighbors.indices.size());
 #pragma omp parallel for schedule(static)
   for (std::size_t i = 0; i < x.size(); ++i) {
     for (std::uint32_t n = m_fluid_neighbors.offsets[i]; n < m_fluid_neighbors.offsets[i + 1]; ++n) {
-      m_fluid_gradients[n] = m_kernel.gradient(x[i] - x[m_fluid_neighbors.indices[n]]);
+      m_fluid_gradient_factors[n] =
+          m_kernel.gradient_factor((x[i] - x[m_fluid_neighbors.indices[n]]).squaredNorm());
     }
     for (std::uint32_t n = m_boundary_neighbors.offsets[i]; n < m_boundary_neighbors.offsets[i + 1]; ++n) {
-      m_boundary_gradients[n] = m_kernel.gradient(x[i] - m_boundary[m_boundary_neighbors.indices[n]]);
+      m_boundary_gradient_factors[n] =
+          m_kernel.gradient_factor((x[i] - m_boundary[m_boundary_neighbors.indices[n]]).squaredNorm());
     }
   }
 }
@@ -118,10 +120,16 @@ StepStatus FluidSolver::substep(Scalar dt, SubstepConstraint* constraint) {
   update_neighbors();
   ++m_stats.substeps;
   const std::size_t n = m_particles.size();
-  const FluidContext ctx{
-      m_kernel,          m_particles,         m_fluid_neighbors,       m_boundary_neighbors,
-      m_boundary,        m_boundary_psi,      m_settings.rest_density, m_settings.particle_spacing,
-      m_fluid_gradients, m_boundary_gradients};
+  const FluidContext ctx{m_kernel,
+                         m_particles,
+                         m_fluid_neighbors,
+                         m_boundary_neighbors,
+                         m_boundary,
+                         m_boundary_psi,
+                         m_settings.rest_density,
+                         m_settings.particle_spacing,
+                         m_fluid_gradient_factors,
+                         m_boundary_gradient_factors};
   {
     ScopedTimer timer(m_stats.timings_s.density);
 #pragma omp parallel for schedule(static)

@@ -107,9 +107,9 @@ class FluidSolver {
   NeighborSearch m_boundary_search;
   NeighborList m_fluid_neighbors;
   NeighborList m_boundary_neighbors;
-  Vec3Array m_positions_before;    // sub-step start positions, kept only for a SubstepConstraint
-  Vec3Array m_fluid_gradients;     // per fluid neighbor pair, at the current positions
-  Vec3Array m_boundary_gradients;  // per boundary neighbor pair
+  Vec3Array m_positions_before;             // sub-step start positions, kept only for a SubstepConstraint
+  ScalarArray m_fluid_gradient_factors;     // per fluid neighbor pair, at the current positions
+  ScalarArray m_boundary_gradient_factors;  // per boundary neighbor pair
   std::unique_ptr<PressureSolver> m_pressure;
   std::unique_ptr<NonPressureForce> m_viscosity;
   Vec3Array m_accelerations;

@@ -99,6 +99,7 @@ void NeighborSearch::build(const Vec3Array& points) {
     build_hashed(points);
   }
   m_points.resize(n);
+#pragma omp parallel for schedule(static)
   for (std::size_t k = 0; k < n; ++k)
     m_points[k] = points[m_sorted_index[k]];
 }
@@ -168,6 +169,18 @@ bool NeighborSearch::cell_range(const Vec3i& cell, std::uint32_t& begin, std::ui
   return begin < end;
 }
 
+bool NeighborSearch::row_range(const Vec3i& cell, int count, std::uint32_t& begin, std::uint32_t& end) const {
+  const Vec3i local = cell - m_lo;
+  if (local.y() < 0 || local.y() >= m_dims.y() || local.z() < 0 || local.z() >= m_dims.z()) return false;
+  const int x_first = std::max(local.x(), 0);
+  const int x_last = std::min(local.x() + count - 1, m_dims.x() - 1);
+  if (x_first > x_last) return false;
+  const std::size_t row = (static_cast<std::size_t>(local.z()) * m_dims.y() + local.y()) * m_dims.x();
+  begin = m_cell_begin[row + x_first];
+  end = m_cell_begin[row + x_last + 1];
+  return begin < end;
+}
+
 std::int64_t NeighborSearch::lookup(std::uint64_t key) const {
   std::uint64_t slot = hash_key(key) & m_table_mask;
   while (true) {
@@ -207,20 +220,30 @@ void NeighborSearch::find(const Vec3Array& queries, NeighborList& out, bool excl
         high[a] = origin + cell - x[a];
       }
       const std::size_t first = local.size();
+      const auto scan = [&](std::uint32_t b, std::uint32_t e) {
+        for (std::uint32_t q = b; q < e; ++q) {
+          if ((m_points[q] - x).squaredNorm() >= r2) continue;
+          const Index j = m_sorted_index[q];
+          if (exclude_self && j == i) continue;
+          local.push_back(j);
+        }
+      };
       for (int dz = -1; dz <= 1; ++dz) {
         const Scalar gz = dz < 0 ? low.z() : dz > 0 ? high.z() : 0.0;
         for (int dy = -1; dy <= 1; ++dy) {
           const Scalar gy = dy < 0 ? low.y() : dy > 0 ? high.y() : 0.0;
-          for (int dx = -1; dx <= 1; ++dx) {
-            const Scalar gx = dx < 0 ? low.x() : dx > 0 ? high.x() : 0.0;
-            if (gx * gx + gy * gy + gz * gz >= r2) continue;
-            std::uint32_t b, e;
-            if (!cell_range(c + Vec3i(dx, dy, dz), b, e)) continue;
-            for (std::uint32_t q = b; q < e; ++q) {
-              if ((m_points[q] - x).squaredNorm() >= r2) continue;
-              const Index j = m_sorted_index[q];
-              if (exclude_self && j == i) continue;
-              local.push_back(j);
+          const Scalar g_yz = gy * gy + gz * gz;
+          if (g_yz >= r2) continue;
+          const int dx_first = low.x() * low.x() + g_yz < r2 ? -1 : 0;
+          const int dx_last = high.x() * high.x() + g_yz < r2 ? 1 : 0;
+          std::uint32_t b, e;
+          if (m_dense) {
+            // The row's cells are adjacent in the dense grid, so their points are one range: one lookup
+            // instead of three, the same points in the same order.
+            if (row_range(c + Vec3i(dx_first, dy, dz), dx_last - dx_first + 1, b, e)) scan(b, e);
+          } else {
+            for (int dx = dx_first; dx <= dx_last; ++dx) {
+              if (cell_range(c + Vec3i(dx, dy, dz), b, e)) scan(b, e);
             }
           }
         }
@@ -230,9 +253,21 @@ void NeighborSearch::find(const Vec3Array& queries, NeighborList& out, bool excl
   }
   for (std::size_t i = 0; i < m; ++i)
     out.offsets[i + 1] += out.offsets[i];
-  out.indices.reserve(out.offsets[m]);
-  for (const IndexArray& local : buffers)
-    out.indices.insert(out.indices.end(), local.begin(), local.end());
+  // Each thread copies its own buffer to its place: a serial concatenation was a tenth of WCSPH's sub-step
+  // on two threads (measured), and the copy is as deterministic as the gather.
+  std::vector<std::size_t> start(buffers.size() + 1, 0);
+  for (std::size_t t = 0; t < buffers.size(); ++t)
+    start[t + 1] = start[t] + buffers[t].size();
+  out.indices.resize(start.back());
+#pragma omp parallel num_threads(threads)
+  {
+    // The team may be smaller than asked for (nested regions): every buffer is still copied.
+    for (auto t = static_cast<std::size_t>(omp_get_thread_num()); t < buffers.size();
+         t += static_cast<std::size_t>(omp_get_num_threads())) {
+      std::copy(buffers[t].begin(), buffers[t].end(),
+                out.indices.begin() + static_cast<std::ptrdiff_t>(start[t]));
+    }
+  }
 }
 
 }  // namespace drench

@@ -54,6 +54,9 @@ class NeighborSearch {
   std::int64_t lookup(std::uint64_t key) const;
   /// Sorted-point range [begin, end) of a cell; false when the cell is empty or unknown.
   bool cell_range(const Vec3i& cell, std::uint32_t& begin, std::uint32_t& end) const;
+  /// Dense mode only: the sorted-point range of `count` cells from `cell` along +x (clipped to the grid);
+  /// false when empty.
+  bool row_range(const Vec3i& cell, int count, std::uint32_t& begin, std::uint32_t& end) const;
   void build_dense(const std::vector<Vec3i>& cells, const Vec3i& lo, const Vec3i& dims);
   void build_hashed(const Vec3Array& points);
 

@@ -19,6 +19,7 @@ namespace {
 template <class T>
 void permute_array(std::vector<T>& values, const IndexArray& order) {
   std::vector<T> sorted(values.size());
+#pragma omp parallel for schedule(static)
   for (std::size_t k = 0; k < order.size(); ++k)
     sorted[k] = values[order[k]];
   values.swap(sorted);
