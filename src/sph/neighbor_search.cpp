@@ -15,6 +15,7 @@ namespace {
 constexpr int kCellBits = 21;
 constexpr std::int64_t kCellOffset = std::int64_t{1} << (kCellBits - 1);
 constexpr std::int64_t kCellMax = (std::int64_t{1} << kCellBits) - 1;
+constexpr Index kNoIndex = std::numeric_limits<Index>::max();
 
 /// Spreads the low 21 bits of v so that bit k moves to bit 3k.
 std::uint64_t spread_bits(std::uint64_t v) {
@@ -207,6 +208,9 @@ void NeighborSearch::find(const Vec3Array& queries, NeighborList& out, bool excl
 #pragma omp parallel num_threads(threads)
   {
     IndexArray& local = buffers[static_cast<std::size_t>(omp_get_thread_num())];
+    std::size_t used = 0;  // local is grown ahead of the writes and trimmed to `used` at the end
+    const Vec3* points = m_points.data();
+    const Index* sorted = m_sorted_index.data();
 #pragma omp for schedule(static)
     for (std::size_t i = 0; i < m; ++i) {
       const Vec3& x = queries[i];
@@ -219,14 +223,22 @@ void NeighborSearch::find(const Vec3Array& queries, NeighborList& out, bool excl
         low[a] = x[a] - origin;
         high[a] = origin + cell - x[a];
       }
-      const std::size_t first = local.size();
+      const std::size_t first = used;
+      const Scalar x0 = x.x(), x1 = x.y(), x2 = x.z();
+      const Index self = exclude_self ? static_cast<Index>(i) : kNoIndex;
       const auto scan = [&](std::uint32_t b, std::uint32_t e) {
+        if (local.size() < used + (e - b)) local.resize(std::max(2 * local.size(), used + (e - b)));
+        Index* dst = local.data() + used;
+        std::size_t count = 0;
+        // Every candidate is written and kept only if it is a neighbor: whether a point of a neighbouring
+        // cell lies inside the radius is a coin toss, and the mispredicted branch cost more than the write.
         for (std::uint32_t q = b; q < e; ++q) {
-          if ((m_points[q] - x).squaredNorm() >= r2) continue;
-          const Index j = m_sorted_index[q];
-          if (exclude_self && j == i) continue;
-          local.push_back(j);
+          const Scalar d0 = points[q].x() - x0, d1 = points[q].y() - x1, d2 = points[q].z() - x2;
+          const Index j = sorted[q];
+          dst[count] = j;
+          count += static_cast<std::size_t>((d0 * d0 + d1 * d1 + d2 * d2 < r2) & (j != self));
         }
+        used += count;
       };
       for (int dz = -1; dz <= 1; ++dz) {
         const Scalar gz = dz < 0 ? low.z() : dz > 0 ? high.z() : 0.0;
@@ -248,8 +260,9 @@ void NeighborSearch::find(const Vec3Array& queries, NeighborList& out, bool excl
           }
         }
       }
-      out.offsets[i + 1] = static_cast<std::uint32_t>(local.size() - first);
+      out.offsets[i + 1] = static_cast<std::uint32_t>(used - first);
     }
+    local.resize(used);
   }
   for (std::size_t i = 0; i < m; ++i)
     out.offsets[i + 1] += out.offsets[i];
