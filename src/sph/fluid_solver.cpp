@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 
+#include "common/parallel.hpp"
 #include "common/stopwatch.hpp"
 #include "sph/boundary_sampling.hpp"
 
@@ -69,7 +70,7 @@ void FluidSolver::update_neighbors() {
   const auto& x = m_particles.positions;
   m_fluid_gradient_factors.resize(m_fluid_neighbors.indices.size());
   m_boundary_gradient_factors.resize(m_boundary_neighbors.indices.size());
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static, kParticleChunk)
   for (std::size_t i = 0; i < x.size(); ++i) {
     for (std::uint32_t n = m_fluid_neighbors.offsets[i]; n < m_fluid_neighbors.offsets[i + 1]; ++n) {
       m_fluid_gradient_factors[n] =
@@ -132,7 +133,7 @@ StepStatus FluidSolver::substep(Scalar dt, SubstepConstraint* constraint) {
                          m_boundary_gradient_factors};
   {
     ScopedTimer timer(m_stats.timings_s.density);
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static, kParticleChunk)
     for (std::size_t i = 0; i < n; ++i)
       m_particles.densities[i] = sph_density(ctx, m_particles.positions, i);
   }

@@ -8,6 +8,8 @@
 
 #include <omp.h>
 
+#include "common/parallel.hpp"
+
 namespace drench {
 
 namespace {
@@ -200,86 +202,94 @@ void NeighborSearch::find(const Vec3Array& queries, NeighborList& out, bool excl
   out.indices.clear();
   if (m_points.empty() || m == 0) return;
 
-  // One pass: each thread gathers the neighbors of a contiguous block of queries (static schedule) into its
-  // own buffer; the buffers are then concatenated in thread order, which is query order, so the result is the
-  // same for any thread count.
+  // One pass: the queries are cut into chunks of kParticleChunk, dealt round-robin to the threads (as
+  // schedule(static, kParticleChunk)) so that each thread gets some of every region of the z-ordered fluid:
+  // contiguous halves were unbalanced (the half at the floor has the boundary neighbors). Each thread gathers
+  // into its own buffer and remembers where each of its chunks starts; the chunks are then copied to their
+  // place in query order, so the result is the same for any thread count.
   const int threads = omp_get_max_threads();
+  const std::size_t chunks = (m + kParticleChunk - 1) / kParticleChunk;
   std::vector<IndexArray> buffers(static_cast<std::size_t>(threads));
+  std::vector<int> chunk_owner(chunks);
+  std::vector<std::size_t> chunk_start(chunks);
 #pragma omp parallel num_threads(threads)
   {
-    IndexArray& local = buffers[static_cast<std::size_t>(omp_get_thread_num())];
+    const int thread = omp_get_thread_num();
+    IndexArray& local = buffers[static_cast<std::size_t>(thread)];
     std::size_t used = 0;  // local is grown ahead of the writes and trimmed to `used` at the end
     const Vec3* points = m_points.data();
     const Index* sorted = m_sorted_index.data();
-#pragma omp for schedule(static)
-    for (std::size_t i = 0; i < m; ++i) {
-      const Vec3& x = queries[i];
-      const Vec3i c = cell_of(x);
-      // Distance from x to the lower and upper faces of its own cell, per axis, to skip neighbouring cells
-      // that lie entirely beyond the radius (most of the 20 edge and corner cells).
-      Vec3 low, high;
-      for (int a = 0; a < 3; ++a) {
-        const Scalar origin = (static_cast<Scalar>(c[a]) - static_cast<Scalar>(kCellOffset)) * cell;
-        low[a] = x[a] - origin;
-        high[a] = origin + cell - x[a];
-      }
-      const std::size_t first = used;
-      const Scalar x0 = x.x(), x1 = x.y(), x2 = x.z();
-      const Index self = exclude_self ? static_cast<Index>(i) : kNoIndex;
-      const auto scan = [&](std::uint32_t b, std::uint32_t e) {
-        if (local.size() < used + (e - b)) local.resize(std::max(2 * local.size(), used + (e - b)));
-        Index* dst = local.data() + used;
-        std::size_t count = 0;
-        // Every candidate is written and kept only if it is a neighbor: whether a point of a neighbouring
-        // cell lies inside the radius is a coin toss, and the mispredicted branch cost more than the write.
-        for (std::uint32_t q = b; q < e; ++q) {
-          const Scalar d0 = points[q].x() - x0, d1 = points[q].y() - x1, d2 = points[q].z() - x2;
-          const Index j = sorted[q];
-          dst[count] = j;
-          count += static_cast<std::size_t>((d0 * d0 + d1 * d1 + d2 * d2 < r2) & (j != self));
+    // The team may be smaller than asked for (nested regions): the stride is the team's real size.
+    for (auto k = static_cast<std::size_t>(thread); k < chunks;
+         k += static_cast<std::size_t>(omp_get_num_threads())) {
+      chunk_owner[k] = thread;
+      chunk_start[k] = used;
+      const std::size_t chunk_end = std::min(m, (k + 1) * kParticleChunk);
+      for (std::size_t i = k * kParticleChunk; i < chunk_end; ++i) {
+        const Vec3& x = queries[i];
+        const Vec3i c = cell_of(x);
+        // Distance from x to the lower and upper faces of its own cell, per axis, to skip neighbouring cells
+        // that lie entirely beyond the radius (most of the 20 edge and corner cells).
+        Vec3 low, high;
+        for (int a = 0; a < 3; ++a) {
+          const Scalar origin = (static_cast<Scalar>(c[a]) - static_cast<Scalar>(kCellOffset)) * cell;
+          low[a] = x[a] - origin;
+          high[a] = origin + cell - x[a];
         }
-        used += count;
-      };
-      for (int dz = -1; dz <= 1; ++dz) {
-        const Scalar gz = dz < 0 ? low.z() : dz > 0 ? high.z() : 0.0;
-        for (int dy = -1; dy <= 1; ++dy) {
-          const Scalar gy = dy < 0 ? low.y() : dy > 0 ? high.y() : 0.0;
-          const Scalar g_yz = gy * gy + gz * gz;
-          if (g_yz >= r2) continue;
-          const int dx_first = low.x() * low.x() + g_yz < r2 ? -1 : 0;
-          const int dx_last = high.x() * high.x() + g_yz < r2 ? 1 : 0;
-          std::uint32_t b, e;
-          if (m_dense) {
-            // The row's cells are adjacent in the dense grid, so their points are one range: one lookup
-            // instead of three, the same points in the same order.
-            if (row_range(c + Vec3i(dx_first, dy, dz), dx_last - dx_first + 1, b, e)) scan(b, e);
-          } else {
-            for (int dx = dx_first; dx <= dx_last; ++dx) {
-              if (cell_range(c + Vec3i(dx, dy, dz), b, e)) scan(b, e);
+        const std::size_t first = used;
+        const Scalar x0 = x.x(), x1 = x.y(), x2 = x.z();
+        const Index self = exclude_self ? static_cast<Index>(i) : kNoIndex;
+        const auto scan = [&](std::uint32_t b, std::uint32_t e) {
+          if (local.size() < used + (e - b)) local.resize(std::max(2 * local.size(), used + (e - b)));
+          Index* dst = local.data() + used;
+          std::size_t count = 0;
+          // Every candidate is written and kept only if it is a neighbor: whether a point of a neighbouring
+          // cell lies inside the radius is a coin toss, and the mispredicted branch cost more than the write.
+          for (std::uint32_t q = b; q < e; ++q) {
+            const Scalar d0 = points[q].x() - x0, d1 = points[q].y() - x1, d2 = points[q].z() - x2;
+            const Index j = sorted[q];
+            dst[count] = j;
+            count += static_cast<std::size_t>((d0 * d0 + d1 * d1 + d2 * d2 < r2) & (j != self));
+          }
+          used += count;
+        };
+        for (int dz = -1; dz <= 1; ++dz) {
+          const Scalar gz = dz < 0 ? low.z() : dz > 0 ? high.z() : 0.0;
+          for (int dy = -1; dy <= 1; ++dy) {
+            const Scalar gy = dy < 0 ? low.y() : dy > 0 ? high.y() : 0.0;
+            const Scalar g_yz = gy * gy + gz * gz;
+            if (g_yz >= r2) continue;
+            const int dx_first = low.x() * low.x() + g_yz < r2 ? -1 : 0;
+            const int dx_last = high.x() * high.x() + g_yz < r2 ? 1 : 0;
+            std::uint32_t b, e;
+            if (m_dense) {
+              // The row's cells are adjacent in the dense grid, so their points are one range: one lookup
+              // instead of three, the same points in the same order.
+              if (row_range(c + Vec3i(dx_first, dy, dz), dx_last - dx_first + 1, b, e)) scan(b, e);
+            } else {
+              for (int dx = dx_first; dx <= dx_last; ++dx) {
+                if (cell_range(c + Vec3i(dx, dy, dz), b, e)) scan(b, e);
+              }
             }
           }
         }
+        out.offsets[i + 1] = static_cast<std::uint32_t>(used - first);
       }
-      out.offsets[i + 1] = static_cast<std::uint32_t>(used - first);
     }
-    local.resize(used);
   }
   for (std::size_t i = 0; i < m; ++i)
     out.offsets[i + 1] += out.offsets[i];
-  // Each thread copies its own buffer to its place: a serial concatenation was a tenth of WCSPH's sub-step
-  // on two threads (measured), and the copy is as deterministic as the gather.
-  std::vector<std::size_t> start(buffers.size() + 1, 0);
-  for (std::size_t t = 0; t < buffers.size(); ++t)
-    start[t + 1] = start[t] + buffers[t].size();
-  out.indices.resize(start.back());
-#pragma omp parallel num_threads(threads)
-  {
-    // The team may be smaller than asked for (nested regions): every buffer is still copied.
-    for (auto t = static_cast<std::size_t>(omp_get_thread_num()); t < buffers.size();
-         t += static_cast<std::size_t>(omp_get_num_threads())) {
-      std::copy(buffers[t].begin(), buffers[t].end(),
-                out.indices.begin() + static_cast<std::ptrdiff_t>(start[t]));
-    }
+  // The copy is parallel too: a serial concatenation was a tenth of WCSPH's sub-step on two threads
+  // (measured).
+  out.indices.resize(out.offsets[m]);
+#pragma omp parallel for schedule(static)
+  for (std::size_t k = 0; k < chunks; ++k) {
+    const std::size_t begin = out.offsets[k * kParticleChunk];
+    const std::size_t end = out.offsets[std::min(m, (k + 1) * kParticleChunk)];
+    const auto from = buffers[static_cast<std::size_t>(chunk_owner[k])].begin() +
+                      static_cast<std::ptrdiff_t>(chunk_start[k]);
+    std::copy(from, from + static_cast<std::ptrdiff_t>(end - begin),
+              out.indices.begin() + static_cast<std::ptrdiff_t>(begin));
   }
 }
 

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <limits>
 
+#include "common/parallel.hpp"
+
 namespace drench {
 
 PressurePcisph::PressurePcisph(const FluidSettings& settings) : m_settings(settings.pcisph) {
@@ -56,7 +58,7 @@ PressureStats PressurePcisph::solve(const FluidContext& ctx, const Vec3Array& ve
     for (std::size_t i = 0; i < n; ++i) {
       m_predicted[i] = particles.positions[i] + dt * (velocities_adv[i] + dt * accelerations[i]);
     }
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static, kParticleChunk)
     for (std::size_t i = 0; i < n; ++i) {
       // Only compression is corrected (as SPlisHSPlasH's PCISPH): a free-surface particle lacks neighbours
       // and its density deficit is no expansion to undo, so pressures only grow within a solve.
@@ -69,7 +71,7 @@ PressureStats PressurePcisph::solve(const FluidContext& ctx, const Vec3Array& ve
       particles.pressures[i] += delta * std::min(std::max(rho - m_target[i], 0.0), max_excess);
       m_p_over_rho2[i] = particles.pressures[i] * inv_rho0_sq;
     }
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static, kParticleChunk)
     for (std::size_t i = 0; i < n; ++i)
       accelerations[i] = pressure_acceleration(ctx, m_p_over_rho2, i);
 

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "common/parallel.hpp"
+
 namespace drench {
 
 PressureWcsph::PressureWcsph(const FluidSettings& settings, Scalar speed_of_sound)
@@ -24,7 +26,7 @@ PressureStats PressureWcsph::solve(const FluidContext& ctx, const Vec3Array& /*v
     particles.pressures[i] = p;
     m_p_over_rho2[i] = p / (rho * rho);
   }
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static, kParticleChunk)
   for (std::size_t i = 0; i < n; ++i)
     accelerations[i] = pressure_acceleration(ctx, m_p_over_rho2, i);
 
