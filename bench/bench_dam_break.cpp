@@ -21,10 +21,10 @@ namespace {
 
 drench::SceneConfig reference_dam_break(double spacing, const std::string& solver) {
   const double block = spacing > 0.04 ? 0.95 : spacing > 0.02 ? 0.975 : 1.0;
-  // Issue 2's steps for 6.9K and 59K; the 1M block keeps their ratio of step to spacing (0.1 s/m). At 2.5 ms
-  // it was unstable: PCISPH hit its limit of 100 iterations within 6 steps and corner particles reached 1.9
-  // m/s at t = 0.015 s, where the block should move at 0.15 m/s (measured).
-  const double dt = spacing > 0.04 ? 0.005 : spacing > 0.02 ? 0.0025 : 0.001;
+  // Issue 2's steps, 5 ms at 0.05 m and 2.5 ms at 0.025 m, are 0.1 s per metre of spacing; the 1M block keeps
+  // that ratio (1 ms). At 2.5 ms it was unstable: PCISPH hit its limit of 100 iterations within 6 steps and
+  // corner particles reached 1.9 m/s at t = 0.015 s, where the block should move at 0.15 m/s (measured).
+  const double dt = 0.1 * spacing;  // unit: s
   return drench::load_scene_file(std::string(DRENCH_SOURCE_DIR) + "/demos/scenes/dam_break.json",
                                  {"fluid.particle_spacing=" + std::to_string(spacing),
                                   "fluid.pressure_solver=" + solver, "fluid.pcisph.eta=0.0005",
