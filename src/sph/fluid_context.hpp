@@ -2,6 +2,9 @@
 
 /// What pressure solvers and forces see of the fluid during one sub-step.
 
+#include <cmath>
+#include <cstdint>
+
 #include "common/types.hpp"
 #include "sph/cubic_spline_kernel.hpp"
 #include "sph/neighbor_search.hpp"
@@ -31,15 +34,33 @@ struct FluidContext {
 /// SPH density of particle i at positions `x` (N, unit: m): sum_j m_j W_ij over fluid neighbors and itself,
 /// plus sum_b Psi_b W_ib over boundary neighbors (Akinci et al. 2012 eq. 6). Unit: kg/m^3.
 inline Scalar sph_density(const FluidContext& ctx, const Vec3Array& x, std::size_t i) {
+  // Neighbor loops run over raw coordinate arrays under `omp simd`: the pairs are independent, and evaluating
+  // several at once hides the square root's latency (a Vec3Array is N x 3 contiguous doubles). The vector
+  // reduction fixes its own summation order, so results still do not depend on the thread count.
   const auto& k = ctx.kernel;
-  Scalar rho = ctx.particles.masses[i] * k.value(0.0);
-  for (const Index* j = ctx.fluid_neighbors.begin(i); j != ctx.fluid_neighbors.end(i); ++j) {
-    rho += ctx.particles.masses[*j] * k.value((x[i] - x[*j]).norm());
+  const Scalar* xs = x.data()->data();
+  const Scalar* m = ctx.particles.masses.data();
+  const Scalar xi = xs[3 * i], yi = xs[3 * i + 1], zi = xs[3 * i + 2];
+  Scalar rho = 0.0;
+  const auto& fn = ctx.fluid_neighbors;
+  const Index* fj = fn.indices.data();
+#pragma omp simd reduction(+ : rho)
+  for (std::uint32_t n = fn.offsets[i]; n < fn.offsets[i + 1]; ++n) {
+    const std::size_t j = 3 * std::size_t{fj[n]};
+    const Scalar dx = xi - xs[j], dy = yi - xs[j + 1], dz = zi - xs[j + 2];
+    rho += m[fj[n]] * k.value(std::sqrt(dx * dx + dy * dy + dz * dz));
   }
-  for (const Index* b = ctx.boundary_neighbors.begin(i); b != ctx.boundary_neighbors.end(i); ++b) {
-    rho += ctx.boundary_psi[*b] * k.value((x[i] - ctx.boundary_positions[*b]).norm());
+  const Scalar* bs = ctx.boundary_positions.data()->data();
+  const Scalar* psi = ctx.boundary_psi.data();
+  const auto& bn = ctx.boundary_neighbors;
+  const Index* bb = bn.indices.data();
+#pragma omp simd reduction(+ : rho)
+  for (std::uint32_t n = bn.offsets[i]; n < bn.offsets[i + 1]; ++n) {
+    const std::size_t b = 3 * std::size_t{bb[n]};
+    const Scalar dx = xi - bs[b], dy = yi - bs[b + 1], dz = zi - bs[b + 2];
+    rho += psi[bb[n]] * k.value(std::sqrt(dx * dx + dy * dy + dz * dz));
   }
-  return rho;
+  return rho + m[i] * k.value(0.0);
 }
 
 /// Symmetric SPH pressure acceleration of particle i (unit: m/s^2):
@@ -50,24 +71,42 @@ inline Scalar sph_density(const FluidContext& ctx, const Vec3Array& x, std::size
 /// hydrostatic extrapolation of p_b (Adami et al. 2012) drove corner particles up at 1 m/s with PCISPH's
 /// noisy pressures (both measured).
 inline Vec3 pressure_acceleration(const FluidContext& ctx, const ScalarArray& p_over_rho2, std::size_t i) {
+  // Vectorized over neighbors as sph_density is.
   const Scalar pi = p_over_rho2[i];
-  const Vec3Array& x = ctx.particles.positions;
-  Vec3 a = Vec3::Zero();
+  const Scalar* pj = p_over_rho2.data();
+  const Scalar* xs = ctx.particles.positions.data()->data();
+  const Scalar* m = ctx.particles.masses.data();
+  const Scalar* f = ctx.fluid_gradient_factors.data();
+  const Scalar xi = xs[3 * i], yi = xs[3 * i + 1], zi = xs[3 * i + 2];
+  Scalar ax = 0.0, ay = 0.0, az = 0.0;
   const auto& fn = ctx.fluid_neighbors;
+  const Index* fj = fn.indices.data();
+#pragma omp simd reduction(+ : ax, ay, az)
   for (std::uint32_t n = fn.offsets[i]; n < fn.offsets[i + 1]; ++n) {
-    const Index j = fn.indices[n];
-    const Vec3 gradient = ctx.fluid_gradient_factors[n] * (x[i] - x[j]);
-    a -= ctx.particles.masses[j] * (pi + p_over_rho2[j]) * gradient;
+    const Index j = fj[n];
+    const std::size_t j3 = 3 * std::size_t{j};
+    const Scalar s = m[j] * (pi + pj[j]) * f[n];
+    ax -= s * (xi - xs[j3]);
+    ay -= s * (yi - xs[j3 + 1]);
+    az -= s * (zi - xs[j3 + 2]);
   }
   if (pi != 0.0) {
+    const Scalar* bs = ctx.boundary_positions.data()->data();
+    const Scalar* psi = ctx.boundary_psi.data();
+    const Scalar* fb = ctx.boundary_gradient_factors.data();
     const auto& bn = ctx.boundary_neighbors;
+    const Index* bb = bn.indices.data();
+#pragma omp simd reduction(+ : ax, ay, az)
     for (std::uint32_t n = bn.offsets[i]; n < bn.offsets[i + 1]; ++n) {
-      const Index b = bn.indices[n];
-      const Vec3 gradient = ctx.boundary_gradient_factors[n] * (x[i] - ctx.boundary_positions[b]);
-      a -= ctx.boundary_psi[b] * pi * gradient;
+      const Index b = bb[n];
+      const std::size_t b3 = 3 * std::size_t{b};
+      const Scalar s = psi[b] * pi * fb[n];
+      ax -= s * (xi - bs[b3]);
+      ay -= s * (yi - bs[b3 + 1]);
+      az -= s * (zi - bs[b3 + 2]);
     }
   }
-  return a;
+  return Vec3(ax, ay, az);
 }
 
 }  // namespace drench

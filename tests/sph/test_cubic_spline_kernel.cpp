@@ -76,6 +76,28 @@ TEST(CubicSplineKernel, GradientMatchesCentralFiniteDifferences) {
   EXPECT_GT(checked, 1500);
 }
 
+TEST(CubicSplineKernel, BranchFreeFormEqualsMonaghansPiecewisePolynomial) {
+  // value() and gradient_factor() evaluate the spline without a branch on q < 1; they must agree with the
+  // published piecewise form (Monaghan 1992) within a few roundings, on both sides of q = 1 and q = 2.
+  const Scalar h = 0.025;
+  const CubicSplineKernel kernel(h);
+  const Scalar sigma = 1.0 / (M_PI * h * h * h);
+  for (int k = 0; k <= 2400; ++k) {
+    const Scalar q = k / 1000.0;
+    const Scalar w = q < 1.0   ? sigma * (1.0 - 1.5 * q * q + 0.75 * q * q * q)
+                     : q < 2.0 ? sigma * 0.25 * (2.0 - q) * (2.0 - q) * (2.0 - q)
+                               : 0.0;
+    EXPECT_NEAR(kernel.value(q * h), w, 1e-14 * sigma) << "q = " << q;
+    if (q == 0.0) continue;
+    const Scalar dw_dq = q < 1.0   ? sigma * (-3.0 * q + 2.25 * q * q)
+                         : q < 2.0 ? -sigma * 0.75 * (2.0 - q) * (2.0 - q)
+                                   : 0.0;
+    const Scalar r = q * h;
+    // gradient_factor * r is dW/dr; compare on the gradient's scale sigma / h
+    EXPECT_NEAR(kernel.gradient_factor(r * r) * r, dw_dq / h, 1e-13 * sigma / h) << "q = " << q;
+  }
+}
+
 TEST(CubicSplineKernel, VanishesAtAndBeyondSupportRadius) {
   const CubicSplineKernel kernel(0.01);
   EXPECT_EQ(kernel.value(0.02), 0.0);
