@@ -209,14 +209,18 @@ void NeighborSearch::find(const Vec3Array& queries, NeighborList& out, bool excl
   // place in query order, so the result is the same for any thread count.
   const int threads = omp_get_max_threads();
   const std::size_t chunks = (m + kParticleChunk - 1) / kParticleChunk;
-  std::vector<IndexArray> buffers(static_cast<std::size_t>(threads));
+  // The per-thread buffers keep their capacity from call to call: grown from empty by doubling, every call
+  // copied each buffer about twice over before its first write.
+  std::vector<IndexArray>& buffers = m_thread_buffers;
+  if (buffers.size() < static_cast<std::size_t>(threads)) buffers.resize(static_cast<std::size_t>(threads));
   std::vector<int> chunk_owner(chunks);
   std::vector<std::size_t> chunk_start(chunks);
 #pragma omp parallel num_threads(threads)
   {
     const int thread = omp_get_thread_num();
     IndexArray& local = buffers[static_cast<std::size_t>(thread)];
-    std::size_t used = 0;  // local is grown ahead of the writes and trimmed to `used` at the end
+    std::size_t used =
+        0;  // local is grown ahead of the writes; only its first `used` entries are this call's
     const Vec3* points = m_points.data();
     const Index* sorted = m_sorted_index.data();
     // The team may be smaller than asked for (nested regions): the stride is the team's real size.

@@ -35,7 +35,8 @@ class NeighborSearch {
   /// Sorts `points` (N, unit: m, finite) into cells. The points are copied; later calls to `find` use them.
   void build(const Vec3Array& points);
 
-  /// For each query point, the source points within the support radius.
+  /// For each query point, the source points within the support radius. Not to be called concurrently on one
+  /// object (it reuses per-thread scratch buffers).
   /// @param queries  M points (unit: m, finite)
   /// @param exclude_self  skip source index i for query i (queries and sources are the same set)
   void find(const Vec3Array& queries, NeighborList& out, bool exclude_self) const;
@@ -69,8 +70,9 @@ class NeighborSearch {
   std::vector<std::int64_t> m_table;        // open-addressing hash: slot -> cell, -1 empty
   std::uint64_t m_table_mask = 0;
   bool m_dense = false;
-  Vec3i m_lo = Vec3i::Zero();    // dense mode: first cell of the grid
-  Vec3i m_dims = Vec3i::Zero();  // dense mode: cells per axis
+  Vec3i m_lo = Vec3i::Zero();                        // dense mode: first cell of the grid
+  Vec3i m_dims = Vec3i::Zero();                      // dense mode: cells per axis
+  mutable std::vector<IndexArray> m_thread_buffers;  // find(): one gather buffer per thread, kept for reuse
 };
 
 }  // namespace drench
