@@ -62,6 +62,7 @@ void run(benchmark::State& state, double spacing, const std::string& solver, dou
     state.counters["density_error_max_pct"] = 100 * f.density_error_max;
     state.counters["wall_s_per_sim_s"] = wall / (steps * config.time.dt);
     state.counters["neighbors_share"] = f.timings_s.neighbors / f.timings_s.total;
+    state.counters["neighbor_searches_per_substep"] = static_cast<double>(f.neighbor_searches) / f.substeps;
     state.counters["boundary_guards_per_step"] = static_cast<double>(f.boundary_guards) / steps;
     rusage usage{};
     getrusage(RUSAGE_SELF, &usage);

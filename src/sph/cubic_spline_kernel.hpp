@@ -36,13 +36,15 @@ class CubicSplineKernel {
   /// The scalar f with grad W = f (x_i - x_j), from r2 = |x_i - x_j|^2 (unit: m^2); unit 1/m^5. Zero at r = 0
   /// and beyond the support. Lets a solver keep one number per neighbor pair instead of a vector.
   Scalar gradient_factor(Scalar r2) const {
-    if (r2 <= 0.0) return 0.0;
-    const Scalar r = std::sqrt(r2);
+    // Branch-free as value(), so that loops over pairs vectorize: r = 0 divides by 1 and is then selected away.
+    const bool apart = r2 > 0.0;
+    const Scalar r = std::sqrt(apart ? r2 : 1.0);
     const Scalar q = r * m_inv_h;
     const Scalar a = std::max(2.0 - q, 0.0);
     const Scalar b = std::max(1.0 - q, 0.0);
-    // dW/dq = sigma/4 (12 (1 - q)+^2 - 3 (2 - q)+^2), branch-free as value()
-    return 3.0 * m_quarter_sigma * (4.0 * b * b - a * a) * m_inv_h / r;
+    // dW/dq = sigma/4 (12 (1 - q)+^2 - 3 (2 - q)+^2)
+    const Scalar f = 3.0 * m_quarter_sigma * (4.0 * b * b - a * a) * m_inv_h / r;
+    return apart ? f : 0.0;
   }
 
  private:

@@ -10,6 +10,12 @@
 
 namespace drench {
 
+namespace {
+/// Skin of a neighbor search whose lists are reused over sub-steps, as a fraction of the kernel support. 0.2:
+/// (1.2)^3 = 1.73 times the candidates of an exact search, kept while no particle moves 0.1 support.
+constexpr Scalar kSkinOfSupport = 0.2;
+}  // namespace
+
 StepStatus& StepStatus::operator|=(const StepStatus& other) {
   flags |= other.flags;
   if (non_finite_particle < 0) non_finite_particle = other.non_finite_particle;
@@ -42,13 +48,11 @@ FluidSolver::FluidSolver(const FluidSettings& settings, const Vec3& gravity, Bou
       m_kernel(settings.particle_spacing),
       m_boundary(std::move(boundary.positions)),
       m_guards(std::move(guards)),
-      m_fluid_search(m_kernel.support_radius()),
-      m_boundary_search(m_kernel.support_radius()),
+      m_neighbors(m_kernel.support_radius(), kSkinOfSupport * m_kernel.support_radius(), m_boundary),
       m_pressure(make_pressure_solver(settings, speed_of_sound)) {
   m_boundary_psi.resize(boundary.volumes.size());
   for (std::size_t b = 0; b < m_boundary_psi.size(); ++b)
     m_boundary_psi[b] = settings.rest_density * boundary.volumes[b];
-  m_boundary_search.build(m_boundary);
   if (with_viscosity) m_viscosity = make_viscosity(settings.viscosity, speed_of_sound);
 }
 
@@ -57,39 +61,43 @@ Scalar FluidSolver::particle_mass() const {
   return m_settings.rest_density * s * s * s;
 }
 
-void FluidSolver::update_neighbors() {
+void FluidSolver::update_neighbors(Scalar max_displacement) {
   ScopedTimer timer(m_stats.timings_s.neighbors);
   if (m_stats.substeps % m_settings.sort_interval == 0) {
-    m_particles.permute(m_fluid_search.z_order(m_particles.positions));
+    m_particles.permute(m_neighbors.z_order(m_particles.positions));
   }
-  m_fluid_search.build(m_particles.positions);
-  m_fluid_search.find(m_particles.positions, m_fluid_neighbors, /*exclude_self=*/true);
-  m_boundary_search.find(m_particles.positions, m_boundary_neighbors, /*exclude_self=*/false);
+  // A search with a skin pays for (1 + kSkinOfSupport)^3 more candidates, so it is made only when its lists
+  // can serve at least two sub-steps (the fastest particle moving less than a quarter of the skin per
+  // sub-step): WCSPH's short sub-steps; PCISPH's long ones search exactly to the support every time.
+  const Scalar skin = kSkinOfSupport * m_kernel.support_radius();
+  if (m_neighbors.update(m_particles.positions, m_particles.ids, 4.0 * max_displacement <= skin ? skin : 0.0))
+    ++m_stats.neighbor_searches;
 
   // Kernel gradients at the current positions, once per sub-step: PCISPH reuses them in every iteration.
-  const auto& x = m_particles.positions;
-  m_fluid_gradient_factors.resize(m_fluid_neighbors.indices.size());
-  m_boundary_gradient_factors.resize(m_boundary_neighbors.indices.size());
-#pragma omp parallel for schedule(static, kParticleChunk)
-  for (std::size_t i = 0; i < x.size(); ++i) {
-    for (std::uint32_t n = m_fluid_neighbors.offsets[i]; n < m_fluid_neighbors.offsets[i + 1]; ++n) {
-      m_fluid_gradient_factors[n] =
-          m_kernel.gradient_factor((x[i] - x[m_fluid_neighbors.indices[n]]).squaredNorm());
-    }
-    for (std::uint32_t n = m_boundary_neighbors.offsets[i]; n < m_boundary_neighbors.offsets[i + 1]; ++n) {
-      m_boundary_gradient_factors[n] =
-          m_kernel.gradient_factor((x[i] - m_boundary[m_boundary_neighbors.indices[n]]).squaredNorm());
-    }
-  }
+  // From the lists' squared distances: one pass in pair order, no gather.
+  const ScalarArray& fluid_r2 = m_neighbors.fluid_squared_distances();
+  const ScalarArray& boundary_r2 = m_neighbors.boundary_squared_distances();
+  m_fluid_gradient_factors.resize(fluid_r2.size());
+  m_boundary_gradient_factors.resize(boundary_r2.size());
+#pragma omp parallel for simd schedule(static)
+  for (std::size_t n = 0; n < fluid_r2.size(); ++n)
+    m_fluid_gradient_factors[n] = m_kernel.gradient_factor(fluid_r2[n]);
+#pragma omp parallel for simd schedule(static)
+  for (std::size_t n = 0; n < boundary_r2.size(); ++n)
+    m_boundary_gradient_factors[n] = m_kernel.gradient_factor(boundary_r2[n]);
 }
 
-Scalar FluidSolver::cfl_limit() const {
+Scalar FluidSolver::max_speed() const {
   Scalar max_speed_sq = 0.0;
   const auto& v = m_particles.velocities;
 #pragma omp parallel for schedule(static) reduction(max : max_speed_sq)
   for (std::size_t i = 0; i < v.size(); ++i)
     max_speed_sq = std::max(max_speed_sq, v[i].squaredNorm());
-  const Scalar speed = std::sqrt(max_speed_sq) + m_pressure->signal_speed();
+  return std::sqrt(max_speed_sq);
+}
+
+Scalar FluidSolver::cfl_limit(Scalar max_speed) const {
+  const Scalar speed = max_speed + m_pressure->signal_speed();
   if (!(speed > 0.0)) return std::numeric_limits<Scalar>::infinity();
   return m_settings.cfl * m_settings.particle_spacing / speed;
 }
@@ -103,12 +111,13 @@ StepStatus FluidSolver::step(Scalar dt, SubstepConstraint* constraint) {
   Scalar remaining = dt;
   int count = 0;
   while (true) {
-    const Scalar limit = cfl_limit();
+    const Scalar speed = max_speed();
+    const Scalar limit = cfl_limit(speed);
     // A NaN limit means a NaN velocity: take one sub-step so that the check below names the particle.
     const Scalar wanted = std::isfinite(limit) ? std::ceil(remaining / limit) : 1.0;
     const int n = static_cast<int>(std::clamp(wanted, 1.0, 1e6));
     const Scalar sub = n == 1 ? remaining : remaining / n;
-    status |= substep(sub, constraint);
+    status |= substep(sub, speed, constraint);
     ++count;
     if (n == 1 || !status.ok()) break;
     remaining -= sub;
@@ -117,14 +126,14 @@ StepStatus FluidSolver::step(Scalar dt, SubstepConstraint* constraint) {
   return status;
 }
 
-StepStatus FluidSolver::substep(Scalar dt, SubstepConstraint* constraint) {
-  update_neighbors();
+StepStatus FluidSolver::substep(Scalar dt, Scalar max_speed, SubstepConstraint* constraint) {
+  update_neighbors(max_speed * dt);
   ++m_stats.substeps;
   const std::size_t n = m_particles.size();
   const FluidContext ctx{m_kernel,
                          m_particles,
-                         m_fluid_neighbors,
-                         m_boundary_neighbors,
+                         m_neighbors.fluid(),
+                         m_neighbors.boundary(),
                          m_boundary,
                          m_boundary_psi,
                          m_settings.rest_density,

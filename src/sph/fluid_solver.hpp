@@ -10,9 +10,9 @@
 #include "sph/boundary_sampling.hpp"
 #include "sph/cubic_spline_kernel.hpp"
 #include "sph/forces/viscosity.hpp"
-#include "sph/neighbor_search.hpp"
 #include "sph/particle_set.hpp"
 #include "sph/pressure/pressure_solver.hpp"
+#include "sph/verlet_neighbor_lists.hpp"
 
 namespace drench {
 
@@ -50,6 +50,8 @@ struct FluidStatistics {
   Scalar density_error_max = 0;           ///< largest average density error of a sub-step
   Scalar particle_density_error_max = 0;  ///< largest density error of any particle in any sub-step
   std::int64_t boundary_guards = 0;       ///< particles put back by enforce_boundary, over all sub-steps
+  std::int64_t neighbor_searches = 0;     ///< sub-steps whose neighbor lists came from a grid search (the
+                                          ///< others reused the last search's candidates)
   struct Timings {
     double total = 0, neighbors = 0, density = 0, forces = 0, pressure = 0, integrate = 0;
   } timings_s;  ///< wall time per stage (unit: s)
@@ -92,9 +94,14 @@ class FluidSolver {
   StepStatus step(Scalar dt, SubstepConstraint* constraint = nullptr);
 
  private:
-  void update_neighbors();
-  StepStatus substep(Scalar dt, SubstepConstraint* constraint);
-  Scalar cfl_limit() const;
+  /// @param max_displacement  how far the fastest particle may move in the coming sub-step (unit: m): decides
+  ///        the skin of a new grid search
+  void update_neighbors(Scalar max_displacement);
+  StepStatus substep(Scalar dt, Scalar max_speed, SubstepConstraint* constraint);
+  /// Fastest particle speed (unit: m/s); NaN when a velocity is NaN.
+  Scalar max_speed() const;
+  /// The CFL sub-step for the fastest particle moving at `max_speed` (unit: s); infinite when nothing moves.
+  Scalar cfl_limit(Scalar max_speed) const;
 
   FluidSettings m_settings;
   Vec3 m_gravity;
@@ -103,10 +110,7 @@ class FluidSolver {
   Vec3Array m_boundary;
   std::vector<BoundarySettings> m_guards;
   ScalarArray m_boundary_psi;
-  NeighborSearch m_fluid_search;
-  NeighborSearch m_boundary_search;
-  NeighborList m_fluid_neighbors;
-  NeighborList m_boundary_neighbors;
+  VerletNeighborLists m_neighbors;
   Vec3Array m_positions_before;             // sub-step start positions, kept only for a SubstepConstraint
   ScalarArray m_fluid_gradient_factors;     // per fluid neighbor pair, at the current positions
   ScalarArray m_boundary_gradient_factors;  // per boundary neighbor pair

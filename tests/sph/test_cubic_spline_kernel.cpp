@@ -88,7 +88,10 @@ TEST(CubicSplineKernel, BranchFreeFormEqualsMonaghansPiecewisePolynomial) {
                      : q < 2.0 ? sigma * 0.25 * (2.0 - q) * (2.0 - q) * (2.0 - q)
                                : 0.0;
     EXPECT_NEAR(kernel.value(q * h), w, 1e-14 * sigma) << "q = " << q;
-    if (q == 0.0) continue;
+    if (q == 0.0) {
+      EXPECT_EQ(kernel.gradient_factor(0.0), 0.0);  // the select, not 0 / 0
+      continue;
+    }
     const Scalar dw_dq = q < 1.0   ? sigma * (-3.0 * q + 2.25 * q * q)
                          : q < 2.0 ? -sigma * 0.75 * (2.0 - q) * (2.0 - q)
                                    : 0.0;

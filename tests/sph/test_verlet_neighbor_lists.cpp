@@ -1,0 +1,115 @@
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <numeric>
+#include <random>
+
+#include "neighbor_test_helpers.hpp"
+#include "sph/verlet_neighbor_lists.hpp"
+
+namespace drench {
+namespace {
+
+using testing::brute_force;
+using testing::expect_same_sets;
+using testing::random_points;
+
+constexpr Scalar kRadius = 0.05;
+constexpr Scalar kSkin = 0.01;
+
+std::vector<std::uint32_t> sequential_ids(std::size_t n) {
+  std::vector<std::uint32_t> ids(n);
+  std::iota(ids.begin(), ids.end(), 0u);
+  return ids;
+}
+
+void expect_exact_lists(const VerletNeighborLists& lists, const Vec3Array& points,
+                        const Vec3Array& boundary) {
+  expect_same_sets(lists.fluid(), brute_force(points, points, kRadius, true));
+  expect_same_sets(lists.boundary(), brute_force(points, boundary, kRadius, false));
+}
+
+TEST(VerletNeighborLists, GiveExactlyTheNeighborsOfAFreshSearchWhileReusingCandidates) {
+  // Points drift by up to 1.5 mm per update; the skin (10 mm) lets the candidates serve while no point has
+  // moved 5 mm since the last rebuild. Every update must still report exactly the pairs closer than the
+  // support, and rebuild exactly when some point moved beyond half the skin.
+  Vec3Array points = random_points(1500, Vec3(0, 0, 0), Vec3(0.4, 0.3, 0.3), 21);
+  const Vec3Array boundary = random_points(600, Vec3(-0.05, -0.05, -0.05), Vec3(0.45, 0.0, 0.35), 22);
+  const auto ids = sequential_ids(points.size());
+  VerletNeighborLists lists(kRadius, kSkin, boundary);
+  std::mt19937 rng(23);
+  std::uniform_real_distribution<Scalar> step(-0.0015 / std::sqrt(3.0), 0.0015 / std::sqrt(3.0));
+  Vec3Array at_rebuild;
+  int rebuilds = 0;
+  for (int update = 0; update < 40; ++update) {
+    Scalar moved = 0.0;
+    for (std::size_t i = 0; i < at_rebuild.size(); ++i)
+      moved = std::max(moved, (points[i] - at_rebuild[i]).norm());
+    const bool expected = at_rebuild.empty() || moved > 0.5 * kSkin;
+    ASSERT_EQ(lists.update(points, ids, kSkin), expected) << "update " << update << ", moved " << moved;
+    if (expected) {
+      at_rebuild = points;
+      ++rebuilds;
+    }
+    expect_exact_lists(lists, points, boundary);
+    for (Vec3& p : points)
+      p += Vec3(step(rng), step(rng), step(rng));
+  }
+  // Both paths ran: reuse (at most every fourth update rebuilds at 1.5 mm per update) and rebuilds.
+  EXPECT_GT(rebuilds, 2);
+  EXPECT_LT(rebuilds, 15);
+}
+
+TEST(VerletNeighborLists, OneParticleJumpingFarForcesARebuild) {
+  Vec3Array points = random_points(800, Vec3(0, 0, 0), Vec3(0.3, 0.3, 0.3), 31);
+  const Vec3Array boundary = random_points(200, Vec3(0, -0.04, 0), Vec3(0.3, 0.0, 0.3), 32);
+  const auto ids = sequential_ids(points.size());
+  VerletNeighborLists lists(kRadius, kSkin, boundary);
+  EXPECT_TRUE(lists.update(points, ids, kSkin));
+  points[17] = points[400] + Vec3(0.001, 0.0, 0.0);  // into another particle's neighborhood
+  EXPECT_TRUE(lists.update(points, ids, kSkin));
+  expect_exact_lists(lists, points, boundary);
+}
+
+TEST(VerletNeighborLists, RebuildWhenParticlesAreReorderedAddedOrRemoved) {
+  Vec3Array points = random_points(900, Vec3(0, 0, 0), Vec3(0.3, 0.3, 0.3), 41);
+  const Vec3Array boundary = random_points(200, Vec3(0, -0.04, 0), Vec3(0.3, 0.0, 0.3), 42);
+  auto ids = sequential_ids(points.size());
+  VerletNeighborLists lists(kRadius, kSkin, boundary);
+  EXPECT_TRUE(lists.update(points, ids, kSkin));
+  EXPECT_FALSE(lists.update(points, ids, kSkin));  // nothing moved
+
+  // Re-sorted: the same points in another order, with their ids.
+  std::reverse(points.begin(), points.end());
+  std::reverse(ids.begin(), ids.end());
+  EXPECT_TRUE(lists.update(points, ids, kSkin));
+  expect_exact_lists(lists, points, boundary);
+
+  // Emitted: one more particle, in the middle of the others.
+  points.push_back(Vec3(0.15, 0.15, 0.15));
+  ids.push_back(5000);
+  EXPECT_TRUE(lists.update(points, ids, kSkin));
+  expect_exact_lists(lists, points, boundary);
+
+  // Removed and emitted in one step: same count, another particle.
+  points.erase(points.begin() + 3);
+  ids.erase(ids.begin() + 3);
+  points.push_back(Vec3(0.1, 0.2, 0.1));
+  ids.push_back(5001);
+  EXPECT_TRUE(lists.update(points, ids, kSkin));
+  expect_exact_lists(lists, points, boundary);
+}
+
+TEST(VerletNeighborLists, WithoutASkinSearchEveryTime) {
+  const Vec3Array points = random_points(700, Vec3(0, 0, 0), Vec3(0.3, 0.3, 0.3), 51);
+  const Vec3Array boundary = random_points(200, Vec3(0, -0.04, 0), Vec3(0.3, 0.0, 0.3), 52);
+  const auto ids = sequential_ids(points.size());
+  VerletNeighborLists lists(kRadius, kSkin, boundary);
+  for (int update = 0; update < 3; ++update) {
+    EXPECT_TRUE(lists.update(points, ids, 0.0));
+    expect_exact_lists(lists, points, boundary);
+  }
+}
+
+}  // namespace
+}  // namespace drench
