@@ -36,7 +36,8 @@ class CubicSplineKernel {
   /// The scalar f with grad W = f (x_i - x_j), from r2 = |x_i - x_j|^2 (unit: m^2); unit 1/m^5. Zero at r = 0
   /// and beyond the support. Lets a solver keep one number per neighbor pair instead of a vector.
   Scalar gradient_factor(Scalar r2) const {
-    // Branch-free as value(), so that loops over pairs vectorize: r = 0 divides by 1 and is then selected away.
+    // Branch-free as value(), so that loops over pairs vectorize: r = 0 divides by 1 and is then selected
+    // away.
     const bool apart = r2 > 0.0;
     const Scalar r = std::sqrt(apart ? r2 : 1.0);
     const Scalar q = r * m_inv_h;

@@ -29,10 +29,25 @@ struct FluidContext {
   const ScalarArray& fluid_gradient_factors;
   /// The same for every entry of boundary_neighbors.indices, with x_b in place of x_j (unit: 1/m^5)
   const ScalarArray& boundary_gradient_factors;
+  /// The mass every particle has (unit: kg), or 0 when masses differ (ParticleSet::common_mass). Every
+  /// emitter makes rho0 spacing^3; the pair loops then leave out a gather per pair (PCISPH runs them every
+  /// iteration).
+  Scalar uniform_mass = 0.0;
 };
 
-/// SPH density of particle i at positions `x` (N, unit: m): sum_j m_j W_ij over fluid neighbors and itself,
-/// plus sum_b Psi_b W_ib over boundary neighbors (Akinci et al. 2012 eq. 6). Unit: kg/m^3.
+namespace detail {
+
+/// m_j for the pair loops: the context's uniform mass, or the particle's own.
+template <bool kUniformMass>
+inline Scalar mass_of(const Scalar* masses, Scalar uniform_mass, Index j) {
+  if constexpr (kUniformMass) {
+    return uniform_mass;
+  } else {
+    return masses[j];
+  }
+}
+
+template <bool kUniformMass>
 inline Scalar sph_density(const FluidContext& ctx, const Vec3Array& x, std::size_t i) {
   // Neighbor loops run over raw coordinate arrays under `omp simd`: the pairs are independent, and evaluating
   // several at once hides the square root's latency (a Vec3Array is N x 3 contiguous doubles). The vector
@@ -40,6 +55,7 @@ inline Scalar sph_density(const FluidContext& ctx, const Vec3Array& x, std::size
   const auto& k = ctx.kernel;
   const Scalar* xs = x.data()->data();
   const Scalar* m = ctx.particles.masses.data();
+  const Scalar m_uniform = ctx.uniform_mass;
   const Scalar xi = xs[3 * i], yi = xs[3 * i + 1], zi = xs[3 * i + 2];
   Scalar rho = 0.0;
   const auto& fn = ctx.fluid_neighbors;
@@ -48,7 +64,7 @@ inline Scalar sph_density(const FluidContext& ctx, const Vec3Array& x, std::size
   for (std::uint32_t n = fn.offsets[i]; n < fn.offsets[i + 1]; ++n) {
     const std::size_t j = 3 * std::size_t{fj[n]};
     const Scalar dx = xi - xs[j], dy = yi - xs[j + 1], dz = zi - xs[j + 2];
-    rho += m[fj[n]] * k.value(std::sqrt(dx * dx + dy * dy + dz * dz));
+    rho += mass_of<kUniformMass>(m, m_uniform, fj[n]) * k.value(std::sqrt(dx * dx + dy * dy + dz * dz));
   }
   const Scalar* bs = ctx.boundary_positions.data()->data();
   const Scalar* psi = ctx.boundary_psi.data();
@@ -63,19 +79,25 @@ inline Scalar sph_density(const FluidContext& ctx, const Vec3Array& x, std::size
   return rho + m[i] * k.value(0.0);
 }
 
-/// Symmetric SPH pressure acceleration of particle i (unit: m/s^2):
-/// -sum_j m_j (p_i / rho_i^2 + p_j / rho_j^2) grad W_ij - sum_b Psi_b p_i / rho_i^2 grad W_ib
-/// (Akinci et al. 2012 eq. 10). `p_over_rho2` holds p / rho^2 per particle. The boundary term is the negative
-/// gradient of the internal energy that the boundary's density contribution adds, so it conserves energy;
-/// pressure mirroring (2 p_i, as some codes use) made a closed tank gain kinetic energy without bound, and a
-/// hydrostatic extrapolation of p_b (Adami et al. 2012) drove corner particles up at 1 m/s with PCISPH's
-/// noisy pressures (both measured).
+}  // namespace detail
+
+/// SPH density of particle i at positions `x` (N, unit: m): sum_j m_j W_ij over fluid neighbors and itself,
+/// plus sum_b Psi_b W_ib over boundary neighbors (Akinci et al. 2012 eq. 6). Unit: kg/m^3.
+inline Scalar sph_density(const FluidContext& ctx, const Vec3Array& x, std::size_t i) {
+  return ctx.uniform_mass > 0.0 ? detail::sph_density<true>(ctx, x, i)
+                                : detail::sph_density<false>(ctx, x, i);
+}
+
+namespace detail {
+
+template <bool kUniformMass>
 inline Vec3 pressure_acceleration(const FluidContext& ctx, const ScalarArray& p_over_rho2, std::size_t i) {
   // Vectorized over neighbors as sph_density is.
   const Scalar pi = p_over_rho2[i];
   const Scalar* pj = p_over_rho2.data();
   const Scalar* xs = ctx.particles.positions.data()->data();
   const Scalar* m = ctx.particles.masses.data();
+  const Scalar m_uniform = ctx.uniform_mass;
   const Scalar* f = ctx.fluid_gradient_factors.data();
   const Scalar xi = xs[3 * i], yi = xs[3 * i + 1], zi = xs[3 * i + 2];
   Scalar ax = 0.0, ay = 0.0, az = 0.0;
@@ -85,7 +107,7 @@ inline Vec3 pressure_acceleration(const FluidContext& ctx, const ScalarArray& p_
   for (std::uint32_t n = fn.offsets[i]; n < fn.offsets[i + 1]; ++n) {
     const Index j = fj[n];
     const std::size_t j3 = 3 * std::size_t{j};
-    const Scalar s = m[j] * (pi + pj[j]) * f[n];
+    const Scalar s = mass_of<kUniformMass>(m, m_uniform, j) * (pi + pj[j]) * f[n];
     ax -= s * (xi - xs[j3]);
     ay -= s * (yi - xs[j3 + 1]);
     az -= s * (zi - xs[j3 + 2]);
@@ -107,6 +129,20 @@ inline Vec3 pressure_acceleration(const FluidContext& ctx, const ScalarArray& p_
     }
   }
   return Vec3(ax, ay, az);
+}
+
+}  // namespace detail
+
+/// Symmetric SPH pressure acceleration of particle i (unit: m/s^2):
+/// -sum_j m_j (p_i / rho_i^2 + p_j / rho_j^2) grad W_ij - sum_b Psi_b p_i / rho_i^2 grad W_ib
+/// (Akinci et al. 2012 eq. 10). `p_over_rho2` holds p / rho^2 per particle. The boundary term is the negative
+/// gradient of the internal energy that the boundary's density contribution adds, so it conserves energy;
+/// pressure mirroring (2 p_i, as some codes use) made a closed tank gain kinetic energy without bound, and a
+/// hydrostatic extrapolation of p_b (Adami et al. 2012) drove corner particles up at 1 m/s with PCISPH's
+/// noisy pressures (both measured).
+inline Vec3 pressure_acceleration(const FluidContext& ctx, const ScalarArray& p_over_rho2, std::size_t i) {
+  return ctx.uniform_mass > 0.0 ? detail::pressure_acceleration<true>(ctx, p_over_rho2, i)
+                                : detail::pressure_acceleration<false>(ctx, p_over_rho2, i);
 }
 
 }  // namespace drench

@@ -48,7 +48,7 @@ FluidSolver::FluidSolver(const FluidSettings& settings, const Vec3& gravity, Bou
       m_kernel(settings.particle_spacing),
       m_boundary(std::move(boundary.positions)),
       m_guards(std::move(guards)),
-      m_neighbors(m_kernel.support_radius(), kSkinOfSupport * m_kernel.support_radius(), m_boundary),
+      m_neighbors(m_kernel, kSkinOfSupport * m_kernel.support_radius(), m_boundary),
       m_pressure(make_pressure_solver(settings, speed_of_sound)) {
   m_boundary_psi.resize(boundary.volumes.size());
   for (std::size_t b = 0; b < m_boundary_psi.size(); ++b)
@@ -72,19 +72,6 @@ void FluidSolver::update_neighbors(Scalar max_displacement) {
   const Scalar skin = kSkinOfSupport * m_kernel.support_radius();
   if (m_neighbors.update(m_particles.positions, m_particles.ids, 4.0 * max_displacement <= skin ? skin : 0.0))
     ++m_stats.neighbor_searches;
-
-  // Kernel gradients at the current positions, once per sub-step: PCISPH reuses them in every iteration.
-  // From the lists' squared distances: one pass in pair order, no gather.
-  const ScalarArray& fluid_r2 = m_neighbors.fluid_squared_distances();
-  const ScalarArray& boundary_r2 = m_neighbors.boundary_squared_distances();
-  m_fluid_gradient_factors.resize(fluid_r2.size());
-  m_boundary_gradient_factors.resize(boundary_r2.size());
-#pragma omp parallel for simd schedule(static)
-  for (std::size_t n = 0; n < fluid_r2.size(); ++n)
-    m_fluid_gradient_factors[n] = m_kernel.gradient_factor(fluid_r2[n]);
-#pragma omp parallel for simd schedule(static)
-  for (std::size_t n = 0; n < boundary_r2.size(); ++n)
-    m_boundary_gradient_factors[n] = m_kernel.gradient_factor(boundary_r2[n]);
 }
 
 Scalar FluidSolver::max_speed() const {
@@ -138,8 +125,9 @@ StepStatus FluidSolver::substep(Scalar dt, Scalar max_speed, SubstepConstraint* 
                          m_boundary_psi,
                          m_settings.rest_density,
                          m_settings.particle_spacing,
-                         m_fluid_gradient_factors,
-                         m_boundary_gradient_factors};
+                         m_neighbors.fluid_gradient_factors(),
+                         m_neighbors.boundary_gradient_factors(),
+                         m_particles.common_mass()};
   {
     ScopedTimer timer(m_stats.timings_s.density);
 #pragma omp parallel for schedule(static, kParticleChunk)

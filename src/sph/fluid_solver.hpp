@@ -111,9 +111,7 @@ class FluidSolver {
   std::vector<BoundarySettings> m_guards;
   ScalarArray m_boundary_psi;
   VerletNeighborLists m_neighbors;
-  Vec3Array m_positions_before;             // sub-step start positions, kept only for a SubstepConstraint
-  ScalarArray m_fluid_gradient_factors;     // per fluid neighbor pair, at the current positions
-  ScalarArray m_boundary_gradient_factors;  // per boundary neighbor pair
+  Vec3Array m_positions_before;  // sub-step start positions, kept only for a SubstepConstraint
   std::unique_ptr<PressureSolver> m_pressure;
   std::unique_ptr<NonPressureForce> m_viscosity;
   Vec3Array m_accelerations;

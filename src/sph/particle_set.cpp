@@ -1,5 +1,6 @@
 #include "sph/particle_set.hpp"
 
+#include <algorithm>
 #include <cassert>
 
 namespace drench {
@@ -68,6 +69,18 @@ void ParticleSet::reserve(std::size_t n) {
   masses.reserve(n);
   ids.reserve(n);
   positions_t0.reserve(n);
+}
+
+Scalar ParticleSet::common_mass() const {
+  if (masses.empty()) return 0.0;
+  Scalar lo = masses[0];
+  Scalar hi = masses[0];
+#pragma omp parallel for schedule(static) reduction(min : lo) reduction(max : hi)
+  for (std::size_t i = 0; i < masses.size(); ++i) {
+    lo = std::min(lo, masses[i]);
+    hi = std::max(hi, masses[i]);
+  }
+  return lo == hi ? lo : 0.0;
 }
 
 }  // namespace drench

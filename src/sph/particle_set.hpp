@@ -34,6 +34,9 @@ struct ParticleSet {
   std::size_t remove_flagged(const std::vector<std::uint8_t>& remove);
 
   void reserve(std::size_t n);
+
+  /// The mass every particle has (unit: kg), or 0 when the masses differ or there are no particles.
+  Scalar common_mass() const;
 };
 
 }  // namespace drench

@@ -2,19 +2,20 @@
 
 #include <algorithm>
 #include <cassert>
-#include <limits>
 
 #include "common/parallel.hpp"
 
 namespace drench {
 
-VerletNeighborLists::VerletNeighborLists(Scalar support_radius, Scalar max_skin, const Vec3Array& boundary)
-    : m_support(support_radius),
+VerletNeighborLists::VerletNeighborLists(const CubicSplineKernel& kernel, Scalar max_skin,
+                                         const Vec3Array& boundary)
+    : m_kernel(kernel),
+      m_support(kernel.support_radius()),
       m_boundary_points(boundary),
-      m_exact_fluid(support_radius),
-      m_exact_boundary(support_radius),
-      m_wide_fluid(support_radius + max_skin),
-      m_wide_boundary(support_radius + max_skin) {
+      m_exact_fluid(m_support),
+      m_exact_boundary(m_support),
+      m_wide_fluid(m_support + max_skin),
+      m_wide_boundary(m_support + max_skin) {
   assert(max_skin >= 0.0);
   m_exact_boundary.build(m_boundary_points);
   if (max_skin > 0.0) m_wide_boundary.build(m_boundary_points);
@@ -32,40 +33,67 @@ bool VerletNeighborLists::moved_beyond_half_skin(const Vec3Array& positions) con
 bool VerletNeighborLists::update(const Vec3Array& positions, const std::vector<std::uint32_t>& ids,
                                  Scalar skin) {
   assert(skin >= 0.0 && skin <= m_wide_fluid.support_radius() - m_support + 1e-12 * m_support);
-  const bool reuse = m_skin > 0.0 && ids == m_ids && !moved_beyond_half_skin(positions);
-  if (!reuse) {
-    m_skin = skin;
-    NeighborSearch& fluid_search = skin > 0.0 ? m_wide_fluid : m_exact_fluid;
-    const NeighborSearch& boundary_search = skin > 0.0 ? m_wide_boundary : m_exact_boundary;
-    fluid_search.build(positions);
-    fluid_search.find(positions, m_fluid_candidates, /*exclude_self=*/true);
-    boundary_search.find(positions, m_boundary_candidates, /*exclude_self=*/false);
-    if (skin > 0.0) {
-      m_ids = ids;
-      m_positions = positions;
+  if (m_skin > 0.0 && ids == m_ids && !moved_beyond_half_skin(positions)) {
+    filter(m_fluid_candidates, positions, positions, m_fluid, m_fluid_factors);
+    filter(m_boundary_candidates, positions, m_boundary_points, m_boundary, m_boundary_factors);
+    return false;
+  }
+  m_skin = skin;
+  if (skin > 0.0) {
+    m_ids = ids;
+    m_positions = positions;
+    m_wide_fluid.build(positions);
+    m_wide_fluid.find(positions, m_fluid_candidates, /*exclude_self=*/true);
+    m_wide_boundary.find(positions, m_boundary_candidates, /*exclude_self=*/false);
+    filter(m_fluid_candidates, positions, positions, m_fluid, m_fluid_factors);
+    filter(m_boundary_candidates, positions, m_boundary_points, m_boundary, m_boundary_factors);
+  } else {
+    // Exactly the neighbors: nothing to filter, and no candidates are kept.
+    m_exact_fluid.build(positions);
+    m_exact_fluid.find(positions, m_fluid, /*exclude_self=*/true);
+    m_exact_boundary.find(positions, m_boundary, /*exclude_self=*/false);
+    gradient_factors(m_fluid, positions, positions, m_fluid_factors);
+    gradient_factors(m_boundary, positions, m_boundary_points, m_boundary_factors);
+  }
+  return true;
+}
+
+void VerletNeighborLists::gradient_factors(const NeighborList& list, const Vec3Array& x,
+                                           const Vec3Array& sources, ScalarArray& out_factors) const {
+  out_factors.resize(list.indices.size());
+  // Raw coordinate arrays: the gather vectorizes over them, not over Eigen's element access.
+  const Scalar* xs = x.data()->data();
+  const Scalar* ss = sources.data()->data();
+  const Index* js = list.indices.data();
+  Scalar* factors = out_factors.data();
+#pragma omp parallel for schedule(static, kParticleChunk)
+  for (std::size_t i = 0; i < x.size(); ++i) {
+    const Scalar x0 = xs[3 * i], x1 = xs[3 * i + 1], x2 = xs[3 * i + 2];
+#pragma omp simd
+    for (std::uint32_t n = list.offsets[i]; n < list.offsets[i + 1]; ++n) {
+      const std::size_t j = 3 * std::size_t{js[n]};
+      const Scalar d0 = ss[j] - x0, d1 = ss[j + 1] - x1, d2 = ss[j + 2] - x2;
+      factors[n] = m_kernel.gradient_factor(d0 * d0 + d1 * d1 + d2 * d2);
     }
   }
-  // Without a skin the search found exactly the neighbors: the pass only takes their squared distances.
-  const bool keep_all = m_skin <= 0.0;
-  filter(m_fluid_candidates, positions, positions, keep_all, m_fluid, m_fluid_r2);
-  filter(m_boundary_candidates, positions, m_boundary_points, keep_all, m_boundary, m_boundary_r2);
-  return !reuse;
 }
 
 void VerletNeighborLists::filter(const NeighborList& candidates, const Vec3Array& x, const Vec3Array& sources,
-                                 bool keep_all, NeighborList& out, ScalarArray& out_r2) {
+                                 NeighborList& out, ScalarArray& out_factors) {
   const std::size_t n = x.size();
-  const Scalar r2_max = keep_all ? std::numeric_limits<Scalar>::infinity() : m_support * m_support;
+  const Scalar r2_max = m_support * m_support;
   out.offsets.assign(n + 1, 0);
-  // Grown only: the fluid and boundary lists share the scratch, and a vector grown again is zero-filled again.
+  // Grown only: the fluid and boundary lists share the scratch, and a vector grown again is zero-filled
+  // again.
   if (m_kept.size() < candidates.indices.size()) {
     m_kept.resize(candidates.indices.size());
     m_kept_r2.resize(candidates.indices.size());
   }
   // One pass over the candidates writes each one, with its squared distance, at the particle's next free slot
   // of its own candidate range, and advances only for a neighbor: no branch (inside or not is a coin toss at
-  // the skin), and a write never leaves the particle's range. The expression is NeighborSearch::find's
-  // (source minus query, summed x, y, z), so a pair is kept exactly when a fresh search would report it.
+  // the skin), and a write never leaves the particle's range. The distance is NeighborSearch::find's
+  // expression (source minus query, summed x, y, z), so a pair is kept exactly when a fresh search would
+  // report it. The gradient factors are taken in the second pass, over the kept pairs only and vectorized.
 #pragma omp parallel for schedule(static, kParticleChunk)
   for (std::size_t i = 0; i < n; ++i) {
     const std::uint32_t first = candidates.offsets[i];
@@ -86,13 +114,17 @@ void VerletNeighborLists::filter(const NeighborList& candidates, const Vec3Array
   for (std::size_t i = 0; i < n; ++i)
     out.offsets[i + 1] += out.offsets[i];
   out.indices.resize(out.offsets[n]);
-  out_r2.resize(out.offsets[n]);
+  out_factors.resize(out.offsets[n]);
 #pragma omp parallel for schedule(static, kParticleChunk)
   for (std::size_t i = 0; i < n; ++i) {
     const std::uint32_t first = candidates.offsets[i];
     const std::uint32_t count = out.offsets[i + 1] - out.offsets[i];
     std::copy_n(m_kept.data() + first, count, out.indices.data() + out.offsets[i]);
-    std::copy_n(m_kept_r2.data() + first, count, out_r2.data() + out.offsets[i]);
+    const Scalar* r2 = m_kept_r2.data() + first;
+    Scalar* factors = out_factors.data() + out.offsets[i];
+#pragma omp simd
+    for (std::uint32_t k = 0; k < count; ++k)
+      factors[k] = m_kernel.gradient_factor(r2[k]);
   }
 }
 

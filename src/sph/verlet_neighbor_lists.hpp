@@ -4,6 +4,7 @@
 #include <cstdint>
 
 #include "common/types.hpp"
+#include "sph/cubic_spline_kernel.hpp"
 #include "sph/neighbor_search.hpp"
 
 namespace drench {
@@ -20,10 +21,10 @@ namespace drench {
 /// hundredths of a spacing, and a fresh grid search every sub-step was 60% of its time (measured).
 class VerletNeighborLists {
  public:
-  /// @param support_radius  kernel support (unit: m), > 0
+  /// @param kernel  the SPH kernel: its support is the neighbor radius (kept by reference; must outlive this)
   /// @param max_skin  the largest skin update() will be given (unit: m), >= 0; sets the rebuild grid's cells
   /// @param boundary  static boundary points (unit: m, finite), copied
-  VerletNeighborLists(Scalar support_radius, Scalar max_skin, const Vec3Array& boundary);
+  VerletNeighborLists(const CubicSplineKernel& kernel, Scalar max_skin, const Vec3Array& boundary);
 
   /// Brings fluid() and boundary() up to date for `positions`.
   /// @param positions  N particle positions (unit: m, finite)
@@ -36,11 +37,12 @@ class VerletNeighborLists {
 
   const NeighborList& fluid() const { return m_fluid; }
   const NeighborList& boundary() const { return m_boundary; }
-  /// For every entry of fluid().indices, |x_i - x_j|^2 at the positions of the last update (unit: m^2): the
-  /// filter computes them anyway, and kernels evaluated from them need no second gather of positions.
-  const ScalarArray& fluid_squared_distances() const { return m_fluid_r2; }
-  /// The same for boundary().indices, with the boundary point in place of x_j (unit: m^2).
-  const ScalarArray& boundary_squared_distances() const { return m_boundary_r2; }
+  /// For every entry of fluid().indices, f with grad W(x_i - x_j) = f (x_i - x_j) at the positions of the
+  /// last update (unit: 1/m^5). Computed in the filter's pass, where the distance is at hand: a pass of its
+  /// own re-read the lists and gathered the positions again, on a sub-step bound by memory traffic.
+  const ScalarArray& fluid_gradient_factors() const { return m_fluid_factors; }
+  /// The same for boundary().indices, with the boundary point in place of x_j (unit: 1/m^5).
+  const ScalarArray& boundary_gradient_factors() const { return m_boundary_factors; }
 
   /// Permutation that orders `points` along the z-order curve of support-sized cells
   /// (NeighborSearch::z_order).
@@ -49,11 +51,15 @@ class VerletNeighborLists {
  private:
   /// True when some particle moved more than skin / 2 since the rebuild.
   bool moved_beyond_half_skin(const Vec3Array& positions) const;
-  /// out = the candidates of `candidates` within the support, out_r2 their squared distances: queries `x`,
-  /// sources `sources`. With `keep_all` every candidate is kept (they were found within the support).
-  void filter(const NeighborList& candidates, const Vec3Array& x, const Vec3Array& sources, bool keep_all,
-              NeighborList& out, ScalarArray& out_r2);
+  /// out = the candidates within the support, out_factors their kernel gradient factors: queries `x`,
+  /// sources `sources`.
+  void filter(const NeighborList& candidates, const Vec3Array& x, const Vec3Array& sources, NeighborList& out,
+              ScalarArray& out_factors);
+  /// out_factors = the kernel gradient factors of the pairs of `list` (all within the support).
+  void gradient_factors(const NeighborList& list, const Vec3Array& x, const Vec3Array& sources,
+                        ScalarArray& out_factors) const;
 
+  const CubicSplineKernel& m_kernel;
   Scalar m_support;
   Vec3Array m_boundary_points;
   NeighborSearch m_exact_fluid;      // cells of the support: rebuilds without a skin, and z_order
@@ -67,8 +73,8 @@ class VerletNeighborLists {
   NeighborList m_boundary_candidates;
   NeighborList m_fluid;
   NeighborList m_boundary;
-  ScalarArray m_fluid_r2;
-  ScalarArray m_boundary_r2;
+  ScalarArray m_fluid_factors;
+  ScalarArray m_boundary_factors;
   IndexArray m_kept;      // filter(): kept indices at their candidates' offsets
   ScalarArray m_kept_r2;  // filter(): their squared distances
 };

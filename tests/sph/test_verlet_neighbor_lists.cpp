@@ -1,6 +1,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <numeric>
 #include <random>
 
@@ -14,8 +15,9 @@ using testing::brute_force;
 using testing::expect_same_sets;
 using testing::random_points;
 
-constexpr Scalar kRadius = 0.05;
+constexpr Scalar kRadius = 0.05;  // the support: smoothing length 0.025 m
 constexpr Scalar kSkin = 0.01;
+const CubicSplineKernel kKernel(0.5 * kRadius);
 
 std::vector<std::uint32_t> sequential_ids(std::size_t n) {
   std::vector<std::uint32_t> ids(n);
@@ -23,10 +25,25 @@ std::vector<std::uint32_t> sequential_ids(std::size_t n) {
   return ids;
 }
 
+/// Every pair's gradient factor is the kernel's at the pair's distance now.
+void expect_gradient_factors(const NeighborList& list, const ScalarArray& factors, const Vec3Array& points,
+                             const Vec3Array& sources) {
+  ASSERT_EQ(factors.size(), list.indices.size());
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    for (std::uint32_t n = list.offsets[i]; n < list.offsets[i + 1]; ++n) {
+      const Scalar expected = kKernel.gradient_factor((sources[list.indices[n]] - points[i]).squaredNorm());
+      ASSERT_NEAR(factors[n], expected, 1e-12 * std::abs(expected))
+          << "pair " << i << ", " << list.indices[n];
+    }
+  }
+}
+
 void expect_exact_lists(const VerletNeighborLists& lists, const Vec3Array& points,
                         const Vec3Array& boundary) {
   expect_same_sets(lists.fluid(), brute_force(points, points, kRadius, true));
   expect_same_sets(lists.boundary(), brute_force(points, boundary, kRadius, false));
+  expect_gradient_factors(lists.fluid(), lists.fluid_gradient_factors(), points, points);
+  expect_gradient_factors(lists.boundary(), lists.boundary_gradient_factors(), points, boundary);
 }
 
 TEST(VerletNeighborLists, GiveExactlyTheNeighborsOfAFreshSearchWhileReusingCandidates) {
@@ -36,7 +53,7 @@ TEST(VerletNeighborLists, GiveExactlyTheNeighborsOfAFreshSearchWhileReusingCandi
   Vec3Array points = random_points(1500, Vec3(0, 0, 0), Vec3(0.4, 0.3, 0.3), 21);
   const Vec3Array boundary = random_points(600, Vec3(-0.05, -0.05, -0.05), Vec3(0.45, 0.0, 0.35), 22);
   const auto ids = sequential_ids(points.size());
-  VerletNeighborLists lists(kRadius, kSkin, boundary);
+  VerletNeighborLists lists(kKernel, kSkin, boundary);
   std::mt19937 rng(23);
   std::uniform_real_distribution<Scalar> step(-0.0015 / std::sqrt(3.0), 0.0015 / std::sqrt(3.0));
   Vec3Array at_rebuild;
@@ -64,7 +81,7 @@ TEST(VerletNeighborLists, OneParticleJumpingFarForcesARebuild) {
   Vec3Array points = random_points(800, Vec3(0, 0, 0), Vec3(0.3, 0.3, 0.3), 31);
   const Vec3Array boundary = random_points(200, Vec3(0, -0.04, 0), Vec3(0.3, 0.0, 0.3), 32);
   const auto ids = sequential_ids(points.size());
-  VerletNeighborLists lists(kRadius, kSkin, boundary);
+  VerletNeighborLists lists(kKernel, kSkin, boundary);
   EXPECT_TRUE(lists.update(points, ids, kSkin));
   points[17] = points[400] + Vec3(0.001, 0.0, 0.0);  // into another particle's neighborhood
   EXPECT_TRUE(lists.update(points, ids, kSkin));
@@ -75,7 +92,7 @@ TEST(VerletNeighborLists, RebuildWhenParticlesAreReorderedAddedOrRemoved) {
   Vec3Array points = random_points(900, Vec3(0, 0, 0), Vec3(0.3, 0.3, 0.3), 41);
   const Vec3Array boundary = random_points(200, Vec3(0, -0.04, 0), Vec3(0.3, 0.0, 0.3), 42);
   auto ids = sequential_ids(points.size());
-  VerletNeighborLists lists(kRadius, kSkin, boundary);
+  VerletNeighborLists lists(kKernel, kSkin, boundary);
   EXPECT_TRUE(lists.update(points, ids, kSkin));
   EXPECT_FALSE(lists.update(points, ids, kSkin));  // nothing moved
 
@@ -104,7 +121,7 @@ TEST(VerletNeighborLists, WithoutASkinSearchEveryTime) {
   const Vec3Array points = random_points(700, Vec3(0, 0, 0), Vec3(0.3, 0.3, 0.3), 51);
   const Vec3Array boundary = random_points(200, Vec3(0, -0.04, 0), Vec3(0.3, 0.0, 0.3), 52);
   const auto ids = sequential_ids(points.size());
-  VerletNeighborLists lists(kRadius, kSkin, boundary);
+  VerletNeighborLists lists(kKernel, kSkin, boundary);
   for (int update = 0; update < 3; ++update) {
     EXPECT_TRUE(lists.update(points, ids, 0.0));
     expect_exact_lists(lists, points, boundary);
