@@ -21,7 +21,7 @@ namespace drench {
 /// hundredths of a spacing, and a fresh grid search every sub-step was 60% of its time (measured).
 class VerletNeighborLists {
  public:
-  /// @param kernel  the SPH kernel: its support is the neighbor radius (kept by reference; must outlive this)
+  /// @param kernel  the SPH kernel, copied: its support is the neighbor radius
   /// @param max_skin  the largest skin update() will be given (unit: m), >= 0; sets the rebuild grid's cells
   /// @param boundary  static boundary points (unit: m, finite), copied
   VerletNeighborLists(const CubicSplineKernel& kernel, Scalar max_skin, const Vec3Array& boundary);
@@ -59,7 +59,7 @@ class VerletNeighborLists {
   void gradient_factors(const NeighborList& list, const Vec3Array& x, const Vec3Array& sources,
                         ScalarArray& out_factors) const;
 
-  const CubicSplineKernel& m_kernel;
+  CubicSplineKernel m_kernel;  // a copy: a reference into the owner would dangle when the owner is moved
   Scalar m_support;
   Vec3Array m_boundary_points;
   NeighborSearch m_exact_fluid;      // cells of the support: rebuilds without a skin, and z_order
