@@ -47,36 +47,36 @@ inline Scalar mass_of(const Scalar* masses, Scalar uniform_mass, Index j) {
   }
 }
 
+/// sum over the neighbors j of i in `list` of weight(j) W(|x_i - x_j|), with x_j read from `sources` (N x 3
+/// doubles). Vectorized over neighbors (`omp simd` over raw coordinate arrays): the pairs are independent,
+/// and evaluating several at once hides the square root's latency. The vector reduction fixes its own
+/// summation order, so results still do not depend on the thread count.
+template <class Weight>
+inline Scalar kernel_sum(const CubicSplineKernel& k, const NeighborList& list, std::size_t i,
+                         const Scalar* xi, const Scalar* sources, Weight weight) {
+  Scalar sum = 0.0;
+  const Index* js = list.indices.data();
+#pragma omp simd reduction(+ : sum)
+  for (std::uint32_t n = list.offsets[i]; n < list.offsets[i + 1]; ++n) {
+    const std::size_t j = 3 * std::size_t{js[n]};
+    const Scalar dx = xi[0] - sources[j], dy = xi[1] - sources[j + 1], dz = xi[2] - sources[j + 2];
+    sum += weight(js[n]) * k.value(std::sqrt(dx * dx + dy * dy + dz * dz));
+  }
+  return sum;
+}
+
 template <bool kUniformMass>
 inline Scalar sph_density(const FluidContext& ctx, const Vec3Array& x, std::size_t i) {
-  // Neighbor loops run over raw coordinate arrays under `omp simd`: the pairs are independent, and evaluating
-  // several at once hides the square root's latency (a Vec3Array is N x 3 contiguous doubles). The vector
-  // reduction fixes its own summation order, so results still do not depend on the thread count.
-  const auto& k = ctx.kernel;
   const Scalar* xs = x.data()->data();
   const Scalar* m = ctx.particles.masses.data();
   const Scalar m_uniform = ctx.uniform_mass;
-  const Scalar xi = xs[3 * i], yi = xs[3 * i + 1], zi = xs[3 * i + 2];
-  Scalar rho = 0.0;
-  const auto& fn = ctx.fluid_neighbors;
-  const Index* fj = fn.indices.data();
-#pragma omp simd reduction(+ : rho)
-  for (std::uint32_t n = fn.offsets[i]; n < fn.offsets[i + 1]; ++n) {
-    const std::size_t j = 3 * std::size_t{fj[n]};
-    const Scalar dx = xi - xs[j], dy = yi - xs[j + 1], dz = zi - xs[j + 2];
-    rho += mass_of<kUniformMass>(m, m_uniform, fj[n]) * k.value(std::sqrt(dx * dx + dy * dy + dz * dz));
-  }
-  const Scalar* bs = ctx.boundary_positions.data()->data();
   const Scalar* psi = ctx.boundary_psi.data();
-  const auto& bn = ctx.boundary_neighbors;
-  const Index* bb = bn.indices.data();
-#pragma omp simd reduction(+ : rho)
-  for (std::uint32_t n = bn.offsets[i]; n < bn.offsets[i + 1]; ++n) {
-    const std::size_t b = 3 * std::size_t{bb[n]};
-    const Scalar dx = xi - bs[b], dy = yi - bs[b + 1], dz = zi - bs[b + 2];
-    rho += psi[bb[n]] * k.value(std::sqrt(dx * dx + dy * dy + dz * dz));
-  }
-  return rho + m[i] * k.value(0.0);
+  const Scalar* xi = xs + 3 * i;
+  const Scalar fluid = kernel_sum(ctx.kernel, ctx.fluid_neighbors, i, xi, xs,
+                                  [=](Index j) { return mass_of<kUniformMass>(m, m_uniform, j); });
+  const Scalar boundary = kernel_sum(ctx.kernel, ctx.boundary_neighbors, i, xi,
+                                     ctx.boundary_positions.data()->data(), [=](Index b) { return psi[b]; });
+  return fluid + boundary + m[i] * ctx.kernel.value(0.0);
 }
 
 }  // namespace detail
