@@ -67,7 +67,7 @@ inline Scalar kernel_sum(const CubicSplineKernel& k, const NeighborList& list, s
 
 template <bool kUniformMass>
 inline Scalar sph_density(const FluidContext& ctx, const Vec3Array& x, std::size_t i) {
-  const Scalar* xs = x.data()->data();
+  const Scalar* xs = coordinates(x);
   const Scalar* m = ctx.particles.masses.data();
   const Scalar m_uniform = ctx.uniform_mass;
   const Scalar* psi = ctx.boundary_psi.data();
@@ -75,7 +75,7 @@ inline Scalar sph_density(const FluidContext& ctx, const Vec3Array& x, std::size
   const Scalar fluid = kernel_sum(ctx.kernel, ctx.fluid_neighbors, i, xi, xs,
                                   [=](Index j) { return mass_of<kUniformMass>(m, m_uniform, j); });
   const Scalar boundary = kernel_sum(ctx.kernel, ctx.boundary_neighbors, i, xi,
-                                     ctx.boundary_positions.data()->data(), [=](Index b) { return psi[b]; });
+                                     coordinates(ctx.boundary_positions), [=](Index b) { return psi[b]; });
   return fluid + boundary + m[i] * ctx.kernel.value(0.0);
 }
 
@@ -95,7 +95,7 @@ inline Vec3 pressure_acceleration(const FluidContext& ctx, const ScalarArray& p_
   // Vectorized over neighbors as sph_density is.
   const Scalar pi = p_over_rho2[i];
   const Scalar* pj = p_over_rho2.data();
-  const Scalar* xs = ctx.particles.positions.data()->data();
+  const Scalar* xs = coordinates(ctx.particles.positions);
   const Scalar* m = ctx.particles.masses.data();
   const Scalar m_uniform = ctx.uniform_mass;
   const Scalar* f = ctx.fluid_gradient_factors.data();
@@ -113,7 +113,7 @@ inline Vec3 pressure_acceleration(const FluidContext& ctx, const ScalarArray& p_
     az -= s * (zi - xs[j3 + 2]);
   }
   if (pi != 0.0) {
-    const Scalar* bs = ctx.boundary_positions.data()->data();
+    const Scalar* bs = coordinates(ctx.boundary_positions);
     const Scalar* psi = ctx.boundary_psi.data();
     const Scalar* fb = ctx.boundary_gradient_factors.data();
     const auto& bn = ctx.boundary_neighbors;

@@ -62,8 +62,8 @@ void VerletNeighborLists::gradient_factors(const NeighborList& list, const Vec3A
                                            const Vec3Array& sources, ScalarArray& out_factors) const {
   out_factors.resize(list.indices.size());
   // Raw coordinate arrays: the gather vectorizes over them, not over Eigen's element access.
-  const Scalar* xs = x.data()->data();
-  const Scalar* ss = sources.data()->data();
+  const Scalar* xs = coordinates(x);
+  const Scalar* ss = coordinates(sources);
   const Index* js = list.indices.data();
   Scalar* factors = out_factors.data();
 #pragma omp parallel for schedule(static, kParticleChunk)
