@@ -130,9 +130,9 @@ StepStatus FluidSolver::substep(Scalar dt, Scalar max_speed, SubstepConstraint* 
                          m_particles.common_mass()};
   {
     ScopedTimer timer(m_stats.timings_s.density);
-#pragma omp parallel for schedule(static, kParticleChunk)
-    for (std::size_t i = 0; i < n; ++i)
-      m_particles.densities[i] = sph_density(ctx, m_particles.positions, i);
+    for_each_chunk(n, [&](std::size_t begin, std::size_t end) {
+      sph_densities(ctx, m_particles.positions, begin, end, &m_particles.densities[begin]);
+    });
   }
   {
     ScopedTimer timer(m_stats.timings_s.forces);

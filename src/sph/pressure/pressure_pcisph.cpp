@@ -58,22 +58,24 @@ PressureStats PressurePcisph::solve(const FluidContext& ctx, const Vec3Array& ve
     for (std::size_t i = 0; i < n; ++i) {
       m_predicted[i] = particles.positions[i] + dt * (velocities_adv[i] + dt * accelerations[i]);
     }
-#pragma omp parallel for schedule(static, kParticleChunk)
-    for (std::size_t i = 0; i < n; ++i) {
-      // Only compression is corrected (as SPlisHSPlasH's PCISPH): a free-surface particle lacks neighbours
-      // and its density deficit is no expansion to undo, so pressures only grow within a solve.
-      const Scalar rho = std::max(sph_density(ctx, m_predicted, i), rho0);
-      // Fixed at the first prediction (no pressure yet): what the motion of this sub-step would add is undone
-      // in full, what the particle entered it with only down to (density - max_relief).
-      if (stats.iterations == 0)
-        m_target[i] = std::max(rho0, std::min(rho, particles.densities[i] - max_relief));
-      m_error[i] = rho;
-      particles.pressures[i] += delta * std::min(std::max(rho - m_target[i], 0.0), max_excess);
-      m_p_over_rho2[i] = particles.pressures[i] * inv_rho0_sq;
-    }
-#pragma omp parallel for schedule(static, kParticleChunk)
-    for (std::size_t i = 0; i < n; ++i)
-      accelerations[i] = pressure_acceleration(ctx, m_p_over_rho2, i);
+    const int iteration = stats.iterations;
+    for_each_chunk(n, [&](std::size_t begin, std::size_t end) {
+      sph_densities(ctx, m_predicted, begin, end, &m_error[begin]);
+      for (std::size_t i = begin; i < end; ++i) {
+        // Only compression is corrected (as SPlisHSPlasH's PCISPH): a free-surface particle lacks neighbours
+        // and its density deficit is no expansion to undo, so pressures only grow within a solve.
+        const Scalar rho = std::max(m_error[i], rho0);
+        // Fixed at the first prediction (no pressure yet): what the motion of this sub-step would add is
+        // undone in full, what the particle entered it with only down to (density - max_relief).
+        if (iteration == 0) m_target[i] = std::max(rho0, std::min(rho, particles.densities[i] - max_relief));
+        m_error[i] = rho;
+        particles.pressures[i] += delta * std::min(std::max(rho - m_target[i], 0.0), max_excess);
+        m_p_over_rho2[i] = particles.pressures[i] * inv_rho0_sq;
+      }
+    });
+    for_each_chunk(n, [&](std::size_t begin, std::size_t end) {
+      pressure_accelerations(ctx, m_p_over_rho2, begin, end, &accelerations[begin]);
+    });
 
     ++stats.iterations;
     density_error_stats(m_error, rho0, stats);

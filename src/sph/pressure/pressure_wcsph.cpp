@@ -26,9 +26,9 @@ PressureStats PressureWcsph::solve(const FluidContext& ctx, const Vec3Array& /*v
     particles.pressures[i] = p;
     m_p_over_rho2[i] = p / (rho * rho);
   }
-#pragma omp parallel for schedule(static, kParticleChunk)
-  for (std::size_t i = 0; i < n; ++i)
-    accelerations[i] = pressure_acceleration(ctx, m_p_over_rho2, i);
+  for_each_chunk(n, [&](std::size_t begin, std::size_t end) {
+    pressure_accelerations(ctx, m_p_over_rho2, begin, end, &accelerations[begin]);
+  });
 
   PressureStats stats;
   stats.iterations = 1;
