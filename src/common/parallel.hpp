@@ -27,14 +27,13 @@ void for_each_chunk(std::size_t n, Body body) {
 
 }  // namespace drench
 
-/// Marks a hot loop function to be compiled twice, for x86-64-v3 (AVX2: four doubles per vector, hardware
-/// gathers) and for the baseline x86-64 that the build targets, the copy being chosen once at load time by
-/// the CPU (GCC's target_clones, an ifunc). The SPH pair loops gather neighbor coordinates by index, which
-/// the baseline can only do two doubles at a time with scalar loads; the AVX2 copy ran PCISPH's pressure
-/// solve 1.3x faster (measured, README). Every thread runs the same copy, so runs stay bit-identical; the
-/// copies may differ in the last bits between CPUs, as vectorized sums are added in another order
-/// (drench_core is built with -ffp-contract=off, so no copy fuses a multiply and an add). Only for
-/// non-inline, non-template functions: what they inline is compiled into each copy.
+/// Marks a hot loop function to be compiled twice, for x86-64-v3 (AVX2: four doubles per vector) and for the
+/// baseline x86-64 that the build targets, the copy being chosen once at load time by the CPU (GCC's
+/// target_clones, an ifunc). Every thread runs the same copy, so runs stay bit-identical. A loop that fixes
+/// its summation order (the four lanes of src/sph/fluid_context.cpp) gives the same bits in both copies as
+/// well: drench_core is built with -ffp-contract=off, so no copy fuses a multiply and an add (the 59K dam
+/// break's frames are identical with the clones disabled, measured). Only for non-inline, non-template
+/// functions: what they inline is compiled into each copy.
 #if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && defined(__linux__) && \
     !defined(DRENCH_NO_SIMD_CLONES)
 #define DRENCH_SIMD_CLONES __attribute__((target_clones("arch=x86-64-v3", "default")))

@@ -2,118 +2,162 @@
 
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 
 #include "common/parallel.hpp"
 
 namespace drench {
 namespace {
 
-/// m_j for the pair loops: the context's uniform mass, or the particle's own.
-template <bool kUniformMass>
-[[gnu::always_inline]] inline Scalar mass_of(const Scalar* masses, Scalar uniform_mass, Index j) {
-  if constexpr (kUniformMass) {
-    return uniform_mass;
-  } else {
-    return masses[j];
-  }
+/// Four doubles as one vector: an AVX2 register, or two SSE2 registers in the baseline copy. GCC's and
+/// clang's vector extension, so one source serves every copy of DRENCH_SIMD_CLONES; lane-wise loops over it
+/// (sqrt, the kernel) are vectorized by the compiler.
+typedef Scalar Lanes __attribute__((vector_size(4 * sizeof(Scalar))));
+constexpr std::uint32_t kLanes = 4;
+
+/// x, y, z and w of four packed points as four vectors.
+struct FourPoints {
+  Lanes x, y, z, w;
+};
+
+/// Loads the points js[0..3] and transposes the four records in registers (a 4 x 4 transpose: unpack within
+/// 128-bit halves, then exchange halves).
+[[gnu::always_inline]] inline void load_four(const PackedPoint* points, const Index* js, FourPoints& out) {
+  Lanes a, b, c, d;
+  std::memcpy(&a, &points[js[0]], sizeof(Lanes));
+  std::memcpy(&b, &points[js[1]], sizeof(Lanes));
+  std::memcpy(&c, &points[js[2]], sizeof(Lanes));
+  std::memcpy(&d, &points[js[3]], sizeof(Lanes));
+  const Lanes ab_xz = __builtin_shufflevector(a, b, 0, 4, 2, 6);  // ax bx az bz
+  const Lanes ab_yw = __builtin_shufflevector(a, b, 1, 5, 3, 7);  // ay by aw bw
+  const Lanes cd_xz = __builtin_shufflevector(c, d, 0, 4, 2, 6);
+  const Lanes cd_yw = __builtin_shufflevector(c, d, 1, 5, 3, 7);
+  out.x = __builtin_shufflevector(ab_xz, cd_xz, 0, 1, 4, 5);
+  out.z = __builtin_shufflevector(ab_xz, cd_xz, 2, 3, 6, 7);
+  out.y = __builtin_shufflevector(ab_yw, cd_yw, 0, 1, 4, 5);
+  out.w = __builtin_shufflevector(ab_yw, cd_yw, 2, 3, 6, 7);
 }
 
-/// sum over the neighbors j of i in `list` of weight(j) W(|x_i - x_j|), with x_j read from `sources` (N x 3
-/// doubles). Vectorized over neighbors (`omp simd` over raw coordinate arrays): the pairs are independent,
-/// and evaluating several at once hides the square root's latency. The vector reduction fixes its own
-/// summation order, so results still do not depend on the thread count.
-template <class Weight>
+/// The lanes summed in a fixed order, (a0 + a1) + (a2 + a3), whatever the vector width of the copy.
+[[gnu::always_inline]] inline Scalar lane_sum(const Lanes& a) {
+  return (a[0] + a[1]) + (a[2] + a[3]);
+}
+
+/// sum over the neighbors j of i in `list` of w_j W(|x_i - x_j|), for `sources` packed with their weights.
+/// Four neighbors at a time in four lanes, then the last (count mod 4) one by one, in that order.
 [[gnu::always_inline]] inline Scalar kernel_sum(const CubicSplineKernel& k, const NeighborList& list,
-                                                std::size_t i, const Scalar* xi, const Scalar* sources,
-                                                Weight weight) {
-  Scalar sum = 0.0;
+                                                std::size_t i, const PackedPoint& xi,
+                                                const PackedPoint* sources) {
   const Index* js = list.indices.data();
-#pragma omp simd reduction(+ : sum)
-  for (std::uint32_t n = list.offsets[i]; n < list.offsets[i + 1]; ++n) {
-    const std::size_t j = 3 * std::size_t{js[n]};
-    const Scalar dx = xi[0] - sources[j], dy = xi[1] - sources[j + 1], dz = xi[2] - sources[j + 2];
-    sum += weight(js[n]) * k.value(std::sqrt(dx * dx + dy * dy + dz * dz));
+  std::uint32_t n = list.offsets[i];
+  const std::uint32_t end = list.offsets[i + 1];
+  Lanes sum = {};
+  for (; n + kLanes <= end; n += kLanes) {
+    FourPoints p;
+    load_four(sources, js + n, p);
+    const Lanes dx = xi.x - p.x, dy = xi.y - p.y, dz = xi.z - p.z;
+    const Lanes r2 = dx * dx + dy * dy + dz * dz;
+    Lanes w;
+    for (std::uint32_t l = 0; l < kLanes; ++l)
+      w[l] = k.value(std::sqrt(r2[l]));
+    sum += p.w * w;
   }
-  return sum;
+  Scalar total = lane_sum(sum);
+  for (; n < end; ++n) {
+    const PackedPoint& p = sources[js[n]];
+    const Scalar dx = xi.x - p.x, dy = xi.y - p.y, dz = xi.z - p.z;
+    total += p.w * k.value(std::sqrt(dx * dx + dy * dy + dz * dz));
+  }
+  return total;
 }
 
 template <bool kUniformMass>
-[[gnu::always_inline]] inline Scalar sph_density(const FluidContext& ctx, const Vec3Array& x, std::size_t i) {
-  const Scalar* xs = coordinates(x);
-  const Scalar* m = ctx.particles.masses.data();
-  const Scalar m_uniform = ctx.uniform_mass;
-  const Scalar* psi = ctx.boundary_psi.data();
-  const Scalar* xi = xs + 3 * i;
-  const Scalar fluid = kernel_sum(ctx.kernel, ctx.fluid_neighbors, i, xi, xs,
-                                  [=](Index j) { return mass_of<kUniformMass>(m, m_uniform, j); });
-  const Scalar boundary = kernel_sum(ctx.kernel, ctx.boundary_neighbors, i, xi,
-                                     coordinates(ctx.boundary_positions), [=](Index b) { return psi[b]; });
-  return fluid + boundary + m[i] * ctx.kernel.value(0.0);
-}
-
-template <bool kUniformMass>
-[[gnu::always_inline]] inline Vec3 pressure_acceleration(const FluidContext& ctx,
-                                                         const ScalarArray& p_over_rho2, std::size_t i) {
-  // Vectorized over neighbors as sph_density is.
-  const Scalar pi = p_over_rho2[i];
-  const Scalar* pj = p_over_rho2.data();
-  const Scalar* xs = coordinates(ctx.particles.positions);
+[[gnu::always_inline]] inline Vec3 pressure_acceleration(const FluidContext& ctx, const PackedPoint* points,
+                                                         std::size_t i) {
+  const PackedPoint& pi = points[i];
   const Scalar* m = ctx.particles.masses.data();
   const Scalar m_uniform = ctx.uniform_mass;
   const Scalar* f = ctx.fluid_gradient_factors.data();
-  const Scalar xi = xs[3 * i], yi = xs[3 * i + 1], zi = xs[3 * i + 2];
-  Scalar ax = 0.0, ay = 0.0, az = 0.0;
-  const auto& fn = ctx.fluid_neighbors;
-  const Index* fj = fn.indices.data();
-#pragma omp simd reduction(+ : ax, ay, az)
-  for (std::uint32_t n = fn.offsets[i]; n < fn.offsets[i + 1]; ++n) {
-    const Index j = fj[n];
-    const std::size_t j3 = 3 * std::size_t{j};
-    const Scalar s = mass_of<kUniformMass>(m, m_uniform, j) * (pi + pj[j]) * f[n];
-    ax -= s * (xi - xs[j3]);
-    ay -= s * (yi - xs[j3 + 1]);
-    az -= s * (zi - xs[j3 + 2]);
+  const NeighborList& fn = ctx.fluid_neighbors;
+  const Index* js = fn.indices.data();
+  std::uint32_t n = fn.offsets[i];
+  const std::uint32_t end = fn.offsets[i + 1];
+  Lanes ax = {}, ay = {}, az = {};
+  for (; n + kLanes <= end; n += kLanes) {
+    FourPoints p;
+    load_four(points, js + n, p);
+    Lanes factor, mass;
+    std::memcpy(&factor, f + n, sizeof(Lanes));
+    for (std::uint32_t l = 0; l < kLanes; ++l)
+      mass[l] = kUniformMass ? m_uniform : m[js[n + l]];
+    const Lanes s = mass * (pi.w + p.w) * factor;
+    ax -= s * (pi.x - p.x);
+    ay -= s * (pi.y - p.y);
+    az -= s * (pi.z - p.z);
   }
-  if (pi != 0.0) {
-    const Scalar* bs = coordinates(ctx.boundary_positions);
-    const Scalar* psi = ctx.boundary_psi.data();
+  Scalar sx = lane_sum(ax), sy = lane_sum(ay), sz = lane_sum(az);
+  for (; n < end; ++n) {
+    const PackedPoint& p = points[js[n]];
+    const Scalar s = (kUniformMass ? m_uniform : m[js[n]]) * (pi.w + p.w) * f[n];
+    sx -= s * (pi.x - p.x);
+    sy -= s * (pi.y - p.y);
+    sz -= s * (pi.z - p.z);
+  }
+  if (pi.w != 0.0) {
+    const PackedPoint* bs = ctx.boundary.data();
     const Scalar* fb = ctx.boundary_gradient_factors.data();
-    const auto& bn = ctx.boundary_neighbors;
+    const NeighborList& bn = ctx.boundary_neighbors;
     const Index* bb = bn.indices.data();
-#pragma omp simd reduction(+ : ax, ay, az)
-    for (std::uint32_t n = bn.offsets[i]; n < bn.offsets[i + 1]; ++n) {
-      const Index b = bb[n];
-      const std::size_t b3 = 3 * std::size_t{b};
-      const Scalar s = psi[b] * pi * fb[n];
-      ax -= s * (xi - bs[b3]);
-      ay -= s * (yi - bs[b3 + 1]);
-      az -= s * (zi - bs[b3 + 2]);
+    std::uint32_t nb = bn.offsets[i];
+    const std::uint32_t end_b = bn.offsets[i + 1];
+    Lanes bx = {}, by = {}, bz = {};
+    for (; nb + kLanes <= end_b; nb += kLanes) {
+      FourPoints p;
+      load_four(bs, bb + nb, p);
+      Lanes factor;
+      std::memcpy(&factor, fb + nb, sizeof(Lanes));
+      const Lanes s = p.w * pi.w * factor;
+      bx -= s * (pi.x - p.x);
+      by -= s * (pi.y - p.y);
+      bz -= s * (pi.z - p.z);
+    }
+    sx += lane_sum(bx);
+    sy += lane_sum(by);
+    sz += lane_sum(bz);
+    for (; nb < end_b; ++nb) {
+      const PackedPoint& p = bs[bb[nb]];
+      const Scalar s = p.w * pi.w * fb[nb];
+      sx -= s * (pi.x - p.x);
+      sy -= s * (pi.y - p.y);
+      sz -= s * (pi.z - p.z);
     }
   }
-  return Vec3(ax, ay, az);
+  return Vec3(sx, sy, sz);
 }
 
 }  // namespace
 
-DRENCH_SIMD_CLONES void sph_densities(const FluidContext& ctx, const Vec3Array& x, std::size_t begin,
-                                      std::size_t end, Scalar* out) {
-  if (ctx.uniform_mass > 0.0) {
-    for (std::size_t i = begin; i < end; ++i)
-      out[i - begin] = sph_density<true>(ctx, x, i);
-  } else {
-    for (std::size_t i = begin; i < end; ++i)
-      out[i - begin] = sph_density<false>(ctx, x, i);
+DRENCH_SIMD_CLONES void sph_densities(const FluidContext& ctx, const PackedPointArray& x_mass,
+                                      std::size_t begin, std::size_t end, Scalar* out) {
+  const PackedPoint* xs = x_mass.data();
+  const PackedPoint* bs = ctx.boundary.data();
+  const Scalar self = ctx.kernel.value(0.0);
+  for (std::size_t i = begin; i < end; ++i) {
+    const PackedPoint& xi = xs[i];
+    out[i - begin] = kernel_sum(ctx.kernel, ctx.fluid_neighbors, i, xi, xs) +
+                     kernel_sum(ctx.kernel, ctx.boundary_neighbors, i, xi, bs) + xi.w * self;
   }
 }
 
-DRENCH_SIMD_CLONES void pressure_accelerations(const FluidContext& ctx, const ScalarArray& p_over_rho2,
+DRENCH_SIMD_CLONES void pressure_accelerations(const FluidContext& ctx, const PackedPointArray& x_p_over_rho2,
                                                std::size_t begin, std::size_t end, Vec3* out) {
+  const PackedPoint* points = x_p_over_rho2.data();
   if (ctx.uniform_mass > 0.0) {
     for (std::size_t i = begin; i < end; ++i)
-      out[i - begin] = pressure_acceleration<true>(ctx, p_over_rho2, i);
+      out[i - begin] = pressure_acceleration<true>(ctx, points, i);
   } else {
     for (std::size_t i = begin; i < end; ++i)
-      out[i - begin] = pressure_acceleration<false>(ctx, p_over_rho2, i);
+      out[i - begin] = pressure_acceleration<false>(ctx, points, i);
   }
 }
 

@@ -50,9 +50,11 @@ FluidSolver::FluidSolver(const FluidSettings& settings, const Vec3& gravity, Bou
       m_guards(std::move(guards)),
       m_neighbors(m_kernel, kSkinOfSupport * m_kernel.support_radius(), m_boundary),
       m_pressure(make_pressure_solver(settings, speed_of_sound)) {
-  m_boundary_psi.resize(boundary.volumes.size());
-  for (std::size_t b = 0; b < m_boundary_psi.size(); ++b)
-    m_boundary_psi[b] = settings.rest_density * boundary.volumes[b];
+  m_boundary_packed.resize(m_boundary.size());
+  for (std::size_t b = 0; b < m_boundary.size(); ++b) {
+    const Vec3& x = m_boundary[b];
+    m_boundary_packed[b] = {x.x(), x.y(), x.z(), settings.rest_density * boundary.volumes[b]};
+  }
   if (with_viscosity) m_viscosity = make_viscosity(settings.viscosity, speed_of_sound);
 }
 
@@ -121,8 +123,7 @@ StepStatus FluidSolver::substep(Scalar dt, Scalar max_speed, SubstepConstraint* 
                          m_particles,
                          m_neighbors.fluid(),
                          m_neighbors.boundary(),
-                         m_boundary,
-                         m_boundary_psi,
+                         m_boundary_packed,
                          m_settings.rest_density,
                          m_settings.particle_spacing,
                          m_neighbors.fluid_gradient_factors(),
@@ -130,8 +131,14 @@ StepStatus FluidSolver::substep(Scalar dt, Scalar max_speed, SubstepConstraint* 
                          m_particles.common_mass()};
   {
     ScopedTimer timer(m_stats.timings_s.density);
+    m_positions_mass.resize(n);
+#pragma omp parallel for schedule(static)
+    for (std::size_t i = 0; i < n; ++i) {
+      const Vec3& x = m_particles.positions[i];
+      m_positions_mass[i] = {x.x(), x.y(), x.z(), m_particles.masses[i]};
+    }
     for_each_chunk(n, [&](std::size_t begin, std::size_t end) {
-      sph_densities(ctx, m_particles.positions, begin, end, &m_particles.densities[begin]);
+      sph_densities(ctx, m_positions_mass, begin, end, &m_particles.densities[begin]);
     });
   }
   {

@@ -109,9 +109,10 @@ class FluidSolver {
   ParticleSet m_particles;
   Vec3Array m_boundary;
   std::vector<BoundarySettings> m_guards;
-  ScalarArray m_boundary_psi;
+  PackedPointArray m_boundary_packed;  // x_b (unit: m), w = Akinci's Psi_b = rho0 V_b (unit: kg)
   VerletNeighborLists m_neighbors;
-  Vec3Array m_positions_before;  // sub-step start positions, kept only for a SubstepConstraint
+  PackedPointArray m_positions_mass;  // positions (unit: m), w = mass (unit: kg), for the densities
+  Vec3Array m_positions_before;       // sub-step start positions, kept only for a SubstepConstraint
   std::unique_ptr<PressureSolver> m_pressure;
   std::unique_ptr<NonPressureForce> m_viscosity;
   Vec3Array m_accelerations;

@@ -36,7 +36,7 @@ PressureStats PressurePcisph::solve(const FluidContext& ctx, const Vec3Array& ve
   m_predicted.resize(n);
   m_error.resize(n);
   m_target.assign(n, rho0);
-  m_p_over_rho2.resize(n);
+  m_pressure_points.resize(n);
   accelerations.resize(n);
   PressureStats stats;
   const Scalar inv_rho0_sq = 1.0 / (rho0 * rho0);
@@ -53,10 +53,16 @@ PressureStats PressurePcisph::solve(const FluidContext& ctx, const Vec3Array& ve
   // over-pressure kept the corner particles of the tank oscillating at 0.5 m/s (measured), so it is not used.
   std::fill(particles.pressures.begin(), particles.pressures.end(), 0.0);
   std::fill(accelerations.begin(), accelerations.end(), Vec3::Zero());
+#pragma omp parallel for schedule(static)
+  for (std::size_t i = 0; i < n; ++i) {
+    const Vec3& x = particles.positions[i];
+    m_pressure_points[i] = {x.x(), x.y(), x.z(), 0.0};
+  }
   while (true) {
 #pragma omp parallel for schedule(static)
     for (std::size_t i = 0; i < n; ++i) {
-      m_predicted[i] = particles.positions[i] + dt * (velocities_adv[i] + dt * accelerations[i]);
+      const Vec3 x = particles.positions[i] + dt * (velocities_adv[i] + dt * accelerations[i]);
+      m_predicted[i] = {x.x(), x.y(), x.z(), particles.masses[i]};
     }
     const int iteration = stats.iterations;
     for_each_chunk(n, [&](std::size_t begin, std::size_t end) {
@@ -70,11 +76,11 @@ PressureStats PressurePcisph::solve(const FluidContext& ctx, const Vec3Array& ve
         if (iteration == 0) m_target[i] = std::max(rho0, std::min(rho, particles.densities[i] - max_relief));
         m_error[i] = rho;
         particles.pressures[i] += delta * std::min(std::max(rho - m_target[i], 0.0), max_excess);
-        m_p_over_rho2[i] = particles.pressures[i] * inv_rho0_sq;
+        m_pressure_points[i].w = particles.pressures[i] * inv_rho0_sq;
       }
     });
     for_each_chunk(n, [&](std::size_t begin, std::size_t end) {
-      pressure_accelerations(ctx, m_p_over_rho2, begin, end, &accelerations[begin]);
+      pressure_accelerations(ctx, m_pressure_points, begin, end, &accelerations[begin]);
     });
 
     ++stats.iterations;

@@ -26,10 +26,10 @@ class PressurePcisph final : public PressureSolver {
   /// sum_j |grad W_ij|^2 + |sum_j grad W_ij|^2 over a prototype particle with a filled lattice neighborhood
   /// (Solenthaler & Pajarola eq. 8) (unit: 1/m^8)
   Scalar m_prototype_gradient_term;
-  Vec3Array m_predicted;
+  PackedPointArray m_predicted;  // N: predicted positions (unit: m), w = mass (unit: kg)
   ScalarArray m_error;
   ScalarArray m_target;  // N, the density each particle is driven to in this sub-step (unit: kg/m^3)
-  ScalarArray m_p_over_rho2;
+  PackedPointArray m_pressure_points;  // N: positions (unit: m), w = p / rho0^2
 };
 
 }  // namespace drench

@@ -16,7 +16,7 @@ PressureStats PressureWcsph::solve(const FluidContext& ctx, const Vec3Array& /*v
                                    Scalar /*dt*/, Vec3Array& accelerations) {
   auto& particles = ctx.particles;
   const std::size_t n = particles.size();
-  m_p_over_rho2.resize(n);
+  m_pressure_points.resize(n);
   accelerations.resize(n);
   const Scalar rho0 = ctx.rest_density;
 #pragma omp parallel for schedule(static)
@@ -24,10 +24,11 @@ PressureStats PressureWcsph::solve(const FluidContext& ctx, const Vec3Array& /*v
     const Scalar rho = particles.densities[i];
     const Scalar p = std::max(0.0, m_stiffness * (std::pow(rho / rho0, m_exponent) - 1.0));
     particles.pressures[i] = p;
-    m_p_over_rho2[i] = p / (rho * rho);
+    const Vec3& x = particles.positions[i];
+    m_pressure_points[i] = {x.x(), x.y(), x.z(), p / (rho * rho)};
   }
   for_each_chunk(n, [&](std::size_t begin, std::size_t end) {
-    pressure_accelerations(ctx, m_p_over_rho2, begin, end, &accelerations[begin]);
+    pressure_accelerations(ctx, m_pressure_points, begin, end, &accelerations[begin]);
   });
 
   PressureStats stats;

@@ -18,8 +18,8 @@ class PressureWcsph final : public PressureSolver {
  private:
   Scalar m_speed_of_sound;
   Scalar m_exponent;
-  Scalar m_stiffness;  // B (unit: Pa)
-  ScalarArray m_p_over_rho2;
+  Scalar m_stiffness;                  // B (unit: Pa)
+  PackedPointArray m_pressure_points;  // N: positions (unit: m), w = p / rho^2
 };
 
 }  // namespace drench

@@ -1,0 +1,153 @@
+// The pair loops of src/sph/fluid_context.cpp read packed points four at a time and transpose them in
+// registers. They must give the textbook sums: SPH density (Akinci et al. 2012 eq. 6) and symmetric pressure
+// acceleration (eq. 10), written here pair by pair with Eigen, for every neighbor count modulo four.
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+
+#include "neighbor_test_helpers.hpp"
+#include "sph/fluid_context.hpp"
+
+namespace drench {
+namespace {
+
+using testing::brute_force;
+using testing::random_points;
+
+constexpr Scalar kSpacing = 0.01;  // m
+
+NeighborList to_list(const std::vector<IndexArray>& sets) {
+  NeighborList list;
+  list.offsets.push_back(0);
+  for (const IndexArray& set : sets) {
+    list.indices.insert(list.indices.end(), set.begin(), set.end());
+    list.offsets.push_back(static_cast<std::uint32_t>(list.indices.size()));
+  }
+  return list;
+}
+
+PackedPointArray pack(const Vec3Array& x, const ScalarArray& w) {
+  PackedPointArray packed(x.size());
+  for (std::size_t i = 0; i < x.size(); ++i)
+    packed[i] = {x[i].x(), x[i].y(), x[i].z(), w[i]};
+  return packed;
+}
+
+ScalarArray factors_of(const CubicSplineKernel& kernel, const NeighborList& list, const Vec3Array& x,
+                       const Vec3Array& sources) {
+  ScalarArray factors;
+  for (std::size_t i = 0; i < x.size(); ++i) {
+    for (const Index* j = list.begin(i); j != list.end(i); ++j)
+      factors.push_back(kernel.gradient_factor((x[i] - sources[*j]).squaredNorm()));
+  }
+  return factors;
+}
+
+/// Random fluid points (about 60 neighbors inside, fewer at the faces) over a slab of boundary points (none
+/// for the fluid above it); masses equal or random, p / rho^2 random and zero for every fifth particle (which
+/// skips the boundary term).
+struct Scene {
+  CubicSplineKernel kernel{kSpacing};
+  ParticleSet particles;
+  Vec3Array boundary_x = random_points(150, Vec3(0, 0, 0), Vec3(0.06, 0.06, 0.01), 2);
+  ScalarArray psi;
+  ScalarArray p_over_rho2;
+  NeighborList fluid, boundary;
+  ScalarArray fluid_factors, boundary_factors;
+  PackedPointArray boundary_packed;
+
+  explicit Scene(bool uniform_mass) {
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<Scalar> u(0.5, 1.5);
+    const Vec3Array x = random_points(400, Vec3(0, 0, 0), Vec3(0.06, 0.06, 0.06), 1);
+    for (std::size_t i = 0; i < x.size(); ++i) {
+      const Scalar mass = uniform_mass ? 1e-3 : 1e-3 * u(rng);
+      particles.add(x[i], Vec3::Zero(), mass, static_cast<std::uint32_t>(i));
+      p_over_rho2.push_back(i % 5 == 0 ? 0.0 : 1e-3 * u(rng));
+    }
+    for (std::size_t b = 0; b < boundary_x.size(); ++b)
+      psi.push_back(1e-3 * u(rng));
+    const Scalar radius = kernel.support_radius();
+    fluid = to_list(brute_force(x, x, radius, true));
+    boundary = to_list(brute_force(x, boundary_x, radius, false));
+    fluid_factors = factors_of(kernel, fluid, x, x);
+    boundary_factors = factors_of(kernel, boundary, x, boundary_x);
+    boundary_packed = pack(boundary_x, psi);
+  }
+
+  FluidContext context() {
+    return FluidContext{kernel, particles, fluid,         boundary,         boundary_packed,
+                        1000.0, kSpacing,  fluid_factors, boundary_factors, particles.common_mass()};
+  }
+};
+
+void expect_every_count_mod_four(const NeighborList& list) {
+  bool seen[4] = {false, false, false, false};
+  for (std::size_t i = 0; i + 1 < list.offsets.size(); ++i)
+    seen[list.count(i) % 4] = true;
+  ASSERT_TRUE(seen[0] && seen[1] && seen[2] && seen[3]) << "the scene must exercise every tail length";
+}
+
+void check_densities(bool uniform_mass) {
+  Scene s(uniform_mass);
+  expect_every_count_mod_four(s.fluid);
+  expect_every_count_mod_four(s.boundary);
+  const FluidContext ctx = s.context();
+  const ParticleSet& p = s.particles;
+  const std::size_t n = p.size();
+  ScalarArray got(n);
+  // Two calls, so that a range starting inside the array is covered.
+  sph_densities(ctx, pack(p.positions, p.masses), 0, 123, got.data());
+  sph_densities(ctx, pack(p.positions, p.masses), 123, n, got.data() + 123);
+  for (std::size_t i = 0; i < n; ++i) {
+    Scalar expected = p.masses[i] * s.kernel.value(0.0);
+    for (const Index* j = s.fluid.begin(i); j != s.fluid.end(i); ++j)
+      expected += p.masses[*j] * s.kernel.value((p.positions[i] - p.positions[*j]).norm());
+    for (const Index* b = s.boundary.begin(i); b != s.boundary.end(i); ++b)
+      expected += s.psi[*b] * s.kernel.value((p.positions[i] - s.boundary_x[*b]).norm());
+    // Every term is positive: the sums differ only by the order of a few dozen roundings.
+    EXPECT_NEAR(got[i], expected, 1e-13 * expected) << "particle " << i;
+  }
+}
+
+void check_pressure_accelerations(bool uniform_mass) {
+  Scene s(uniform_mass);
+  const FluidContext ctx = s.context();
+  const ParticleSet& p = s.particles;
+  const std::size_t n = p.size();
+  Vec3Array got(n);
+  pressure_accelerations(ctx, pack(p.positions, s.p_over_rho2), 0, 200, got.data());
+  pressure_accelerations(ctx, pack(p.positions, s.p_over_rho2), 200, n, got.data() + 200);
+  for (std::size_t i = 0; i < n; ++i) {
+    Vec3 expected = Vec3::Zero();
+    Scalar magnitude = 0.0;  // sum of |terms|: the scale of the rounding
+    for (const Index* j = s.fluid.begin(i); j != s.fluid.end(i); ++j) {
+      const Vec3 term = p.masses[*j] * (s.p_over_rho2[i] + s.p_over_rho2[*j]) *
+                        s.kernel.gradient(p.positions[i] - p.positions[*j]);
+      expected -= term;
+      magnitude += term.norm();
+    }
+    for (const Index* b = s.boundary.begin(i); b != s.boundary.end(i); ++b) {
+      const Vec3 term = s.psi[*b] * s.p_over_rho2[i] * s.kernel.gradient(p.positions[i] - s.boundary_x[*b]);
+      expected -= term;
+      magnitude += term.norm();
+    }
+    EXPECT_LE((got[i] - expected).norm(), 1e-13 * magnitude) << "particle " << i;
+  }
+}
+
+TEST(FluidContext, DensitiesAreTheSphSumsOverFluidAndBoundaryNeighbors) {
+  check_densities(true);
+  check_densities(false);
+}
+
+TEST(FluidContext, PressureAccelerationsAreTheSymmetricSphSums) {
+  check_pressure_accelerations(true);
+  check_pressure_accelerations(false);
+}
+
+}  // namespace
+}  // namespace drench
