@@ -1,6 +1,7 @@
-// The pair loops of src/sph/fluid_context.cpp read packed points four at a time and transpose them in
-// registers. They must give the textbook sums: SPH density (Akinci et al. 2012 eq. 6) and symmetric pressure
-// acceleration (eq. 10), written here pair by pair with Eigen, for every neighbor count modulo four.
+// The pair loops over packed points (src/sph/fluid_context.cpp, XSPH in src/sph/forces/viscosity.cpp) read
+// four neighbors at a time and transpose them in registers. They must give the textbook sums: SPH density
+// (Akinci et al. 2012 eq. 6), symmetric pressure acceleration (eq. 10) and XSPH (Monaghan 1989), written here
+// pair by pair with Eigen, for every neighbor count modulo four.
 
 #include <gtest/gtest.h>
 
@@ -10,6 +11,7 @@
 
 #include "neighbor_test_helpers.hpp"
 #include "sph/fluid_context.hpp"
+#include "sph/forces/viscosity.hpp"
 
 namespace drench {
 namespace {
@@ -65,7 +67,8 @@ struct Scene {
     const Vec3Array x = random_points(400, Vec3(0, 0, 0), Vec3(0.06, 0.06, 0.06), 1);
     for (std::size_t i = 0; i < x.size(); ++i) {
       const Scalar mass = uniform_mass ? 1e-3 : 1e-3 * u(rng);
-      particles.add(x[i], Vec3::Zero(), mass, static_cast<std::uint32_t>(i));
+      particles.add(x[i], Vec3(u(rng), u(rng), u(rng)) - Vec3::Ones(), mass, static_cast<std::uint32_t>(i));
+      particles.densities.back() = 1000.0 * u(rng);
       p_over_rho2.push_back(i % 5 == 0 ? 0.0 : 1e-3 * u(rng));
     }
     for (std::size_t b = 0; b < boundary_x.size(); ++b)
@@ -139,6 +142,30 @@ void check_pressure_accelerations(bool uniform_mass) {
   }
 }
 
+void check_xsph(bool uniform_mass) {
+  Scene s(uniform_mass);
+  const FluidContext ctx = s.context();
+  const ParticleSet& p = s.particles;
+  const Scalar coefficient = 0.01, dt = 1e-3;  // (unit: -, s)
+  const Vec3 gravity(0.0, -9.81, 0.0);
+  Vec3Array got(p.size(), gravity);
+  ViscosityXsph(coefficient).add_accelerations(ctx, dt, got);
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    Vec3 sum = Vec3::Zero();
+    Scalar magnitude = 0.0;
+    for (const Index* j = s.fluid.begin(i); j != s.fluid.end(i); ++j) {
+      const Vec3 term = (p.masses[*j] / p.densities[*j]) *
+                        s.kernel.value((p.positions[i] - p.positions[*j]).norm()) *
+                        (p.velocities[*j] - p.velocities[i]);
+      sum += term;
+      magnitude += term.norm();
+    }
+    const Vec3 expected = gravity + coefficient / dt * sum;
+    EXPECT_LE((got[i] - expected).norm(), 1e-13 * (coefficient / dt * magnitude + gravity.norm()))
+        << "particle " << i;
+  }
+}
+
 TEST(FluidContext, DensitiesAreTheSphSumsOverFluidAndBoundaryNeighbors) {
   check_densities(true);
   check_densities(false);
@@ -147,6 +174,11 @@ TEST(FluidContext, DensitiesAreTheSphSumsOverFluidAndBoundaryNeighbors) {
 TEST(FluidContext, PressureAccelerationsAreTheSymmetricSphSums) {
   check_pressure_accelerations(true);
   check_pressure_accelerations(false);
+}
+
+TEST(ViscosityXsph, AddsTheXsphSumsToTheAccelerations) {
+  check_xsph(true);
+  check_xsph(false);
 }
 
 }  // namespace

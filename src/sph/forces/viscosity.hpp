@@ -26,6 +26,10 @@ class ViscosityXsph final : public NonPressureForce {
 
  private:
   Scalar m_coefficient;
+  // Scratch of add_accelerations, kept between sub-steps: positions with m / rho (unit: m, m^3), velocities
+  // (unit: m/s), packed for the pair loop.
+  mutable PackedPointArray m_x_volume;
+  mutable PackedPointArray m_velocities;
 };
 
 /// Monaghan 1992 artificial viscosity: a_i = -sum_j m_j Pi_ij grad W_ij with
