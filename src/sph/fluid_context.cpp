@@ -21,11 +21,8 @@ namespace {
   for (; n + kLanes <= end; n += kLanes) {
     FourPoints p;
     load_four(sources, js + n, p);
-    const Lanes dx = xi.x - p.x, dy = xi.y - p.y, dz = xi.z - p.z;
-    const Lanes r2 = dx * dx + dy * dy + dz * dz;
     Lanes w;
-    for (std::uint32_t l = 0; l < kLanes; ++l)
-      w[l] = k.value(std::sqrt(r2[l]));
+    kernel_at_four(k, xi, p, w);
     sum += p.w * w;
   }
   Scalar total = lane_sum(sum);
@@ -37,66 +34,54 @@ namespace {
   return total;
 }
 
+/// Subtracts sum_n c_n f_n (x_i - x_n) over the entries [n, end) of a neighbor list from (sx, sy, sz), with
+/// c_n = a(j_n) (alpha + w_n): the symmetric pressure term m_j (p_i / rho_i^2 + p_j / rho_j^2) for fluid
+/// neighbors, and Psi_b p_i / rho_i^2 (alpha = 0, a = p_i / rho_i^2) for boundary ones. `factors` are the
+/// gradient factors f of the entries.
+template <class Coefficient>
+[[gnu::always_inline]] inline void subtract_gradient_sum(const PackedPoint& xi, Scalar alpha, const PackedPoint* points,
+                                                         const Index* js, const Scalar* factors, std::uint32_t n,
+                                                         std::uint32_t end, Coefficient a, Scalar& sx, Scalar& sy,
+                                                         Scalar& sz) {
+  Lanes ax = {}, ay = {}, az = {};
+  for (; n + kLanes <= end; n += kLanes) {
+    FourPoints p;
+    load_four(points, js + n, p);
+    Lanes factor, a_lanes;
+    std::memcpy(&factor, factors + n, sizeof(Lanes));
+    for (std::uint32_t l = 0; l < kLanes; ++l)
+      a_lanes[l] = a(js[n + l]);
+    const Lanes s = a_lanes * (alpha + p.w) * factor;
+    ax -= s * (xi.x - p.x);
+    ay -= s * (xi.y - p.y);
+    az -= s * (xi.z - p.z);
+  }
+  sx += lane_sum(ax);
+  sy += lane_sum(ay);
+  sz += lane_sum(az);
+  for (; n < end; ++n) {
+    const PackedPoint& p = points[js[n]];
+    const Scalar s = a(js[n]) * (alpha + p.w) * factors[n];
+    sx -= s * (xi.x - p.x);
+    sy -= s * (xi.y - p.y);
+    sz -= s * (xi.z - p.z);
+  }
+}
+
 template <bool kUniformMass>
 [[gnu::always_inline]] inline Vec3 pressure_acceleration(const FluidContext& ctx, const PackedPoint* points,
                                                          std::size_t i) {
   const PackedPoint& pi = points[i];
   const Scalar* m = ctx.particles.masses.data();
   const Scalar m_uniform = ctx.uniform_mass;
-  const Scalar* f = ctx.fluid_gradient_factors.data();
   const NeighborList& fn = ctx.fluid_neighbors;
-  const Index* js = fn.indices.data();
-  std::uint32_t n = fn.offsets[i];
-  const std::uint32_t end = fn.offsets[i + 1];
-  Lanes ax = {}, ay = {}, az = {};
-  for (; n + kLanes <= end; n += kLanes) {
-    FourPoints p;
-    load_four(points, js + n, p);
-    Lanes factor, mass;
-    std::memcpy(&factor, f + n, sizeof(Lanes));
-    for (std::uint32_t l = 0; l < kLanes; ++l)
-      mass[l] = kUniformMass ? m_uniform : m[js[n + l]];
-    const Lanes s = mass * (pi.w + p.w) * factor;
-    ax -= s * (pi.x - p.x);
-    ay -= s * (pi.y - p.y);
-    az -= s * (pi.z - p.z);
-  }
-  Scalar sx = lane_sum(ax), sy = lane_sum(ay), sz = lane_sum(az);
-  for (; n < end; ++n) {
-    const PackedPoint& p = points[js[n]];
-    const Scalar s = (kUniformMass ? m_uniform : m[js[n]]) * (pi.w + p.w) * f[n];
-    sx -= s * (pi.x - p.x);
-    sy -= s * (pi.y - p.y);
-    sz -= s * (pi.z - p.z);
-  }
+  Scalar sx = 0.0, sy = 0.0, sz = 0.0;
+  subtract_gradient_sum(pi, pi.w, points, fn.indices.data(), ctx.fluid_gradient_factors.data(), fn.offsets[i],
+                        fn.offsets[i + 1], [=](Index j) { return kUniformMass ? m_uniform : m[j]; }, sx, sy, sz);
   if (pi.w != 0.0) {
-    const PackedPoint* bs = ctx.boundary.data();
-    const Scalar* fb = ctx.boundary_gradient_factors.data();
     const NeighborList& bn = ctx.boundary_neighbors;
-    const Index* bb = bn.indices.data();
-    std::uint32_t nb = bn.offsets[i];
-    const std::uint32_t end_b = bn.offsets[i + 1];
-    Lanes bx = {}, by = {}, bz = {};
-    for (; nb + kLanes <= end_b; nb += kLanes) {
-      FourPoints p;
-      load_four(bs, bb + nb, p);
-      Lanes factor;
-      std::memcpy(&factor, fb + nb, sizeof(Lanes));
-      const Lanes s = p.w * pi.w * factor;
-      bx -= s * (pi.x - p.x);
-      by -= s * (pi.y - p.y);
-      bz -= s * (pi.z - p.z);
-    }
-    sx += lane_sum(bx);
-    sy += lane_sum(by);
-    sz += lane_sum(bz);
-    for (; nb < end_b; ++nb) {
-      const PackedPoint& p = bs[bb[nb]];
-      const Scalar s = p.w * pi.w * fb[nb];
-      sx -= s * (pi.x - p.x);
-      sy -= s * (pi.y - p.y);
-      sz -= s * (pi.z - p.z);
-    }
+    subtract_gradient_sum(pi, 0.0, ctx.boundary.data(), bn.indices.data(), ctx.boundary_gradient_factors.data(),
+                          bn.offsets[i], bn.offsets[i + 1], [=](Index) { return pi.w; }, sx, sy, sz);
   }
   return Vec3(sx, sy, sz);
 }

@@ -3,6 +3,7 @@
 /// arrays (sph/fluid_context.cpp, sph/forces/viscosity.cpp). Internal to those files' DRENCH_SIMD_CLONES
 /// functions; everything is in an unnamed namespace and always inlined, so each copy compiles its own.
 
+#include <cmath>
 #include <cstdint>
 #include <cstring>
 
@@ -43,6 +44,16 @@ struct FourPoints {
 /// The lanes summed in a fixed order, (a0 + a1) + (a2 + a3), whatever the vector width of the copy.
 [[gnu::always_inline]] inline Scalar lane_sum(const Lanes& a) {
   return (a[0] + a[1]) + (a[2] + a[3]);
+}
+
+/// w[l] = W(|x_i - x_l|) for the four points of `p` (unit: 1/m^3), lane by lane (the compiler makes one
+/// vector square root of it).
+[[gnu::always_inline]] inline void kernel_at_four(const CubicSplineKernel& k, const PackedPoint& xi,
+                                                  const FourPoints& p, Lanes& w) {
+  const Lanes dx = xi.x - p.x, dy = xi.y - p.y, dz = xi.z - p.z;
+  const Lanes r2 = dx * dx + dy * dy + dz * dz;
+  for (std::uint32_t l = 0; l < kLanes; ++l)
+    w[l] = k.value(std::sqrt(r2[l]));
 }
 
 }  // namespace

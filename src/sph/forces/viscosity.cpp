@@ -30,11 +30,8 @@ DRENCH_SIMD_CLONES void add_xsph(const FluidContext& ctx, const PackedPointArray
       FourPoints p, v;
       load_four(xs, js + n, p);
       load_four(vs, js + n, v);
-      const Lanes dx = xi.x - p.x, dy = xi.y - p.y, dz = xi.z - p.z;
-      const Lanes r2 = dx * dx + dy * dy + dz * dz;
       Lanes w;
-      for (std::uint32_t l = 0; l < kLanes; ++l)
-        w[l] = k.value(std::sqrt(r2[l]));
+      kernel_at_four(k, xi, p, w);
       const Lanes s = p.w * w;
       sx += s * (v.x - vi.x);
       sy += s * (v.y - vi.y);
