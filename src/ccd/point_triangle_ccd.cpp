@@ -280,7 +280,7 @@ CcdResult contact_at(const VertexFaceQuery& q, double toi, CcdPath path) {
   r.toi = std::clamp(toi, 0.0, 1.0);
   r.path = path;
   r.barycentric = closest_point_barycentric(at(q.p_t0, q.p_t1, r.toi), at(q.a_t0, q.a_t1, r.toi),
-                                      at(q.b_t0, q.b_t1, r.toi), at(q.c_t0, q.c_t1, r.toi));
+                                            at(q.b_t0, q.b_t1, r.toi), at(q.c_t0, q.c_t1, r.toi));
   return r;
 }
 

@@ -39,10 +39,11 @@ namespace {
 /// neighbors, and Psi_b p_i / rho_i^2 (alpha = 0, a = p_i / rho_i^2) for boundary ones. `factors` are the
 /// gradient factors f of the entries.
 template <class Coefficient>
-[[gnu::always_inline]] inline void subtract_gradient_sum(const PackedPoint& xi, Scalar alpha, const PackedPoint* points,
-                                                         const Index* js, const Scalar* factors, std::uint32_t n,
-                                                         std::uint32_t end, Coefficient a, Scalar& sx, Scalar& sy,
-                                                         Scalar& sz) {
+[[gnu::always_inline]] inline void subtract_gradient_sum(const PackedPoint& xi, Scalar alpha,
+                                                         const PackedPoint* points, const Index* js,
+                                                         const Scalar* factors, std::uint32_t n,
+                                                         std::uint32_t end, Coefficient a, Scalar& sx,
+                                                         Scalar& sy, Scalar& sz) {
   Lanes ax = {}, ay = {}, az = {};
   for (; n + kLanes <= end; n += kLanes) {
     FourPoints p;
@@ -76,12 +77,14 @@ template <bool kUniformMass>
   const Scalar m_uniform = ctx.uniform_mass;
   const NeighborList& fn = ctx.fluid_neighbors;
   Scalar sx = 0.0, sy = 0.0, sz = 0.0;
-  subtract_gradient_sum(pi, pi.w, points, fn.indices.data(), ctx.fluid_gradient_factors.data(), fn.offsets[i],
-                        fn.offsets[i + 1], [=](Index j) { return kUniformMass ? m_uniform : m[j]; }, sx, sy, sz);
+  subtract_gradient_sum(
+      pi, pi.w, points, fn.indices.data(), ctx.fluid_gradient_factors.data(), fn.offsets[i],
+      fn.offsets[i + 1], [=](Index j) { return kUniformMass ? m_uniform : m[j]; }, sx, sy, sz);
   if (pi.w != 0.0) {
     const NeighborList& bn = ctx.boundary_neighbors;
-    subtract_gradient_sum(pi, 0.0, ctx.boundary.data(), bn.indices.data(), ctx.boundary_gradient_factors.data(),
-                          bn.offsets[i], bn.offsets[i + 1], [=](Index) { return pi.w; }, sx, sy, sz);
+    subtract_gradient_sum(
+        pi, 0.0, ctx.boundary.data(), bn.indices.data(), ctx.boundary_gradient_factors.data(), bn.offsets[i],
+        bn.offsets[i + 1], [=](Index) { return pi.w; }, sx, sy, sz);
   }
   return Vec3(sx, sy, sz);
 }
