@@ -28,8 +28,7 @@ namespace {
   Scalar total = lane_sum(sum);
   for (; n < end; ++n) {
     const PackedPoint& p = sources[js[n]];
-    const Scalar dx = xi.x - p.x, dy = xi.y - p.y, dz = xi.z - p.z;
-    total += p.w * k.value(std::sqrt(dx * dx + dy * dy + dz * dz));
+    total += p.w * kernel_at(k, xi, p);
   }
   return total;
 }

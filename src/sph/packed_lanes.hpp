@@ -56,5 +56,12 @@ struct FourPoints {
     w[l] = k.value(std::sqrt(r2[l]));
 }
 
+/// W(|x_i - x_p|) for one packed point (unit: 1/m^3): the loops' tail, in the lanes' arithmetic.
+[[gnu::always_inline]] inline Scalar kernel_at(const CubicSplineKernel& k, const PackedPoint& xi,
+                                               const PackedPoint& p) {
+  const Scalar dx = xi.x - p.x, dy = xi.y - p.y, dz = xi.z - p.z;
+  return k.value(std::sqrt(dx * dx + dy * dy + dz * dz));
+}
+
 }  // namespace
 }  // namespace drench

@@ -41,8 +41,7 @@ DRENCH_SIMD_CLONES void add_xsph(const FluidContext& ctx, const PackedPointArray
     for (; n < last; ++n) {
       const PackedPoint& p = xs[js[n]];
       const PackedPoint& v = vs[js[n]];
-      const Scalar dx = xi.x - p.x, dy = xi.y - p.y, dz = xi.z - p.z;
-      const Scalar s = p.w * k.value(std::sqrt(dx * dx + dy * dy + dz * dz));
+      const Scalar s = p.w * kernel_at(k, xi, p);
       ax += s * (v.x - vi.x);
       ay += s * (v.y - vi.y);
       az += s * (v.z - vi.z);
