@@ -46,13 +46,13 @@ FluidSolver::FluidSolver(const FluidSettings& settings, const Vec3& gravity, Bou
     : m_settings(settings),
       m_gravity(gravity),
       m_kernel(settings.particle_spacing),
-      m_boundary(std::move(boundary.positions)),
       m_guards(std::move(guards)),
-      m_neighbors(m_kernel, kSkinOfSupport * m_kernel.support_radius(), m_boundary),
+      m_neighbors(m_kernel, kSkinOfSupport * m_kernel.support_radius(), std::move(boundary.positions)),
       m_pressure(make_pressure_solver(settings, speed_of_sound)) {
-  m_boundary_packed.resize(m_boundary.size());
-  for (std::size_t b = 0; b < m_boundary.size(); ++b) {
-    const Vec3& x = m_boundary[b];
+  const Vec3Array& points = m_neighbors.boundary_points();
+  m_boundary_packed.resize(points.size());
+  for (std::size_t b = 0; b < points.size(); ++b) {
+    const Vec3& x = points[b];
     m_boundary_packed[b] = {x.x(), x.y(), x.z(), settings.rest_density * boundary.volumes[b]};
   }
   if (with_viscosity) m_viscosity = make_viscosity(settings.viscosity, speed_of_sound);

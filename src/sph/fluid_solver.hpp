@@ -82,7 +82,7 @@ class FluidSolver {
 
   ParticleSet& particles() { return m_particles; }
   const ParticleSet& particles() const { return m_particles; }
-  const Vec3Array& boundary_positions() const { return m_boundary; }
+  const Vec3Array& boundary_positions() const { return m_neighbors.boundary_points(); }
   const FluidSettings& settings() const { return m_settings; }
   const CubicSplineKernel& kernel() const { return m_kernel; }
   const FluidStatistics& statistics() const { return m_stats; }
@@ -107,7 +107,6 @@ class FluidSolver {
   Vec3 m_gravity;
   CubicSplineKernel m_kernel;
   ParticleSet m_particles;
-  Vec3Array m_boundary;
   std::vector<BoundarySettings> m_guards;
   PackedPointArray m_boundary_packed;  // x_b (unit: m), w = Akinci's Psi_b = rho0 V_b (unit: kg)
   VerletNeighborLists m_neighbors;

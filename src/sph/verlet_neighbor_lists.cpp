@@ -2,16 +2,16 @@
 
 #include <algorithm>
 #include <cassert>
+#include <utility>
 
 #include "common/parallel.hpp"
 
 namespace drench {
 
-VerletNeighborLists::VerletNeighborLists(const CubicSplineKernel& kernel, Scalar max_skin,
-                                         const Vec3Array& boundary)
+VerletNeighborLists::VerletNeighborLists(const CubicSplineKernel& kernel, Scalar max_skin, Vec3Array boundary)
     : m_kernel(kernel),
       m_support(kernel.support_radius()),
-      m_boundary_points(boundary),
+      m_boundary_points(std::move(boundary)),
       m_exact_fluid(m_support),
       m_exact_boundary(m_support),
       m_wide_fluid(m_support + max_skin),

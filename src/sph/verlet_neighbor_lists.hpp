@@ -23,8 +23,8 @@ class VerletNeighborLists {
  public:
   /// @param kernel  the SPH kernel, copied: its support is the neighbor radius
   /// @param max_skin  the largest skin update() will be given (unit: m), >= 0; sets the rebuild grid's cells
-  /// @param boundary  static boundary points (unit: m, finite), copied
-  VerletNeighborLists(const CubicSplineKernel& kernel, Scalar max_skin, const Vec3Array& boundary);
+  /// @param boundary  static boundary points (unit: m, finite), kept
+  VerletNeighborLists(const CubicSplineKernel& kernel, Scalar max_skin, Vec3Array boundary);
 
   /// Brings fluid() and boundary() up to date for `positions`.
   /// @param positions  N particle positions (unit: m, finite)
@@ -37,6 +37,8 @@ class VerletNeighborLists {
 
   const NeighborList& fluid() const { return m_fluid; }
   const NeighborList& boundary() const { return m_boundary; }
+  /// The static boundary points given at construction (unit: m).
+  const Vec3Array& boundary_points() const { return m_boundary_points; }
   /// For every entry of fluid().indices, f with grad W(x_i - x_j) = f (x_i - x_j) at the positions of the
   /// last update (unit: 1/m^5). Computed in the filter's pass, where the distance is at hand: a pass of its
   /// own re-read the lists and gathered the positions again, on a sub-step bound by memory traffic.
