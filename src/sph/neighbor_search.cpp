@@ -9,6 +9,7 @@
 #include <omp.h>
 
 #include "common/parallel.hpp"
+#include "sph/packed_lanes.hpp"
 
 namespace drench {
 
@@ -38,6 +39,40 @@ std::uint64_t hash_key(std::uint64_t key) {
   key *= 0x94d049bb133111ebULL;
   key ^= key >> 31;
   return key;
+}
+
+/// Writes the indices of the candidates q < end with |p_q - x|^2 < r2 and indices[q] != self to dst, in their
+/// order, and returns how many. Four candidates at a time: their coordinates are contiguous, so the distances
+/// are vector arithmetic without gathers; the distance is the same expression in every lane (source minus
+/// query, summed x, y, z) and in every copy, so the kept set does not depend on the CPU.
+/// Precondition: xs, ys, zs and indices hold end + kLanes - 1 entries, dst has room for end + kLanes - 1.
+DRENCH_SIMD_CLONES std::size_t scan_candidates(const Scalar* xs, const Scalar* ys, const Scalar* zs,
+                                               const Index* indices, std::uint32_t end, const Vec3& x,
+                                               Scalar r2, Index self, Index* dst) {
+  const Scalar x0 = x.x(), x1 = x.y(), x2 = x.z();
+  std::size_t count = 0;
+  for (std::uint32_t q = 0; q < end; q += kLanes) {
+    Lanes px, py, pz;
+    std::memcpy(&px, xs + q, sizeof(Lanes));
+    std::memcpy(&py, ys + q, sizeof(Lanes));
+    std::memcpy(&pz, zs + q, sizeof(Lanes));
+    const Lanes d0 = px - x0, d1 = py - x1, d2 = pz - x2;
+    const auto inside = d0 * d0 + d1 * d1 + d2 * d2 < r2;
+    // Every candidate is written and kept only if it is a neighbor: whether a point of a neighbouring cell
+    // lies inside the radius is a coin toss, and a mispredicted branch costs more than the write. The lanes
+    // are written out one by one: in a loop over l the compiler spilled the mask and reloaded each lane.
+    const Index* js = indices + q;
+    const std::uint32_t left = end - q;
+    dst[count] = js[0];
+    count += static_cast<std::size_t>((inside[0] != 0) & (js[0] != self));
+    dst[count] = js[1];
+    count += static_cast<std::size_t>((inside[1] != 0) & (js[1] != self) & (left > 1));
+    dst[count] = js[2];
+    count += static_cast<std::size_t>((inside[2] != 0) & (js[2] != self) & (left > 2));
+    dst[count] = js[3];
+    count += static_cast<std::size_t>((inside[3] != 0) & (js[3] != self) & (left > 3));
+  }
+  return count;
 }
 
 }  // namespace
@@ -101,10 +136,16 @@ void NeighborSearch::build(const Vec3Array& points) {
   } else {
     build_hashed(points);
   }
-  m_points.resize(n);
+  m_xs.resize(n);
+  m_ys.resize(n);
+  m_zs.resize(n);
 #pragma omp parallel for schedule(static)
-  for (std::size_t k = 0; k < n; ++k)
-    m_points[k] = points[m_sorted_index[k]];
+  for (std::size_t k = 0; k < n; ++k) {
+    const Vec3& x = points[m_sorted_index[k]];
+    m_xs[k] = x.x();
+    m_ys[k] = x.y();
+    m_zs[k] = x.z();
+  }
 }
 
 void NeighborSearch::build_dense(const std::vector<Vec3i>& cells, const Vec3i& lo, const Vec3i& dims) {
@@ -194,12 +235,45 @@ std::int64_t NeighborSearch::lookup(std::uint64_t key) const {
   }
 }
 
+void NeighborSearch::gather_candidates(const Vec3i& cell, Candidates& out) const {
+  out.size = 0;
+  const auto append = [&](std::uint32_t b, std::uint32_t e) {
+    const std::size_t size = out.size + (e - b);
+    if (out.indices.size() < size + kLanes - 1) {
+      // kLanes - 1 entries of padding: scan_candidates reads whole groups of four.
+      const std::size_t grown = std::max(2 * out.indices.size(), size + kLanes - 1);
+      out.xs.resize(grown);
+      out.ys.resize(grown);
+      out.zs.resize(grown);
+      out.indices.resize(grown);
+    }
+    std::copy(m_xs.begin() + b, m_xs.begin() + e, out.xs.begin() + out.size);
+    std::copy(m_ys.begin() + b, m_ys.begin() + e, out.ys.begin() + out.size);
+    std::copy(m_zs.begin() + b, m_zs.begin() + e, out.zs.begin() + out.size);
+    std::copy(m_sorted_index.begin() + b, m_sorted_index.begin() + e, out.indices.begin() + out.size);
+    out.size = static_cast<std::uint32_t>(size);
+  };
+  for (int dz = -1; dz <= 1; ++dz) {
+    for (int dy = -1; dy <= 1; ++dy) {
+      std::uint32_t b, e;
+      if (m_dense) {
+        // The row's cells are adjacent in the dense grid, so their points are one range: one lookup instead
+        // of three, the same points in the same order.
+        if (row_range(cell + Vec3i(-1, dy, dz), 3, b, e)) append(b, e);
+      } else {
+        for (int dx = -1; dx <= 1; ++dx) {
+          if (cell_range(cell + Vec3i(dx, dy, dz), b, e)) append(b, e);
+        }
+      }
+    }
+  }
+}
+
 void NeighborSearch::find(const Vec3Array& queries, NeighborList& out, bool exclude_self) const {
   const std::size_t m = queries.size();
   const Scalar r2 = m_radius * m_radius;
-  const Scalar cell = m_radius;
   out.offsets.assign(m + 1, 0);
-  if (m_points.empty() || m == 0) {
+  if (m_sorted_index.empty() || m == 0) {
     out.indices.clear();
     return;
   }
@@ -215,70 +289,43 @@ void NeighborSearch::find(const Vec3Array& queries, NeighborList& out, bool excl
   // copied each buffer about twice over before its first write.
   std::vector<IndexArray>& buffers = m_thread_buffers;
   if (buffers.size() < static_cast<std::size_t>(threads)) buffers.resize(static_cast<std::size_t>(threads));
+  if (m_thread_candidates.size() < static_cast<std::size_t>(threads))
+    m_thread_candidates.resize(static_cast<std::size_t>(threads));
   std::vector<int> chunk_owner(chunks);
   std::vector<std::size_t> chunk_start(chunks);
 #pragma omp parallel num_threads(threads)
   {
     const int thread = omp_get_thread_num();
     IndexArray& local = buffers[static_cast<std::size_t>(thread)];
+    Candidates& candidates = m_thread_candidates[static_cast<std::size_t>(thread)];
     std::size_t used =
         0;  // local is grown ahead of the writes; only its first `used` entries are this call's
-    const Vec3* points = m_points.data();
-    const Index* sorted = m_sorted_index.data();
     // The team may be smaller than asked for (nested regions): the stride is the team's real size.
     for (auto k = static_cast<std::size_t>(thread); k < chunks;
          k += static_cast<std::size_t>(omp_get_num_threads())) {
       chunk_owner[k] = thread;
       chunk_start[k] = used;
       const std::size_t chunk_end = std::min(m, (k + 1) * kParticleChunk);
+      // The candidates of a cell are gathered once for the run of queries in it (z-ordered particles come
+      // in runs of about eight per cell), then each query scans them in one loop. Scanning the cells row by
+      // row per query, skipping cells beyond the radius, read 24% fewer points but was 1.3x slower (build +
+      // find of a 59K block, 21 vs 16 ms, measured): nine short loops per query, each of a different length.
+      bool buffered = false;
+      Vec3i buffered_cell = Vec3i::Zero();
       for (std::size_t i = k * kParticleChunk; i < chunk_end; ++i) {
         const Vec3& x = queries[i];
         const Vec3i c = cell_of(x);
-        // Distance from x to the lower and upper faces of its own cell, per axis, to skip neighbouring cells
-        // that lie entirely beyond the radius (most of the 20 edge and corner cells).
-        Vec3 low, high;
-        for (int a = 0; a < 3; ++a) {
-          const Scalar origin = (static_cast<Scalar>(c[a]) - static_cast<Scalar>(kCellOffset)) * cell;
-          low[a] = x[a] - origin;
-          high[a] = origin + cell - x[a];
+        if (!buffered || c != buffered_cell) {
+          gather_candidates(c, candidates);
+          buffered = true;
+          buffered_cell = c;
         }
+        const std::size_t room = used + candidates.size + kLanes;
+        if (local.size() < room) local.resize(std::max(2 * local.size(), room));
         const std::size_t first = used;
-        const Scalar x0 = x.x(), x1 = x.y(), x2 = x.z();
-        const Index self = exclude_self ? static_cast<Index>(i) : kNoIndex;
-        const auto scan = [&](std::uint32_t b, std::uint32_t e) {
-          if (local.size() < used + (e - b)) local.resize(std::max(2 * local.size(), used + (e - b)));
-          Index* dst = local.data() + used;
-          std::size_t count = 0;
-          // Every candidate is written and kept only if it is a neighbor: whether a point of a neighbouring
-          // cell lies inside the radius is a coin toss, and the mispredicted branch cost more than the write.
-          for (std::uint32_t q = b; q < e; ++q) {
-            const Scalar d0 = points[q].x() - x0, d1 = points[q].y() - x1, d2 = points[q].z() - x2;
-            const Index j = sorted[q];
-            dst[count] = j;
-            count += static_cast<std::size_t>((d0 * d0 + d1 * d1 + d2 * d2 < r2) & (j != self));
-          }
-          used += count;
-        };
-        for (int dz = -1; dz <= 1; ++dz) {
-          const Scalar gz = dz < 0 ? low.z() : dz > 0 ? high.z() : 0.0;
-          for (int dy = -1; dy <= 1; ++dy) {
-            const Scalar gy = dy < 0 ? low.y() : dy > 0 ? high.y() : 0.0;
-            const Scalar g_yz = gy * gy + gz * gz;
-            if (g_yz >= r2) continue;
-            const int dx_first = low.x() * low.x() + g_yz < r2 ? -1 : 0;
-            const int dx_last = high.x() * high.x() + g_yz < r2 ? 1 : 0;
-            std::uint32_t b, e;
-            if (m_dense) {
-              // The row's cells are adjacent in the dense grid, so their points are one range: one lookup
-              // instead of three, the same points in the same order.
-              if (row_range(c + Vec3i(dx_first, dy, dz), dx_last - dx_first + 1, b, e)) scan(b, e);
-            } else {
-              for (int dx = dx_first; dx <= dx_last; ++dx) {
-                if (cell_range(c + Vec3i(dx, dy, dz), b, e)) scan(b, e);
-              }
-            }
-          }
-        }
+        used += scan_candidates(candidates.xs.data(), candidates.ys.data(), candidates.zs.data(),
+                                candidates.indices.data(), candidates.size, x, r2,
+                                exclude_self ? static_cast<Index>(i) : kNoIndex, local.data() + used);
         out.offsets[i + 1] = static_cast<std::uint32_t>(used - first);
       }
     }

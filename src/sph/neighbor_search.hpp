@@ -49,10 +49,21 @@ class NeighborSearch {
   std::uint64_t cell_key(const Vec3& x) const;
 
  private:
+  /// The source points of a block of 3 x 3 x 3 cells, in find()'s order (by row of cells, then sorted order):
+  /// coordinates (unit: m) and source indices, `size` of them; every array has at least 3 entries of padding
+  /// after them (the scan reads groups of four).
+  struct Candidates {
+    ScalarArray xs, ys, zs;
+    IndexArray indices;
+    std::uint32_t size = 0;
+  };
+
   std::uint64_t key_of_cell(const Vec3i& cell) const;
   Vec3i cell_of(const Vec3& x) const;
   /// Slot of `key` in m_cell_keys, or -1.
   std::int64_t lookup(std::uint64_t key) const;
+  /// out = the source points of the 27 cells around `cell`, the order of find()'s result.
+  void gather_candidates(const Vec3i& cell, Candidates& out) const;
   /// Sorted-point range [begin, end) of a cell; false when the cell is empty or unknown.
   bool cell_range(const Vec3i& cell, std::uint32_t& begin, std::uint32_t& end) const;
   /// Dense mode only: the sorted-point range of `count` cells from `cell` along +x (clipped to the grid);
@@ -63,8 +74,10 @@ class NeighborSearch {
 
   Scalar m_radius;
   Scalar m_inv_cell;
-  Vec3Array m_points;                       // source points in sorted (cell) order
-  IndexArray m_sorted_index;                // original index of each sorted point
+  // Source points in sorted (cell) order, one array per coordinate (gather_candidates copies runs of them),
+  // and the original index of each.
+  ScalarArray m_xs, m_ys, m_zs;
+  IndexArray m_sorted_index;
   std::vector<std::uint64_t> m_cell_keys;   // distinct keys, ascending
   std::vector<std::uint32_t> m_cell_begin;  // first sorted point of each cell; one extra end entry
   std::vector<std::int64_t> m_table;        // open-addressing hash: slot -> cell, -1 empty
@@ -73,6 +86,7 @@ class NeighborSearch {
   Vec3i m_lo = Vec3i::Zero();                        // dense mode: first cell of the grid
   Vec3i m_dims = Vec3i::Zero();                      // dense mode: cells per axis
   mutable std::vector<IndexArray> m_thread_buffers;  // find(): one gather buffer per thread, kept for reuse
+  mutable std::vector<Candidates> m_thread_candidates;  // find(): one per thread, kept for reuse
 };
 
 }  // namespace drench

@@ -37,6 +37,45 @@ TEST(NeighborSearch, CrossQueryMatchesBruteForceIncludingNegativeAndFarCoordinat
   expect_same_sets(list, brute_force(queries, sources, radius, false));
 }
 
+// find() gathers a cell's candidates once for a run of queries in that cell: z-ordered queries come in such
+// runs, random ones (above) almost never do, so this set is z-ordered first.
+TEST(NeighborSearch, ZOrderedQueriesInRunsPerCellMatchBruteForce) {
+  const Vec3Array random = random_points(4000, Vec3(0, 0, 0), Vec3(0.4, 0.3, 0.3), 21);
+  const Scalar radius = 0.05;
+  NeighborSearch search(radius);
+  const IndexArray order = search.z_order(random);
+  Vec3Array points(random.size());
+  for (std::size_t k = 0; k < order.size(); ++k)
+    points[k] = random[order[k]];
+  std::size_t runs = 1;
+  for (std::size_t k = 1; k < points.size(); ++k)
+    runs += search.cell_key(points[k]) != search.cell_key(points[k - 1]) ? 1 : 0;
+  ASSERT_LT(runs, points.size() / 4) << "the queries should share cells in runs";
+  search.build(points);
+  NeighborList list;
+  search.find(points, list, /*exclude_self=*/true);
+  expect_same_sets(list, brute_force(points, points, radius, true));
+}
+
+// A jet spread far: more cells than the dense grid allows, so cells are hashed.
+TEST(NeighborSearch, SparsePointsInHashedCellsMatchBruteForce) {
+  Vec3Array points = random_points(1500, Vec3(0, 0, 0), Vec3(0.2, 0.2, 0.2), 31);
+  const Vec3Array far = random_points(500, Vec3(-40, -5, 0), Vec3(60, 5, 0.1), 32);
+  points.insert(points.end(), far.begin(), far.end());
+  const Scalar radius = 0.04;
+  NeighborSearch search(radius);
+  const IndexArray order = search.z_order(points);
+  Vec3Array sorted(points.size());
+  for (std::size_t k = 0; k < order.size(); ++k)
+    sorted[k] = points[order[k]];
+  search.build(sorted);
+  NeighborList list;
+  search.find(sorted, list, /*exclude_self=*/true);
+  expect_same_sets(list, brute_force(sorted, sorted, radius, true));
+  search.find(points, list, /*exclude_self=*/false);
+  expect_same_sets(list, brute_force(points, sorted, radius, false));
+}
+
 TEST(NeighborSearch, PointsExactlyAtTheRadiusAreNotNeighbors) {
   const Vec3Array points = {Vec3(0, 0, 0), Vec3(0.1, 0, 0), Vec3(0, 0.0999999, 0)};
   NeighborSearch search(0.1);
