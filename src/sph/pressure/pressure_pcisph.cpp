@@ -34,7 +34,7 @@ PressureStats PressurePcisph::solve(const FluidContext& ctx, const Vec3Array& ve
   const Scalar delta = 1.0 / (beta * m_prototype_gradient_term);
 
   m_predicted.resize(n);
-  m_error.resize(n);
+  m_density.resize(n);
   m_target.assign(n, rho0);
   m_pressure_points.resize(n);
   accelerations.resize(n);
@@ -45,9 +45,6 @@ PressureStats PressurePcisph::solve(const FluidContext& ctx, const Vec3Array& ve
                                 : std::numeric_limits<Scalar>::infinity();
   const Scalar max_relief = m_settings.max_relief_per_substep ? *m_settings.max_relief_per_substep * rho0
                                                               : std::numeric_limits<Scalar>::infinity();
-  // The convergence test measures the error against each particle's target density; the reported errors
-  // are against the rest density (the fluid's real compression).
-  PressureStats to_target;
   // Every solve starts from zero pressure, as Solenthaler & Pajarola and SPlisHSPlasH do. A warm start from
   // the last sub-step's pressures needed 3x fewer iterations in a settled tank, but its leftover
   // over-pressure kept the corner particles of the tank oscillating at 0.5 m/s (measured), so it is not used.
@@ -58,42 +55,61 @@ PressureStats PressurePcisph::solve(const FluidContext& ctx, const Vec3Array& ve
     const Vec3& x = particles.positions[i];
     m_pressure_points[i] = {x.x(), x.y(), x.z(), 0.0};
   }
-  while (true) {
-#pragma omp parallel for schedule(static)
-    for (std::size_t i = 0; i < n; ++i) {
+  if (n == 0) return stats;
+  // Positions predicted with the current pressure accelerations, for the particles [begin, end).
+  const auto predict = [&](std::size_t begin, std::size_t end) {
+    for (std::size_t i = begin; i < end; ++i) {
       const Vec3 x = particles.positions[i] + dt * (velocities_adv[i] + dt * accelerations[i]);
       m_predicted[i] = {x.x(), x.y(), x.z(), particles.masses[i]};
     }
+  };
+  for_each_chunk(n, predict);
+  const std::size_t chunks = (n + kParticleChunk - 1) / kParticleChunk;
+  m_chunk_errors.resize(chunks);
+  while (true) {
     const int iteration = stats.iterations;
     for_each_chunk(n, [&](std::size_t begin, std::size_t end) {
-      sph_densities(ctx, m_predicted, begin, end, &m_error[begin]);
+      sph_densities(ctx, m_predicted, begin, end, &m_density[begin]);
+      // The chunk's density errors are summed here, where the densities are at hand, and the chunks' sums
+      // in chunk order below: the same sum for any thread count, and no serial pass over N per iteration.
+      ChunkErrors errors;
       for (std::size_t i = begin; i < end; ++i) {
         // Only compression is corrected (as SPlisHSPlasH's PCISPH): a free-surface particle lacks neighbours
         // and its density deficit is no expansion to undo, so pressures only grow within a solve.
-        const Scalar rho = std::max(m_error[i], rho0);
+        const Scalar rho = std::max(m_density[i], rho0);
         // Fixed at the first prediction (no pressure yet): what the motion of this sub-step would add is
         // undone in full, what the particle entered it with only down to (density - max_relief).
         if (iteration == 0) m_target[i] = std::max(rho0, std::min(rho, particles.densities[i] - max_relief));
-        m_error[i] = rho;
-        particles.pressures[i] += delta * std::min(std::max(rho - m_target[i], 0.0), max_excess);
+        const Scalar to_target = std::max(rho - m_target[i], 0.0);
+        particles.pressures[i] += delta * std::min(to_target, max_excess);
         m_pressure_points[i].w = particles.pressures[i] * inv_rho0_sq;
+        errors.sum += rho - rho0;
+        errors.max = std::max(errors.max, rho - rho0);
+        errors.sum_to_target += to_target;
       }
+      m_chunk_errors[begin / kParticleChunk] = errors;
     });
+    // The next iteration's predictions are made per chunk as its accelerations come out, while they are in
+    // cache: a pass of their own re-read all of them.
     for_each_chunk(n, [&](std::size_t begin, std::size_t end) {
       pressure_accelerations(ctx, m_pressure_points, begin, end, &accelerations[begin]);
+      predict(begin, end);
     });
 
     ++stats.iterations;
-    density_error_stats(m_error, rho0, stats);
-    bool below = stats.average_density_error <= m_settings.eta;
-    if (m_settings.max_relief_per_substep) {
-      // rho - target + rho0 >= rho0 (the prediction only falls below the target once relieved)
-#pragma omp parallel for schedule(static)
-      for (std::size_t i = 0; i < n; ++i)
-        m_error[i] = std::max(m_error[i] - m_target[i], 0.0) + rho0;
-      density_error_stats(m_error, rho0, to_target);
-      below = to_target.average_density_error <= m_settings.eta;
+    ChunkErrors total;
+    for (const ChunkErrors& errors : m_chunk_errors) {
+      total.sum += errors.sum;
+      total.max = std::max(total.max, errors.max);
+      total.sum_to_target += errors.sum_to_target;
     }
+    const Scalar scale = 1.0 / (static_cast<Scalar>(n) * rho0);
+    stats.average_density_error = total.sum * scale;
+    stats.max_density_error = total.max / rho0;
+    // The convergence test measures the error against each particle's target density (the rest density
+    // unless max_relief_per_substep is set); the reported errors are against the rest density.
+    const bool below =
+        (m_settings.max_relief_per_substep ? total.sum_to_target : total.sum) * scale <= m_settings.eta;
     if ((below && stats.iterations >= m_settings.min_iterations) ||
         stats.iterations >= m_settings.max_iterations) {
       stats.converged = below;

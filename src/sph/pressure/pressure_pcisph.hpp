@@ -27,7 +27,13 @@ class PressurePcisph final : public PressureSolver {
   /// (Solenthaler & Pajarola eq. 8) (unit: 1/m^8)
   Scalar m_prototype_gradient_term;
   PackedPointArray m_predicted;  // N: predicted positions (unit: m), w = mass (unit: kg)
-  ScalarArray m_error;
+  ScalarArray m_density;         // N: predicted densities (unit: kg/m^3)
+  /// Density errors of one chunk of particles (unit: kg/m^3): sums of max(rho - rho0, 0) and of
+  /// max(rho - target, 0), and the largest max(rho - rho0, 0).
+  struct ChunkErrors {
+    Scalar sum = 0.0, max = 0.0, sum_to_target = 0.0;
+  };
+  std::vector<ChunkErrors> m_chunk_errors;
   ScalarArray m_target;  // N, the density each particle is driven to in this sub-step (unit: kg/m^3)
   PackedPointArray m_pressure_points;  // N: positions (unit: m), w = p / rho0^2
 };
