@@ -278,11 +278,11 @@ void NeighborSearch::find(const Vec3Array& queries, NeighborList& out, bool excl
     return;
   }
 
-  // One pass: the queries are cut into chunks of kParticleChunk, dealt round-robin to the threads (as
-  // schedule(static, kParticleChunk)) so that each thread gets some of every region of the z-ordered fluid:
-  // contiguous halves were unbalanced (the half at the floor has the boundary neighbors). Each thread gathers
-  // into its own buffer and remembers where each of its chunks starts; the chunks are then copied to their
-  // place in query order, so the result is the same for any thread count.
+  // One pass: the queries are cut into chunks of kParticleChunk, each taken by the next free thread (as
+  // for_each_chunk), so that each thread gets some of every region of the z-ordered fluid: contiguous halves
+  // were unbalanced (the half at the floor has the boundary neighbors). Each thread gathers into its own
+  // buffer and remembers where each of its chunks starts; the chunks are then copied to their place in query
+  // order, so the result is the same for any thread count and any deal.
   const int threads = omp_get_max_threads();
   const std::size_t chunks = (m + kParticleChunk - 1) / kParticleChunk;
   // The per-thread buffers keep their capacity from call to call: grown from empty by doubling, every call
@@ -300,9 +300,8 @@ void NeighborSearch::find(const Vec3Array& queries, NeighborList& out, bool excl
     Candidates& candidates = m_thread_candidates[static_cast<std::size_t>(thread)];
     std::size_t used =
         0;  // local is grown ahead of the writes; only its first `used` entries are this call's
-    // The team may be smaller than asked for (nested regions): the stride is the team's real size.
-    for (auto k = static_cast<std::size_t>(thread); k < chunks;
-         k += static_cast<std::size_t>(omp_get_num_threads())) {
+#pragma omp for schedule(dynamic, 1)
+    for (std::size_t k = 0; k < chunks; ++k) {
       chunk_owner[k] = thread;
       chunk_start[k] = used;
       const std::size_t chunk_end = std::min(m, (k + 1) * kParticleChunk);

@@ -66,7 +66,7 @@ void VerletNeighborLists::gradient_factors(const NeighborList& list, const Vec3A
   const Scalar* ss = coordinates(sources);
   const Index* js = list.indices.data();
   Scalar* factors = out_factors.data();
-#pragma omp parallel for schedule(static, kParticleChunk)
+#pragma omp parallel for schedule(dynamic, kParticleChunk)
   for (std::size_t i = 0; i < x.size(); ++i) {
     const Scalar x0 = xs[3 * i], x1 = xs[3 * i + 1], x2 = xs[3 * i + 2];
 #pragma omp simd
@@ -94,7 +94,7 @@ void VerletNeighborLists::filter(const NeighborList& candidates, const Vec3Array
   // the skin), and a write never leaves the particle's range. The distance is NeighborSearch::find's
   // expression (source minus query, summed x, y, z), so a pair is kept exactly when a fresh search would
   // report it. The gradient factors are taken in the second pass, over the kept pairs only and vectorized.
-#pragma omp parallel for schedule(static, kParticleChunk)
+#pragma omp parallel for schedule(dynamic, kParticleChunk)
   for (std::size_t i = 0; i < n; ++i) {
     const std::uint32_t first = candidates.offsets[i];
     Index* kept = m_kept.data() + first;
@@ -115,7 +115,7 @@ void VerletNeighborLists::filter(const NeighborList& candidates, const Vec3Array
     out.offsets[i + 1] += out.offsets[i];
   out.indices.resize(out.offsets[n]);
   out_factors.resize(out.offsets[n]);
-#pragma omp parallel for schedule(static, kParticleChunk)
+#pragma omp parallel for schedule(dynamic, kParticleChunk)
   for (std::size_t i = 0; i < n; ++i) {
     const std::uint32_t first = candidates.offsets[i];
     const std::uint32_t count = out.offsets[i + 1] - out.offsets[i];

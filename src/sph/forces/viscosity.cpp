@@ -76,7 +76,7 @@ void ViscosityArtificial::add_accelerations(const FluidContext& ctx, Scalar /*dt
   const Scalar h = ctx.kernel.smoothing_length();
   const Scalar eps = 0.01 * h * h;
   const Scalar scale = m_alpha * m_speed_of_sound * h;
-#pragma omp parallel for schedule(static, kParticleChunk)
+#pragma omp parallel for schedule(dynamic, kParticleChunk)
   for (std::size_t i = 0; i < p.size(); ++i) {
     Vec3 a = Vec3::Zero();
     for (const Index* j = ctx.fluid_neighbors.begin(i); j != ctx.fluid_neighbors.end(i); ++j) {
