@@ -41,4 +41,13 @@ inline Vec3Array random_points(std::size_t n, const Vec3& lo, const Vec3& hi, un
   return points;
 }
 
+/// `points` re-ordered along `search`'s z-order curve, as the fluid solver sorts its particles.
+inline Vec3Array z_ordered(const NeighborSearch& search, const Vec3Array& points) {
+  const IndexArray order = search.z_order(points);
+  Vec3Array sorted(points.size());
+  for (std::size_t k = 0; k < order.size(); ++k)
+    sorted[k] = points[order[k]];
+  return sorted;
+}
+
 }  // namespace drench::testing

@@ -12,6 +12,7 @@ namespace {
 using testing::brute_force;
 using testing::expect_same_sets;
 using testing::random_points;
+using testing::z_ordered;
 
 TEST(NeighborSearch, SelfQueryMatchesBruteForceOnRandomSets) {
   for (unsigned seed = 1; seed <= 5; ++seed) {
@@ -40,13 +41,9 @@ TEST(NeighborSearch, CrossQueryMatchesBruteForceIncludingNegativeAndFarCoordinat
 // find() gathers a cell's candidates once for a run of queries in that cell: z-ordered queries come in such
 // runs, random ones (above) almost never do, so this set is z-ordered first.
 TEST(NeighborSearch, ZOrderedQueriesInRunsPerCellMatchBruteForce) {
-  const Vec3Array random = random_points(4000, Vec3(0, 0, 0), Vec3(0.4, 0.3, 0.3), 21);
   const Scalar radius = 0.05;
   NeighborSearch search(radius);
-  const IndexArray order = search.z_order(random);
-  Vec3Array points(random.size());
-  for (std::size_t k = 0; k < order.size(); ++k)
-    points[k] = random[order[k]];
+  const Vec3Array points = z_ordered(search, random_points(4000, Vec3(0, 0, 0), Vec3(0.4, 0.3, 0.3), 21));
   std::size_t runs = 1;
   for (std::size_t k = 1; k < points.size(); ++k)
     runs += search.cell_key(points[k]) != search.cell_key(points[k - 1]) ? 1 : 0;
@@ -64,10 +61,7 @@ TEST(NeighborSearch, SparsePointsInHashedCellsMatchBruteForce) {
   points.insert(points.end(), far.begin(), far.end());
   const Scalar radius = 0.04;
   NeighborSearch search(radius);
-  const IndexArray order = search.z_order(points);
-  Vec3Array sorted(points.size());
-  for (std::size_t k = 0; k < order.size(); ++k)
-    sorted[k] = points[order[k]];
+  const Vec3Array sorted = z_ordered(search, points);
   search.build(sorted);
   NeighborList list;
   search.find(sorted, list, /*exclude_self=*/true);
