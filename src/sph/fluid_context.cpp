@@ -83,7 +83,7 @@ template <bool kUniformMass>
     const NeighborList& bn = ctx.boundary_neighbors;
     subtract_gradient_sum(
         pi, 0.0, ctx.boundary.data(), bn.indices.data(), ctx.boundary_gradient_factors.data(), bn.offsets[i],
-        bn.offsets[i + 1], [=](Index) { return pi.w; }, sx, sy, sz);
+        bn.offsets[i + 1], [w = pi.w](Index) { return w; }, sx, sy, sz);
   }
   return Vec3(sx, sy, sz);
 }
