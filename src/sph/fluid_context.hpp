@@ -20,6 +20,10 @@ struct alignas(4 * sizeof(Scalar)) PackedPoint {
   Scalar x, y, z;  ///< (unit: m)
   Scalar w;        ///< unit of the loop that reads it
 };
+/// The record of the point x (unit: m) with the scalar w.
+inline PackedPoint packed(const Vec3& x, Scalar w) {
+  return {x.x(), x.y(), x.z(), w};
+}
 /// N packed points, one per particle or boundary point.
 using PackedPointArray = std::vector<PackedPoint>;
 

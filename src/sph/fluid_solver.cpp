@@ -51,10 +51,8 @@ FluidSolver::FluidSolver(const FluidSettings& settings, const Vec3& gravity, Bou
       m_pressure(make_pressure_solver(settings, speed_of_sound)) {
   const Vec3Array& points = m_neighbors.boundary_points();
   m_boundary_packed.resize(points.size());
-  for (std::size_t b = 0; b < points.size(); ++b) {
-    const Vec3& x = points[b];
-    m_boundary_packed[b] = {x.x(), x.y(), x.z(), settings.rest_density * boundary.volumes[b]};
-  }
+  for (std::size_t b = 0; b < points.size(); ++b)
+    m_boundary_packed[b] = packed(points[b], settings.rest_density * boundary.volumes[b]);
   if (with_viscosity) m_viscosity = make_viscosity(settings.viscosity, speed_of_sound);
 }
 
@@ -133,10 +131,8 @@ StepStatus FluidSolver::substep(Scalar dt, Scalar max_speed, SubstepConstraint* 
     ScopedTimer timer(m_stats.timings_s.density);
     m_positions_mass.resize(n);
 #pragma omp parallel for schedule(static)
-    for (std::size_t i = 0; i < n; ++i) {
-      const Vec3& x = m_particles.positions[i];
-      m_positions_mass[i] = {x.x(), x.y(), x.z(), m_particles.masses[i]};
-    }
+    for (std::size_t i = 0; i < n; ++i)
+      m_positions_mass[i] = packed(m_particles.positions[i], m_particles.masses[i]);
     for_each_chunk(n, [&](std::size_t begin, std::size_t end) {
       sph_densities(ctx, m_positions_mass, begin, end, &m_particles.densities[begin]);
     });

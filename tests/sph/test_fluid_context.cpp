@@ -32,10 +32,20 @@ NeighborList to_list(const std::vector<IndexArray>& sets) {
 }
 
 PackedPointArray pack(const Vec3Array& x, const ScalarArray& w) {
-  PackedPointArray packed(x.size());
+  PackedPointArray points(x.size());
   for (std::size_t i = 0; i < x.size(); ++i)
-    packed[i] = {x[i].x(), x[i].y(), x[i].z(), w[i]};
-  return packed;
+    points[i] = packed(x[i], w[i]);
+  return points;
+}
+
+/// out[i] of the particles [0, n) from loop(begin, end, out + begin), called for [0, split) and [split, n),
+/// so that a range starting inside the array is covered.
+template <class T, class Loop>
+std::vector<T> in_two_ranges(std::size_t n, std::size_t split, Loop loop) {
+  std::vector<T> out(n);
+  loop(std::size_t{0}, split, out.data());
+  loop(split, n, out.data() + split);
+  return out;
 }
 
 ScalarArray factors_of(const CubicSplineKernel& kernel, const NeighborList& list, const Vec3Array& x,
@@ -101,10 +111,10 @@ void check_densities(bool uniform_mass) {
   const FluidContext ctx = s.context();
   const ParticleSet& p = s.particles;
   const std::size_t n = p.size();
-  ScalarArray got(n);
-  // Two calls, so that a range starting inside the array is covered.
-  sph_densities(ctx, pack(p.positions, p.masses), 0, 123, got.data());
-  sph_densities(ctx, pack(p.positions, p.masses), 123, n, got.data() + 123);
+  const PackedPointArray x_mass = pack(p.positions, p.masses);
+  const ScalarArray got = in_two_ranges<Scalar>(n, 123, [&](std::size_t begin, std::size_t end, Scalar* out) {
+    sph_densities(ctx, x_mass, begin, end, out);
+  });
   for (std::size_t i = 0; i < n; ++i) {
     Scalar expected = p.masses[i] * s.kernel.value(0.0);
     for (const Index* j = s.fluid.begin(i); j != s.fluid.end(i); ++j)
@@ -121,9 +131,10 @@ void check_pressure_accelerations(bool uniform_mass) {
   const FluidContext ctx = s.context();
   const ParticleSet& p = s.particles;
   const std::size_t n = p.size();
-  Vec3Array got(n);
-  pressure_accelerations(ctx, pack(p.positions, s.p_over_rho2), 0, 200, got.data());
-  pressure_accelerations(ctx, pack(p.positions, s.p_over_rho2), 200, n, got.data() + 200);
+  const PackedPointArray x_p_over_rho2 = pack(p.positions, s.p_over_rho2);
+  const Vec3Array got = in_two_ranges<Vec3>(n, 200, [&](std::size_t begin, std::size_t end, Vec3* out) {
+    pressure_accelerations(ctx, x_p_over_rho2, begin, end, out);
+  });
   for (std::size_t i = 0; i < n; ++i) {
     Vec3 expected = Vec3::Zero();
     Scalar magnitude = 0.0;  // sum of |terms|: the scale of the rounding

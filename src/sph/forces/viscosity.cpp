@@ -59,10 +59,8 @@ void ViscosityXsph::add_accelerations(const FluidContext& ctx, Scalar dt, Vec3Ar
   m_velocities.resize(n);
 #pragma omp parallel for schedule(static)
   for (std::size_t i = 0; i < n; ++i) {
-    const Vec3& x = p.positions[i];
-    const Vec3& v = p.velocities[i];
-    m_x_volume[i] = {x.x(), x.y(), x.z(), p.masses[i] / p.densities[i]};
-    m_velocities[i] = {v.x(), v.y(), v.z(), 0.0};
+    m_x_volume[i] = packed(p.positions[i], p.masses[i] / p.densities[i]);
+    m_velocities[i] = packed(p.velocities[i], 0.0);
   }
   const Scalar factor = m_coefficient / dt;
   for_each_chunk(n, [&](std::size_t begin, std::size_t end) {

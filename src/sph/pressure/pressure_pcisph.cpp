@@ -52,15 +52,14 @@ PressureStats PressurePcisph::solve(const FluidContext& ctx, const Vec3Array& ve
   std::fill(accelerations.begin(), accelerations.end(), Vec3::Zero());
 #pragma omp parallel for schedule(static)
   for (std::size_t i = 0; i < n; ++i) {
-    const Vec3& x = particles.positions[i];
-    m_pressure_points[i] = {x.x(), x.y(), x.z(), 0.0};
+    m_pressure_points[i] = packed(particles.positions[i], 0.0);
   }
   if (n == 0) return stats;
   // Positions predicted with the current pressure accelerations, for the particles [begin, end).
   const auto predict = [&](std::size_t begin, std::size_t end) {
     for (std::size_t i = begin; i < end; ++i) {
       const Vec3 x = particles.positions[i] + dt * (velocities_adv[i] + dt * accelerations[i]);
-      m_predicted[i] = {x.x(), x.y(), x.z(), particles.masses[i]};
+      m_predicted[i] = packed(x, particles.masses[i]);
     }
   };
   for_each_chunk(n, predict);

@@ -24,8 +24,7 @@ PressureStats PressureWcsph::solve(const FluidContext& ctx, const Vec3Array& /*v
     const Scalar rho = particles.densities[i];
     const Scalar p = std::max(0.0, m_stiffness * (std::pow(rho / rho0, m_exponent) - 1.0));
     particles.pressures[i] = p;
-    const Vec3& x = particles.positions[i];
-    m_pressure_points[i] = {x.x(), x.y(), x.z(), p / (rho * rho)};
+    m_pressure_points[i] = packed(particles.positions[i], p / (rho * rho));
   }
   for_each_chunk(n, [&](std::size_t begin, std::size_t end) {
     pressure_accelerations(ctx, m_pressure_points, begin, end, &accelerations[begin]);
