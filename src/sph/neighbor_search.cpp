@@ -307,8 +307,9 @@ void NeighborSearch::find(const Vec3Array& queries, NeighborList& out, bool excl
       const std::size_t chunk_end = std::min(m, (k + 1) * kParticleChunk);
       // The candidates of a cell are gathered once for the run of queries in it (z-ordered particles come
       // in runs of about eight per cell), then each query scans them in one loop. Scanning the cells row by
-      // row per query, skipping cells beyond the radius, read 24% fewer points but was 1.3x slower (build +
-      // find of a 59K block, 21 vs 16 ms, measured): nine short loops per query, each of a different length.
+      // row per query, skipping cells beyond the radius, read 24% fewer points but was slower: nine short
+      // loops per query, each of a different length (bench/bench_neighbor_search, 1 thread: 23.6-41.4 ms
+      // against 18.5-19.5 ms, bench/results/debian12-2core/neighbor_search_99939d6_vs_7d87b95.txt).
       bool buffered = false;
       Vec3i buffered_cell = Vec3i::Zero();
       for (std::size_t i = k * kParticleChunk; i < chunk_end; ++i) {
