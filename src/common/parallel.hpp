@@ -31,16 +31,16 @@ void for_each_chunk(std::size_t n, Body body) {
 
 }  // namespace drench
 
-/// Marks a hot loop function to be compiled twice, for x86-64-v3 (AVX2: four doubles per vector) and for the
-/// baseline x86-64 that the build targets, the copy being chosen once at load time by the CPU (GCC's
-/// target_clones, an ifunc). Every thread runs the same copy, so runs stay bit-identical. A loop that fixes
-/// its summation order (the four lanes of src/sph/fluid_context.cpp) gives the same bits in both copies as
-/// well: drench_core is built with -ffp-contract=off, so no copy fuses a multiply and an add (the 59K dam
-/// break's frames are identical with the clones disabled, measured). Only for non-inline, non-template
-/// functions: what they inline is compiled into each copy.
+/// Marks a hot loop function to be compiled three times, for x86-64-v4 (AVX-512: eight doubles per vector),
+/// x86-64-v3 (AVX2: four) and the baseline x86-64 that the build targets, the copy being chosen once at load
+/// time by the CPU (GCC's target_clones, an ifunc). Every thread runs the same copy, so runs stay
+/// bit-identical. A loop that fixes its lanes and summation order (sph/packed_lanes.hpp) gives the same bits
+/// in every copy as well: drench_core is built with -ffp-contract=off, so no copy fuses a multiply and an add
+/// (the 59K dam break's frames are identical with the clones disabled, built for x86-64 or x86-64-v3,
+/// measured). Only for non-inline, non-template functions: what they inline is compiled into each copy.
 #if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && defined(__linux__) && \
     !defined(DRENCH_NO_SIMD_CLONES)
-#define DRENCH_SIMD_CLONES __attribute__((target_clones("arch=x86-64-v3", "default")))
+#define DRENCH_SIMD_CLONES __attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default")))
 #else
 #define DRENCH_SIMD_CLONES
 #endif

@@ -10,27 +10,32 @@ namespace drench {
 namespace {
 
 /// sum over the neighbors j of i in `list` of w_j W(|x_i - x_j|), for `sources` packed with their weights.
-/// Four neighbors at a time in four lanes, then the last (count mod 4) one by one, in that order.
+/// Eight neighbors at a time in eight lanes, the last (count mod 8) as one more group with its padding lanes
+/// dropped, in that order.
 [[gnu::always_inline]] inline Scalar kernel_sum(const CubicSplineKernel& k, const NeighborList& list,
                                                 std::size_t i, const PackedPoint& xi,
                                                 const PackedPoint* sources) {
   const Index* js = list.indices.data();
   std::uint32_t n = list.offsets[i];
   const std::uint32_t end = list.offsets[i + 1];
-  Lanes sum = {};
-  for (; n + kLanes <= end; n += kLanes) {
-    FourPoints p;
-    load_four(sources, js + n, p);
-    Lanes w;
-    kernel_at_four(k, xi, p, w);
+  Wide sum = {};
+  for (; n + kWide <= end; n += kWide) {
+    EightPoints p;
+    load_eight(sources, js + n, p);
+    Wide w;
+    kernel_at_eight(k, xi, p, w);
     sum += p.w * w;
   }
-  Scalar total = lane_sum(sum);
-  for (; n < end; ++n) {
-    const PackedPoint& p = sources[js[n]];
-    total += p.w * kernel_at(k, xi, p);
+  if (n < end) {
+    TailGroup tail;
+    tail_group(js, list.indices.size(), n, end, tail);
+    EightPoints p;
+    load_eight(sources, tail.js, p);
+    Wide w;
+    kernel_at_eight(k, xi, p, w);
+    sum += tail.active ? p.w * w : Wide{};
   }
-  return total;
+  return wide_sum(sum);
 }
 
 /// Subtracts sum_n c_n f_n (x_i - x_n) over the entries [n, end) of a neighbor list from (sx, sy, sz), with

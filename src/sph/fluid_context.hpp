@@ -13,9 +13,9 @@
 namespace drench {
 
 /// A point and one scalar that the pair loops read with it (w: a mass, Akinci's Psi_b, or p / rho^2), in one
-/// aligned 32-byte record: a neighbor is one vector load instead of four gathered scalars, and four neighbors
-/// are transposed into x, y, z and w vectors in registers. PCISPH's pressure solve ran 1.6x faster over these
-/// than over gathered N x 3 coordinates (59K dam break, 1 thread, measured).
+/// aligned 32-byte record: a neighbor is one vector load instead of four gathered scalars, and four or eight
+/// neighbors are transposed into x, y, z and w vectors in registers. PCISPH's pressure solve ran 1.6x faster
+/// over these than over gathered N x 3 coordinates (59K dam break, 1 thread, measured).
 struct alignas(4 * sizeof(Scalar)) PackedPoint {
   Scalar x, y, z;  ///< (unit: m)
   Scalar w;        ///< unit of the loop that reads it
@@ -55,8 +55,8 @@ struct FluidContext {
 /// (Akinci et al. 2012 eq. 6).
 /// @param x_mass  N particles: positions (unit: m) and w = mass (unit: kg)
 /// Precondition: begin <= end <= N, out holds end - begin values. Compiled per CPU (DRENCH_SIMD_CLONES); call
-/// it per chunk (for_each_chunk). The sums run over four neighbors at a time in a fixed order, so every copy
-/// and every thread count gives the same bits.
+/// it per chunk (for_each_chunk). The sums run over eight neighbors at a time in a fixed order (the last
+/// group padded with lanes left out of the sum), so every copy and every thread count gives the same bits.
 void sph_densities(const FluidContext& ctx, const PackedPointArray& x_mass, std::size_t begin,
                    std::size_t end, Scalar* out);
 
@@ -67,8 +67,8 @@ void sph_densities(const FluidContext& ctx, const PackedPointArray& x_mass, std:
 /// The boundary term is the negative gradient of the internal energy that the boundary's density contribution
 /// adds, so it conserves energy; pressure mirroring (2 p_i, as some codes use) made a closed tank gain
 /// kinetic energy without bound, and a hydrostatic extrapolation of p_b (Adami et al. 2012) drove corner
-/// particles up at 1 m/s with PCISPH's noisy pressures (both measured). Compiled and ordered as
-/// sph_densities.
+/// particles up at 1 m/s with PCISPH's noisy pressures (both measured). Compiled as sph_densities; the sums
+/// run over four neighbors at a time in a fixed order, then the last (count mod 4) one by one.
 void pressure_accelerations(const FluidContext& ctx, const PackedPointArray& x_p_over_rho2, std::size_t begin,
                             std::size_t end, Vec3* out);
 

@@ -1,0 +1,123 @@
+// The fluid's pair loops alone, on the 59K reference dam break (bench_dam_break's pcisph_59k scene) after 60
+// steps of 2.5 ms, when the block has collapsed into a wave: densities at the particles' positions
+// (sph_densities), pressure accelerations with a made-up positive pressure field (pressure_accelerations) and
+// XSPH. The first two on all 59,319 particles (lists, factors and points exceed the cache) and on the first
+// 2,048 (within it), XSPH on all. Counter time_per_pair: wall time per fluid neighbor pair.
+//
+//   build-bench/bench/bench_pair_loops --benchmark_repetitions=5
+// Thread count: OMP_NUM_THREADS. Setting up (the 60 steps) takes about 10 s on one thread.
+
+#include <benchmark/benchmark.h>
+
+#include <cmath>
+#include <memory>
+#include <string>
+
+#include "common/parallel.hpp"
+#include "scene/scene_loader.hpp"
+#include "scene/simulation.hpp"
+#include "sph/fluid_context.hpp"
+#include "sph/forces/viscosity.hpp"
+#include "sph/verlet_neighbor_lists.hpp"
+
+namespace {
+
+/// The dam break's particles after 60 steps, their exact neighbor lists and the packed inputs of the loops.
+struct Fixture {
+  std::unique_ptr<drench::Simulation> sim;
+  std::unique_ptr<drench::VerletNeighborLists> lists;
+  drench::PackedPointArray boundary;       // w = Psi_b, taken as rest density x spacing^3 (unit: kg)
+  drench::PackedPointArray x_mass;         // w = mass (unit: kg)
+  drench::PackedPointArray x_p_over_rho2;  // w = p / rho0^2, p in [0, 2000] Pa
+  std::unique_ptr<drench::FluidContext> ctx;
+
+  Fixture() {
+    const double spacing = 0.025;  // m
+    sim = std::make_unique<drench::Simulation>(drench::load_scene_file(
+        std::string(DRENCH_SOURCE_DIR) + "/demos/scenes/dam_break.json",
+        {"fluid.particle_spacing=0.025", "fluid.pcisph.eta=0.0005", "emitters[0].max=[0.975,0.975,0.975]",
+         "time.dt=0.0025", "time.frame_rate=0"}));
+    for (int s = 0; s < 60; ++s)
+      sim->step();
+    drench::FluidSolver& fluid = sim->fluid();
+    drench::ParticleSet& p = fluid.particles();
+    lists = std::make_unique<drench::VerletNeighborLists>(fluid.kernel(), 0.0, fluid.boundary_positions());
+    lists->update(p.positions, p.ids, 0.0);
+    const double rho0 = fluid.settings().rest_density;
+    for (const drench::Vec3& b : fluid.boundary_positions())
+      boundary.push_back(drench::packed(b, rho0 * spacing * spacing * spacing));
+    for (std::size_t i = 0; i < p.size(); ++i) {
+      x_mass.push_back(drench::packed(p.positions[i], p.masses[i]));
+      const double pressure = 1000.0 * (1.0 + std::cos(static_cast<double>(i)));  // Pa
+      x_p_over_rho2.push_back(drench::packed(p.positions[i], pressure / (rho0 * rho0)));
+    }
+    ctx = std::make_unique<drench::FluidContext>(drench::FluidContext{
+        fluid.kernel(), p, lists->fluid(), lists->boundary(), boundary, rho0, spacing,
+        lists->fluid_gradient_factors(), lists->boundary_gradient_factors(), p.common_mass()});
+  }
+};
+
+const Fixture& fixture() {
+  static const Fixture f;
+  return f;
+}
+
+/// The particles a benchmark runs over: all, or the first 2,048.
+std::size_t particles(const benchmark::State& state) {
+  return state.range(0) ? std::min<std::size_t>(fixture().x_mass.size(), state.range(0))
+                        : fixture().x_mass.size();
+}
+
+void report(benchmark::State& state, std::size_t n) {
+  const double pairs = fixture().ctx->fluid_neighbors.offsets[n];
+  state.counters["particles"] = static_cast<double>(n);
+  state.counters["pairs"] = pairs;
+  state.counters["time_per_pair"] =
+      benchmark::Counter(pairs, benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
+}
+
+void densities(benchmark::State& state) {
+  const Fixture& f = fixture();
+  const std::size_t n = particles(state);
+  drench::ScalarArray out(n);
+  for (auto _ : state) {
+    drench::for_each_chunk(n, [&](std::size_t begin, std::size_t end) {
+      drench::sph_densities(*f.ctx, f.x_mass, begin, end, &out[begin]);
+    });
+    benchmark::DoNotOptimize(out.data());
+  }
+  report(state, n);
+}
+
+void pressure_accelerations(benchmark::State& state) {
+  const Fixture& f = fixture();
+  const std::size_t n = particles(state);
+  drench::Vec3Array out(n);
+  for (auto _ : state) {
+    drench::for_each_chunk(n, [&](std::size_t begin, std::size_t end) {
+      drench::pressure_accelerations(*f.ctx, f.x_p_over_rho2, begin, end, &out[begin]);
+    });
+    benchmark::DoNotOptimize(out.data());
+  }
+  report(state, n);
+}
+
+/// XSPH over all particles (ViscosityXsph packs its own inputs each call, as in a sub-step).
+void xsph(benchmark::State& state) {
+  const Fixture& f = fixture();
+  const drench::ViscosityXsph viscosity(0.01);
+  drench::Vec3Array out(f.x_mass.size(), drench::Vec3::Zero());
+  for (auto _ : state) {
+    viscosity.add_accelerations(*f.ctx, 0.0025, out);
+    benchmark::DoNotOptimize(out.data());
+  }
+  report(state, f.x_mass.size());
+}
+
+}  // namespace
+
+BENCHMARK(densities)->Arg(0)->Arg(2048)->Unit(benchmark::kMillisecond);
+BENCHMARK(pressure_accelerations)->Arg(0)->Arg(2048)->Unit(benchmark::kMillisecond);
+BENCHMARK(xsph)->Unit(benchmark::kMillisecond);
+
+BENCHMARK_MAIN();
