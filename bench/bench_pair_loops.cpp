@@ -1,8 +1,9 @@
 // The fluid's pair loops alone, on the 59K reference dam break (bench_dam_break's pcisph_59k scene) after 60
 // steps of 2.5 ms, when the block has collapsed into a wave: densities at the particles' positions
 // (sph_densities), pressure accelerations with a made-up positive pressure field (pressure_accelerations) and
-// XSPH. The first two on all 59,319 particles (lists, factors and points exceed the cache) and on the first
-// 2,048 (within it), XSPH on all. Counter time_per_pair: wall time per fluid neighbor pair.
+// XSPH, and the exact neighbor lists they read (search and gradient factors). Densities and pressure on all
+// 59,319 particles (lists, factors and points exceed the cache) and on the first 2,048 (within it), the
+// others on all. Counter time_per_pair: wall time per fluid neighbor pair.
 //
 //   build-bench/bench/bench_pair_loops --benchmark_repetitions=5
 // Thread count: OMP_NUM_THREADS. Setting up (the 60 steps) takes about 10 s on one thread.
@@ -114,8 +115,23 @@ void xsph(benchmark::State& state) {
   report(state, f.x_mass.size());
 }
 
+/// The exact neighbor lists of all particles from scratch, as a PCISPH sub-step updates them: grid build,
+/// search and the gradient factors of every pair (fluid and boundary).
+void neighbor_lists(benchmark::State& state) {
+  const Fixture& f = fixture();
+  const drench::FluidSolver& fluid = f.sim->fluid();
+  const drench::ParticleSet& p = fluid.particles();
+  drench::VerletNeighborLists lists(fluid.kernel(), 0.0, fluid.boundary_positions());
+  for (auto _ : state) {
+    lists.update(p.positions, p.ids, 0.0);
+    benchmark::DoNotOptimize(lists.fluid_gradient_factors().data());
+  }
+  report(state, p.size());
+}
+
 }  // namespace
 
+BENCHMARK(neighbor_lists)->Unit(benchmark::kMillisecond);
 BENCHMARK(densities)->Arg(0)->Arg(2048)->Unit(benchmark::kMillisecond);
 BENCHMARK(pressure_accelerations)->Arg(0)->Arg(2048)->Unit(benchmark::kMillisecond);
 BENCHMARK(xsph)->Unit(benchmark::kMillisecond);
