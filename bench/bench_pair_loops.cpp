@@ -19,6 +19,7 @@
 #include "scene/simulation.hpp"
 #include "sph/fluid_context.hpp"
 #include "sph/forces/viscosity.hpp"
+#include "sph/pressure/pressure_pcisph.hpp"
 #include "sph/verlet_neighbor_lists.hpp"
 
 namespace {
@@ -129,11 +130,34 @@ void neighbor_lists(benchmark::State& state) {
   report(state, p.size());
 }
 
+/// One PCISPH pressure solve of the state (sub-step 1.25 ms, the dam break's at this time; velocities plus
+/// gravity as the advected ones): its iterations are a density and a pressure pass each, so its time over
+/// (densities + pressure_accelerations) x iterations shows what the solve adds around the two loops.
+void pcisph_solve(benchmark::State& state) {
+  const Fixture& f = fixture();
+  const drench::FluidSolver& fluid = f.sim->fluid();
+  const drench::ParticleSet& p = fluid.particles();
+  const double dt = 0.00125;  // s
+  drench::Vec3Array velocities_adv(p.size());
+  for (std::size_t i = 0; i < p.size(); ++i)
+    velocities_adv[i] = p.velocities[i] + dt * drench::Vec3(0.0, -9.81, 0.0);
+  drench::PressurePcisph solver(fluid.settings());
+  drench::Vec3Array accelerations;
+  drench::PressureStats stats;
+  for (auto _ : state) {
+    stats = solver.solve(*f.ctx, velocities_adv, dt, accelerations);
+    benchmark::DoNotOptimize(accelerations.data());
+  }
+  report(state, p.size());
+  state.counters["iterations"] = stats.iterations;
+}
+
 }  // namespace
 
 BENCHMARK(neighbor_lists)->Unit(benchmark::kMillisecond);
 BENCHMARK(densities)->Arg(0)->Arg(2048)->Unit(benchmark::kMillisecond);
 BENCHMARK(pressure_accelerations)->Arg(0)->Arg(2048)->Unit(benchmark::kMillisecond);
 BENCHMARK(xsph)->Unit(benchmark::kMillisecond);
+BENCHMARK(pcisph_solve)->Unit(benchmark::kMillisecond);
 
 BENCHMARK_MAIN();

@@ -1,5 +1,7 @@
-// Pure arithmetic, no memory traffic: two copies on two physical cores run as fast as one alone; on SMT
-// siblings of one core they slow each other down. Quoted in the README's Performance section.
+// Pure arithmetic, no memory traffic: eight chains of dependent scalar multiply-adds, bound by their latency
+// (about 6 cycles an iteration), not by the floating-point pipes. Two copies running as fast as one alone show
+// that the second vCPU gets its own cycles, but not that it is another core: SMT siblings would leave each
+// other idle pipes. fp_ports.c, which fills the pipes, tells cores from siblings. Quoted in the README.
 #include <stdio.h>
 #include <time.h>
 int main(void) {
