@@ -45,15 +45,17 @@ namespace {
 template <class Coefficient>
 [[gnu::always_inline]] inline void subtract_gradient_sum(const PackedPoint& xi, Scalar alpha,
                                                          const PackedPoint* points, const Index* js,
-                                                         const Scalar* factors, std::uint32_t n,
+                                                         const float* factors, std::uint32_t n,
                                                          std::uint32_t end, Coefficient a, Scalar& sx,
                                                          Scalar& sy, Scalar& sz) {
   Lanes ax = {}, ay = {}, az = {};
   for (; n + kLanes <= end; n += kLanes) {
     FourPoints p;
     load_four(points, js + n, p);
-    Lanes factor, a_lanes;
-    std::memcpy(&factor, factors + n, sizeof(Lanes));
+    FloatLanes stored;
+    std::memcpy(&stored, factors + n, sizeof(FloatLanes));
+    const Lanes factor = __builtin_convertvector(stored, Lanes);
+    Lanes a_lanes;
     for (std::uint32_t l = 0; l < kLanes; ++l)
       a_lanes[l] = a(js[n + l]);
     const Lanes s = a_lanes * (alpha + p.w) * factor;
@@ -66,7 +68,7 @@ template <class Coefficient>
   sz += lane_sum(az);
   for (; n < end; ++n) {
     const PackedPoint& p = points[js[n]];
-    const Scalar s = a(js[n]) * (alpha + p.w) * factors[n];
+    const Scalar s = a(js[n]) * (alpha + p.w) * Scalar{factors[n]};
     sx -= s * (xi.x - p.x);
     sy -= s * (xi.y - p.y);
     sz -= s * (xi.z - p.z);

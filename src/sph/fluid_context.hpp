@@ -39,11 +39,12 @@ struct FluidContext {
   Scalar rest_density;      ///< (unit: kg/m^3)
   Scalar particle_spacing;  ///< (unit: m)
   /// For every entry of fluid_neighbors.indices, f with grad W(x_i - x_j) = f (x_i - x_j) at the current
-  /// positions (unit: 1/m^5). One number instead of a 3-vector per pair: PCISPH's pressure loop streams these
-  /// every iteration and was memory-bound on 3-vectors (34% of its sub-step, measured).
-  const ScalarArray& fluid_gradient_factors;
+  /// positions (unit: 1/m^5), in float (GradientFactorArray). One number instead of a 3-vector per pair:
+  /// PCISPH's pressure loop streams these every iteration and was memory-bound on 3-vectors (34% of its
+  /// sub-step, measured).
+  const GradientFactorArray& fluid_gradient_factors;
   /// The same for every entry of boundary_neighbors.indices, with x_b in place of x_j (unit: 1/m^5)
-  const ScalarArray& boundary_gradient_factors;
+  const GradientFactorArray& boundary_gradient_factors;
   /// The mass every particle has (unit: kg), or 0 when masses differ (ParticleSet::common_mass). Every
   /// emitter makes rho0 spacing^3; the pair loops then leave out a gather per pair (PCISPH runs them every
   /// iteration).

@@ -19,6 +19,14 @@ struct NeighborList {
   const Index* end(std::size_t i) const { return indices.data() + offsets[i + 1]; }
 };
 
+/// One number per entry of a NeighborList: the kernel gradient factor f of the pair (grad W = f (x_i - x_j),
+/// unit: 1/m^5), in single precision. PCISPH's pressure loop streams the factors every iteration; as floats
+/// the stream is a third smaller (with the indices), and the 59K dam break's pressure phase ran 2-21% faster
+/// in five interleaved 100-step runs on 1 thread (measured; a warm-cache benchmark of the loop alone showed
+/// no difference, so the gain is the cache the other passes keep). The relative rounding, at most 2^-24, is
+/// far below any solver tolerance, and f_ij = f_ji still holds exactly (the same squared distance).
+using GradientFactorArray = std::vector<float>;
+
 /// Uniform-grid neighbor search. `build` sorts the source points into cells; `find` answers, for every query
 /// point, all source points at distance strictly less than the support radius. When the points' bounding box
 /// holds few enough cells (at most 4 per point), cells live in a dense array filled by a counting sort;

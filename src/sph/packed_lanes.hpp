@@ -24,6 +24,8 @@ namespace {
 /// baseline copy. GCC's and clang's vector extension, so one source serves every copy of DRENCH_SIMD_CLONES.
 typedef Scalar Lanes __attribute__((vector_size(4 * sizeof(Scalar))));
 constexpr std::uint32_t kLanes = 4;
+/// Four floats: four stored gradient factors (GradientFactorArray), widened to Lanes after the load.
+typedef float FloatLanes __attribute__((vector_size(4 * sizeof(float))));
 
 /// x, y, z and w of four packed points as four vectors.
 struct FourPoints {

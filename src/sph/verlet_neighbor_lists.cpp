@@ -10,13 +10,13 @@ namespace drench {
 
 namespace {
 
-/// factors[n] = the kernel's gradient factor of the pair n of `list`, for the rows [begin, end): query i at
-/// xs[3i..3i+2], source j at ss[3j..3j+2] (unit: m). The distance is NeighborSearch::find's expression
-/// (source minus query, summed x, y, z). Compiled per CPU (DRENCH_SIMD_CLONES): a square root and a division
-/// per pair, which the baseline copy did two at a time (5% of a 59K PCISPH step, measured).
+/// factors[n] = the kernel's gradient factor of the pair n of `list`, rounded to float, for the rows [begin,
+/// end): query i at xs[3i..3i+2], source j at ss[3j..3j+2] (unit: m). The distance is NeighborSearch::find's
+/// expression (source minus query, summed x, y, z). Compiled per CPU (DRENCH_SIMD_CLONES): a square root and
+/// a division per pair, which the baseline copy did two at a time (5% of a 59K PCISPH step, measured).
 DRENCH_SIMD_CLONES void gradient_factor_rows(const CubicSplineKernel& kernel, const NeighborList& list,
                                              const Scalar* xs, const Scalar* ss, std::size_t begin,
-                                             std::size_t end, Scalar* factors) {
+                                             std::size_t end, float* factors) {
   const Index* js = list.indices.data();
   for (std::size_t i = begin; i < end; ++i) {
     const Scalar x0 = xs[3 * i], x1 = xs[3 * i + 1], x2 = xs[3 * i + 2];
@@ -24,18 +24,18 @@ DRENCH_SIMD_CLONES void gradient_factor_rows(const CubicSplineKernel& kernel, co
     for (std::uint32_t n = list.offsets[i]; n < list.offsets[i + 1]; ++n) {
       const std::size_t j = 3 * std::size_t{js[n]};
       const Scalar d0 = ss[j] - x0, d1 = ss[j + 1] - x1, d2 = ss[j + 2] - x2;
-      factors[n] = kernel.gradient_factor(d0 * d0 + d1 * d1 + d2 * d2);
+      factors[n] = static_cast<float>(kernel.gradient_factor(d0 * d0 + d1 * d1 + d2 * d2));
     }
   }
 }
 
-/// factors[k] = the kernel's gradient factor at the squared distance r2[k] (unit: m^2), k < count. Compiled
-/// per CPU as gradient_factor_rows.
+/// factors[k] = the kernel's gradient factor at the squared distance r2[k] (unit: m^2), rounded to float, k <
+/// count. Compiled per CPU as gradient_factor_rows.
 DRENCH_SIMD_CLONES void gradient_factors_of(const CubicSplineKernel& kernel, const Scalar* r2,
-                                            std::uint32_t count, Scalar* factors) {
+                                            std::uint32_t count, float* factors) {
 #pragma omp simd
   for (std::uint32_t k = 0; k < count; ++k)
-    factors[k] = kernel.gradient_factor(r2[k]);
+    factors[k] = static_cast<float>(kernel.gradient_factor(r2[k]));
 }
 
 }  // namespace
@@ -91,7 +91,7 @@ bool VerletNeighborLists::update(const Vec3Array& positions, const std::vector<s
 }
 
 void VerletNeighborLists::gradient_factors(const NeighborList& list, const Vec3Array& x,
-                                           const Vec3Array& sources, ScalarArray& out_factors) const {
+                                           const Vec3Array& sources, GradientFactorArray& out_factors) const {
   out_factors.resize(list.indices.size());
   for_each_chunk(x.size(), [&](std::size_t begin, std::size_t end) {
     gradient_factor_rows(m_kernel, list, coordinates(x), coordinates(sources), begin, end,
@@ -100,7 +100,7 @@ void VerletNeighborLists::gradient_factors(const NeighborList& list, const Vec3A
 }
 
 void VerletNeighborLists::filter(const NeighborList& candidates, const Vec3Array& x, const Vec3Array& sources,
-                                 NeighborList& out, ScalarArray& out_factors) {
+                                 NeighborList& out, GradientFactorArray& out_factors) {
   const std::size_t n = x.size();
   const Scalar r2_max = m_support * m_support;
   out.offsets.assign(n + 1, 0);

@@ -40,11 +40,12 @@ class VerletNeighborLists {
   /// The static boundary points given at construction (unit: m).
   const Vec3Array& boundary_points() const { return m_boundary_points; }
   /// For every entry of fluid().indices, f with grad W(x_i - x_j) = f (x_i - x_j) at the positions of the
-  /// last update (unit: 1/m^5). Computed in the filter's pass, where the distance is at hand: a pass of its
-  /// own re-read the lists and gathered the positions again, on a sub-step bound by memory traffic.
-  const ScalarArray& fluid_gradient_factors() const { return m_fluid_factors; }
+  /// last update (unit: 1/m^5), rounded to float (GradientFactorArray). Computed in the filter's pass, where
+  /// the distance is at hand: a pass of its own re-read the lists and gathered the positions again, on a
+  /// sub-step bound by memory traffic.
+  const GradientFactorArray& fluid_gradient_factors() const { return m_fluid_factors; }
   /// The same for boundary().indices, with the boundary point in place of x_j (unit: 1/m^5).
-  const ScalarArray& boundary_gradient_factors() const { return m_boundary_factors; }
+  const GradientFactorArray& boundary_gradient_factors() const { return m_boundary_factors; }
 
   /// Permutation that orders `points` along the z-order curve of support-sized cells
   /// (NeighborSearch::z_order).
@@ -56,10 +57,10 @@ class VerletNeighborLists {
   /// out = the candidates within the support, out_factors their kernel gradient factors: queries `x`,
   /// sources `sources`.
   void filter(const NeighborList& candidates, const Vec3Array& x, const Vec3Array& sources, NeighborList& out,
-              ScalarArray& out_factors);
+              GradientFactorArray& out_factors);
   /// out_factors = the kernel gradient factors of the pairs of `list` (all within the support).
   void gradient_factors(const NeighborList& list, const Vec3Array& x, const Vec3Array& sources,
-                        ScalarArray& out_factors) const;
+                        GradientFactorArray& out_factors) const;
 
   CubicSplineKernel m_kernel;  // a copy: a reference into the owner would dangle when the owner is moved
   Scalar m_support;
@@ -75,8 +76,8 @@ class VerletNeighborLists {
   NeighborList m_boundary_candidates;
   NeighborList m_fluid;
   NeighborList m_boundary;
-  ScalarArray m_fluid_factors;
-  ScalarArray m_boundary_factors;
+  GradientFactorArray m_fluid_factors;
+  GradientFactorArray m_boundary_factors;
   IndexArray m_kept;      // filter(): kept indices at their candidates' offsets
   ScalarArray m_kept_r2;  // filter(): their squared distances
 };

@@ -49,14 +49,20 @@ std::vector<T> in_two_ranges(std::size_t n, std::size_t split, Loop loop) {
   return out;
 }
 
-ScalarArray factors_of(const CubicSplineKernel& kernel, const NeighborList& list, const Vec3Array& x,
-                       const Vec3Array& sources) {
-  ScalarArray factors;
+/// The gradient factors of the pairs of `list`, stored as the neighbor lists store them (float).
+GradientFactorArray factors_of(const CubicSplineKernel& kernel, const NeighborList& list, const Vec3Array& x,
+                               const Vec3Array& sources) {
+  GradientFactorArray factors;
   for (std::size_t i = 0; i < x.size(); ++i) {
     for (const Index* j = list.begin(i); j != list.end(i); ++j)
-      factors.push_back(kernel.gradient_factor((x[i] - sources[*j]).squaredNorm()));
+      factors.push_back(static_cast<float>(kernel.gradient_factor((x[i] - sources[*j]).squaredNorm())));
   }
   return factors;
+}
+
+/// grad W(x_i - x_j) with its factor rounded to float, as the pressure loop is given it.
+Vec3 stored_gradient(const CubicSplineKernel& kernel, const Vec3& x_ij) {
+  return Scalar{static_cast<float>(kernel.gradient_factor(x_ij.squaredNorm()))} * x_ij;
 }
 
 /// Random fluid points (about 60 neighbors inside, fewer at the faces) over a slab of boundary points (none
@@ -69,7 +75,7 @@ struct Scene {
   ScalarArray psi;
   ScalarArray p_over_rho2;
   NeighborList fluid, boundary;
-  ScalarArray fluid_factors, boundary_factors;
+  GradientFactorArray fluid_factors, boundary_factors;
   PackedPointArray boundary_packed;
 
   explicit Scene(bool uniform_mass) {
@@ -148,12 +154,13 @@ void check_pressure_accelerations(bool uniform_mass) {
     Scalar magnitude = 0.0;  // sum of |terms|: the scale of the rounding
     for (const Index* j = s.fluid.begin(i); j != s.fluid.end(i); ++j) {
       const Vec3 term = p.masses[*j] * (s.p_over_rho2[i] + s.p_over_rho2[*j]) *
-                        s.kernel.gradient(p.positions[i] - p.positions[*j]);
+                        stored_gradient(s.kernel, p.positions[i] - p.positions[*j]);
       expected -= term;
       magnitude += term.norm();
     }
     for (const Index* b = s.boundary.begin(i); b != s.boundary.end(i); ++b) {
-      const Vec3 term = s.psi[*b] * s.p_over_rho2[i] * s.kernel.gradient(p.positions[i] - s.boundary_x[*b]);
+      const Vec3 term =
+          s.psi[*b] * s.p_over_rho2[i] * stored_gradient(s.kernel, p.positions[i] - s.boundary_x[*b]);
       expected -= term;
       magnitude += term.norm();
     }

@@ -25,14 +25,15 @@ std::vector<std::uint32_t> sequential_ids(std::size_t n) {
   return ids;
 }
 
-/// Every pair's gradient factor is the kernel's at the pair's distance now.
-void expect_gradient_factors(const NeighborList& list, const ScalarArray& factors, const Vec3Array& points,
-                             const Vec3Array& sources) {
+/// Every pair's gradient factor is the kernel's at the pair's distance now, rounded to float: within half a
+/// float ulp (2^-24 relative) of the double value, plus 1e-12 for the double's own rounding.
+void expect_gradient_factors(const NeighborList& list, const GradientFactorArray& factors,
+                             const Vec3Array& points, const Vec3Array& sources) {
   ASSERT_EQ(factors.size(), list.indices.size());
   for (std::size_t i = 0; i < points.size(); ++i) {
     for (std::uint32_t n = list.offsets[i]; n < list.offsets[i + 1]; ++n) {
       const Scalar expected = kKernel.gradient_factor((sources[list.indices[n]] - points[i]).squaredNorm());
-      ASSERT_NEAR(factors[n], expected, 1e-12 * std::abs(expected))
+      ASSERT_NEAR(factors[n], expected, (0x1p-24 + 1e-12) * std::abs(expected))
           << "pair " << i << ", " << list.indices[n];
     }
   }
