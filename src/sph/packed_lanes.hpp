@@ -8,7 +8,7 @@
 /// The loops that evaluate the kernel (densities, XSPH) take eight neighbors at a time: a square root of
 /// eight lanes costs what one of four does on the AVX-512 copy, and the densities ran 1.3-1.5 times faster
 /// than at four lanes (59K dam break, 1 thread, bench/bench_pair_loops). The pressure loop, a few
-/// multiplies per pair, stays at four: at eight it ran 1.2-1.4 times slower (its masked last group and
+/// multiplies per pair, stays at four: at eight it ran 1.1-1.4 times slower (its masked last group and
 /// its three eight-lane sums cost more than the lanes saved).
 
 #include <cmath>
@@ -111,9 +111,9 @@ struct EightPoints {
 
 /// The last group of a neighbor list's entries [n, end) when fewer than eight are left (0 < end - n < 8):
 /// `js` points to eight readable indices whose first end - n are the entries, `active` marks those lanes.
-/// The lanes after them hold the next particle's entries (real points, their terms dropped by the caller),
-/// or at the very end of the list copies of its last index; a padded copy for every particle cost as much as
-/// the scalar loop it replaced.
+/// The lanes after them hold the next particle's entries, read in place (real points, their terms dropped
+/// by the caller); only at the very end of the list, where reading on would leave the array, are they copies
+/// of its last index (test_fluid_context covers that group; without the copies ASan reports an overflow).
 struct TailGroup {
   const Index* js;
   WideMask active;
@@ -133,19 +133,6 @@ struct TailGroup {
   for (std::uint32_t l = 0; l < kWide; ++l)
     out.padded[l] = indices[n + (l < count ? l : count - 1)];
   out.js = out.padded;
-}
-
-/// The per-entry values `values` (as long as the list) of a tail group's lanes, zero in its inactive lanes.
-[[gnu::always_inline]] inline void tail_values(const Scalar* values, std::size_t size, std::uint32_t n,
-                                               const TailGroup& tail, Wide& out) {
-  if (n + kWide <= size) {
-    std::memcpy(&out, values + n, sizeof(Wide));
-    out = tail.active ? out : Wide{};
-    return;
-  }
-  out = Wide{};
-  for (std::uint32_t l = 0; l < kWide && tail.active[l]; ++l)
-    out[l] = values[n + l];
 }
 
 }  // namespace
