@@ -15,26 +15,15 @@ namespace {
 [[gnu::always_inline]] inline Scalar kernel_sum(const CubicSplineKernel& k, const NeighborList& list,
                                                 std::size_t i, const PackedPoint& xi,
                                                 const PackedPoint* sources) {
-  const Index* js = list.indices.data();
-  std::uint32_t n = list.offsets[i];
-  const std::uint32_t end = list.offsets[i + 1];
   Wide sum = {};
-  for (; n + kWide <= end; n += kWide) {
-    EightPoints p;
-    load_eight(sources, js + n, p);
-    Wide w;
-    kernel_at_eight(k, xi, p, w);
-    sum += p.w * w;
-  }
-  if (n < end) {
-    TailGroup tail;
-    tail_group(js, list.indices.size(), n, end, tail);
-    EightPoints p;
-    load_eight(sources, tail.js, p);
-    Wide w;
-    kernel_at_eight(k, xi, p, w);
-    sum += tail.active ? p.w * w : Wide{};
-  }
+  for_each_eight(
+      list, i, [&](const Index* group, const WideMask& active) __attribute__((always_inline)) {
+        EightPoints p;
+        load_eight(sources, group, p);
+        Wide w;
+        kernel_at_eight(k, xi, p, w);
+        sum += active ? p.w * w : Wide{};
+      });
   return wide_sum(sum);
 }
 

@@ -109,30 +109,32 @@ struct EightPoints {
     w[l] = k.value(std::sqrt(r2[l]));
 }
 
-/// The last group of a neighbor list's entries [n, end) when fewer than eight are left (0 < end - n < 8):
-/// `js` points to eight readable indices whose first end - n are the entries, `active` marks those lanes.
-/// The lanes after them hold the next particle's entries, read in place (real points, their terms dropped
-/// by the caller); only at the very end of the list, where reading on would leave the array, are they copies
-/// of its last index (test_fluid_context covers that group; without the copies ASan reports an overflow).
-struct TailGroup {
-  const Index* js;
-  WideMask active;
-  Index padded[kWide];
-};
-
-/// The tail group of the entries [n, end) of a list of `size` entries `indices` (see TailGroup).
-[[gnu::always_inline]] inline void tail_group(const Index* indices, std::size_t size, std::uint32_t n,
-                                              std::uint32_t end, TailGroup& out) {
+/// Calls body(js, active) for the neighbors of particle i in `list`, eight at a time: `js` points to eight
+/// readable indices, `active` marks the lanes that are i's neighbors (all of them but in the last group,
+/// which takes the last count mod 8). The last group's other lanes hold the next particle's entries, read in
+/// place (real points, whose terms the body drops); only at the very end of the list, where reading on would
+/// leave the array, are they copies of its last index (test_fluid_context covers that group; without the
+/// copies ASan reports an overflow). `body` must be always_inline (see above).
+template <class Body>
+[[gnu::always_inline]] inline void for_each_eight(const NeighborList& list, std::size_t i, Body&& body) {
+  const Index* js = list.indices.data();
+  std::uint32_t n = list.offsets[i];
+  const std::uint32_t end = list.offsets[i + 1];
+  const WideMask all = {-1, -1, -1, -1, -1, -1, -1, -1};
+  for (; n + kWide <= end; n += kWide)
+    body(js + n, all);
+  if (n == end) return;
   const std::uint32_t count = end - n;
   const WideMask lane = {0, 1, 2, 3, 4, 5, 6, 7};
-  out.active = lane < static_cast<std::int64_t>(count);
-  if (n + kWide <= size) {
-    out.js = indices + n;
+  const WideMask active = lane < static_cast<std::int64_t>(count);
+  if (n + kWide <= list.indices.size()) {
+    body(js + n, active);
     return;
   }
+  Index padded[kWide];
   for (std::uint32_t l = 0; l < kWide; ++l)
-    out.padded[l] = indices[n + (l < count ? l : count - 1)];
-  out.js = out.padded;
+    padded[l] = js[n + (l < count ? l : count - 1)];
+  body(padded, active);
 }
 
 }  // namespace

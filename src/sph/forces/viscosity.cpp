@@ -19,34 +19,23 @@ DRENCH_SIMD_CLONES void add_xsph(const FluidContext& ctx, const PackedPointArray
   const CubicSplineKernel& k = ctx.kernel;
   const PackedPoint* xs = x_volume.data();
   const PackedPoint* vs = velocities.data();
-  const Index* js = ctx.fluid_neighbors.indices.data();
   for (std::size_t i = begin; i < end; ++i) {
     const PackedPoint& xi = xs[i];
     const PackedPoint& vi = vs[i];
-    std::uint32_t n = ctx.fluid_neighbors.offsets[i];
-    const std::uint32_t last = ctx.fluid_neighbors.offsets[i + 1];
     Wide sx = {}, sy = {}, sz = {};
-    // Inlined by force: a lambda is not part of the DRENCH_SIMD_CLONES copy, and out of line it ran as
-    // baseline code, 2.7 times slower.
-    const auto add = [&](const Index* group, const WideMask& active) __attribute__((always_inline)) {
-      EightPoints p, v;
-      load_eight(xs, group, p);
-      load_eight(vs, group, v);
-      Wide w;
-      kernel_at_eight(k, xi, p, w);
-      const Wide s = active ? p.w * w : Wide{};
-      sx += s * (v.x - vi.x);
-      sy += s * (v.y - vi.y);
-      sz += s * (v.z - vi.z);
-    };
-    const WideMask all = {-1, -1, -1, -1, -1, -1, -1, -1};
-    for (; n + kWide <= last; n += kWide)
-      add(js + n, all);
-    if (n < last) {
-      TailGroup tail;
-      tail_group(js, ctx.fluid_neighbors.indices.size(), n, last, tail);
-      add(tail.js, tail.active);
-    }
+    for_each_eight(
+        ctx.fluid_neighbors,
+        i, [&](const Index* group, const WideMask& active) __attribute__((always_inline)) {
+          EightPoints p, v;
+          load_eight(xs, group, p);
+          load_eight(vs, group, v);
+          Wide w;
+          kernel_at_eight(k, xi, p, w);
+          const Wide s = active ? p.w * w : Wide{};
+          sx += s * (v.x - vi.x);
+          sy += s * (v.y - vi.y);
+          sz += s * (v.z - vi.z);
+        });
     const Scalar ax = wide_sum(sx), ay = wide_sum(sy), az = wide_sum(sz);
     accelerations[i - begin] += factor * Vec3(ax, ay, az);
   }
