@@ -29,13 +29,25 @@ DRENCH_SIMD_CLONES void gradient_factor_rows(const CubicSplineKernel& kernel, co
   }
 }
 
-/// factors[k] = the kernel's gradient factor at the squared distance r2[k] (unit: m^2), rounded to float, k <
-/// count. Compiled per CPU as gradient_factor_rows.
-DRENCH_SIMD_CLONES void gradient_factors_of(const CubicSplineKernel& kernel, const Scalar* r2,
-                                            std::uint32_t count, float* factors) {
+/// The kept pairs of the particles [begin, end) moved to their place in the filtered list: particle i's kept
+/// indices and squared distances (unit: m^2) start at candidate_offsets[i] in kept and kept_r2, and go to
+/// out_offsets[i] in out_indices, with their gradient factors rounded to float in out_factors. Compiled per
+/// CPU as gradient_factor_rows, and called per chunk (one dispatch per chunk, as for_each_chunk's loops).
+DRENCH_SIMD_CLONES void move_kept_rows(const CubicSplineKernel& kernel,
+                                       const std::uint32_t* candidate_offsets,
+                                       const std::uint32_t* out_offsets, const Index* kept,
+                                       const Scalar* kept_r2, std::size_t begin, std::size_t end,
+                                       Index* out_indices, float* out_factors) {
+  for (std::size_t i = begin; i < end; ++i) {
+    const std::uint32_t first = candidate_offsets[i];
+    const std::uint32_t count = out_offsets[i + 1] - out_offsets[i];
+    std::copy_n(kept + first, count, out_indices + out_offsets[i]);
+    const Scalar* r2 = kept_r2 + first;
+    float* factors = out_factors + out_offsets[i];
 #pragma omp simd
-  for (std::uint32_t k = 0; k < count; ++k)
-    factors[k] = static_cast<float>(kernel.gradient_factor(r2[k]));
+    for (std::uint32_t k = 0; k < count; ++k)
+      factors[k] = static_cast<float>(kernel.gradient_factor(r2[k]));
+  }
 }
 
 }  // namespace
@@ -136,13 +148,10 @@ void VerletNeighborLists::filter(const NeighborList& candidates, const Vec3Array
     out.offsets[i + 1] += out.offsets[i];
   out.indices.resize(out.offsets[n]);
   out_factors.resize(out.offsets[n]);
-#pragma omp parallel for schedule(dynamic, kParticleChunk)
-  for (std::size_t i = 0; i < n; ++i) {
-    const std::uint32_t first = candidates.offsets[i];
-    const std::uint32_t count = out.offsets[i + 1] - out.offsets[i];
-    std::copy_n(m_kept.data() + first, count, out.indices.data() + out.offsets[i]);
-    gradient_factors_of(m_kernel, m_kept_r2.data() + first, count, out_factors.data() + out.offsets[i]);
-  }
+  for_each_chunk(n, [&](std::size_t begin, std::size_t end) {
+    move_kept_rows(m_kernel, candidates.offsets.data(), out.offsets.data(), m_kept.data(), m_kept_r2.data(),
+                   begin, end, out.indices.data(), out_factors.data());
+  });
 }
 
 }  // namespace drench
