@@ -22,9 +22,10 @@ struct NeighborList {
 /// One number per entry of a NeighborList: the kernel gradient factor f of the pair (grad W = f (x_i - x_j),
 /// unit: 1/m^5), in single precision. PCISPH's pressure loop streams the factors every iteration; as floats
 /// the stream is a third smaller (with the indices), and the 59K dam break's pressure phase ran 2-21% faster
-/// in five interleaved 100-step runs on 1 thread (measured; a warm-cache benchmark of the loop alone showed
-/// no difference, so the gain is the cache the other passes keep). The relative rounding, at most 2^-24, is
-/// far below any solver tolerance, and f_ij = f_ji still holds exactly (the same squared distance).
+/// in five interleaved 100-step runs on 1 thread (README, Performance, has the command; a warm-cache
+/// benchmark of the loop alone showed no difference, so the gain is the cache the other passes keep). The
+/// relative rounding, at most 2^-24, is far below any solver tolerance, and f_ij = f_ji still holds exactly
+/// (the same squared distance).
 using GradientFactorArray = std::vector<float>;
 
 /// Uniform-grid neighbor search. `build` sorts the source points into cells; `find` answers, for every query

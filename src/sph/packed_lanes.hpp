@@ -3,13 +3,15 @@
 /// PackedPoint arrays (sph/fluid_context.cpp, sph/forces/viscosity.cpp) and the grid search's scan
 /// (sph/neighbor_search.cpp). Internal to those files' DRENCH_SIMD_CLONES functions; everything is in an
 /// unnamed namespace and always inlined, so each copy compiles its own. A lambda in such a function must be
-/// always_inline as well: out of line it is compiled for the baseline only (measured: XSPH 2.7 times slower).
+/// always_inline as well: out of line it is compiled for the baseline only (XSPH ran 2.7 times slower so,
+/// timed in-process against the inlined version on bench_pair_loops' 59K state; that harness is not kept).
 ///
 /// The loops that evaluate the kernel (densities, XSPH) take eight neighbors at a time: a square root of
-/// eight lanes costs what one of four does on the AVX-512 copy, and the densities ran 1.3-1.5 times faster
-/// than at four lanes (59K dam break, 1 thread, bench/bench_pair_loops). The pressure loop, a few
-/// multiplies per pair, stays at four: at eight it ran 1.1-1.4 times slower (its masked last group and
-/// its three eight-lane sums cost more than the lanes saved).
+/// eight lanes costs what one of four does on the AVX-512 copy. The densities of the 59K state ran 1.88-1.97
+/// ms per pass against 2.54-2.57 ms at four lanes (`OMP_NUM_THREADS=1 build-bench/bench/bench_pair_loops
+/// --benchmark_filter=densities`, this build against bf7bffb's, alternating; a third round of the old build
+/// took 3.93 ms). The pressure loop, a few multiplies per pair, stays at four: an eight-lane version (not
+/// kept) ran 1.1-1.4 times slower, in and out of cache, timed in-process against this one on the same state.
 
 #include <cmath>
 #include <cstdint>

@@ -13,7 +13,8 @@ namespace {
 /// factors[n] = the kernel's gradient factor of the pair n of `list`, rounded to float, for the rows [begin,
 /// end): query i at xs[3i..3i+2], source j at ss[3j..3j+2] (unit: m). The distance is NeighborSearch::find's
 /// expression (source minus query, summed x, y, z). Compiled per CPU (DRENCH_SIMD_CLONES): a square root and
-/// a division per pair, which the baseline copy did two at a time (5% of a 59K PCISPH step, measured).
+/// a division per pair, which the baseline copy did two at a time (5% of a 59K PCISPH step: perf record -e
+/// cpu-clock of 150 steps of the README's 60-step drench run).
 DRENCH_SIMD_CLONES void gradient_factor_rows(const CubicSplineKernel& kernel, const NeighborList& list,
                                              const Scalar* xs, const Scalar* ss, std::size_t begin,
                                              std::size_t end, float* factors) {
