@@ -41,6 +41,27 @@ void for_each_chunk(std::size_t n, Body body) {
 #if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && defined(__linux__) && \
     !defined(DRENCH_NO_SIMD_CLONES)
 #define DRENCH_SIMD_CLONES __attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default")))
+#define DRENCH_HAS_SIMD_CLONES 1
 #else
 #define DRENCH_SIMD_CLONES
+#define DRENCH_HAS_SIMD_CLONES 0
 #endif
+
+namespace drench {
+
+/// True when the running copy of a DRENCH_SIMD_CLONES function has vectors of eight doubles (the
+/// x86-64-v4 copy, which the loader picks by the same test), or, without clones, when the build targets
+/// AVX-512. Loops over eight lanes pick their vector type by it (sph/packed_lanes.hpp): elsewhere an
+/// eight-double vector is split by GCC through the stack. Tested once; a read of a static after that.
+inline bool eight_double_vectors() {
+#if DRENCH_HAS_SIMD_CLONES
+  static const bool v4 = __builtin_cpu_supports("x86-64-v4");
+  return v4;
+#elif defined(__AVX512F__)
+  return true;
+#else
+  return false;
+#endif
+}
+
+}  // namespace drench

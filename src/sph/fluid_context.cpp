@@ -9,24 +9,6 @@
 namespace drench {
 namespace {
 
-/// sum over the neighbors j of i in `list` of w_j W(|x_i - x_j|), for `sources` packed with their weights.
-/// Eight neighbors at a time in eight lanes, the last (count mod 8) as one more group with its padding lanes
-/// dropped, in that order.
-[[gnu::always_inline]] inline Scalar kernel_sum(const CubicSplineKernel& k, const NeighborList& list,
-                                                std::size_t i, const PackedPoint& xi,
-                                                const PackedPoint* sources) {
-  Wide sum = {};
-  for_each_eight(
-      list, i, [&](const Index* group, const WideMask& active) __attribute__((always_inline)) {
-        EightPoints p;
-        load_eight(sources, group, p);
-        Wide w;
-        kernel_at_eight(k, xi, p, w);
-        sum += active ? p.w * w : Wide{};
-      });
-  return wide_sum(sum);
-}
-
 /// Subtracts sum_n c_n f_n (x_i - x_n) over the entries [n, end) of a neighbor list from (sx, sy, sz), with
 /// c_n = a(j_n) (alpha + w_n): the symmetric pressure term m_j (p_i / rho_i^2 + p_j / rho_j^2) for fluid
 /// neighbors, and Psi_b p_i / rho_i^2 (alpha = 0, a = p_i / rho_i^2) for boundary ones. `factors` are the
@@ -91,11 +73,14 @@ DRENCH_SIMD_CLONES void sph_densities(const FluidContext& ctx, const PackedPoint
   const PackedPoint* xs = x_mass.data();
   const PackedPoint* bs = ctx.boundary.data();
   const Scalar self = ctx.kernel.value(0.0);
-  for (std::size_t i = begin; i < end; ++i) {
-    const PackedPoint& xi = xs[i];
-    out[i - begin] = kernel_sum(ctx.kernel, ctx.fluid_neighbors, i, xi, xs) +
-                     kernel_sum(ctx.kernel, ctx.boundary_neighbors, i, xi, bs) + xi.w * self;
-  }
+  with_eight_lane_group([&](auto group) __attribute__((always_inline)) {
+    using Group = decltype(group);
+    for (std::size_t i = begin; i < end; ++i) {
+      const PackedPoint& xi = xs[i];
+      out[i - begin] = kernel_sum<Group>(ctx.kernel, ctx.fluid_neighbors, i, xi, xs) +
+                       kernel_sum<Group>(ctx.kernel, ctx.boundary_neighbors, i, xi, bs) + xi.w * self;
+    }
+  });
 }
 
 DRENCH_SIMD_CLONES void pressure_accelerations(const FluidContext& ctx, const PackedPointArray& x_p_over_rho2,

@@ -12,11 +12,19 @@
 /// --benchmark_filter=densities`, this build against bf7bffb's, alternating; a third round of the old build
 /// took 3.93 ms). The pressure loop, a few multiplies per pair, stays at four: an eight-lane version (not
 /// kept) ran 1.1-1.4 times slower, in and out of cache, timed in-process against this one on the same state.
-
+///
+/// An eight-lane group is one of two types with the same lanes, arithmetic and summation order, so the same
+/// bits: WideGroup, one vector of eight doubles, for the AVX-512 copy, and HalvesGroup, two vectors of four,
+/// for the AVX2 and baseline copies (eight_double_vectors() tells which copy runs). GCC lowers an
+/// eight-double vector on AVX2 through the stack: the AVX2 copy of the densities spent 402 of its 1,380
+/// instructions on stack loads and stores and ran 3.5 times slower than the AVX-512 copy (10.7-11.2 against
+/// 3.0-3.4 ms per pass on the 59K state, a build for x86-64-v3 against the cloned build on the same AMD EPYC
+/// VM); the two halves are what the four-lane loops compiled to there before.
 #include <cmath>
 #include <cstdint>
 #include <cstring>
 
+#include "common/parallel.hpp"
 #include "sph/fluid_context.hpp"
 
 namespace drench {
@@ -111,24 +119,115 @@ struct EightPoints {
     w[l] = k.value(std::sqrt(r2[l]));
 }
 
+/// w[l] = W(|x_i - x_l|) for the four points of `p` (unit: 1/m^3).
+[[gnu::always_inline]] inline void kernel_at_four(const CubicSplineKernel& k, const PackedPoint& xi,
+                                                  const FourPoints& p, Lanes& w) {
+  const Lanes dx = xi.x - p.x, dy = xi.y - p.y, dz = xi.z - p.z;
+  const Lanes r2 = dx * dx + dy * dy + dz * dz;
+  for (std::uint32_t l = 0; l < kLanes; ++l)
+    w[l] = k.value(std::sqrt(r2[l]));
+}
+
+/// Eight lanes as one vector of eight doubles: one register in the AVX-512 copy.
+struct WideGroup {
+  using Vec = Wide;
+  using Mask = WideMask;
+  using Points = EightPoints;
+  /// out = the first `count` lanes (an out parameter: a 64-byte vector returned by value makes GCC warn of
+  /// the ABI in the copies without AVX-512, -Wpsabi).
+  [[gnu::always_inline]] static void first(std::int64_t count, Mask& out) {
+    const WideMask lane = {0, 1, 2, 3, 4, 5, 6, 7};
+    out = lane < count;
+  }
+  [[gnu::always_inline]] static void load(const PackedPoint* points, const Index* js, Points& out) {
+    load_eight(points, js, out);
+  }
+  [[gnu::always_inline]] static void kernel(const CubicSplineKernel& k, const PackedPoint& xi,
+                                            const Points& p, Vec& w) {
+    kernel_at_eight(k, xi, p, w);
+  }
+  /// out = v in the active lanes, 0 in the others.
+  [[gnu::always_inline]] static void select(const Mask& active, const Vec& v, Vec& out) {
+    out = active ? v : Vec{};
+  }
+  [[gnu::always_inline]] static Scalar sum(const Vec& v) { return wide_sum(v); }
+};
+
+/// Eight doubles as two vectors of four (lanes 0-3 and 4-7), with the arithmetic of Wide lane by lane.
+struct Halves {
+  Lanes lo, hi;
+};
+[[gnu::always_inline]] inline Halves operator+(const Halves& a, const Halves& b) {
+  return {a.lo + b.lo, a.hi + b.hi};
+}
+[[gnu::always_inline]] inline Halves operator-(const Halves& a, const Halves& b) {
+  return {a.lo - b.lo, a.hi - b.hi};
+}
+[[gnu::always_inline]] inline Halves operator*(const Halves& a, const Halves& b) {
+  return {a.lo * b.lo, a.hi * b.hi};
+}
+[[gnu::always_inline]] inline Halves operator-(Scalar a, const Halves& b) {
+  return {a - b.lo, a - b.hi};
+}
+[[gnu::always_inline]] inline Halves operator-(const Halves& a, Scalar b) {
+  return {a.lo - b, a.hi - b};
+}
+[[gnu::always_inline]] inline Halves& operator+=(Halves& a, const Halves& b) {
+  a.lo += b.lo;
+  a.hi += b.hi;
+  return a;
+}
+
+/// Eight lanes as two vectors of four: two AVX2 registers, four SSE2 registers in the baseline copy.
+struct HalvesGroup {
+  typedef std::int64_t LaneMask __attribute__((vector_size(4 * sizeof(std::int64_t))));
+  using Vec = Halves;
+  struct Mask {
+    LaneMask lo, hi;
+  };
+  struct Points {
+    Halves x, y, z, w;
+  };
+  [[gnu::always_inline]] static void first(std::int64_t count, Mask& out) {
+    const LaneMask lane = {0, 1, 2, 3};
+    out = {lane < count, lane + 4 < count};
+  }
+  [[gnu::always_inline]] static void load(const PackedPoint* points, const Index* js, Points& out) {
+    FourPoints a, b;
+    load_four(points, js, a);
+    load_four(points, js + kLanes, b);
+    out = {{a.x, b.x}, {a.y, b.y}, {a.z, b.z}, {a.w, b.w}};
+  }
+  [[gnu::always_inline]] static void kernel(const CubicSplineKernel& k, const PackedPoint& xi,
+                                            const Points& p, Vec& w) {
+    kernel_at_four(k, xi, {p.x.lo, p.y.lo, p.z.lo, p.w.lo}, w.lo);
+    kernel_at_four(k, xi, {p.x.hi, p.y.hi, p.z.hi, p.w.hi}, w.hi);
+  }
+  [[gnu::always_inline]] static void select(const Mask& active, const Vec& v, Vec& out) {
+    out = {active.lo ? v.lo : Lanes{}, active.hi ? v.hi : Lanes{}};
+  }
+  /// ((a0 + a1) + (a2 + a3)) + ((a4 + a5) + (a6 + a7)), as wide_sum.
+  [[gnu::always_inline]] static Scalar sum(const Vec& v) { return lane_sum(v.lo) + lane_sum(v.hi); }
+};
+
 /// Calls body(js, active) for the neighbors of particle i in `list`, eight at a time: `js` points to eight
-/// readable indices, `active` marks the lanes that are i's neighbors (all of them but in the last group,
-/// which takes the last count mod 8). The last group's other lanes hold the next particle's entries, read in
-/// place (real points, whose terms the body drops); only at the very end of the list, where reading on would
-/// leave the array, are they copies of its last index (test_fluid_context covers that group; without the
-/// copies ASan reports an overflow). `body` must be always_inline (see above).
-template <class Body>
+/// readable indices, `active` (a Group::Mask) marks the lanes that are i's neighbors (all of them but in the
+/// last group, which takes the last count mod 8). The last group's other lanes hold the next particle's
+/// entries, read in place (real points, whose terms the body drops); only at the very end of the list, where
+/// reading on would leave the array, are they copies of its last index (test_fluid_context covers that group;
+/// without the copies ASan reports an overflow). `body` must be always_inline (see above).
+template <class Group, class Body>
 [[gnu::always_inline]] inline void for_each_eight(const NeighborList& list, std::size_t i, Body&& body) {
   const Index* js = list.indices.data();
   std::uint32_t n = list.offsets[i];
   const std::uint32_t end = list.offsets[i + 1];
-  const WideMask all = {-1, -1, -1, -1, -1, -1, -1, -1};
+  typename Group::Mask all, active;
+  Group::first(kWide, all);
   for (; n + kWide <= end; n += kWide)
     body(js + n, all);
   if (n == end) return;
   const std::uint32_t count = end - n;
-  const WideMask lane = {0, 1, 2, 3, 4, 5, 6, 7};
-  const WideMask active = lane < static_cast<std::int64_t>(count);
+  Group::first(count, active);
   if (n + kWide <= list.indices.size()) {
     body(js + n, active);
     return;
@@ -137,6 +236,40 @@ template <class Body>
   for (std::uint32_t l = 0; l < kWide; ++l)
     padded[l] = js[n + (l < count ? l : count - 1)];
   body(padded, active);
+}
+
+/// sum over the neighbors j of i in `list` of w_j W(|x_i - x_j|), for `sources` packed with their weights.
+/// Eight neighbors at a time in eight lanes of Group (packed_lanes.hpp), the last (count mod 8) as one more
+/// group with its padding lanes dropped, in that order. The densities' loop (sph_densities); here so that the
+/// tests run it with either group type.
+template <class Group>
+[[gnu::always_inline]] inline Scalar kernel_sum(const CubicSplineKernel& k, const NeighborList& list,
+                                                std::size_t i, const PackedPoint& xi,
+                                                const PackedPoint* sources) {
+  typename Group::Vec sum = {};
+  for_each_eight<Group>(
+      list, i, [&](const Index* group, const typename Group::Mask& active) __attribute__((always_inline)) {
+        typename Group::Points p;
+        Group::load(sources, group, p);
+        typename Group::Vec w;
+        Group::kernel(k, xi, p, w);
+        typename Group::Vec term;
+        Group::select(active, p.w * w, term);
+        sum += term;
+      });
+  return Group::sum(sum);
+}
+
+/// Calls loop(Group{}) with the group type native to the running copy of a DRENCH_SIMD_CLONES function:
+/// WideGroup in the AVX-512 copy, HalvesGroup in the others. Both give the same bits. `loop` must be
+/// always_inline (see above).
+template <class Loop>
+[[gnu::always_inline]] inline void with_eight_lane_group(Loop&& loop) {
+  if (eight_double_vectors()) {
+    loop(WideGroup{});
+  } else {
+    loop(HalvesGroup{});
+  }
 }
 
 }  // namespace

@@ -2,7 +2,9 @@
 // eight (densities, XSPH) or four (pressure) neighbors at a time and transpose them in registers. They must
 // give the textbook sums: SPH density (Akinci et al. 2012 eq. 6), symmetric pressure acceleration (eq. 10)
 // and XSPH (Monaghan 1989), written here pair by pair with Eigen, for every neighbor count modulo eight, and
-// with a last group that ends the list (padded with copies, not the next particle's entries).
+// with a last group that ends the list (padded with copies, not the next particle's entries). The eight-lane
+// loops have two group types (one vector of eight doubles in the AVX-512 copy, two of four elsewhere), and
+// the copy that runs here is the CPU's; both types must give the same bits.
 
 #include <gtest/gtest.h>
 
@@ -13,6 +15,7 @@
 #include "neighbor_test_helpers.hpp"
 #include "sph/fluid_context.hpp"
 #include "sph/forces/viscosity.hpp"
+#include "sph/packed_lanes.hpp"
 
 namespace drench {
 namespace {
@@ -205,6 +208,27 @@ TEST(FluidContext, PressureAccelerationsAreTheSymmetricSphSums) {
 TEST(ViscosityXsph, AddsTheXsphSumsToTheAccelerations) {
   check_xsph(true);
   check_xsph(false);
+}
+
+/// The kernel sums of both eight-lane group types, bit for bit, over every tail length of the fluid and the
+/// boundary lists: which type runs depends on the CPU, the results must not.
+TEST(PackedLanes, WideAndHalvesGroupsGiveTheSameBits) {
+  Scene s(false);
+  expect_every_tail(s.fluid);
+  expect_every_tail(s.boundary);
+  const PackedPointArray x_mass = pack(s.particles.positions, s.particles.masses);
+  std::size_t nonzero = 0;
+  for (std::size_t i = 0; i < x_mass.size(); ++i) {
+    using Sources = std::pair<const NeighborList*, const PackedPoint*>;
+    for (const auto& [list, sources] :
+         {Sources{&s.fluid, x_mass.data()}, Sources{&s.boundary, s.boundary_packed.data()}}) {
+      const Scalar wide = kernel_sum<WideGroup>(s.kernel, *list, i, x_mass[i], sources);
+      const Scalar halves = kernel_sum<HalvesGroup>(s.kernel, *list, i, x_mass[i], sources);
+      EXPECT_EQ(wide, halves) << "particle " << i;
+      nonzero += wide != 0.0;
+    }
+  }
+  EXPECT_GT(nonzero, x_mass.size()) << "the sums must not be trivially zero";
 }
 
 }  // namespace
