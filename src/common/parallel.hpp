@@ -49,15 +49,15 @@ void for_each_chunk(std::size_t n, Body body) {
 
 namespace drench {
 
-/// True when the running copy of a DRENCH_SIMD_CLONES function has vectors of eight doubles (the
-/// x86-64-v4 copy, which the loader picks by the same test), or, without clones, when the build targets
-/// AVX-512. Loops over eight lanes pick their vector type by it (sph/packed_lanes.hpp): elsewhere an
-/// eight-double vector is split by GCC through the stack. Tested once; a read of a static after that.
-inline bool eight_double_vectors() {
+/// True when the running copy of a DRENCH_SIMD_CLONES function is the x86-64-v3 (AVX2) one, the loader
+/// picking it by the same tests; without clones, when the build targets AVX2 but not AVX-512. Loops over
+/// eight lanes pick their vector type by it (sph/packed_lanes.hpp). Tested once; a read of a static after
+/// that.
+inline bool avx2_copy() {
 #if DRENCH_HAS_SIMD_CLONES
-  static const bool v4 = __builtin_cpu_supports("x86-64-v4");
-  return v4;
-#elif defined(__AVX512F__)
+  static const bool v3 = __builtin_cpu_supports("x86-64-v3") && !__builtin_cpu_supports("x86-64-v4");
+  return v3;
+#elif defined(__AVX2__) && !defined(__AVX512F__)
   return true;
 #else
   return false;

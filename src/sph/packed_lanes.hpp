@@ -14,12 +14,13 @@
 /// kept) ran 1.1-1.4 times slower, in and out of cache, timed in-process against this one on the same state.
 ///
 /// An eight-lane group is one of two types with the same lanes, arithmetic and summation order, so the same
-/// bits: WideGroup, one vector of eight doubles, for the AVX-512 copy, and HalvesGroup, two vectors of four,
-/// for the AVX2 and baseline copies (eight_double_vectors() tells which copy runs). GCC lowers an
-/// eight-double vector on AVX2 through the stack: the AVX2 copy of the densities spent 402 of its 1,380
-/// instructions on stack loads and stores and ran 3.5 times slower than the AVX-512 copy (10.7-11.2 against
-/// 3.0-3.4 ms per pass on the 59K state, a build for x86-64-v3 against the cloned build on the same AMD EPYC
-/// VM); the two halves are what the four-lane loops compiled to there before.
+/// bits: HalvesGroup, two vectors of four doubles, for the AVX2 copy, and WideGroup, one vector of eight, for
+/// the others (avx2_copy() tells which copy runs). GCC lowers an eight-double vector on AVX2 through the
+/// stack: the AVX2 copy of the densities spent 402 of its 1,380 instructions on stack loads and stores and
+/// ran 3.5 times slower than the AVX-512 copy (10.7-11.2 against 3.0-3.4 ms per pass on the 59K state, a
+/// build for x86-64-v3 against the cloned build on the same AMD EPYC VM; 3.5-4.1 ms with the halves). In the
+/// baseline copy (SSE2) the halves were no faster for the densities and 1.7 times slower for XSPH (a build
+/// without clones, `bench_pair_loops --benchmark_filter='densities/0|xsph'`), so it keeps WideGroup.
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -128,7 +129,7 @@ struct EightPoints {
     w[l] = k.value(std::sqrt(r2[l]));
 }
 
-/// Eight lanes as one vector of eight doubles: one register in the AVX-512 copy.
+/// Eight lanes as one vector of eight doubles: one register in the AVX-512 copy, four in the baseline copy.
 struct WideGroup {
   using Vec = Wide;
   using Mask = WideMask;
@@ -178,7 +179,7 @@ struct Halves {
   return a;
 }
 
-/// Eight lanes as two vectors of four: two AVX2 registers, four SSE2 registers in the baseline copy.
+/// Eight lanes as two vectors of four: two registers in the AVX2 copy.
 struct HalvesGroup {
   typedef std::int64_t LaneMask __attribute__((vector_size(4 * sizeof(std::int64_t))));
   using Vec = Halves;
@@ -260,15 +261,15 @@ template <class Group>
   return Group::sum(sum);
 }
 
-/// Calls loop(Group{}) with the group type native to the running copy of a DRENCH_SIMD_CLONES function:
-/// WideGroup in the AVX-512 copy, HalvesGroup in the others. Both give the same bits. `loop` must be
+/// Calls loop(Group{}) with the group type that suits the running copy of a DRENCH_SIMD_CLONES function:
+/// HalvesGroup in the AVX2 copy, WideGroup in the others. Both give the same bits. `loop` must be
 /// always_inline (see above).
 template <class Loop>
 [[gnu::always_inline]] inline void with_eight_lane_group(Loop&& loop) {
-  if (eight_double_vectors()) {
-    loop(WideGroup{});
-  } else {
+  if (avx2_copy()) {
     loop(HalvesGroup{});
+  } else {
+    loop(WideGroup{});
   }
 }
 
