@@ -73,8 +73,8 @@ DRENCH_SIMD_CLONES void sph_densities(const FluidContext& ctx, const PackedPoint
   const PackedPoint* xs = x_mass.data();
   const PackedPoint* bs = ctx.boundary.data();
   const Scalar self = ctx.kernel.value(0.0);
-  with_eight_lane_group([&](auto group) __attribute__((always_inline)) {
-    using Group = decltype(group);
+  with_eight_lane_group([&](auto lanes) __attribute__((always_inline)) {
+    using Group = decltype(lanes);
     for (std::size_t i = begin; i < end; ++i) {
       const PackedPoint& xi = xs[i];
       out[i - begin] = kernel_sum<Group>(ctx.kernel, ctx.fluid_neighbors, i, xi, xs) +

@@ -1,8 +1,9 @@
 #pragma once
 /// Four or eight neighbors at a time: the vector types and the loads shared by the SPH pair loops over
 /// PackedPoint arrays (sph/fluid_context.cpp, sph/forces/viscosity.cpp) and the grid search's scan
-/// (sph/neighbor_search.cpp). Internal to those files' DRENCH_SIMD_CLONES functions; everything is in an
-/// unnamed namespace and always inlined, so each copy compiles its own. A lambda in such a function must be
+/// (sph/neighbor_search.cpp). Internal to those files' DRENCH_SIMD_CLONES functions (and their tests, which
+/// run both eight-lane group types); everything is in an unnamed namespace and always inlined, so each copy
+/// compiles its own. A lambda in such a function must be
 /// always_inline as well: out of line it is compiled for the baseline only (XSPH ran 2.7 times slower so,
 /// timed in-process against the inlined version on bench_pair_loops' 59K state; that harness is not kept).
 ///
@@ -66,9 +67,9 @@ struct FourPoints {
   return (a[0] + a[1]) + (a[2] + a[3]);
 }
 
-/// Eight doubles: the pair loops' vector. One AVX-512 register in the x86-64-v4 copy, two AVX2 registers in
-/// the x86-64-v3 copy, four SSE2 registers in the baseline copy; the lanes are the same in all, so are the
-/// sums.
+/// Eight doubles: the pair loops' vector in WideGroup. One AVX-512 register in the x86-64-v4 copy, four SSE2
+/// registers in the baseline copy (the x86-64-v3 copy uses HalvesGroup instead, see above); the lanes are the
+/// same in all, so are the sums.
 typedef Scalar Wide __attribute__((vector_size(8 * sizeof(Scalar))));
 /// A mask of Wide lanes: all bits set where true.
 typedef std::int64_t WideMask __attribute__((vector_size(8 * sizeof(std::int64_t))));
@@ -111,21 +112,14 @@ struct EightPoints {
   return ((a[0] + a[1]) + (a[2] + a[3])) + ((a[4] + a[5]) + (a[6] + a[7]));
 }
 
-/// w[l] = W(|x_i - x_l|) for the eight points of `p` (unit: 1/m^3).
-[[gnu::always_inline]] inline void kernel_at_eight(const CubicSplineKernel& k, const PackedPoint& xi,
-                                                   const EightPoints& p, Wide& w) {
-  const Wide dx = xi.x - p.x, dy = xi.y - p.y, dz = xi.z - p.z;
-  const Wide r2 = dx * dx + dy * dy + dz * dz;
-  for (std::uint32_t l = 0; l < kWide; ++l)
-    w[l] = k.value(std::sqrt(r2[l]));
-}
-
-/// w[l] = W(|x_i - x_l|) for the four points of `p` (unit: 1/m^3).
-[[gnu::always_inline]] inline void kernel_at_four(const CubicSplineKernel& k, const PackedPoint& xi,
-                                                  const FourPoints& p, Lanes& w) {
-  const Lanes dx = xi.x - p.x, dy = xi.y - p.y, dz = xi.z - p.z;
-  const Lanes r2 = dx * dx + dy * dy + dz * dz;
-  for (std::uint32_t l = 0; l < kLanes; ++l)
+/// w[l] = W(|x_i - x_l|) for the points of `p` (unit: 1/m^3): four (FourPoints, V = Lanes) or eight
+/// (EightPoints, V = Wide).
+template <class Points, class V>
+[[gnu::always_inline]] inline void kernel_at(const CubicSplineKernel& k, const PackedPoint& xi,
+                                             const Points& p, V& w) {
+  const V dx = xi.x - p.x, dy = xi.y - p.y, dz = xi.z - p.z;
+  const V r2 = dx * dx + dy * dy + dz * dz;
+  for (std::uint32_t l = 0; l < sizeof(V) / sizeof(Scalar); ++l)
     w[l] = k.value(std::sqrt(r2[l]));
 }
 
@@ -145,7 +139,7 @@ struct WideGroup {
   }
   [[gnu::always_inline]] static void kernel(const CubicSplineKernel& k, const PackedPoint& xi,
                                             const Points& p, Vec& w) {
-    kernel_at_eight(k, xi, p, w);
+    kernel_at(k, xi, p, w);
   }
   /// out = v in the active lanes, 0 in the others.
   [[gnu::always_inline]] static void select(const Mask& active, const Vec& v, Vec& out) {
@@ -158,17 +152,8 @@ struct WideGroup {
 struct Halves {
   Lanes lo, hi;
 };
-[[gnu::always_inline]] inline Halves operator+(const Halves& a, const Halves& b) {
-  return {a.lo + b.lo, a.hi + b.hi};
-}
-[[gnu::always_inline]] inline Halves operator-(const Halves& a, const Halves& b) {
-  return {a.lo - b.lo, a.hi - b.hi};
-}
 [[gnu::always_inline]] inline Halves operator*(const Halves& a, const Halves& b) {
   return {a.lo * b.lo, a.hi * b.hi};
-}
-[[gnu::always_inline]] inline Halves operator-(Scalar a, const Halves& b) {
-  return {a - b.lo, a - b.hi};
 }
 [[gnu::always_inline]] inline Halves operator-(const Halves& a, Scalar b) {
   return {a.lo - b, a.hi - b};
@@ -201,8 +186,8 @@ struct HalvesGroup {
   }
   [[gnu::always_inline]] static void kernel(const CubicSplineKernel& k, const PackedPoint& xi,
                                             const Points& p, Vec& w) {
-    kernel_at_four(k, xi, {p.x.lo, p.y.lo, p.z.lo, p.w.lo}, w.lo);
-    kernel_at_four(k, xi, {p.x.hi, p.y.hi, p.z.hi, p.w.hi}, w.hi);
+    kernel_at(k, xi, FourPoints{p.x.lo, p.y.lo, p.z.lo, p.w.lo}, w.lo);
+    kernel_at(k, xi, FourPoints{p.x.hi, p.y.hi, p.z.hi, p.w.hi}, w.hi);
   }
   [[gnu::always_inline]] static void select(const Mask& active, const Vec& v, Vec& out) {
     out = {active.lo ? v.lo : Lanes{}, active.hi ? v.hi : Lanes{}};
@@ -240,8 +225,8 @@ template <class Group, class Body>
 }
 
 /// sum over the neighbors j of i in `list` of w_j W(|x_i - x_j|), for `sources` packed with their weights.
-/// Eight neighbors at a time in eight lanes of Group (packed_lanes.hpp), the last (count mod 8) as one more
-/// group with its padding lanes dropped, in that order. The densities' loop (sph_densities); here so that the
+/// Eight neighbors at a time in eight lanes of Group, the last (count mod 8) as one more group with its
+/// padding lanes dropped, in that order. The densities' loop (sph_densities); here so that the
 /// tests run it with either group type.
 template <class Group>
 [[gnu::always_inline]] inline Scalar kernel_sum(const CubicSplineKernel& k, const NeighborList& list,
@@ -259,6 +244,30 @@ template <class Group>
         sum += term;
       });
   return Group::sum(sum);
+}
+
+/// sum over the neighbors j of i in `list` of V_j W(|x_i - x_j|) (v_j - v_i), for `xs` packed with the
+/// volumes V_j = m_j / rho_j and `vs` with the velocities (unit: m/s). Eight neighbors at a time as
+/// kernel_sum. XSPH's loop (sph/forces/viscosity.cpp); here so that the tests run it with either group type.
+template <class Group>
+[[gnu::always_inline]] inline Vec3 xsph_sum(const CubicSplineKernel& k, const NeighborList& list,
+                                            std::size_t i, const PackedPoint* xs, const PackedPoint* vs) {
+  const PackedPoint& xi = xs[i];
+  const PackedPoint& vi = vs[i];
+  typename Group::Vec sx = {}, sy = {}, sz = {};
+  for_each_eight<Group>(
+      list, i, [&](const Index* group, const typename Group::Mask& active) __attribute__((always_inline)) {
+        typename Group::Points p, v;
+        Group::load(xs, group, p);
+        Group::load(vs, group, v);
+        typename Group::Vec w, s;
+        Group::kernel(k, xi, p, w);
+        Group::select(active, p.w * w, s);
+        sx += s * (v.x - vi.x);
+        sy += s * (v.y - vi.y);
+        sz += s * (v.z - vi.z);
+      });
+  return Vec3(Group::sum(sx), Group::sum(sy), Group::sum(sz));
 }
 
 /// Calls loop(Group{}) with the group type that suits the running copy of a DRENCH_SIMD_CLONES function:

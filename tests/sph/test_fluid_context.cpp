@@ -3,8 +3,8 @@
 // give the textbook sums: SPH density (Akinci et al. 2012 eq. 6), symmetric pressure acceleration (eq. 10)
 // and XSPH (Monaghan 1989), written here pair by pair with Eigen, for every neighbor count modulo eight, and
 // with a last group that ends the list (padded with copies, not the next particle's entries). The eight-lane
-// loops have two group types (one vector of eight doubles in the AVX-512 copy, two of four elsewhere), and
-// the copy that runs here is the CPU's; both types must give the same bits.
+// loops have two group types (two vectors of four doubles in the AVX2 copy, one of eight in the others); the
+// public functions run the one of this CPU's copy, so a last test runs both and requires the same bits.
 
 #include <gtest/gtest.h>
 
@@ -210,13 +210,19 @@ TEST(ViscosityXsph, AddsTheXsphSumsToTheAccelerations) {
   check_xsph(false);
 }
 
-/// The kernel sums of both eight-lane group types, bit for bit, over every tail length of the fluid and the
-/// boundary lists: which type runs depends on the CPU, the results must not.
+/// The kernel sums (densities) and XSPH sums of both eight-lane group types, bit for bit, over every tail
+/// length of the fluid and the boundary lists: which type runs depends on the CPU, the results must not.
 TEST(PackedLanes, WideAndHalvesGroupsGiveTheSameBits) {
   Scene s(false);
   expect_every_tail(s.fluid);
   expect_every_tail(s.boundary);
-  const PackedPointArray x_mass = pack(s.particles.positions, s.particles.masses);
+  const ParticleSet& p = s.particles;
+  const PackedPointArray x_mass = pack(p.positions, p.masses);
+  ScalarArray volumes(p.size());
+  for (std::size_t i = 0; i < p.size(); ++i)
+    volumes[i] = p.masses[i] / p.densities[i];
+  const PackedPointArray x_volume = pack(p.positions, volumes);
+  const PackedPointArray velocities = pack(p.velocities, ScalarArray(p.size(), 0.0));
   std::size_t nonzero = 0;
   for (std::size_t i = 0; i < x_mass.size(); ++i) {
     using Sources = std::pair<const NeighborList*, const PackedPoint*>;
@@ -224,9 +230,14 @@ TEST(PackedLanes, WideAndHalvesGroupsGiveTheSameBits) {
          {Sources{&s.fluid, x_mass.data()}, Sources{&s.boundary, s.boundary_packed.data()}}) {
       const Scalar wide = kernel_sum<WideGroup>(s.kernel, *list, i, x_mass[i], sources);
       const Scalar halves = kernel_sum<HalvesGroup>(s.kernel, *list, i, x_mass[i], sources);
-      EXPECT_EQ(wide, halves) << "particle " << i;
+      EXPECT_EQ(wide, halves) << "density sum, particle " << i;
       nonzero += wide != 0.0;
     }
+    const Vec3 wide = xsph_sum<WideGroup>(s.kernel, s.fluid, i, x_volume.data(), velocities.data());
+    const Vec3 halves = xsph_sum<HalvesGroup>(s.kernel, s.fluid, i, x_volume.data(), velocities.data());
+    for (int c = 0; c < 3; ++c)
+      EXPECT_EQ(wide[c], halves[c]) << "XSPH sum, particle " << i << ", component " << c;
+    nonzero += wide.squaredNorm() != 0.0;
   }
   EXPECT_GT(nonzero, x_mass.size()) << "the sums must not be trivially zero";
 }

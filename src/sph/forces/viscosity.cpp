@@ -21,27 +21,8 @@ DRENCH_SIMD_CLONES void add_xsph(const FluidContext& ctx, const PackedPointArray
   const PackedPoint* vs = velocities.data();
   with_eight_lane_group([&](auto lanes) __attribute__((always_inline)) {
     using Group = decltype(lanes);
-    for (std::size_t i = begin; i < end; ++i) {
-      const PackedPoint& xi = xs[i];
-      const PackedPoint& vi = vs[i];
-      typename Group::Vec sx = {}, sy = {}, sz = {};
-      for_each_eight<Group>(
-          ctx.fluid_neighbors,
-          i, [&](const Index* group, const typename Group::Mask& active) __attribute__((always_inline)) {
-            typename Group::Points p, v;
-            Group::load(xs, group, p);
-            Group::load(vs, group, v);
-            typename Group::Vec w;
-            Group::kernel(k, xi, p, w);
-            typename Group::Vec s;
-            Group::select(active, p.w * w, s);
-            sx += s * (v.x - vi.x);
-            sy += s * (v.y - vi.y);
-            sz += s * (v.z - vi.z);
-          });
-      const Scalar ax = Group::sum(sx), ay = Group::sum(sy), az = Group::sum(sz);
-      accelerations[i - begin] += factor * Vec3(ax, ay, az);
-    }
+    for (std::size_t i = begin; i < end; ++i)
+      accelerations[i - begin] += factor * xsph_sum<Group>(k, ctx.fluid_neighbors, i, xs, vs);
   });
 }
 
