@@ -19,7 +19,7 @@
 /// the others (avx2_copy() tells which copy runs). GCC lowers an eight-double vector on AVX2 through the
 /// stack: the AVX2 copy of the densities spent 402 of its 1,380 instructions on stack loads and stores and
 /// ran 3.5 times slower than the AVX-512 copy (10.7-11.2 against 3.0-3.4 ms per pass on the 59K state, a
-/// build for x86-64-v3 against the cloned build on the same AMD EPYC VM; 3.5-4.1 ms with the halves). In the
+/// build for x86-64-v3 against the cloned build on the same AMD EPYC VM; 3.4-5.2 ms with the halves). In the
 /// baseline copy (SSE2) the halves were no faster for the densities and 1.7 times slower for XSPH (a build
 /// without clones, `bench_pair_loops --benchmark_filter='densities/0|xsph'`), so it keeps WideGroup.
 #include <cmath>
