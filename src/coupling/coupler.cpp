@@ -390,8 +390,13 @@ std::uint32_t Coupler::correct(const FluidView& fluid, ClothMesh& cloth, double 
   std::vector<std::pair<Index, Index>> pairs;
 
   const auto repulsion_start = Clock::now();
-  // Candidates for proximity: swept boxes grown by the thickness cover every start position within it.
-  m_broad_phase->find_pairs(ctx.x0(), ctx.x1(), cloth, thickness, nullptr, pairs);
+  // Candidates for proximity (find_contacts: a start position within the thickness of the triangle at the
+  // step's start): the particle's start point and the triangle's swept box, each grown by half the
+  // thickness, overlap for every such pair. The particle's swept box with each box grown by the whole
+  // thickness, as this query was before, found the same contacts among 5.1 times the pairs at a 5 mm
+  // thickness (12.9M against 2.52M over jet_on_cloth.json's 0.5 s; 2.2 times, 2.18M against 0.98M, at its
+  // 1 mm), and the 5 mm row of bench_jet_on_cloth spent 1.48 s on repulsion against 0.84-0.98 s.
+  m_broad_phase->find_pairs(ctx.x0(), ctx.x0(), cloth, 0.5 * thickness, nullptr, pairs);
   std::vector<Contact> contacts = find_contacts(ctx, pairs, thickness);
   stats.contacts += contacts.size();
   repulse(ctx, contacts, m_settings);

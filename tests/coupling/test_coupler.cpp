@@ -3,6 +3,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <random>
 
 #include "ccd/ccd_exact_reference.hpp"
@@ -225,6 +226,58 @@ TEST(Coupler, RepulsionStopsAnApproachWithinTheThickness) {
   EXPECT_EQ(stats.contacts, 1u);
   EXPECT_GE(particles.v[0].y(), 0.0);
   EXPECT_LE(particles.v[0].y(), 0.1 * 0.0005 / dt + 1e-12) << "the elastic impulse is capped at 0.1 d / dt";
+}
+
+/// Sec. 3.1's proximity test finds every particle-triangle pair whose start-of-step distance is below the
+/// cloth thickness, whatever the broad phase proposes: the contacts of one step equal the count over all
+/// pairs, each particle's closest points counted once (triangles sharing the edge or vertex a particle is
+/// closest to give one contact). Particles fly fast (swept boxes of several thicknesses) and the cloth
+/// moves, so a broad phase that grows its boxes too little would lose pairs.
+TEST(Coupler, FindsEveryContactWithinTheThickness) {
+  for (const double thickness : {0.001, 0.005}) {
+    ClothMesh mesh = grid_mesh(11, 0.1, 0.0, 1.0 / 2e-4);
+    std::mt19937_64 rng(11);
+    std::uniform_real_distribution<double> u(-1.0, 1.0);
+    for (std::size_t i = 0; i < mesh.node_count(); ++i)
+      mesh.positions_t1[i] += 0.003 * Vec3(u(rng), u(rng), u(rng));
+    Particles particles;
+    const double dt = 0.002;
+    for (int k = 0; k < 600; ++k) {
+      const Vec3 x(0.1 * (u(rng) + 1) / 2, 2.0 * thickness * u(rng), 0.1 * (u(rng) + 1) / 2);
+      particles.add(x, Vec3(2.0 * u(rng), 2.0 * u(rng), 2.0 * u(rng)), dt, kMass);
+    }
+    std::size_t expected = 0;
+    for (const Vec3& x : particles.x0) {
+      Vec3Array closest_points;
+      for (const Triangle& t : mesh.triangles) {
+        const Vec3& a = mesh.positions_t0[t[0]];
+        const Vec3& b = mesh.positions_t0[t[1]];
+        const Vec3& c = mesh.positions_t0[t[2]];
+        const Vec3 w = closest_point_barycentric(x, a, b, c);
+        const Vec3 point = w[0] * a + w[1] * b + w[2] * c;
+        if (!((x - point).norm() < thickness)) continue;
+        const bool seen = std::any_of(closest_points.begin(), closest_points.end(), [&](const Vec3& q) {
+          return (q - point).norm() <= 1e-12 * (1.0 + point.norm());
+        });
+        if (!seen) closest_points.push_back(point);
+      }
+      expected += closest_points.size();
+    }
+    ASSERT_GT(expected, 200u) << "the test needs many particles within the thickness";
+    for (const BroadPhaseKind broad_phase : {BroadPhaseKind::FCL, BroadPhaseKind::GRID}) {
+      Particles copy = particles;
+      ClothMesh cloth = mesh;
+      CouplingSettings settings;
+      settings.cloth_thickness = thickness;
+      settings.continuous = false;
+      settings.broad_phase = broad_phase;
+      Coupler coupler(settings);
+      CouplingStepStats stats;
+      coupler.step(copy.view(), cloth, dt, stats);
+      EXPECT_EQ(stats.contacts, expected) << "thickness " << thickness << " m, broad phase "
+                                          << (broad_phase == BroadPhaseKind::FCL ? "fcl" : "grid");
+    }
+  }
 }
 
 TEST(Coupler, NeverMovesPinnedNodes) {
