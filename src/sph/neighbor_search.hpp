@@ -30,7 +30,8 @@ using GradientFactorArray = std::vector<float>;
 
 /// Uniform-grid neighbor search. `build` sorts the source points into cells; `find` answers, for every query
 /// point, all source points at distance strictly less than the support radius. When the points' bounding box
-/// holds few enough cells (at most 4 per point), cells live in a dense array filled by a counting sort;
+/// holds few enough cells (at most 128 per point and 2^24 in all, or at most 4 per point), cells live in a
+/// dense array filled by a counting sort;
 /// otherwise (a jet spread far) in an open-addressing hash of their Morton keys, so the domain is unbounded
 /// (up to 2^20 cells from the origin on each axis; farther points are clamped into the outermost cells,
 /// which stays correct but slow).
@@ -56,6 +57,10 @@ class NeighborSearch {
 
   /// Morton key of the cell holding `x`.
   std::uint64_t cell_key(const Vec3& x) const;
+
+  /// True when the last build kept its cells in the dense array, false when it hashed them (the tests check
+  /// that each layout is exercised).
+  bool dense() const { return m_dense; }
 
  private:
   /// The source points of a block of 3 x 3 x 3 cells, in find()'s order (by row of cells, then sorted order):

@@ -63,6 +63,34 @@ TEST(NeighborSearch, SparsePointsInHashedCellsMatchBruteForce) {
   NeighborSearch search(radius);
   const Vec3Array sorted = z_ordered(search, points);
   search.build(sorted);
+  ASSERT_FALSE(search.dense()) << "the test is about hashed cells";
+  NeighborList list;
+  search.find(sorted, list, /*exclude_self=*/true);
+  expect_same_sets(list, brute_force(sorted, sorted, radius, true));
+  search.find(points, list, /*exclude_self=*/false);
+  expect_same_sets(list, brute_force(points, sorted, radius, false));
+}
+
+// A jet over a cloth: two clusters and a thin stream between them, about 30 cells of the bounding box per
+// point, mostly empty; the grid stays dense (up to 128 per point; it was hashed beyond 4 per point).
+TEST(NeighborSearch, SpreadPointsInADenseGridOfMostlyEmptyCellsMatchBruteForce) {
+  Vec3Array points = random_points(800, Vec3(0, 0, 0), Vec3(0.1, 0.1, 0.1), 41);
+  const Vec3Array stream = random_points(200, Vec3(0.1, 0.1, 0.1), Vec3(0.5, 0.12, 0.12), 42);
+  const Vec3Array pool = random_points(500, Vec3(0.4, 0.0, 0.3), Vec3(0.5, 0.1, 0.4), 43);
+  points.insert(points.end(), stream.begin(), stream.end());
+  points.insert(points.end(), pool.begin(), pool.end());
+  const Scalar radius = 0.008;
+  Vec3 lo = points[0], hi = points[0];
+  for (const Vec3& x : points) {
+    lo = lo.cwiseMin(x);
+    hi = hi.cwiseMax(x);
+  }
+  const Eigen::Array3d cells = (hi / radius).array().floor() - (lo / radius).array().floor() + 1.0;
+  ASSERT_GT(cells.prod(), 4.0 * points.size() + 4096.0) << "the test needs more cells than 4 per point";
+  NeighborSearch search(radius);
+  const Vec3Array sorted = z_ordered(search, points);
+  search.build(sorted);
+  ASSERT_TRUE(search.dense()) << "the test is about a dense grid of more than 4 cells per point";
   NeighborList list;
   search.find(sorted, list, /*exclude_self=*/true);
   expect_same_sets(list, brute_force(sorted, sorted, radius, true));
