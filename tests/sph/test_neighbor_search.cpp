@@ -54,21 +54,29 @@ TEST(NeighborSearch, ZOrderedQueriesInRunsPerCellMatchBruteForce) {
   expect_same_sets(list, brute_force(points, points, radius, true));
 }
 
-// A jet spread far: more cells than the dense grid allows, so cells are hashed.
-TEST(NeighborSearch, SparsePointsInHashedCellsMatchBruteForce) {
-  Vec3Array points = random_points(1500, Vec3(0, 0, 0), Vec3(0.2, 0.2, 0.2), 31);
-  const Vec3Array far = random_points(500, Vec3(-40, -5, 0), Vec3(60, 5, 0.1), 32);
-  points.insert(points.end(), far.begin(), far.end());
-  const Scalar radius = 0.04;
-  NeighborSearch search(radius);
+/// Builds `search` over `points` in z-order and checks find() against brute force twice: the sorted points
+/// querying themselves (self excluded), and the points in their given order querying the sorted ones.
+/// Returns the built layout (NeighborSearch::dense()).
+bool expect_sorted_and_unsorted_queries_match_brute_force(NeighborSearch& search, const Vec3Array& points) {
+  const Scalar radius = search.support_radius();
   const Vec3Array sorted = z_ordered(search, points);
   search.build(sorted);
-  ASSERT_FALSE(search.dense()) << "the test is about hashed cells";
   NeighborList list;
   search.find(sorted, list, /*exclude_self=*/true);
   expect_same_sets(list, brute_force(sorted, sorted, radius, true));
   search.find(points, list, /*exclude_self=*/false);
   expect_same_sets(list, brute_force(points, sorted, radius, false));
+  return search.dense();
+}
+
+// A jet spread far: more cells than the dense grid allows, so cells are hashed.
+TEST(NeighborSearch, SparsePointsInHashedCellsMatchBruteForce) {
+  Vec3Array points = random_points(1500, Vec3(0, 0, 0), Vec3(0.2, 0.2, 0.2), 31);
+  const Vec3Array far = random_points(500, Vec3(-40, -5, 0), Vec3(60, 5, 0.1), 32);
+  points.insert(points.end(), far.begin(), far.end());
+  NeighborSearch search(0.04);
+  EXPECT_FALSE(expect_sorted_and_unsorted_queries_match_brute_force(search, points))
+      << "the test is about hashed cells";
 }
 
 // A jet over a cloth: two clusters and a thin stream between them, about 30 cells of the bounding box per
@@ -88,14 +96,8 @@ TEST(NeighborSearch, SpreadPointsInADenseGridOfMostlyEmptyCellsMatchBruteForce) 
   const Eigen::Array3d cells = (hi / radius).array().floor() - (lo / radius).array().floor() + 1.0;
   ASSERT_GT(cells.prod(), 4.0 * points.size() + 4096.0) << "the test needs more cells than 4 per point";
   NeighborSearch search(radius);
-  const Vec3Array sorted = z_ordered(search, points);
-  search.build(sorted);
-  ASSERT_TRUE(search.dense()) << "the test is about a dense grid of more than 4 cells per point";
-  NeighborList list;
-  search.find(sorted, list, /*exclude_self=*/true);
-  expect_same_sets(list, brute_force(sorted, sorted, radius, true));
-  search.find(points, list, /*exclude_self=*/false);
-  expect_same_sets(list, brute_force(points, sorted, radius, false));
+  EXPECT_TRUE(expect_sorted_and_unsorted_queries_match_brute_force(search, points))
+      << "the test is about a dense grid of more than 4 cells per point";
 }
 
 TEST(NeighborSearch, PointsExactlyAtTheRadiusAreNotNeighbors) {
