@@ -19,23 +19,27 @@
 
 namespace {
 
-drench::SceneConfig reference_dam_break(double spacing, const std::string& solver) {
+/// `precision`: PCISPH's iterations, "single" (the default) or "double".
+drench::SceneConfig reference_dam_break(double spacing, const std::string& solver,
+                                        const std::string& precision) {
   const double block = spacing > 0.04 ? 0.95 : spacing > 0.02 ? 0.975 : 1.0;
   // Issue 2's steps, 5 ms at 0.05 m and 2.5 ms at 0.025 m, are 0.1 s per metre of spacing; the 1M block keeps
   // that ratio (1 ms). At 2.5 ms it was unstable: PCISPH hit its limit of 100 iterations within 6 steps and
   // corner particles reached 1.9 m/s at t = 0.015 s, where the block should move at 0.15 m/s (measured).
   const double dt = 0.1 * spacing;  // unit: s
-  return drench::load_scene_file(std::string(DRENCH_SOURCE_DIR) + "/demos/scenes/dam_break.json",
-                                 {"fluid.particle_spacing=" + std::to_string(spacing),
-                                  "fluid.pressure_solver=" + solver, "fluid.pcisph.eta=0.0005",
-                                  "emitters[0].max=[" + std::to_string(block) + "," + std::to_string(block) +
-                                      "," + std::to_string(block) + "]",
-                                  "time.dt=" + std::to_string(dt), "time.frame_rate=0"});
+  return drench::load_scene_file(
+      std::string(DRENCH_SOURCE_DIR) + "/demos/scenes/dam_break.json",
+      {"fluid.particle_spacing=" + std::to_string(spacing), "fluid.pressure_solver=" + solver,
+       "fluid.pcisph.eta=0.0005", "fluid.pcisph.precision=\"" + precision + "\"",
+       "emitters[0].max=[" + std::to_string(block) + "," + std::to_string(block) + "," +
+           std::to_string(block) + "]",
+       "time.dt=" + std::to_string(dt), "time.frame_rate=0"});
 }
 
 /// Runs `sim_seconds` of the dam break once and reports per-step figures as counters.
-void run(benchmark::State& state, double spacing, const std::string& solver, double sim_seconds) {
-  const drench::SceneConfig config = reference_dam_break(spacing, solver);
+void run(benchmark::State& state, double spacing, const std::string& solver, double sim_seconds,
+         const std::string& precision = "single") {
+  const drench::SceneConfig config = reference_dam_break(spacing, solver, precision);
   for (auto _ : state) {
     drench::Simulation sim(config);
     const auto start = std::chrono::steady_clock::now();
@@ -76,6 +80,13 @@ void pcisph_6k9(benchmark::State& s) {
 void pcisph_59k(benchmark::State& s) {
   run(s, 0.025, "pcisph", 0.5);
 }
+// The same two in double precision (fluid.pcisph.precision): what the default single precision saves.
+void pcisph_6k9_double(benchmark::State& s) {
+  run(s, 0.05, "pcisph", 1.0, "double");
+}
+void pcisph_59k_double(benchmark::State& s) {
+  run(s, 0.025, "pcisph", 0.5, "double");
+}
 void wcsph_6k9(benchmark::State& s) {
   run(s, 0.05, "wcsph", 0.25);
 }
@@ -91,6 +102,8 @@ void pcisph_1m(benchmark::State& s) {
 
 BENCHMARK(pcisph_6k9)->Unit(benchmark::kSecond)->UseManualTime()->Iterations(1);
 BENCHMARK(pcisph_59k)->Unit(benchmark::kSecond)->UseManualTime()->Iterations(1);
+BENCHMARK(pcisph_6k9_double)->Unit(benchmark::kSecond)->UseManualTime()->Iterations(1);
+BENCHMARK(pcisph_59k_double)->Unit(benchmark::kSecond)->UseManualTime()->Iterations(1);
 BENCHMARK(wcsph_6k9)->Unit(benchmark::kSecond)->UseManualTime()->Iterations(1);
 BENCHMARK(wcsph_59k)->Unit(benchmark::kSecond)->UseManualTime()->Iterations(1);
 BENCHMARK(pcisph_1m)->Unit(benchmark::kSecond)->UseManualTime()->Iterations(1);

@@ -1,9 +1,10 @@
 // The fluid's pair loops alone, on the 59K reference dam break (bench_dam_break's pcisph_59k scene) after 60
 // steps of 2.5 ms, when the block has collapsed into a wave: densities at the particles' positions
 // (sph_densities), pressure accelerations with a made-up positive pressure field (pressure_accelerations) and
-// XSPH, and the exact neighbor lists they read (search and gradient factors). Densities and pressure on all
-// 59,319 particles (lists, factors and points exceed the cache) and on the first 2,048 (within it), the
-// others on all. Counter time_per_pair: wall time per fluid neighbor pair.
+// XSPH, and the exact neighbor lists they read (search and gradient factors); the densities and pressure
+// loops also in single precision (densities_float, pressure_accelerations_float), as PCISPH runs them.
+// Densities and pressure on all 59,319 particles (lists, factors and points exceed the cache) and on the
+// first 2,048 (within it), the others on all. Counter time_per_pair: wall time per fluid neighbor pair.
 //
 //   build-bench/bench/bench_pair_loops --benchmark_repetitions=5
 // Thread count: OMP_NUM_THREADS. Setting up (the 60 steps) takes about 10 s on one thread.
@@ -34,6 +35,8 @@ struct Fixture {
   drench::PackedPointArray boundary;       // w = Psi_b, taken as rest density x spacing^3 (unit: kg)
   drench::PackedPointArray x_mass;         // w = mass (unit: kg)
   drench::PackedPointArray x_p_over_rho2;  // w = p / rho0^2, p in [0, 2000] Pa
+  // The same three in single precision, relative to the box's centre as PCISPH makes them.
+  drench::PackedPointFArray boundary_float, x_mass_float, x_p_over_rho2_float;
   std::unique_ptr<drench::FluidContext> ctx;
 
   Fixture() {
@@ -56,6 +59,14 @@ struct Fixture {
       const double pressure = 1000.0 * (1.0 + std::cos(static_cast<double>(i)));  // Pa
       x_p_over_rho2.push_back(drench::packed(p.positions[i], pressure / (rho0 * rho0)));
     }
+    const drench::Vec3 centre(2.0, 1.5, 0.75);  // m
+    const auto to_float = [&](const drench::PackedPointArray& from, drench::PackedPointFArray& to) {
+      for (const drench::PackedPoint& q : from)
+        to.push_back(drench::packed_float(drench::Vec3(q.x, q.y, q.z) - centre, q.w));
+    };
+    to_float(boundary, boundary_float);
+    to_float(x_mass, x_mass_float);
+    to_float(x_p_over_rho2, x_p_over_rho2_float);
     ctx = std::make_unique<drench::FluidContext>(drench::FluidContext{
         fluid.kernel(), p, lists->fluid(), lists->boundary(), boundary, rho0, spacing,
         lists->fluid_gradient_factors(), lists->boundary_gradient_factors(), p.common_mass()});
@@ -106,6 +117,35 @@ void densities(benchmark::State& state) {
   state.counters["chunks_last_thread"] = taken.back() / all;
 }
 
+/// sph_densities_float, PCISPH's density pass in single precision.
+void densities_float(benchmark::State& state) {
+  const Fixture& f = fixture();
+  const std::size_t n = particles(state);
+  drench::ScalarArray out(n);
+  for (auto _ : state) {
+    drench::for_each_chunk(n, [&](std::size_t begin, std::size_t end) {
+      drench::sph_densities_float(*f.ctx, f.x_mass_float, f.boundary_float, begin, end, &out[begin]);
+    });
+    benchmark::DoNotOptimize(out.data());
+  }
+  report(state, n);
+}
+
+/// pressure_accelerations_float, PCISPH's pressure pass in single precision.
+void pressure_accelerations_float(benchmark::State& state) {
+  const Fixture& f = fixture();
+  const std::size_t n = particles(state);
+  drench::Vec3Array out(n);
+  for (auto _ : state) {
+    drench::for_each_chunk(n, [&](std::size_t begin, std::size_t end) {
+      drench::pressure_accelerations_float(*f.ctx, f.x_p_over_rho2_float, f.boundary_float, begin, end,
+                                           &out[begin]);
+    });
+    benchmark::DoNotOptimize(out.data());
+  }
+  report(state, n);
+}
+
 void pressure_accelerations(benchmark::State& state) {
   const Fixture& f = fixture();
   const std::size_t n = particles(state);
@@ -148,6 +188,7 @@ void neighbor_lists(benchmark::State& state) {
 /// One PCISPH pressure solve of the state (sub-step 1.25 ms, the dam break's at this time; velocities plus
 /// gravity as the advected ones): its iterations are a density and a pressure pass each, so its time over
 /// (densities + pressure_accelerations) x iterations shows what the solve adds around the two loops.
+/// Argument: 0 in single precision (the default, the _float loops), 1 in double.
 void pcisph_solve(benchmark::State& state) {
   const Fixture& f = fixture();
   const drench::FluidSolver& fluid = f.sim->fluid();
@@ -156,7 +197,9 @@ void pcisph_solve(benchmark::State& state) {
   drench::Vec3Array velocities_adv(p.size());
   for (std::size_t i = 0; i < p.size(); ++i)
     velocities_adv[i] = p.velocities[i] + dt * drench::Vec3(0.0, -9.81, 0.0);
-  drench::PressurePcisph solver(fluid.settings());
+  drench::FluidSettings settings = fluid.settings();
+  if (state.range(0)) settings.pcisph.precision = drench::IterationPrecision::DOUBLE;
+  drench::PressurePcisph solver(settings);
   drench::Vec3Array accelerations;
   drench::PressureStats stats;
   for (auto _ : state) {
@@ -172,7 +215,9 @@ void pcisph_solve(benchmark::State& state) {
 BENCHMARK(neighbor_lists)->Unit(benchmark::kMillisecond);
 BENCHMARK(densities)->Arg(0)->Arg(2048)->Unit(benchmark::kMillisecond);
 BENCHMARK(pressure_accelerations)->Arg(0)->Arg(2048)->Unit(benchmark::kMillisecond);
+BENCHMARK(densities_float)->Arg(0)->Arg(2048)->Unit(benchmark::kMillisecond);
+BENCHMARK(pressure_accelerations_float)->Arg(0)->Arg(2048)->Unit(benchmark::kMillisecond);
 BENCHMARK(xsph)->Unit(benchmark::kMillisecond);
-BENCHMARK(pcisph_solve)->Unit(benchmark::kMillisecond);
+BENCHMARK(pcisph_solve)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
 
 BENCHMARK_MAIN();

@@ -25,6 +25,14 @@ struct WcsphSettings {
   Scalar exponent = 7.0;  ///< gamma of the Tait equation (dimensionless), >= 1
 };
 
+/// Floating-point precision of PCISPH's iterations: the density and pressure passes over neighbor pairs that
+/// each iteration runs (fluid.pcisph.precision). Pressures, densities, velocities and positions are double
+/// either way.
+enum class IterationPrecision {
+  SINGLE,  ///< the pair sums in float (sph_densities_float, pressure_accelerations_float)
+  DOUBLE   ///< the pair sums in double (sph_densities, pressure_accelerations)
+};
+
 /// Predictive-corrective incompressible SPH, Solenthaler & Pajarola 2009.
 struct PcisphSettings {
   Scalar eta = 0.001;      ///< target average density error (fraction of rest density), > 0
@@ -50,6 +58,10 @@ struct PcisphSettings {
   /// Measured with 0.05 (PCISPH, 0.5 s of jet_on_cloth.json): dt 1 ms 6.4 m/s, dt 4 ms 7.5 m/s (without:
   /// blew up at t = 0.356 s). Source: none; docs/scenes.md has its cost.
   std::optional<Scalar> max_relief_per_substep = 0.05;
+  /// Precision of the iterations' pair sums. Single (the default) agrees with double to about 1e-5 of a
+  /// density and ran the 59K dam break's solve faster (docs/scenes.md has the measured cost of each). Double
+  /// is also used, whatever this says, when particle masses differ.
+  IterationPrecision precision = IterationPrecision::SINGLE;
 };
 
 /// Viscosity method. Constructed only when the scene's `effects` lists "viscosity".

@@ -267,11 +267,15 @@ FluidSettings read_fluid(const Node& node) {
     fluid.wcsph.speed_of_sound = c.number(kPositive);
   wcsph.read("exponent", fluid.wcsph.exponent, kAtLeastOne);
 
-  const ObjectReader pcisph(r["pcisph"], {"eta", "min_iterations", "max_iterations",
-                                          "max_compression_per_iteration", "max_relief_per_substep"});
+  const ObjectReader pcisph(r["pcisph"],
+                            {"eta", "min_iterations", "max_iterations", "max_compression_per_iteration",
+                             "max_relief_per_substep", "precision"});
   pcisph.read("eta", fluid.pcisph.eta, Range{0.0, true, 1.0, true});
   pcisph.read("min_iterations", fluid.pcisph.min_iterations, kAtLeastOne);
   pcisph.read("max_iterations", fluid.pcisph.max_iterations, kAtLeastOne);
+  pcisph.read_choice("precision", fluid.pcisph.precision,
+                     Choices<IterationPrecision>{{"single", IterationPrecision::SINGLE},
+                                                 {"double", IterationPrecision::DOUBLE}});
   pcisph.require_order("min_iterations", fluid.pcisph.min_iterations, "max_iterations",
                        fluid.pcisph.max_iterations);
   // null is "no limit" (the published PCISPH), so that --set can undo the default.

@@ -4,6 +4,7 @@
 #include <cstdint>
 
 #include "common/parallel.hpp"
+#include "sph/float_lanes.hpp"
 #include "sph/packed_lanes.hpp"
 
 namespace drench {
@@ -93,6 +94,46 @@ DRENCH_SIMD_CLONES void pressure_accelerations(const FluidContext& ctx, const Pa
     for (std::size_t i = begin; i < end; ++i)
       out[i - begin] = pressure_acceleration<false>(ctx, points, i);
   }
+}
+
+DRENCH_SIMD_CLONES void sph_densities_float(const FluidContext& ctx, const PackedPointFArray& x_mass,
+                                            const PackedPointFArray& boundary, std::size_t begin,
+                                            std::size_t end, Scalar* out) {
+  const PackedPointF* xs = x_mass.data();
+  const PackedPointF* bs = boundary.data();
+  const FloatKernel kernel(ctx.kernel);
+  const Scalar self = ctx.kernel.value(0.0);
+  with_sixteen_lane_group([&](auto lanes) __attribute__((always_inline)) {
+    using Group = decltype(lanes);
+    for (std::size_t i = begin; i < end; ++i) {
+      const PackedPointF& xi = xs[i];
+      out[i - begin] = Scalar{float_kernel_sum<Group>(kernel, ctx.fluid_neighbors, i, xi, xs)} +
+                       Scalar{float_kernel_sum<Group>(kernel, ctx.boundary_neighbors, i, xi, bs)} +
+                       Scalar{xi.w} * self;
+    }
+  });
+}
+
+DRENCH_SIMD_CLONES void pressure_accelerations_float(const FluidContext& ctx,
+                                                     const PackedPointFArray& x_p_over_rho2,
+                                                     const PackedPointFArray& boundary, std::size_t begin,
+                                                     std::size_t end, Vec3* out) {
+  const PackedPointF* points = x_p_over_rho2.data();
+  const float mass = static_cast<float>(ctx.uniform_mass);
+  with_sixteen_lane_group([&](auto lanes) __attribute__((always_inline)) {
+    using Group = decltype(lanes);
+    for (std::size_t i = begin; i < end; ++i) {
+      const PackedPointF& pi = points[i];
+      float sx = 0.0f, sy = 0.0f, sz = 0.0f;
+      float_subtract_gradient_sum<Group>(pi, pi.w, mass, points, ctx.fluid_neighbors, i,
+                                         ctx.fluid_gradient_factors.data(), sx, sy, sz);
+      if (pi.w != 0.0f) {
+        float_subtract_gradient_sum<Group>(pi, 0.0f, pi.w, boundary.data(), ctx.boundary_neighbors, i,
+                                           ctx.boundary_gradient_factors.data(), sx, sy, sz);
+      }
+      out[i - begin] = Vec3(sx, sy, sz);
+    }
+  });
 }
 
 }  // namespace drench

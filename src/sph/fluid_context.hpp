@@ -27,6 +27,20 @@ inline PackedPoint packed(const Vec3& x, Scalar w) {
 /// N packed points, one per particle or boundary point.
 using PackedPointArray = std::vector<PackedPoint>;
 
+/// A PackedPoint in single precision (16 bytes): PCISPH's iterations read these (sph/float_lanes.hpp has
+/// why).
+struct alignas(4 * sizeof(float)) PackedPointF {
+  float x, y, z;  ///< (unit: m)
+  float w;        ///< unit of the loop that reads it
+};
+/// The record of the point x (unit: m) with the scalar w, each rounded to float.
+inline PackedPointF packed_float(const Vec3& x, Scalar w) {
+  return {static_cast<float>(x.x()), static_cast<float>(x.y()), static_cast<float>(x.z()),
+          static_cast<float>(w)};
+}
+/// N single-precision packed points.
+using PackedPointFArray = std::vector<PackedPointF>;
+
 /// Read access to the particles, their neighborhoods and the static boundary during one fluid sub-step.
 /// Neighbor lists are valid for the current particle order and positions.
 struct FluidContext {
@@ -72,5 +86,26 @@ void sph_densities(const FluidContext& ctx, const PackedPointArray& x_mass, std:
 /// run over four neighbors at a time in a fixed order, then the last (count mod 4) one by one.
 void pressure_accelerations(const FluidContext& ctx, const PackedPointArray& x_p_over_rho2, std::size_t begin,
                             std::size_t end, Vec3* out);
+
+/// sph_densities in single precision, for PCISPH's iterations (fluid.pcisph.precision "single"): each sum
+/// over neighbors is taken in float, sixteen neighbors at a time, and converted to double; the self term is
+/// added in double. Rounding a position to float moves it by up to 2^-24 of its magnitude, so callers give
+/// positions relative to an origin near the fluid (PCISPH: its bounding-box centre); for points within
+/// 0.06 m of it the result is within 1e-5 of sph_densities' (tests/sph/test_fluid_context.cpp).
+/// @param x_mass  N particles: positions relative to the origin (unit: m) and w = mass (unit: kg)
+/// @param boundary  ctx.boundary relative to the same origin (x_b in m, Psi_b in kg)
+/// Precondition: as sph_densities. Every copy and thread count gives the same bits.
+void sph_densities_float(const FluidContext& ctx, const PackedPointFArray& x_mass,
+                         const PackedPointFArray& boundary, std::size_t begin, std::size_t end, Scalar* out);
+
+/// pressure_accelerations in single precision, for PCISPH's iterations: the sums over neighbors in float,
+/// sixteen at a time, converted to double.
+/// @param x_p_over_rho2  N particles: current positions relative to an origin near the fluid (unit: m) and
+///                       w = p / rho^2 (unit: m^5/(kg s^2))
+/// @param boundary  ctx.boundary relative to the same origin (x_b in m, Psi_b in kg)
+/// Precondition: as pressure_accelerations, and ctx.uniform_mass > 0 (one mass for every particle).
+void pressure_accelerations_float(const FluidContext& ctx, const PackedPointFArray& x_p_over_rho2,
+                                  const PackedPointFArray& boundary, std::size_t begin, std::size_t end,
+                                  Vec3* out);
 
 }  // namespace drench

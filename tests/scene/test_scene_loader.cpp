@@ -74,7 +74,7 @@ constexpr const char* kFullScene = R"({
     "pressure_solver": "wcsph",
     "wcsph": {"speed_of_sound": 30, "exponent": 7},
     "pcisph": {"eta": 0.01, "min_iterations": 2, "max_iterations": 50, "max_compression_per_iteration": 0.1,
-               "max_relief_per_substep": 0.2},
+               "max_relief_per_substep": 0.2, "precision": "double"},
     "viscosity": {"method": "artificial", "coefficient": 0.05},
     "cfl": 0.25,
     "sort_interval": 20
@@ -116,6 +116,7 @@ TEST(SceneLoader, ParsesFullSceneIntoEveryMember) {
   ASSERT_TRUE(c.fluid.pcisph.max_relief_per_substep.has_value());
   EXPECT_DOUBLE_EQ(*c.fluid.pcisph.max_relief_per_substep, 0.2);
   EXPECT_EQ(c.fluid.pcisph.max_iterations, 50);
+  EXPECT_EQ(c.fluid.pcisph.precision, IterationPrecision::DOUBLE);
   EXPECT_EQ(c.fluid.viscosity.method, ViscosityKind::ARTIFICIAL);
   EXPECT_DOUBLE_EQ(c.fluid.viscosity.coefficient, 0.05);
   EXPECT_DOUBLE_EQ(c.fluid.cfl, 0.25);
@@ -192,6 +193,7 @@ TEST(SceneLoader, AbsentKeysInsideAnElementTakeDefaults) {
   EXPECT_DOUBLE_EQ(c.emitters[0].nozzle.speed, 3.0);
   EXPECT_DOUBLE_EQ(c.fluid.cfl, 1.0);
   EXPECT_EQ(c.fluid.pcisph.eta, PcisphSettings{}.eta);
+  EXPECT_EQ(c.fluid.pcisph.precision, IterationPrecision::SINGLE);
 }
 
 TEST(SceneLoader, NormalisesNozzleDirection) {
@@ -329,6 +331,12 @@ TEST(SceneLoader, RejectsUnknownPressureSolverListingChoices) {
   EXPECT_TRUE(
       scene_error(R"({"fluid": {"pressure_solver": "iisph"}})",
                   "fluid.pressure_solver must be one of \"pcisph\", \"wcsph\", got \"iisph\" (x.json)"));
+}
+
+TEST(SceneLoader, RejectsUnknownPcisphPrecisionListingChoices) {
+  EXPECT_TRUE(
+      scene_error(R"({"fluid": {"pcisph": {"precision": "half"}}})",
+                  "fluid.pcisph.precision must be one of \"single\", \"double\", got \"half\" (x.json)"));
 }
 
 TEST(SceneLoader, RejectsPressureSolverThatIsNotAString) {

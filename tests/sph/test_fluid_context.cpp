@@ -11,8 +11,12 @@
 #include <algorithm>
 #include <cmath>
 #include <random>
+#include <tuple>
+#include <utility>
+#include <vector>
 
 #include "neighbor_test_helpers.hpp"
+#include "sph/float_lanes.hpp"
 #include "sph/fluid_context.hpp"
 #include "sph/forces/viscosity.hpp"
 #include "sph/packed_lanes.hpp"
@@ -107,18 +111,26 @@ struct Scene {
   }
 };
 
-/// The scene covers every length of the loops' last group: each neighbor count modulo eight, and a last
-/// group at the very end of the list (the last particle with neighbors has a count not divisible by eight).
-void expect_every_tail(const NeighborList& list) {
-  bool seen[8] = {};
+/// The scene covers every length of the loops' last group: each neighbor count modulo `lanes` (8 or 16),
+/// and a last group at the very end of the list (the last particle with neighbors has a count not divisible
+/// by `lanes`).
+void expect_every_tail(const NeighborList& list, std::size_t lanes = 8) {
+  std::vector<bool> seen(lanes, false);
   std::size_t last = 0;
   for (std::size_t i = 0; i + 1 < list.offsets.size(); ++i) {
-    seen[list.count(i) % 8] = true;
+    seen[list.count(i) % lanes] = true;
     if (list.count(i) > 0) last = i;
   }
-  ASSERT_TRUE(std::all_of(std::begin(seen), std::end(seen), [](bool b) { return b; }))
-      << "the scene must exercise every tail length";
-  ASSERT_NE(list.count(last) % 8, 0u) << "the scene must end the list with a partial group";
+  ASSERT_TRUE(std::all_of(seen.begin(), seen.end(), [](bool b) { return b; }))
+      << "the scene must exercise every tail length modulo " << lanes;
+  ASSERT_NE(list.count(last) % lanes, 0u) << "the scene must end the list with a partial group";
+}
+
+PackedPointFArray pack_float(const Vec3Array& x, const ScalarArray& w) {
+  PackedPointFArray points(x.size());
+  for (std::size_t i = 0; i < x.size(); ++i)
+    points[i] = packed_float(x[i], w[i]);
+  return points;
 }
 
 void check_densities(bool uniform_mass) {
@@ -195,6 +207,73 @@ void check_xsph(bool uniform_mass) {
   }
 }
 
+/// The single-precision densities against the textbook sum in double. Rounding the positions (within
+/// 0.06 m of the origin: 3.6e-9 m, 4e-7 of the spacing) and some 60 float roundings of 6e-8 each bound the
+/// relative difference by about 5e-6; 1e-5 is asserted.
+void check_float_densities(bool uniform_mass) {
+  Scene s(uniform_mass);
+  expect_every_tail(s.fluid, 16);
+  const FluidContext ctx = s.context();
+  const ParticleSet& p = s.particles;
+  const std::size_t n = p.size();
+  const PackedPointFArray x_mass = pack_float(p.positions, p.masses);
+  const PackedPointFArray boundary = pack_float(s.boundary_x, s.psi);
+  const ScalarArray got = in_two_ranges<Scalar>(n, 123, [&](std::size_t begin, std::size_t end, Scalar* out) {
+    sph_densities_float(ctx, x_mass, boundary, begin, end, out);
+  });
+  Scalar largest = 0.0;
+  for (std::size_t i = 0; i < n; ++i) {
+    Scalar expected = p.masses[i] * s.kernel.value(0.0);
+    for (const Index* j = s.fluid.begin(i); j != s.fluid.end(i); ++j)
+      expected += p.masses[*j] * s.kernel.value((p.positions[i] - p.positions[*j]).norm());
+    for (const Index* b = s.boundary.begin(i); b != s.boundary.end(i); ++b)
+      expected += s.psi[*b] * s.kernel.value((p.positions[i] - s.boundary_x[*b]).norm());
+    EXPECT_NEAR(got[i], expected, 1e-5 * expected) << "particle " << i;
+    largest = std::max(largest, std::abs(got[i] - expected) / expected);
+  }
+  EXPECT_GT(largest, 0.0) << "single precision must be in use (else this test checks nothing new)";
+}
+
+/// The single-precision pressure accelerations against the textbook sum in double (uniform masses, the
+/// loop's precondition), relative to the sum of the terms' magnitudes: 1e-5, as for the densities.
+TEST(FluidContext, FloatPressureAccelerationsAreTheSymmetricSphSumsWithin1e5) {
+  Scene s(true);
+  expect_every_tail(s.fluid, 16);
+  const FluidContext ctx = s.context();
+  const ParticleSet& p = s.particles;
+  const std::size_t n = p.size();
+  const PackedPointFArray points = pack_float(p.positions, s.p_over_rho2);
+  const PackedPointFArray boundary = pack_float(s.boundary_x, s.psi);
+  const Vec3Array got = in_two_ranges<Vec3>(n, 200, [&](std::size_t begin, std::size_t end, Vec3* out) {
+    pressure_accelerations_float(ctx, points, boundary, begin, end, out);
+  });
+  std::size_t with_boundary = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    Vec3 expected = Vec3::Zero();
+    Scalar magnitude = 0.0;
+    for (const Index* j = s.fluid.begin(i); j != s.fluid.end(i); ++j) {
+      const Vec3 term = p.masses[*j] * (s.p_over_rho2[i] + s.p_over_rho2[*j]) *
+                        stored_gradient(s.kernel, p.positions[i] - p.positions[*j]);
+      expected -= term;
+      magnitude += term.norm();
+    }
+    for (const Index* b = s.boundary.begin(i); b != s.boundary.end(i); ++b) {
+      const Vec3 term =
+          s.psi[*b] * s.p_over_rho2[i] * stored_gradient(s.kernel, p.positions[i] - s.boundary_x[*b]);
+      expected -= term;
+      magnitude += term.norm();
+    }
+    with_boundary += s.boundary.count(i) > 0 && s.p_over_rho2[i] != 0.0;
+    EXPECT_LE((got[i] - expected).norm(), 1e-5 * magnitude) << "particle " << i;
+  }
+  EXPECT_GT(with_boundary, 10u) << "the boundary term must be exercised";
+}
+
+TEST(FluidContext, FloatDensitiesAreTheSphSumsWithin1e5) {
+  check_float_densities(true);
+  check_float_densities(false);
+}
+
 TEST(FluidContext, DensitiesAreTheSphSumsOverFluidAndBoundaryNeighbors) {
   check_densities(true);
   check_densities(false);
@@ -240,6 +319,44 @@ TEST(PackedLanes, WideAndHalvesGroupsGiveTheSameBits) {
     nonzero += wide.squaredNorm() != 0.0;
   }
   EXPECT_GT(nonzero, x_mass.size()) << "the sums must not be trivially zero";
+}
+
+/// The single-precision kernel sums (densities) and gradient sums (pressure) of both sixteen-lane group
+/// types, bit for bit, over every tail length modulo sixteen of the fluid list and over the boundary list.
+TEST(FloatLanes, WideAndHalvesGroupsGiveTheSameBits) {
+  Scene s(true);
+  expect_every_tail(s.fluid, 16);
+  const ParticleSet& p = s.particles;
+  const PackedPointFArray x_mass = pack_float(p.positions, p.masses);
+  const PackedPointFArray x_pressure = pack_float(p.positions, s.p_over_rho2);
+  const PackedPointFArray boundary = pack_float(s.boundary_x, s.psi);
+  const FloatKernel kernel(s.kernel);
+  std::size_t nonzero = 0;
+  for (std::size_t i = 0; i < x_mass.size(); ++i) {
+    using Sources = std::pair<const NeighborList*, const PackedPointF*>;
+    for (const auto& [list, sources] :
+         {Sources{&s.fluid, x_mass.data()}, Sources{&s.boundary, boundary.data()}}) {
+      const float wide = float_kernel_sum<FloatWideGroup>(kernel, *list, i, x_mass[i], sources);
+      const float halves = float_kernel_sum<FloatHalvesGroup>(kernel, *list, i, x_mass[i], sources);
+      EXPECT_EQ(wide, halves) << "density sum, particle " << i;
+      nonzero += wide != 0.0f;
+    }
+    using Pass = std::tuple<const NeighborList*, const PackedPointF*, const float*, float, float>;
+    const float w = x_pressure[i].w;
+    for (const auto& [list, points, factors, alpha, a] :
+         {Pass{&s.fluid, x_pressure.data(), s.fluid_factors.data(), w, 1e-3f},
+          Pass{&s.boundary, boundary.data(), s.boundary_factors.data(), 0.0f, w}}) {
+      float wide[3] = {}, halves[3] = {};
+      float_subtract_gradient_sum<FloatWideGroup>(x_pressure[i], alpha, a, points, *list, i, factors, wide[0],
+                                                  wide[1], wide[2]);
+      float_subtract_gradient_sum<FloatHalvesGroup>(x_pressure[i], alpha, a, points, *list, i, factors,
+                                                    halves[0], halves[1], halves[2]);
+      for (int c = 0; c < 3; ++c)
+        EXPECT_EQ(wide[c], halves[c]) << "pressure sum, particle " << i << ", component " << c;
+      nonzero += wide[0] != 0.0f;
+    }
+  }
+  EXPECT_GT(nonzero, 2 * x_mass.size()) << "the sums must not be trivially zero";
 }
 
 }  // namespace

@@ -13,7 +13,8 @@ namespace drench {
 /// compression. With PcisphSettings::max_relief_per_substep set (the default, a drench addition), a
 /// particle that enters a sub-step compressed by more than that fraction is driven to (its density -
 /// max_relief), or to its first prediction if lower, instead of the rest density, and the stopping rule
-/// measures the error against that target.
+/// measures the error against that target. PcisphSettings::precision chooses the precision of the
+/// iterations' pair sums (single by default).
 class PressurePcisph final : public PressureSolver {
  public:
   explicit PressurePcisph(const FluidSettings& settings);
@@ -36,6 +37,10 @@ class PressurePcisph final : public PressureSolver {
   std::vector<ChunkErrors> m_chunk_errors;
   ScalarArray m_target;  // N, the density each particle is driven to in this sub-step (unit: kg/m^3)
   PackedPointArray m_pressure_points;  // N: positions (unit: m), w = p / rho0^2
+  // The same three in single precision, for IterationPrecision::SINGLE.
+  PackedPointFArray m_predicted_float;
+  PackedPointFArray m_pressure_points_float;
+  PackedPointFArray m_boundary_float;  // ctx.boundary, rounded at each solve (the context may change)
 };
 
 }  // namespace drench
