@@ -89,6 +89,7 @@ PressureStats PressurePcisph::solve(const FluidContext& ctx, const Vec3Array& ve
 #pragma omp parallel for schedule(static)
     for (std::size_t i = 0; i < n; ++i)
       m_pressure_points_float[i] = packed_float(particles.positions[i] - origin, 0.0);
+#pragma omp parallel for schedule(static)
     for (std::size_t b = 0; b < ctx.boundary.size(); ++b) {
       const PackedPoint& p = ctx.boundary[b];
       m_boundary_float[b] = packed_float(Vec3(p.x, p.y, p.z) - origin, p.w);
