@@ -5,10 +5,10 @@
 /// always_inline apply here too).
 ///
 /// Why single precision: a record is 16 bytes instead of 32, and a vector holds twice the lanes, so the
-/// densities of the 59K state ran 1.93-1.95 ms per pass against 2.78-3.05 ms in double, with a largest
-/// relative difference of 2.8e-6 (`OMP_NUM_THREADS=1 build-bench/bench/bench_pair_loops
-/// --benchmark_filter=densities`, three alternating rounds; docs/architecture.md has the solver-level
-/// numbers). Positions in float carry 2^-24 of their magnitude: 0.24 um at 4 m, 1e-5 of a 25 mm spacing,
+/// densities of the 59K state ran 2.06 ms per pass against 2.95 ms in double (medians of five interleaved
+/// repetitions, `OMP_NUM_THREADS=1 build-bench/bench/bench_pair_loops --benchmark_filter=densities
+/// --benchmark_repetitions=5 --benchmark_enable_random_interleaving=true`), with a largest relative difference
+/// of 4.7e-6 (its counter max_relative_difference); README, Performance, has the solver-level numbers. Positions in float carry 2^-24 of their magnitude: 0.24 um at 4 m, 1e-5 of a 25 mm spacing,
 /// against PCISPH's tolerance of 5e-4 on the average density.
 ///
 /// A group of sixteen lanes is one of two types with the same lanes, arithmetic and summation order, so the
