@@ -7,8 +7,9 @@
 /// Why single precision: a record is 16 bytes instead of 32, and a vector holds twice the lanes, so the
 /// densities of the 59K state ran 2.06 ms per pass against 2.95 ms in double (medians of five interleaved
 /// repetitions, `OMP_NUM_THREADS=1 build-bench/bench/bench_pair_loops --benchmark_filter=densities
-/// --benchmark_repetitions=5 --benchmark_enable_random_interleaving=true`), with a largest relative difference
-/// of 4.7e-6 (its counter max_relative_difference); README, Performance, has the solver-level numbers. Positions in float carry 2^-24 of their magnitude: 0.24 um at 4 m, 1e-5 of a 25 mm spacing,
+/// --benchmark_repetitions=5 --benchmark_enable_random_interleaving=true`), with a largest relative
+/// difference of 4.7e-6 (its counter max_relative_difference); README, Performance, has the solver-level
+/// numbers. Positions in float carry 2^-24 of their magnitude: 0.24 um at 4 m, 1e-5 of a 25 mm spacing,
 /// against PCISPH's tolerance of 5e-4 on the average density.
 ///
 /// A group of sixteen lanes is one of two types with the same lanes, arithmetic and summation order, so the
@@ -21,6 +22,7 @@
 
 #include "common/parallel.hpp"
 #include "sph/fluid_context.hpp"
+#include "sph/packed_lanes.hpp"
 
 namespace drench {
 namespace {
@@ -131,6 +133,10 @@ struct EightPointsF {
 /// Sixteen lanes as one vector: one AVX-512 register in the x86-64-v4 copy, four SSE registers in the
 /// baseline copy.
 struct FloatWideGroup {
+  static constexpr std::uint32_t kGroupLanes = kFloatLanes;
+  using Kernel = FloatKernel;
+  using Record = PackedPointF;
+  using Sum = float;
   using Vec = Floats16;
   using Mask = Ints16;
   using Points = SixteenPoints;
@@ -191,6 +197,10 @@ struct FloatHalves {
 
 /// Sixteen lanes as two vectors of eight floats: two registers in the AVX2 copy.
 struct FloatHalvesGroup {
+  static constexpr std::uint32_t kGroupLanes = kFloatLanes;
+  using Kernel = FloatKernel;
+  using Record = PackedPointF;
+  using Sum = float;
   using Vec = FloatHalves;
   struct Mask {
     Ints8 lo, hi;
@@ -226,60 +236,6 @@ struct FloatHalvesGroup {
   [[gnu::always_inline]] static float sum(const Vec& v) { return float_sum_of_eight(v.lo + v.hi); }
 };
 
-/// Calls body(js, fs, active) for the neighbors of particle i in `list`, sixteen at a time: `js` points to
-/// sixteen readable indices and, when `factors` (one per entry of `list`) is given, `fs` to their sixteen
-/// factors (else nullptr); `active` marks the lanes that are i's neighbors. The last group reads on into the
-/// next particle's entries (dropped by `active`), or, at the very end of the list, copies of the last entry
-/// (as for_each_eight in packed_lanes.hpp).
-template <class Group, class Body>
-[[gnu::always_inline]] inline void for_each_sixteen(const NeighborList& list, std::size_t i,
-                                                    const float* factors, Body&& body) {
-  const Index* js = list.indices.data();
-  std::uint32_t n = list.offsets[i];
-  const std::uint32_t end = list.offsets[i + 1];
-  typename Group::Mask all, active;
-  Group::first(kFloatLanes, all);
-  for (; n + kFloatLanes <= end; n += kFloatLanes)
-    body(js + n, factors ? factors + n : nullptr, all);
-  if (n == end) return;
-  const std::uint32_t count = end - n;
-  Group::first(static_cast<std::int32_t>(count), active);
-  if (n + kFloatLanes <= list.indices.size()) {
-    body(js + n, factors ? factors + n : nullptr, active);
-    return;
-  }
-  Index padded[kFloatLanes];
-  float padded_factors[kFloatLanes];
-  for (std::uint32_t l = 0; l < kFloatLanes; ++l) {
-    const std::uint32_t entry = n + (l < count ? l : count - 1);
-    padded[l] = js[entry];
-    padded_factors[l] = factors ? factors[entry] : 0.0f;
-  }
-  body(padded, factors ? padded_factors : nullptr, active);
-}
-
-/// sum over the neighbors j of i in `list` of w_j W(|x_i - x_j|), in single precision, for `sources` packed
-/// with their weights: kernel_sum of packed_lanes.hpp sixteen lanes at a time.
-template <class Group>
-[[gnu::always_inline]] inline float float_kernel_sum(const FloatKernel& k, const NeighborList& list,
-                                                     std::size_t i, const PackedPointF& xi,
-                                                     const PackedPointF* sources) {
-  typename Group::Vec sum = {};
-  for_each_sixteen<Group>(
-      list, i, nullptr,
-      [&](const Index* group, const float*, const typename Group::Mask& active)
-          __attribute__((always_inline)) {
-            typename Group::Points p;
-            Group::load(sources, group, p);
-            typename Group::Vec w;
-            Group::kernel(k, xi, p, w);
-            typename Group::Vec term;
-            Group::select(active, p.w * w, term);
-            sum += term;
-          });
-  return Group::sum(sum);
-}
-
 /// Subtracts sum_j a (alpha + w_j) f_j (x_i - x_j) over the neighbors j of i in `list` from (sx, sy, sz), in
 /// single precision; `factors` are the gradient factors f of the list's entries. The pressure loop's sum:
 /// a = m (uniform mass) and alpha = p_i / rho_i^2 for fluid neighbors, a = p_i / rho_i^2 and alpha = 0 for
@@ -291,7 +247,7 @@ template <class Group>
                                                                const float* factors, float& sx, float& sy,
                                                                float& sz) {
   typename Group::Vec ax = {}, ay = {}, az = {};
-  for_each_sixteen<Group>(
+  for_each_group<Group>(
       list, i, factors,
       [&](const Index* group, const float* fs, const typename Group::Mask& active)
           __attribute__((always_inline)) {

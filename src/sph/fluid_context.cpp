@@ -107,8 +107,8 @@ DRENCH_SIMD_CLONES void sph_densities_float(const FluidContext& ctx, const Packe
     using Group = decltype(lanes);
     for (std::size_t i = begin; i < end; ++i) {
       const PackedPointF& xi = xs[i];
-      out[i - begin] = Scalar{float_kernel_sum<Group>(kernel, ctx.fluid_neighbors, i, xi, xs)} +
-                       Scalar{float_kernel_sum<Group>(kernel, ctx.boundary_neighbors, i, xi, bs)} +
+      out[i - begin] = Scalar{kernel_sum<Group>(kernel, ctx.fluid_neighbors, i, xi, xs)} +
+                       Scalar{kernel_sum<Group>(kernel, ctx.boundary_neighbors, i, xi, bs)} +
                        Scalar{xi.w} * self;
     }
   });

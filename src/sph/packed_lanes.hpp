@@ -125,6 +125,10 @@ template <class Points, class V>
 
 /// Eight lanes as one vector of eight doubles: one register in the AVX-512 copy, four in the baseline copy.
 struct WideGroup {
+  static constexpr std::uint32_t kGroupLanes = kWide;
+  using Kernel = CubicSplineKernel;
+  using Record = PackedPoint;
+  using Sum = Scalar;
   using Vec = Wide;
   using Mask = WideMask;
   using Points = EightPoints;
@@ -166,6 +170,10 @@ struct Halves {
 
 /// Eight lanes as two vectors of four: two registers in the AVX2 copy.
 struct HalvesGroup {
+  static constexpr std::uint32_t kGroupLanes = kWide;
+  using Kernel = CubicSplineKernel;
+  using Record = PackedPoint;
+  using Sum = Scalar;
   typedef std::int64_t LaneMask __attribute__((vector_size(4 * sizeof(std::int64_t))));
   using Vec = Halves;
   struct Mask {
@@ -196,53 +204,65 @@ struct HalvesGroup {
   [[gnu::always_inline]] static Scalar sum(const Vec& v) { return lane_sum(v.lo) + lane_sum(v.hi); }
 };
 
-/// Calls body(js, active) for the neighbors of particle i in `list`, eight at a time: `js` points to eight
-/// readable indices, `active` (a Group::Mask) marks the lanes that are i's neighbors (all of them but in the
-/// last group, which takes the last count mod 8). The last group's other lanes hold the next particle's
-/// entries, read in place (real points, whose terms the body drops); only at the very end of the list, where
-/// reading on would leave the array, are they copies of its last index (test_fluid_context covers that group;
-/// without the copies ASan reports an overflow). `body` must be always_inline (see above).
+/// Calls body(js, fs, active) for the neighbors of particle i in `list`, Group::kGroupLanes (8 or 16) at a
+/// time: `js` points to kGroupLanes readable indices and, when `factors` (one per entry of `list`) is given,
+/// `fs` to their kGroupLanes factors (else nullptr); `active` (a Group::Mask) marks the lanes that are i's
+/// neighbors (all of them but in the last group, which takes the last count mod kGroupLanes). The last
+/// group's other lanes hold the next particle's entries, read in place (real points, whose terms the body
+/// drops); only at the very end of the list, where reading on would leave the array, are they copies of its
+/// last entry (test_fluid_context covers that group; without the copies ASan reports an overflow). `body`
+/// must be always_inline (see above).
 template <class Group, class Body>
-[[gnu::always_inline]] inline void for_each_eight(const NeighborList& list, std::size_t i, Body&& body) {
+[[gnu::always_inline]] inline void for_each_group(const NeighborList& list, std::size_t i,
+                                                  const float* factors, Body&& body) {
+  constexpr std::uint32_t lanes = Group::kGroupLanes;
   const Index* js = list.indices.data();
   std::uint32_t n = list.offsets[i];
   const std::uint32_t end = list.offsets[i + 1];
   typename Group::Mask all, active;
-  Group::first(kWide, all);
-  for (; n + kWide <= end; n += kWide)
-    body(js + n, all);
+  Group::first(lanes, all);
+  for (; n + lanes <= end; n += lanes)
+    body(js + n, factors ? factors + n : nullptr, all);
   if (n == end) return;
   const std::uint32_t count = end - n;
   Group::first(count, active);
-  if (n + kWide <= list.indices.size()) {
-    body(js + n, active);
+  if (n + lanes <= list.indices.size()) {
+    body(js + n, factors ? factors + n : nullptr, active);
     return;
   }
-  Index padded[kWide];
-  for (std::uint32_t l = 0; l < kWide; ++l)
-    padded[l] = js[n + (l < count ? l : count - 1)];
-  body(padded, active);
+  Index padded[lanes];
+  float padded_factors[lanes];
+  for (std::uint32_t l = 0; l < lanes; ++l) {
+    const std::uint32_t entry = n + (l < count ? l : count - 1);
+    padded[l] = js[entry];
+    padded_factors[l] = factors ? factors[entry] : 0.0f;
+  }
+  body(padded, factors ? padded_factors : nullptr, active);
 }
 
-/// sum over the neighbors j of i in `list` of w_j W(|x_i - x_j|), for `sources` packed with their weights.
-/// Eight neighbors at a time in eight lanes of Group, the last (count mod 8) as one more group with its
-/// padding lanes dropped, in that order. The densities' loop (sph_densities); here so that the
-/// tests run it with either group type.
+/// sum over the neighbors j of i in `list` of w_j W(|x_i - x_j|), for `sources` packed with their weights, in
+/// the group's precision (Scalar for the eight-lane double groups here, float for the sixteen-lane groups of
+/// float_lanes.hpp). Group::kGroupLanes neighbors at a time, the last (count mod kGroupLanes) as one more
+/// group with its padding lanes dropped, in that order. The densities' loop (sph_densities,
+/// sph_densities_float); here so that the tests run it with every group type.
 template <class Group>
-[[gnu::always_inline]] inline Scalar kernel_sum(const CubicSplineKernel& k, const NeighborList& list,
-                                                std::size_t i, const PackedPoint& xi,
-                                                const PackedPoint* sources) {
+[[gnu::always_inline]] inline typename Group::Sum kernel_sum(const typename Group::Kernel& k,
+                                                             const NeighborList& list, std::size_t i,
+                                                             const typename Group::Record& xi,
+                                                             const typename Group::Record* sources) {
   typename Group::Vec sum = {};
-  for_each_eight<Group>(
-      list, i, [&](const Index* group, const typename Group::Mask& active) __attribute__((always_inline)) {
-        typename Group::Points p;
-        Group::load(sources, group, p);
-        typename Group::Vec w;
-        Group::kernel(k, xi, p, w);
-        typename Group::Vec term;
-        Group::select(active, p.w * w, term);
-        sum += term;
-      });
+  for_each_group<Group>(
+      list, i, nullptr,
+      [&](const Index* group, const float*, const typename Group::Mask& active)
+          __attribute__((always_inline)) {
+            typename Group::Points p;
+            Group::load(sources, group, p);
+            typename Group::Vec w;
+            Group::kernel(k, xi, p, w);
+            typename Group::Vec term;
+            Group::select(active, p.w * w, term);
+            sum += term;
+          });
   return Group::sum(sum);
 }
 
@@ -255,18 +275,20 @@ template <class Group>
   const PackedPoint& xi = xs[i];
   const PackedPoint& vi = vs[i];
   typename Group::Vec sx = {}, sy = {}, sz = {};
-  for_each_eight<Group>(
-      list, i, [&](const Index* group, const typename Group::Mask& active) __attribute__((always_inline)) {
-        typename Group::Points p, v;
-        Group::load(xs, group, p);
-        Group::load(vs, group, v);
-        typename Group::Vec w, s;
-        Group::kernel(k, xi, p, w);
-        Group::select(active, p.w * w, s);
-        sx += s * (v.x - vi.x);
-        sy += s * (v.y - vi.y);
-        sz += s * (v.z - vi.z);
-      });
+  for_each_group<Group>(
+      list, i, nullptr,
+      [&](const Index* group, const float*, const typename Group::Mask& active)
+          __attribute__((always_inline)) {
+            typename Group::Points p, v;
+            Group::load(xs, group, p);
+            Group::load(vs, group, v);
+            typename Group::Vec w, s;
+            Group::kernel(k, xi, p, w);
+            Group::select(active, p.w * w, s);
+            sx += s * (v.x - vi.x);
+            sy += s * (v.y - vi.y);
+            sz += s * (v.z - vi.z);
+          });
   return Vec3(Group::sum(sx), Group::sum(sy), Group::sum(sz));
 }
 

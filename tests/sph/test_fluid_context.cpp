@@ -105,6 +105,37 @@ struct Scene {
     boundary_packed = pack(boundary_x, psi);
   }
 
+  /// The textbook density of particle i (Akinci et al. 2012 eq. 6), pair by pair in double.
+  Scalar expected_density(std::size_t i) const {
+    const ParticleSet& p = particles;
+    Scalar expected = p.masses[i] * kernel.value(0.0);
+    for (const Index* j = fluid.begin(i); j != fluid.end(i); ++j)
+      expected += p.masses[*j] * kernel.value((p.positions[i] - p.positions[*j]).norm());
+    for (const Index* b = boundary.begin(i); b != boundary.end(i); ++b)
+      expected += psi[*b] * kernel.value((p.positions[i] - boundary_x[*b]).norm());
+    return expected;
+  }
+
+  /// The textbook pressure acceleration of particle i (eq. 10) with the stored gradients, pair by pair in
+  /// double; `magnitude` = the sum of the terms' norms, the scale of the rounding.
+  Vec3 expected_pressure_acceleration(std::size_t i, Scalar& magnitude) const {
+    const ParticleSet& p = particles;
+    Vec3 expected = Vec3::Zero();
+    magnitude = 0.0;
+    for (const Index* j = fluid.begin(i); j != fluid.end(i); ++j) {
+      const Vec3 term = p.masses[*j] * (p_over_rho2[i] + p_over_rho2[*j]) *
+                        stored_gradient(kernel, p.positions[i] - p.positions[*j]);
+      expected -= term;
+      magnitude += term.norm();
+    }
+    for (const Index* b = boundary.begin(i); b != boundary.end(i); ++b) {
+      const Vec3 term = psi[*b] * p_over_rho2[i] * stored_gradient(kernel, p.positions[i] - boundary_x[*b]);
+      expected -= term;
+      magnitude += term.norm();
+    }
+    return expected;
+  }
+
   FluidContext context() {
     return FluidContext{kernel, particles, fluid,         boundary,         boundary_packed,
                         1000.0, kSpacing,  fluid_factors, boundary_factors, particles.common_mass()};
@@ -145,11 +176,7 @@ void check_densities(bool uniform_mass) {
     sph_densities(ctx, x_mass, begin, end, out);
   });
   for (std::size_t i = 0; i < n; ++i) {
-    Scalar expected = p.masses[i] * s.kernel.value(0.0);
-    for (const Index* j = s.fluid.begin(i); j != s.fluid.end(i); ++j)
-      expected += p.masses[*j] * s.kernel.value((p.positions[i] - p.positions[*j]).norm());
-    for (const Index* b = s.boundary.begin(i); b != s.boundary.end(i); ++b)
-      expected += s.psi[*b] * s.kernel.value((p.positions[i] - s.boundary_x[*b]).norm());
+    const Scalar expected = s.expected_density(i);
     // Every term is positive: the sums differ only by the order of a few dozen roundings.
     EXPECT_NEAR(got[i], expected, 1e-13 * expected) << "particle " << i;
   }
@@ -165,20 +192,8 @@ void check_pressure_accelerations(bool uniform_mass) {
     pressure_accelerations(ctx, x_p_over_rho2, begin, end, out);
   });
   for (std::size_t i = 0; i < n; ++i) {
-    Vec3 expected = Vec3::Zero();
-    Scalar magnitude = 0.0;  // sum of |terms|: the scale of the rounding
-    for (const Index* j = s.fluid.begin(i); j != s.fluid.end(i); ++j) {
-      const Vec3 term = p.masses[*j] * (s.p_over_rho2[i] + s.p_over_rho2[*j]) *
-                        stored_gradient(s.kernel, p.positions[i] - p.positions[*j]);
-      expected -= term;
-      magnitude += term.norm();
-    }
-    for (const Index* b = s.boundary.begin(i); b != s.boundary.end(i); ++b) {
-      const Vec3 term =
-          s.psi[*b] * s.p_over_rho2[i] * stored_gradient(s.kernel, p.positions[i] - s.boundary_x[*b]);
-      expected -= term;
-      magnitude += term.norm();
-    }
+    Scalar magnitude;
+    const Vec3 expected = s.expected_pressure_acceleration(i, magnitude);
     EXPECT_LE((got[i] - expected).norm(), 1e-13 * magnitude) << "particle " << i;
   }
 }
@@ -223,11 +238,7 @@ void check_float_densities(bool uniform_mass) {
   });
   Scalar largest = 0.0;
   for (std::size_t i = 0; i < n; ++i) {
-    Scalar expected = p.masses[i] * s.kernel.value(0.0);
-    for (const Index* j = s.fluid.begin(i); j != s.fluid.end(i); ++j)
-      expected += p.masses[*j] * s.kernel.value((p.positions[i] - p.positions[*j]).norm());
-    for (const Index* b = s.boundary.begin(i); b != s.boundary.end(i); ++b)
-      expected += s.psi[*b] * s.kernel.value((p.positions[i] - s.boundary_x[*b]).norm());
+    const Scalar expected = s.expected_density(i);
     EXPECT_NEAR(got[i], expected, 1e-5 * expected) << "particle " << i;
     largest = std::max(largest, std::abs(got[i] - expected) / expected);
   }
@@ -249,20 +260,8 @@ TEST(FluidContext, FloatPressureAccelerationsAreTheSymmetricSphSumsWithin1e5) {
   });
   std::size_t with_boundary = 0;
   for (std::size_t i = 0; i < n; ++i) {
-    Vec3 expected = Vec3::Zero();
-    Scalar magnitude = 0.0;
-    for (const Index* j = s.fluid.begin(i); j != s.fluid.end(i); ++j) {
-      const Vec3 term = p.masses[*j] * (s.p_over_rho2[i] + s.p_over_rho2[*j]) *
-                        stored_gradient(s.kernel, p.positions[i] - p.positions[*j]);
-      expected -= term;
-      magnitude += term.norm();
-    }
-    for (const Index* b = s.boundary.begin(i); b != s.boundary.end(i); ++b) {
-      const Vec3 term =
-          s.psi[*b] * s.p_over_rho2[i] * stored_gradient(s.kernel, p.positions[i] - s.boundary_x[*b]);
-      expected -= term;
-      magnitude += term.norm();
-    }
+    Scalar magnitude;
+    const Vec3 expected = s.expected_pressure_acceleration(i, magnitude);
     with_boundary += s.boundary.count(i) > 0 && s.p_over_rho2[i] != 0.0;
     EXPECT_LE((got[i] - expected).norm(), 1e-5 * magnitude) << "particle " << i;
   }
@@ -336,8 +335,8 @@ TEST(FloatLanes, WideAndHalvesGroupsGiveTheSameBits) {
     using Sources = std::pair<const NeighborList*, const PackedPointF*>;
     for (const auto& [list, sources] :
          {Sources{&s.fluid, x_mass.data()}, Sources{&s.boundary, boundary.data()}}) {
-      const float wide = float_kernel_sum<FloatWideGroup>(kernel, *list, i, x_mass[i], sources);
-      const float halves = float_kernel_sum<FloatHalvesGroup>(kernel, *list, i, x_mass[i], sources);
+      const float wide = kernel_sum<FloatWideGroup>(kernel, *list, i, x_mass[i], sources);
+      const float halves = kernel_sum<FloatHalvesGroup>(kernel, *list, i, x_mass[i], sources);
       EXPECT_EQ(wide, halves) << "density sum, particle " << i;
       nonzero += wide != 0.0f;
     }
