@@ -35,7 +35,7 @@ struct Fixture {
   drench::PackedPointArray boundary;       // w = Psi_b, taken as rest density x spacing^3 (unit: kg)
   drench::PackedPointArray x_mass;         // w = mass (unit: kg)
   drench::PackedPointArray x_p_over_rho2;  // w = p / rho0^2, p in [0, 2000] Pa
-  // The same three in single precision, relative to the box's centre as PCISPH makes them.
+  // The same three in single precision, relative to the fluid's bounding-box centre, as PCISPH makes them.
   drench::PackedPointFArray boundary_float, x_mass_float, x_p_over_rho2_float;
   std::unique_ptr<drench::FluidContext> ctx;
 
@@ -59,7 +59,13 @@ struct Fixture {
       const double pressure = 1000.0 * (1.0 + std::cos(static_cast<double>(i)));  // Pa
       x_p_over_rho2.push_back(drench::packed(p.positions[i], pressure / (rho0 * rho0)));
     }
-    const drench::Vec3 centre(2.0, 1.5, 0.75);  // m
+    // The centre of the fluid's bounding box, as PCISPH takes it (unit: m).
+    drench::Vec3 lo = p.positions[0], hi = p.positions[0];
+    for (const drench::Vec3& x : p.positions) {
+      lo = lo.cwiseMin(x);
+      hi = hi.cwiseMax(x);
+    }
+    const drench::Vec3 centre = 0.5 * (lo + hi);
     const auto to_float = [&](const drench::PackedPointArray& from, drench::PackedPointFArray& to) {
       for (const drench::PackedPoint& q : from)
         to.push_back(drench::packed_float(drench::Vec3(q.x, q.y, q.z) - centre, q.w));

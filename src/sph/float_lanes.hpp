@@ -8,7 +8,7 @@
 /// densities of the 59K state ran 2.06 ms per pass against 2.95 ms in double (medians of five interleaved
 /// repetitions, `OMP_NUM_THREADS=1 build-bench/bench/bench_pair_loops --benchmark_filter=densities
 /// --benchmark_repetitions=5 --benchmark_enable_random_interleaving=true`), with a largest relative
-/// difference of 4.7e-6 (its counter max_relative_difference); README, Performance, has the solver-level
+/// difference of 2.3e-6 (its counter max_relative_difference); README, Performance, has the solver-level
 /// numbers. Positions in float carry 2^-24 of their magnitude: 0.24 um at 4 m, 1e-5 of a 25 mm spacing,
 /// against PCISPH's tolerance of 5e-4 on the average density.
 ///
@@ -255,11 +255,16 @@ template <class Group>
             Group::load(points, group, p);
             typename Group::Vec f;
             Group::load_factors(fs, f);
-            typename Group::Vec s;
-            Group::select(active, a * (alpha + p.w) * f, s);
-            ax -= s * (xi.x - p.x);
-            ay -= s * (xi.y - p.y);
-            az -= s * (xi.z - p.z);
+            // The products are masked, not the coefficient: the padding lanes hold the next particle's
+            // neighbors, and 0 x NaN from one of those would make this particle NaN.
+            const typename Group::Vec s = a * (alpha + p.w) * f;
+            typename Group::Vec tx, ty, tz;
+            Group::select(active, s * (xi.x - p.x), tx);
+            Group::select(active, s * (xi.y - p.y), ty);
+            Group::select(active, s * (xi.z - p.z), tz);
+            ax -= tx;
+            ay -= ty;
+            az -= tz;
           });
   sx += Group::sum(ax);
   sy += Group::sum(ay);

@@ -1,5 +1,6 @@
 #include "sph/fluid_context.hpp"
 
+#include <cassert>
 #include <cmath>
 #include <cstdint>
 
@@ -118,6 +119,7 @@ DRENCH_SIMD_CLONES void pressure_accelerations_float(const FluidContext& ctx,
                                                      const PackedPointFArray& x_p_over_rho2,
                                                      const PackedPointFArray& boundary, std::size_t begin,
                                                      std::size_t end, Vec3* out) {
+  assert(ctx.uniform_mass > 0.0);
   const PackedPointF* points = x_p_over_rho2.data();
   const float mass = static_cast<float>(ctx.uniform_mass);
   with_sixteen_lane_group([&](auto lanes) __attribute__((always_inline)) {

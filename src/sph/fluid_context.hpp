@@ -88,10 +88,11 @@ void pressure_accelerations(const FluidContext& ctx, const PackedPointArray& x_p
                             std::size_t end, Vec3* out);
 
 /// sph_densities in single precision, for PCISPH's iterations (fluid.pcisph.precision "single"): each sum
-/// over neighbors is taken in float, sixteen neighbors at a time, and converted to double; the self term is
-/// added in double. Rounding a position to float moves it by up to 2^-24 of its magnitude, so callers give
-/// positions relative to an origin near the fluid (PCISPH: its bounding-box centre); for points within
-/// 0.06 m of it the result is within 1e-5 of sph_densities' (tests/sph/test_fluid_context.cpp).
+/// over neighbors is taken in float, sixteen neighbors at a time, and converted to double; the self term (the
+/// particle's mass, as rounded in x_mass, times W(0)) is added in double. Rounding a position to float moves
+/// it by up to 2^-24 of its magnitude, so callers give positions relative to an origin near the fluid
+/// (PCISPH: its bounding-box centre); for points within 0.06 m of it the result is within 1e-5 of
+/// sph_densities' (tests/sph/test_fluid_context.cpp).
 /// @param x_mass  N particles: positions relative to the origin (unit: m) and w = mass (unit: kg)
 /// @param boundary  ctx.boundary relative to the same origin (x_b in m, Psi_b in kg)
 /// Precondition: as sph_densities. Every copy and thread count gives the same bits.

@@ -7,9 +7,11 @@
 /// always_inline as well: out of line it is compiled for the baseline only (XSPH ran 2.7 times slower so,
 /// timed in-process against the inlined version on bench_pair_loops' 59K state; that harness is not kept).
 ///
-/// The loops that evaluate the kernel (densities, XSPH) take eight neighbors at a time: a square root of
-/// eight lanes costs what one of four does on the AVX-512 copy. The densities of the 59K state ran 1.88-1.97
-/// ms per pass against 2.54-2.57 ms at four lanes (`OMP_NUM_THREADS=1 build-bench/bench/bench_pair_loops
+/// The double-precision loops that evaluate the kernel (densities, XSPH) take eight neighbors at a time (the
+/// single-precision ones of sph/float_lanes.hpp, sixteen, through the same for_each_group and kernel_sum): a
+/// square root of eight lanes costs what one of four does on the AVX-512 copy. The densities of the 59K state
+/// ran 1.88-1.97 ms per pass against 2.54-2.57 ms at four lanes (`OMP_NUM_THREADS=1
+/// build-bench/bench/bench_pair_loops
 /// --benchmark_filter=densities`, this build against bf7bffb's, alternating; a third round of the old build
 /// took 3.93 ms). The pressure loop, a few multiplies per pair, stays at four: an eight-lane version (not
 /// kept) ran 1.1-1.4 times slower, in and out of cache, timed in-process against this one on the same state.

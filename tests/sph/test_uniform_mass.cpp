@@ -6,9 +6,13 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <limits>
 #include <unordered_map>
+#include <utility>
 
 #include "scene/scene_config.hpp"
+#include "sph/boundary_sampling.hpp"
 #include "sph/emitters.hpp"
 #include "sph/fluid_solver.hpp"
 
@@ -20,15 +24,25 @@ constexpr double kSpacing = 0.01;  // m
 /// An 8 x 8 x 8 PCISPH block without gravity with one particle stacked 0.2 spacing from an interior one, so
 /// that pressures and pressure accelerations are not zero; with `lone_heavy_particle`, one more particle of
 /// twice the mass far away (no neighbor), which makes the masses differ. PCISPH's iterations run in
-/// `precision`.
+/// `precision`. The block's corner is at `offset` (unit: m); with `floor`, it rests on one layer of boundary
+/// points half a spacing below it, 12 x 12 of them (the bottom layer then has boundary neighbors).
 FluidSolver compressed_block(bool lone_heavy_particle,
-                             IterationPrecision precision = IterationPrecision::DOUBLE) {
+                             IterationPrecision precision = IterationPrecision::DOUBLE,
+                             const Vec3& offset = Vec3::Zero(), bool floor = false) {
   FluidSettings settings;
   settings.particle_spacing = kSpacing;
   settings.pcisph.precision = precision;
-  FluidSolver fluid(settings, Vec3::Zero(), BoundaryParticles{}, {}, false, 10.0);
+  BoundaryParticles boundary;
+  for (int k = -2; floor && k < 10; ++k) {
+    for (int i = -2; i < 10; ++i) {
+      boundary.positions.push_back(offset + kSpacing * Vec3(i + 0.5, -0.5, k + 0.5));
+      boundary.volumes.push_back(kSpacing * kSpacing * kSpacing);
+    }
+  }
+  FluidSolver fluid(settings, Vec3::Zero(), std::move(boundary), {}, false, 10.0);
   BoxEmitterSettings box;
-  box.max = Vec3::Constant(8 * kSpacing);
+  box.min = offset;
+  box.max = offset + Vec3::Constant(8 * kSpacing);
   std::uint32_t next_id = 0;
   const Scalar mass = settings.rest_density * kSpacing * kSpacing * kSpacing;
   emit_box(box, kSpacing, mass, fluid.particles(), next_id);
@@ -75,36 +89,93 @@ TEST(FluidContext, UniformMassPathGivesTheFluidOfPerParticleMasses) {
   EXPECT_GT(fastest, 1e-3);
 }
 
-/// Three sub-steps of the compressed block in single and in double precision: the same iteration counts, and
-/// densities, pressures and velocities within float's rounding. Measured: densities 3.4e-7 apart (relative),
-/// pressures 4.6 Pa of 53.6 kPa (the stacked particle's: PCISPH's pressure is delta times the density error,
-/// an amplifier of density rounding), velocities 1.7e-5 of 5.9 m/s.
-TEST(Pcisph, SinglePrecisionIterationsGiveTheFluidOfDouble) {
-  FluidSolver single = compressed_block(false, IterationPrecision::SINGLE);
-  FluidSolver reference = compressed_block(false, IterationPrecision::DOUBLE);
+/// The largest differences between two runs of the same particles (matched by id).
+struct Differences {
+  Scalar density = 0.0;       // relative
+  Scalar pressure = 0.0;      // (unit: Pa)
+  Scalar velocity = 0.0;      // (unit: m/s)
+  Scalar position = 0.0;      // (unit: m)
+  Scalar fastest = 0.0;       // the fastest particle of `b` (unit: m/s)
+  Scalar max_pressure = 0.0;  // the largest pressure of `b` (unit: Pa)
+};
+
+/// Three sub-steps of 0.1 ms of `a` and `b`, then their differences.
+Differences after_three_substeps(FluidSolver& a, FluidSolver& b) {
   for (int step = 0; step < 3; ++step) {
-    ASSERT_TRUE(single.step(1e-4).ok());
-    ASSERT_TRUE(reference.step(1e-4).ok());
+    EXPECT_TRUE(a.step(1e-4).ok());
+    EXPECT_TRUE(b.step(1e-4).ok());
   }
-  const ParticleSet& a = single.particles();
-  const ParticleSet& b = reference.particles();
+  const ParticleSet& pa = a.particles();
+  const ParticleSet& pb = b.particles();
   std::unordered_map<std::uint32_t, std::size_t> in_b;
-  for (std::size_t i = 0; i < b.size(); ++i)
-    in_b[b.ids[i]] = i;
-  Scalar fastest = 0.0, density = 0.0, pressure = 0.0, velocity = 0.0, max_pressure = 0.0;
-  for (std::size_t i = 0; i < a.size(); ++i) {
-    const std::size_t k = in_b.at(a.ids[i]);
-    density = std::max(density, std::abs(a.densities[i] - b.densities[k]) / b.densities[k]);
-    pressure = std::max(pressure, std::abs(a.pressures[i] - b.pressures[k]));
-    velocity = std::max(velocity, (a.velocities[i] - b.velocities[k]).norm());
-    fastest = std::max(fastest, b.velocities[k].norm());
-    max_pressure = std::max(max_pressure, b.pressures[k]);
+  for (std::size_t i = 0; i < pb.size(); ++i)
+    in_b[pb.ids[i]] = i;
+  Differences d;
+  for (std::size_t i = 0; i < pa.size(); ++i) {
+    const std::size_t k = in_b.at(pa.ids[i]);
+    d.density = std::max(d.density, std::abs(pa.densities[i] - pb.densities[k]) / pb.densities[k]);
+    d.pressure = std::max(d.pressure, std::abs(pa.pressures[i] - pb.pressures[k]));
+    d.velocity = std::max(d.velocity, (pa.velocities[i] - pb.velocities[k]).norm());
+    d.position = std::max(d.position, (pa.positions[i] - pb.positions[k]).norm());
+    d.fastest = std::max(d.fastest, pb.velocities[k].norm());
+    d.max_pressure = std::max(d.max_pressure, pb.pressures[k]);
   }
+  return d;
+}
+
+/// Single precision against double on the compressed block: the same iteration counts, and densities,
+/// pressures and velocities within float's rounding (pressures: PCISPH's pressure is delta times the density
+/// error, an amplifier of density rounding).
+void expect_single_gives_the_fluid_of_double(const Vec3& offset, bool floor) {
+  FluidSolver single = compressed_block(false, IterationPrecision::SINGLE, offset, floor);
+  FluidSolver reference = compressed_block(false, IterationPrecision::DOUBLE, offset, floor);
+  const Differences d = after_three_substeps(single, reference);
   EXPECT_EQ(single.statistics().pressure_iterations, reference.statistics().pressure_iterations);
-  EXPECT_LT(density, 1e-5);
-  EXPECT_LT(pressure, 1e-4 * max_pressure);
-  EXPECT_LT(velocity, 1e-4 * fastest);
-  EXPECT_GT(fastest, 1e-3);  // the stacked particle was pushed apart: the loops did work
+  EXPECT_LT(d.density, 1e-5);
+  EXPECT_LT(d.pressure, 1e-4 * d.max_pressure);
+  EXPECT_LT(d.velocity, 1e-4 * d.fastest);
+  EXPECT_GT(d.fastest, 1e-3);  // the stacked particle was pushed apart: the loops did work
+}
+
+/// At the origin, measured: densities 3.4e-7 apart (relative), pressures 4.6 Pa of 53.6 kPa (the stacked
+/// particle's), velocities 1.7e-5 of 5.9 m/s.
+TEST(Pcisph, SinglePrecisionIterationsGiveTheFluidOfDouble) {
+  expect_single_gives_the_fluid_of_double(Vec3::Zero(), false);
+}
+
+/// 1 km from the origin, on a floor of boundary points: a float there is 61 um coarse, 0.6% of the spacing,
+/// so this holds only because the float records are taken relative to the fluid's centre (boundary points
+/// included).
+TEST(Pcisph, SinglePrecisionFarFromTheOriginOverAFloorGivesTheFluidOfDouble) {
+  expect_single_gives_the_fluid_of_double(Vec3(1000.0, -200.0, 300.0), true);
+}
+
+/// Particles of differing masses take the double loops whatever the setting: the same bits as double.
+TEST(Pcisph, SinglePrecisionFallsBackToDoubleWhenMassesDiffer) {
+  FluidSolver single = compressed_block(true, IterationPrecision::SINGLE);
+  FluidSolver reference = compressed_block(true, IterationPrecision::DOUBLE);
+  const Differences d = after_three_substeps(single, reference);
+  EXPECT_EQ(d.position, 0.0);
+  EXPECT_EQ(d.velocity, 0.0);
+  EXPECT_EQ(d.pressure, 0.0);
+  EXPECT_GT(d.fastest, 1e-3);
+}
+
+/// A particle at infinity is reported by name and harms no other. Single precision centres its float records
+/// on the finite particles and takes double when the fluid reaches too far from that centre; with neither
+/// guard, every record became NaN and the report named another particle (both checked by mutation).
+TEST(Pcisph, SinglePrecisionKeepsAParticleAtInfinityToItself) {
+  FluidSolver fluid = compressed_block(false, IterationPrecision::SINGLE);
+  ParticleSet& p = fluid.particles();
+  const std::uint32_t id = 100000;
+  p.add(Vec3(std::numeric_limits<Scalar>::infinity(), 0.0, 0.0), Vec3::Zero(), p.masses[0], id);
+  const StepStatus status = fluid.step(1e-4);
+  EXPECT_FALSE(status.ok());
+  EXPECT_EQ(status.non_finite_particle, static_cast<std::int64_t>(id));
+  std::size_t finite = 0;
+  for (std::size_t i = 0; i < p.size(); ++i)
+    finite += p.positions[i].allFinite() && p.velocities[i].allFinite();
+  EXPECT_EQ(finite, p.size() - 1);
 }
 
 }  // namespace

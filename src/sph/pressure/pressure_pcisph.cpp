@@ -8,23 +8,32 @@
 namespace drench {
 
 namespace {
-/// The centre of the points' axis-aligned bounding box (unit: m); zero for none. Min and max are exact, so
-/// any thread count gives the same bits.
-Vec3 bounding_box_centre(const Vec3Array& points) {
-  if (points.empty()) return Vec3::Zero();
-  Scalar lo_x = points[0].x(), lo_y = points[0].y(), lo_z = points[0].z();
-  Scalar hi_x = lo_x, hi_y = lo_y, hi_z = lo_z;
+/// The axis-aligned bounding box of the finite points among `points` (unit: m); lo > hi on every axis when
+/// there is none. Non-finite points are left out: one particle at infinity (the solver names it after the
+/// sub-step) would otherwise put every other particle's float record at NaN. Min and max are exact, so any
+/// thread count gives the same bits.
+void finite_bounding_box(const Vec3Array& points, Vec3& lo, Vec3& hi) {
+  constexpr Scalar kInf = std::numeric_limits<Scalar>::infinity();
+  Scalar lo_x = kInf, lo_y = kInf, lo_z = kInf, hi_x = -kInf, hi_y = -kInf, hi_z = -kInf;
 #pragma omp parallel for schedule(static) reduction(min : lo_x, lo_y, lo_z) reduction(max : hi_x, hi_y, hi_z)
   for (std::size_t i = 0; i < points.size(); ++i) {
-    lo_x = std::min(lo_x, points[i].x());
-    lo_y = std::min(lo_y, points[i].y());
-    lo_z = std::min(lo_z, points[i].z());
-    hi_x = std::max(hi_x, points[i].x());
-    hi_y = std::max(hi_y, points[i].y());
-    hi_z = std::max(hi_z, points[i].z());
+    const Vec3& x = points[i];
+    if (!x.allFinite()) continue;
+    lo_x = std::min(lo_x, x.x());
+    lo_y = std::min(lo_y, x.y());
+    lo_z = std::min(lo_z, x.z());
+    hi_x = std::max(hi_x, x.x());
+    hi_y = std::max(hi_y, x.y());
+    hi_z = std::max(hi_z, x.z());
   }
-  return 0.5 * Vec3(lo_x + hi_x, lo_y + hi_y, lo_z + hi_z);
+  lo = Vec3(lo_x, lo_y, lo_z);
+  hi = Vec3(hi_x, hi_y, hi_z);
 }
+
+/// Single precision rounds a coordinate by up to 2^-24 of its distance from the fluid's centre; beyond this
+/// many spacings from it (1e-4 x 2^24, about 1,680) the rounding would exceed 1e-4 of a spacing, and the
+/// solve takes double precision instead (a particle flung far from the fluid without a kill region).
+constexpr Scalar kSingleReachInSpacings = 1e-4 * 0x1p24;
 }  // namespace
 
 PressurePcisph::PressurePcisph(const FluidSettings& settings) : m_settings(settings.pcisph) {
@@ -53,8 +62,18 @@ PressureStats PressurePcisph::solve(const FluidContext& ctx, const Vec3Array& ve
   const Scalar beta = 2.0 * (mass * dt / rho0) * (mass * dt / rho0);
   const Scalar delta = 1.0 / (beta * m_prototype_gradient_term);
 
-  // Single precision needs one mass for all (its pressure loop takes the mass as a constant).
-  const bool single = m_settings.precision == IterationPrecision::SINGLE && ctx.uniform_mass > 0.0;
+  // Single precision: points relative to the centre of the fluid's bounding box, so that their rounding
+  // (2^-24 of the magnitude) depends on the fluid's extent, not on where the scene sits in the world: at
+  // x = 100 m a float is 7.6 um coarse, 3e-4 of a 25 mm spacing. It needs one mass for all (its pressure loop
+  // takes the mass as a constant) and a fluid within kSingleReachInSpacings of that centre.
+  bool single = m_settings.precision == IterationPrecision::SINGLE && ctx.uniform_mass > 0.0 && n > 0;
+  Vec3 origin = Vec3::Zero();
+  if (single) {
+    Vec3 lo, hi;
+    finite_bounding_box(particles.positions, lo, hi);
+    origin = lo.x() <= hi.x() ? Vec3(0.5 * (lo + hi)) : Vec3::Zero();
+    single = lo.x() > hi.x() || 0.5 * (hi - lo).maxCoeff() <= kSingleReachInSpacings * ctx.particle_spacing;
+  }
   m_predicted.resize(single ? 0 : n);
   m_pressure_points.resize(single ? 0 : n);
   m_predicted_float.resize(single ? n : 0);
@@ -80,12 +99,8 @@ PressureStats PressurePcisph::solve(const FluidContext& ctx, const Vec3Array& ve
   // (Shepard average over the neighbors) or a stopping rule that also counts over-pressure.
   std::fill(particles.pressures.begin(), particles.pressures.end(), 0.0);
   std::fill(accelerations.begin(), accelerations.end(), Vec3::Zero());
-  // Single precision: points relative to the fluid's bounding-box centre, so that their rounding (2^-24 of
-  // the magnitude) depends on the fluid's extent, not on where the scene sits in the world: at x = 100 m a
-  // float is 7.6 um coarse, 3e-4 of a 25 mm spacing.
-  Vec3 origin = Vec3::Zero();
+  if (n == 0) return stats;
   if (single) {
-    origin = bounding_box_centre(particles.positions);
 #pragma omp parallel for schedule(static)
     for (std::size_t i = 0; i < n; ++i)
       m_pressure_points_float[i] = packed_float(particles.positions[i] - origin, 0.0);
@@ -99,7 +114,6 @@ PressureStats PressurePcisph::solve(const FluidContext& ctx, const Vec3Array& ve
     for (std::size_t i = 0; i < n; ++i)
       m_pressure_points[i] = packed(particles.positions[i], 0.0);
   }
-  if (n == 0) return stats;
   // Positions predicted with the current pressure accelerations, for the particles [begin, end).
   const auto predict = [&](std::size_t begin, std::size_t end) {
     for (std::size_t i = begin; i < end; ++i) {

@@ -37,10 +37,12 @@ class PressurePcisph final : public PressureSolver {
   std::vector<ChunkErrors> m_chunk_errors;
   ScalarArray m_target;  // N, the density each particle is driven to in this sub-step (unit: kg/m^3)
   PackedPointArray m_pressure_points;  // N: positions (unit: m), w = p / rho0^2
-  // The same three in single precision, for IterationPrecision::SINGLE.
-  PackedPointFArray m_predicted_float;
-  PackedPointFArray m_pressure_points_float;
-  PackedPointFArray m_boundary_float;  // ctx.boundary, rounded at each solve (the context may change)
+  // For IterationPrecision::SINGLE, in float, every point relative to the centre of the fluid's bounding box
+  // at the solve's start (unit: m):
+  PackedPointFArray m_predicted_float;        // N: predicted positions, w = mass (unit: kg)
+  PackedPointFArray m_pressure_points_float;  // N: positions, w = p / rho0^2 (unit: m^5/(kg s^2))
+  PackedPointFArray m_boundary_float;  // ctx.boundary, w = Psi_b (unit: kg); made at each solve (the context
+                                       // may change)
 };
 
 }  // namespace drench
