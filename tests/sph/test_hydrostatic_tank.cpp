@@ -34,7 +34,7 @@ SettledTank settle(const std::vector<std::string>& overrides) {
   SettledTank tank;
   tank.config = testing::demo_scene("hydrostatic_tank.json", overrides);
   Simulation sim(tank.config);
-  const std::int64_t total = std::llround(tank.config.time.duration / tank.config.time.dt);
+  const std::int64_t total = sim.total_steps();
   std::unordered_map<std::uint32_t, Scalar> pressure_sums;  // by particle id: the order changes on re-sorts
   while (!sim.finished()) {
     const StepStatus status = sim.step();
