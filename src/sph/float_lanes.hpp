@@ -130,13 +130,18 @@ struct EightPointsF {
   return (s[0] + s[1]) + (s[2] + s[3]);
 }
 
-/// Sixteen lanes as one vector: one AVX-512 register in the x86-64-v4 copy, four SSE registers in the
-/// baseline copy.
-struct FloatWideGroup {
+/// What the sixteen-lane float groups share: lane count, kernel, record and sum types (for_each_group,
+/// kernel_sum).
+struct SixteenFloatLanes {
   static constexpr std::uint32_t kGroupLanes = kFloatLanes;
   using Kernel = FloatKernel;
   using Record = PackedPointF;
   using Sum = float;
+};
+
+/// Sixteen lanes as one vector: one AVX-512 register in the x86-64-v4 copy, four SSE registers in the
+/// baseline copy.
+struct FloatWideGroup : SixteenFloatLanes {
   using Vec = Floats16;
   using Mask = Ints16;
   using Points = SixteenPoints;
@@ -167,40 +172,11 @@ struct FloatWideGroup {
   }
 };
 
-/// Sixteen floats as two vectors of eight (lanes 0-7 and 8-15), with the arithmetic of Floats16 lane by
-/// lane.
-struct FloatHalves {
-  Floats8 lo, hi;
-};
-[[gnu::always_inline]] inline FloatHalves operator*(const FloatHalves& a, const FloatHalves& b) {
-  return {a.lo * b.lo, a.hi * b.hi};
-}
-[[gnu::always_inline]] inline FloatHalves operator*(float a, const FloatHalves& b) {
-  return {a * b.lo, a * b.hi};
-}
-[[gnu::always_inline]] inline FloatHalves operator+(float a, const FloatHalves& b) {
-  return {a + b.lo, a + b.hi};
-}
-[[gnu::always_inline]] inline FloatHalves operator-(float a, const FloatHalves& b) {
-  return {a - b.lo, a - b.hi};
-}
-[[gnu::always_inline]] inline FloatHalves& operator+=(FloatHalves& a, const FloatHalves& b) {
-  a.lo += b.lo;
-  a.hi += b.hi;
-  return a;
-}
-[[gnu::always_inline]] inline FloatHalves& operator-=(FloatHalves& a, const FloatHalves& b) {
-  a.lo -= b.lo;
-  a.hi -= b.hi;
-  return a;
-}
+/// Sixteen floats as two vectors of eight (lanes 0-7 and 8-15).
+using FloatHalves = LanePair<Floats8>;
 
 /// Sixteen lanes as two vectors of eight floats: two registers in the AVX2 copy.
-struct FloatHalvesGroup {
-  static constexpr std::uint32_t kGroupLanes = kFloatLanes;
-  using Kernel = FloatKernel;
-  using Record = PackedPointF;
-  using Sum = float;
+struct FloatHalvesGroup : SixteenFloatLanes {
   using Vec = FloatHalves;
   struct Mask {
     Ints8 lo, hi;
@@ -269,17 +245,6 @@ template <class Group>
   sx += Group::sum(ax);
   sy += Group::sum(ay);
   sz += Group::sum(az);
-}
-
-/// Calls loop(Group{}) with the sixteen-lane group type that suits the running copy of a DRENCH_SIMD_CLONES
-/// function: FloatHalvesGroup in the AVX2 copy, FloatWideGroup in the others. Both give the same bits.
-template <class Loop>
-[[gnu::always_inline]] inline void with_sixteen_lane_group(Loop&& loop) {
-  if (avx2_copy()) {
-    loop(FloatHalvesGroup{});
-  } else {
-    loop(FloatWideGroup{});
-  }
 }
 
 }  // namespace

@@ -75,7 +75,7 @@ DRENCH_SIMD_CLONES void sph_densities(const FluidContext& ctx, const PackedPoint
   const PackedPoint* xs = x_mass.data();
   const PackedPoint* bs = ctx.boundary.data();
   const Scalar self = ctx.kernel.value(0.0);
-  with_eight_lane_group([&](auto lanes) __attribute__((always_inline)) {
+  with_group_of_copy<HalvesGroup, WideGroup>([&](auto lanes) __attribute__((always_inline)) {
     using Group = decltype(lanes);
     for (std::size_t i = begin; i < end; ++i) {
       const PackedPoint& xi = xs[i];
@@ -104,7 +104,7 @@ DRENCH_SIMD_CLONES void sph_densities_float(const FluidContext& ctx, const Packe
   const PackedPointF* bs = boundary.data();
   const FloatKernel kernel(ctx.kernel);
   const Scalar self = ctx.kernel.value(0.0);
-  with_sixteen_lane_group([&](auto lanes) __attribute__((always_inline)) {
+  with_group_of_copy<FloatHalvesGroup, FloatWideGroup>([&](auto lanes) __attribute__((always_inline)) {
     using Group = decltype(lanes);
     for (std::size_t i = begin; i < end; ++i) {
       const PackedPointF& xi = xs[i];
@@ -122,7 +122,7 @@ DRENCH_SIMD_CLONES void pressure_accelerations_float(const FluidContext& ctx,
   assert(ctx.uniform_mass > 0.0);
   const PackedPointF* points = x_p_over_rho2.data();
   const float mass = static_cast<float>(ctx.uniform_mass);
-  with_sixteen_lane_group([&](auto lanes) __attribute__((always_inline)) {
+  with_group_of_copy<FloatHalvesGroup, FloatWideGroup>([&](auto lanes) __attribute__((always_inline)) {
     using Group = decltype(lanes);
     for (std::size_t i = begin; i < end; ++i) {
       const PackedPointF& pi = points[i];

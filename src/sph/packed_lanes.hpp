@@ -125,12 +125,17 @@ template <class Points, class V>
     w[l] = k.value(std::sqrt(r2[l]));
 }
 
-/// Eight lanes as one vector of eight doubles: one register in the AVX-512 copy, four in the baseline copy.
-struct WideGroup {
+/// What the eight-lane double groups share: lane count, kernel, record and sum types (for_each_group,
+/// kernel_sum).
+struct EightDoubleLanes {
   static constexpr std::uint32_t kGroupLanes = kWide;
   using Kernel = CubicSplineKernel;
   using Record = PackedPoint;
   using Sum = Scalar;
+};
+
+/// Eight lanes as one vector of eight doubles: one register in the AVX-512 copy, four in the baseline copy.
+struct WideGroup : EightDoubleLanes {
   using Vec = Wide;
   using Mask = WideMask;
   using Points = EightPoints;
@@ -154,28 +159,51 @@ struct WideGroup {
   [[gnu::always_inline]] static Scalar sum(const Vec& v) { return wide_sum(v); }
 };
 
-/// Eight doubles as two vectors of four (lanes 0-3 and 4-7), with the arithmetic of Wide lane by lane.
-struct Halves {
-  Lanes lo, hi;
+/// Two vectors V as one of twice the lanes (lo: the first half), with the wide vector's arithmetic lane by
+/// lane: the halves groups' vector (HalvesGroup here, FloatHalvesGroup in float_lanes.hpp). Only the
+/// operators the loops use; S is a scalar.
+template <class V>
+struct LanePair {
+  V lo, hi;
 };
-[[gnu::always_inline]] inline Halves operator*(const Halves& a, const Halves& b) {
+template <class V>
+[[gnu::always_inline]] inline LanePair<V> operator*(const LanePair<V>& a, const LanePair<V>& b) {
   return {a.lo * b.lo, a.hi * b.hi};
 }
-[[gnu::always_inline]] inline Halves operator-(const Halves& a, Scalar b) {
+template <class V, class S>
+[[gnu::always_inline]] inline LanePair<V> operator*(S a, const LanePair<V>& b) {
+  return {a * b.lo, a * b.hi};
+}
+template <class V, class S>
+[[gnu::always_inline]] inline LanePair<V> operator+(S a, const LanePair<V>& b) {
+  return {a + b.lo, a + b.hi};
+}
+template <class V, class S>
+[[gnu::always_inline]] inline LanePair<V> operator-(S a, const LanePair<V>& b) {
+  return {a - b.lo, a - b.hi};
+}
+template <class V, class S>
+[[gnu::always_inline]] inline LanePair<V> operator-(const LanePair<V>& a, S b) {
   return {a.lo - b, a.hi - b};
 }
-[[gnu::always_inline]] inline Halves& operator+=(Halves& a, const Halves& b) {
+template <class V>
+[[gnu::always_inline]] inline LanePair<V>& operator+=(LanePair<V>& a, const LanePair<V>& b) {
   a.lo += b.lo;
   a.hi += b.hi;
   return a;
 }
+template <class V>
+[[gnu::always_inline]] inline LanePair<V>& operator-=(LanePair<V>& a, const LanePair<V>& b) {
+  a.lo -= b.lo;
+  a.hi -= b.hi;
+  return a;
+}
+
+/// Eight doubles as two vectors of four (lanes 0-3 and 4-7).
+using Halves = LanePair<Lanes>;
 
 /// Eight lanes as two vectors of four: two registers in the AVX2 copy.
-struct HalvesGroup {
-  static constexpr std::uint32_t kGroupLanes = kWide;
-  using Kernel = CubicSplineKernel;
-  using Record = PackedPoint;
-  using Sum = Scalar;
+struct HalvesGroup : EightDoubleLanes {
   typedef std::int64_t LaneMask __attribute__((vector_size(4 * sizeof(std::int64_t))));
   using Vec = Halves;
   struct Mask {
@@ -294,15 +322,15 @@ template <class Group>
   return Vec3(Group::sum(sx), Group::sum(sy), Group::sum(sz));
 }
 
-/// Calls loop(Group{}) with the group type that suits the running copy of a DRENCH_SIMD_CLONES function:
-/// HalvesGroup in the AVX2 copy, WideGroup in the others. Both give the same bits. `loop` must be
-/// always_inline (see above).
-template <class Loop>
-[[gnu::always_inline]] inline void with_eight_lane_group(Loop&& loop) {
+/// Calls loop(HalvesType{}) in the AVX2 copy of a DRENCH_SIMD_CLONES function and loop(WideType{}) in the
+/// others: a pair of group types with the same bits (HalvesGroup and WideGroup here, the float pair in
+/// float_lanes.hpp). `loop` must be always_inline (see above).
+template <class HalvesType, class WideType, class Loop>
+[[gnu::always_inline]] inline void with_group_of_copy(Loop&& loop) {
   if (avx2_copy()) {
-    loop(HalvesGroup{});
+    loop(HalvesType{});
   } else {
-    loop(WideGroup{});
+    loop(WideType{});
   }
 }
 

@@ -19,7 +19,7 @@ DRENCH_SIMD_CLONES void add_xsph(const FluidContext& ctx, const PackedPointArray
   const CubicSplineKernel& k = ctx.kernel;
   const PackedPoint* xs = x_volume.data();
   const PackedPoint* vs = velocities.data();
-  with_eight_lane_group([&](auto lanes) __attribute__((always_inline)) {
+  with_group_of_copy<HalvesGroup, WideGroup>([&](auto lanes) __attribute__((always_inline)) {
     using Group = decltype(lanes);
     for (std::size_t i = begin; i < end; ++i)
       accelerations[i - begin] += factor * xsph_sum<Group>(k, ctx.fluid_neighbors, i, xs, vs);
