@@ -9,7 +9,7 @@
 #include <omp.h>
 
 #include "common/parallel.hpp"
-#include "sph/packed_lanes.hpp"
+#include "sph/candidate_scan.hpp"
 
 namespace drench {
 
@@ -41,38 +41,11 @@ std::uint64_t hash_key(std::uint64_t key) {
   return key;
 }
 
-/// Writes the indices of the candidates q < end with |p_q - x|^2 < r2 and indices[q] != self to dst, in their
-/// order, and returns how many. Four candidates at a time: their coordinates are contiguous, so the distances
-/// are vector arithmetic without gathers; the distance is the same expression in every lane (source minus
-/// query, summed x, y, z) and in every copy, so the kept set does not depend on the CPU.
-/// Precondition: xs, ys, zs and indices hold end + kLanes - 1 entries, dst has room for end + kLanes - 1.
+/// scan_candidates_lanes compiled for each copy of DRENCH_SIMD_CLONES (the CPUs without AVX-512).
 DRENCH_SIMD_CLONES std::size_t scan_candidates(const Scalar* xs, const Scalar* ys, const Scalar* zs,
                                                const Index* indices, std::uint32_t end, const Vec3& x,
                                                Scalar r2, Index self, Index* dst) {
-  const Scalar x0 = x.x(), x1 = x.y(), x2 = x.z();
-  std::size_t count = 0;
-  for (std::uint32_t q = 0; q < end; q += kLanes) {
-    Lanes px, py, pz;
-    std::memcpy(&px, xs + q, sizeof(Lanes));
-    std::memcpy(&py, ys + q, sizeof(Lanes));
-    std::memcpy(&pz, zs + q, sizeof(Lanes));
-    const Lanes d0 = px - x0, d1 = py - x1, d2 = pz - x2;
-    const auto inside = d0 * d0 + d1 * d1 + d2 * d2 < r2;
-    // Every candidate is written and kept only if it is a neighbor: whether a point of a neighbouring cell
-    // lies inside the radius is a coin toss, and a mispredicted branch costs more than the write. The lanes
-    // are written out one by one: in a loop over l the compiler spilled the mask and reloaded each lane.
-    const Index* js = indices + q;
-    const std::uint32_t left = end - q;
-    dst[count] = js[0];
-    count += static_cast<std::size_t>((inside[0] != 0) & (js[0] != self));
-    dst[count] = js[1];
-    count += static_cast<std::size_t>((inside[1] != 0) & (js[1] != self) & (left > 1));
-    dst[count] = js[2];
-    count += static_cast<std::size_t>((inside[2] != 0) & (js[2] != self) & (left > 2));
-    dst[count] = js[3];
-    count += static_cast<std::size_t>((inside[3] != 0) & (js[3] != self) & (left > 3));
-  }
-  return count;
+  return scan_candidates_lanes(xs, ys, zs, indices, end, x, r2, self, dst);
 }
 
 }  // namespace
@@ -246,9 +219,9 @@ void NeighborSearch::gather_candidates(const Vec3i& cell, Candidates& out) const
   out.size = 0;
   const auto append = [&](std::uint32_t b, std::uint32_t e) {
     const std::size_t size = out.size + (e - b);
-    if (out.indices.size() < size + kLanes - 1) {
-      // kLanes - 1 entries of padding: scan_candidates reads whole groups of four.
-      const std::size_t grown = std::max(2 * out.indices.size(), size + kLanes - 1);
+    if (out.indices.size() < size + kScanPadding) {
+      // The scans read whole groups of up to eight.
+      const std::size_t grown = std::max(2 * out.indices.size(), size + kScanPadding);
       out.xs.resize(grown);
       out.ys.resize(grown);
       out.zs.resize(grown);
@@ -298,6 +271,7 @@ void NeighborSearch::find(const Vec3Array& queries, NeighborList& out, bool excl
   if (buffers.size() < static_cast<std::size_t>(threads)) buffers.resize(static_cast<std::size_t>(threads));
   if (m_thread_candidates.size() < static_cast<std::size_t>(threads))
     m_thread_candidates.resize(static_cast<std::size_t>(threads));
+  [[maybe_unused]] const bool compress = avx512_copy();
   std::vector<int> chunk_owner(chunks);
   std::vector<std::size_t> chunk_start(chunks);
 #pragma omp parallel num_threads(threads)
@@ -327,12 +301,22 @@ void NeighborSearch::find(const Vec3Array& queries, NeighborList& out, bool excl
           buffered = true;
           buffered_cell = c;
         }
-        const std::size_t room = used + candidates.size + kLanes;
+        const std::size_t room = used + candidates.size + kScanPadding;
         if (local.size() < room) local.resize(std::max(2 * local.size(), room));
         const std::size_t first = used;
-        used += scan_candidates(candidates.xs.data(), candidates.ys.data(), candidates.zs.data(),
-                                candidates.indices.data(), candidates.size, x, r2,
-                                exclude_self ? static_cast<Index>(i) : kNoIndex, local.data() + used);
+        const Index self = exclude_self ? static_cast<Index>(i) : kNoIndex;
+#if DRENCH_HAS_COMPRESS_SCAN
+        if (compress) {
+          used += scan_candidates_compress(candidates.xs.data(), candidates.ys.data(), candidates.zs.data(),
+                                           candidates.indices.data(), candidates.size, x, r2, self,
+                                           local.data() + used);
+        } else
+#endif
+        {
+          used +=
+              scan_candidates(candidates.xs.data(), candidates.ys.data(), candidates.zs.data(),
+                              candidates.indices.data(), candidates.size, x, r2, self, local.data() + used);
+        }
         out.offsets[i + 1] = static_cast<std::uint32_t>(used - first);
       }
     }

@@ -64,8 +64,8 @@ class NeighborSearch {
 
  private:
   /// The source points of a block of 3 x 3 x 3 cells, in find()'s order (by row of cells, then sorted order):
-  /// coordinates (unit: m) and source indices, `size` of them; every array has at least 3 entries of padding
-  /// after them (the scan reads groups of four).
+  /// coordinates (unit: m) and source indices, `size` of them; every array has at least kScanPadding (7)
+  /// entries of padding after them (the scans read groups of up to eight, sph/candidate_scan.hpp).
   struct Candidates {
     ScalarArray xs, ys, zs;
     IndexArray indices;

@@ -1,9 +1,12 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
+#include <limits>
 #include <random>
 
 #include "neighbor_test_helpers.hpp"
+#include "sph/candidate_scan.hpp"
 #include "sph/neighbor_search.hpp"
 
 namespace drench {
@@ -108,6 +111,90 @@ TEST(NeighborSearch, PointsExactlyAtTheRadiusAreNotNeighbors) {
   search.find(points, list, true);
   EXPECT_EQ(list.count(0), 1u);
   EXPECT_EQ(*list.begin(0), 2u);
+}
+
+/// Candidate runs for the scans: random points around the query (about half inside the radius), some at the
+/// radius up to rounding, one NaN, the query's own index somewhere, and padding that would be kept if a scan
+/// read past the end (points at the query, indices that are not the query's).
+struct CandidateRun {
+  ScalarArray xs, ys, zs;
+  IndexArray indices;
+  std::uint32_t size = 0;
+  Index self = 0;
+};
+
+CandidateRun candidate_run(std::uint32_t size, const Vec3& query, Scalar radius, std::mt19937& rng) {
+  std::uniform_real_distribution<Scalar> offset(-1.3 * radius, 1.3 * radius);
+  CandidateRun run;
+  run.size = size;
+  const std::size_t stored = size + kScanPadding;
+  run.xs.assign(stored, query.x());
+  run.ys.assign(stored, query.y());
+  run.zs.assign(stored, query.z());
+  run.indices.resize(stored);
+  for (std::size_t q = 0; q < stored; ++q)
+    run.indices[q] = static_cast<Index>(1000 + q);
+  for (std::uint32_t q = 0; q < size; ++q) {
+    Vec3 p = query + Vec3(offset(rng), offset(rng), offset(rng));
+    if (q % 7 == 3) p = query + Vec3(0.0, radius, 0.0);  // at the radius, up to rounding
+    if (q % 11 == 5) p.x() = std::numeric_limits<Scalar>::quiet_NaN();
+    run.xs[q] = p.x();
+    run.ys[q] = p.y();
+    run.zs[q] = p.z();
+  }
+  run.self = size > 0 ? static_cast<Index>(1000 + rng() % size) : 0;
+  // The query itself sits at its own position: kept only if the self test failed.
+  if (size > 0) {
+    const std::uint32_t own = run.self - 1000;
+    run.xs[own] = query.x();
+    run.ys[own] = query.y();
+    run.zs[own] = query.z();
+  }
+  return run;
+}
+
+/// The definition: candidates q < size with |p_q - x|^2 < r2 (NaN never), other than self, in their order.
+IndexArray kept_by_definition(const CandidateRun& run, const Vec3& x, Scalar r2) {
+  IndexArray kept;
+  for (std::uint32_t q = 0; q < run.size; ++q) {
+    const Scalar d0 = run.xs[q] - x.x(), d1 = run.ys[q] - x.y(), d2 = run.zs[q] - x.z();
+    if (d0 * d0 + d1 * d1 + d2 * d2 < r2 && run.indices[q] != run.self) kept.push_back(run.indices[q]);
+  }
+  return kept;
+}
+
+// Both scans of the grid search (sph/candidate_scan.hpp) against the definition, on runs of every length
+// from 0 to 40 (whole groups of four and eight and every tail): the same indices in the same order, nothing
+// from the padding, the query's own index left out, NaN and points at exactly the radius not kept.
+TEST(CandidateScan, BothScansKeepExactlyTheCandidatesWithinTheRadiusInOrder) {
+  std::mt19937 rng(7);
+  const Vec3 query(0.31, -0.72, 1.05);
+  const Scalar radius = 0.05, r2 = radius * radius;
+  int compressed_runs = 0;
+  for (int repeat = 0; repeat < 20; ++repeat) {
+    for (std::uint32_t size = 0; size <= 40; ++size) {
+      const CandidateRun run = candidate_run(size, query, radius, rng);
+      const IndexArray expected = kept_by_definition(run, query, r2);
+      IndexArray dst(size + kScanPadding, 0);
+      const std::size_t count =
+          scan_candidates_lanes(run.xs.data(), run.ys.data(), run.zs.data(), run.indices.data(), size, query,
+                                r2, run.self, dst.data());
+      ASSERT_EQ(IndexArray(dst.begin(), dst.begin() + static_cast<std::ptrdiff_t>(count)), expected)
+          << "four-lane scan, " << size << " candidates";
+#if DRENCH_HAS_COMPRESS_SCAN
+      if (avx512_copy()) {
+        std::fill(dst.begin(), dst.end(), 0);
+        const std::size_t compressed =
+            scan_candidates_compress(run.xs.data(), run.ys.data(), run.zs.data(), run.indices.data(), size,
+                                     query, r2, run.self, dst.data());
+        ASSERT_EQ(IndexArray(dst.begin(), dst.begin() + static_cast<std::ptrdiff_t>(compressed)), expected)
+            << "compressed scan, " << size << " candidates";
+        ++compressed_runs;
+      }
+#endif
+    }
+  }
+  if (compressed_runs == 0) GTEST_SKIP() << "four-lane scan checked; this CPU has no AVX-512 for the other";
 }
 
 TEST(NeighborSearch, ZOrderIsAPermutationGroupingEachCell) {

@@ -1,0 +1,107 @@
+#pragma once
+/// The grid search's inner loop (sph/neighbor_search.cpp): of a run of candidate points, keep the indices of
+/// those within the support radius of one query, in their order. Two versions with the same result: four
+/// candidates at a time in GCC's vector extension (every copy of DRENCH_SIMD_CLONES), and eight at a time
+/// with AVX-512's compress for CPUs that have it. Internal to neighbor_search.cpp and its tests, which run
+/// both against each other.
+#include <algorithm>
+#include <cstdint>
+#include <cstring>
+
+#include "common/parallel.hpp"
+#include "sph/packed_lanes.hpp"
+
+// The compressed scan needs AVX-512 (F, VL) and BMI2: compiled for x86-64-v4 by a target attribute where the
+// build makes DRENCH_SIMD_CLONES (the loader then tells whether the CPU has it), or with no attribute where
+// the whole build targets such a CPU.
+#if DRENCH_HAS_SIMD_CLONES
+#define DRENCH_HAS_COMPRESS_SCAN 1
+#define DRENCH_TARGET_X86_64_V4 __attribute__((target("arch=x86-64-v4")))
+#elif defined(__x86_64__) && defined(__AVX512F__) && defined(__AVX512VL__) && defined(__BMI2__)
+#define DRENCH_HAS_COMPRESS_SCAN 1
+#define DRENCH_TARGET_X86_64_V4
+#else
+#define DRENCH_HAS_COMPRESS_SCAN 0
+#endif
+
+#if DRENCH_HAS_COMPRESS_SCAN
+#include <immintrin.h>
+#endif
+
+namespace drench {
+namespace {
+
+/// Entries each candidate array holds after its last candidate (the scans read whole groups of up to eight),
+/// and that the destination holds after `end`.
+constexpr std::uint32_t kScanPadding = 7;
+
+/// Writes the indices of the candidates q < end with |p_q - x|^2 < r2 and indices[q] != self to dst, in their
+/// order, and returns how many. Four candidates at a time: their coordinates are contiguous, so the distances
+/// are vector arithmetic without gathers; the distance is the same expression in every lane (source minus
+/// query, summed x, y, z) and in every copy, so the kept set does not depend on the CPU.
+/// Precondition: xs, ys, zs and indices hold end + kScanPadding entries, dst has room for as many.
+[[gnu::always_inline]] inline std::size_t scan_candidates_lanes(const Scalar* xs, const Scalar* ys,
+                                                                const Scalar* zs, const Index* indices,
+                                                                std::uint32_t end, const Vec3& x, Scalar r2,
+                                                                Index self, Index* dst) {
+  const Scalar x0 = x.x(), x1 = x.y(), x2 = x.z();
+  std::size_t count = 0;
+  for (std::uint32_t q = 0; q < end; q += kLanes) {
+    Lanes px, py, pz;
+    std::memcpy(&px, xs + q, sizeof(Lanes));
+    std::memcpy(&py, ys + q, sizeof(Lanes));
+    std::memcpy(&pz, zs + q, sizeof(Lanes));
+    const Lanes d0 = px - x0, d1 = py - x1, d2 = pz - x2;
+    const auto inside = d0 * d0 + d1 * d1 + d2 * d2 < r2;
+    // Every candidate is written and kept only if it is a neighbor: whether a point of a neighbouring cell
+    // lies inside the radius is a coin toss, and a mispredicted branch costs more than the write. The lanes
+    // are written out one by one: in a loop over l the compiler spilled the mask and reloaded each lane.
+    const Index* js = indices + q;
+    const std::uint32_t left = end - q;
+    dst[count] = js[0];
+    count += static_cast<std::size_t>((inside[0] != 0) & (js[0] != self));
+    dst[count] = js[1];
+    count += static_cast<std::size_t>((inside[1] != 0) & (js[1] != self) & (left > 1));
+    dst[count] = js[2];
+    count += static_cast<std::size_t>((inside[2] != 0) & (js[2] != self) & (left > 2));
+    dst[count] = js[3];
+    count += static_cast<std::size_t>((inside[3] != 0) & (js[3] != self) & (left > 3));
+  }
+  return count;
+}
+
+#if DRENCH_HAS_COMPRESS_SCAN
+/// scan_candidates_lanes' result, eight candidates at a time: the kept lanes' indices are packed to the front
+/// of one vector (vpcompressd, register form: its memory form is microcoded on AMD's Zen 4) and the vector is
+/// stored whole at dst + count. The four-lane version spends a compare, an and and a dependent add per
+/// candidate on the packing. The distances are the same expression, rounded the same way (no fused
+/// multiply-add: these are separate intrinsics, and drench_core is built with -ffp-contract=off), so the
+/// kept set is the same. Call only when avx512_copy().
+/// Precondition: as scan_candidates_lanes.
+DRENCH_TARGET_X86_64_V4 inline std::size_t scan_candidates_compress(const Scalar* xs, const Scalar* ys,
+                                                                    const Scalar* zs, const Index* indices,
+                                                                    std::uint32_t end, const Vec3& x,
+                                                                    Scalar r2, Index self, Index* dst) {
+  const __m512d x0 = _mm512_set1_pd(x.x()), x1 = _mm512_set1_pd(x.y()), x2 = _mm512_set1_pd(x.z());
+  const __m512d radius2 = _mm512_set1_pd(r2);
+  const __m256i self_lanes = _mm256_set1_epi32(static_cast<int>(self));
+  std::size_t count = 0;
+  for (std::uint32_t q = 0; q < end; q += 8) {
+    const __m512d d0 = _mm512_sub_pd(_mm512_loadu_pd(xs + q), x0);
+    const __m512d d1 = _mm512_sub_pd(_mm512_loadu_pd(ys + q), x1);
+    const __m512d d2 = _mm512_sub_pd(_mm512_loadu_pd(zs + q), x2);
+    const __m512d d_sq =
+        _mm512_add_pd(_mm512_add_pd(_mm512_mul_pd(d0, d0), _mm512_mul_pd(d1, d1)), _mm512_mul_pd(d2, d2));
+    const __m256i js = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(indices + q));
+    // Ordered, non-signalling less-than: false for NaN, as the vector extension's `<`.
+    __mmask8 keep = _mm512_cmp_pd_mask(d_sq, radius2, _CMP_LT_OQ) & _mm256_cmpneq_epi32_mask(js, self_lanes);
+    keep &= static_cast<__mmask8>(_bzhi_u32(0xffu, std::min(end - q, 8u)));
+    _mm256_storeu_si256(reinterpret_cast<__m256i*>(dst + count), _mm256_maskz_compress_epi32(keep, js));
+    count += static_cast<std::size_t>(__builtin_popcount(keep));
+  }
+  return count;
+}
+#endif
+
+}  // namespace
+}  // namespace drench
