@@ -1,6 +1,7 @@
 // The fluid's grid search alone: build + find on a block of 39^3 = 59,319 points at spacing 0.025 m, jittered
 // by up to 0.1 spacing and z-ordered as the fluid solver keeps its particles, support 0.05 m (the 59K dam
-// break's). Fluid onto itself, self excluded.
+// break's). Fluid onto itself, self excluded. Argument 1: the compressed scan (AVX-512 CPUs' default), 0: the
+// four-lane scan of the other CPUs (NeighborSearch::set_compressed_scan).
 //
 //   build-bench/bench/bench_neighbor_search --benchmark_repetitions=5
 // Thread count: OMP_NUM_THREADS.
@@ -25,6 +26,11 @@ void build_and_find_59k(benchmark::State& state) {
     }
   }
   drench::NeighborSearch search(2.0 * spacing);
+  search.set_compressed_scan(state.range(0) != 0);
+  if (state.range(0) != 0 && !search.compressed_scan()) {
+    state.SkipWithError("this CPU or build has no AVX-512 for the compressed scan");
+    return;
+  }
   const drench::IndexArray order = search.z_order(lattice);
   drench::Vec3Array points(lattice.size());
   for (std::size_t k = 0; k < order.size(); ++k)
@@ -39,7 +45,7 @@ void build_and_find_59k(benchmark::State& state) {
   state.counters["queries_per_s"] =
       benchmark::Counter(static_cast<double>(points.size()), benchmark::Counter::kIsIterationInvariantRate);
 }
-BENCHMARK(build_and_find_59k)->Unit(benchmark::kMillisecond);
+BENCHMARK(build_and_find_59k)->Arg(1)->Arg(0)->Unit(benchmark::kMillisecond);
 
 }  // namespace
 

@@ -101,6 +101,22 @@ DRENCH_TARGET_X86_64_V4 inline std::size_t scan_candidates_compress(const Scalar
   }
   return count;
 }
+
+/// scan_candidates_compress over the runs [begins[r], ends[r]), r < runs, of the arrays, in place, the kept
+/// indices one after the other in dst: no copy of the candidates into one array first. Precondition: xs, ys,
+/// zs and indices hold kScanPadding entries after every run's end; dst has room for all the runs'
+/// candidates + kScanPadding.
+DRENCH_TARGET_X86_64_V4 inline std::size_t scan_runs_compress(
+    const Scalar* xs, const Scalar* ys, const Scalar* zs, const Index* indices, const std::uint32_t* begins,
+    const std::uint32_t* ends, int runs, const Vec3& x, Scalar r2, Index self, Index* dst) {
+  std::size_t count = 0;
+  for (int r = 0; r < runs; ++r) {
+    const std::uint32_t b = begins[r];
+    count +=
+        scan_candidates_compress(xs + b, ys + b, zs + b, indices + b, ends[r] - b, x, r2, self, dst + count);
+  }
+  return count;
+}
 #endif
 
 }  // namespace

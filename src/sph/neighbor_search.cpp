@@ -53,6 +53,11 @@ DRENCH_SIMD_CLONES std::size_t scan_candidates(const Scalar* xs, const Scalar* y
 NeighborSearch::NeighborSearch(Scalar support_radius)
     : m_radius(support_radius), m_inv_cell(1.0 / support_radius) {
   assert(support_radius > 0.0);
+  set_compressed_scan(true);
+}
+
+void NeighborSearch::set_compressed_scan(bool on) {
+  m_compressed_scan = on && DRENCH_HAS_COMPRESS_SCAN && avx512_copy();
 }
 
 Vec3i NeighborSearch::cell_of(const Vec3& x) const {
@@ -116,9 +121,12 @@ void NeighborSearch::build(const Vec3Array& points) {
   } else {
     build_hashed(points);
   }
-  m_xs.resize(n);
-  m_ys.resize(n);
-  m_zs.resize(n);
+  m_count = n;
+  // kScanPadding entries after the last point: the compressed scan reads the runs of cells in place.
+  m_sorted_index.resize(n + kScanPadding, 0);
+  m_xs.resize(n + kScanPadding);
+  m_ys.resize(n + kScanPadding);
+  m_zs.resize(n + kScanPadding);
 #pragma omp parallel for schedule(static)
   for (std::size_t k = 0; k < n; ++k) {
     const Vec3& x = points[m_sorted_index[k]];
@@ -249,11 +257,34 @@ void NeighborSearch::gather_candidates(const Vec3i& cell, Candidates& out) const
   }
 }
 
+void NeighborSearch::candidate_runs(const Vec3i& cell, CandidateRuns& out) const {
+  out.runs = 0;
+  out.total = 0;
+  const auto add = [&](std::uint32_t b, std::uint32_t e) {
+    out.begin[out.runs] = b;
+    out.end[out.runs] = e;
+    ++out.runs;
+    out.total += e - b;
+  };
+  for (int dz = -1; dz <= 1; ++dz) {
+    for (int dy = -1; dy <= 1; ++dy) {
+      std::uint32_t b, e;
+      if (m_dense) {
+        if (row_range(cell + Vec3i(-1, dy, dz), 3, b, e)) add(b, e);
+      } else {
+        for (int dx = -1; dx <= 1; ++dx) {
+          if (cell_range(cell + Vec3i(dx, dy, dz), b, e)) add(b, e);
+        }
+      }
+    }
+  }
+}
+
 void NeighborSearch::find(const Vec3Array& queries, NeighborList& out, bool exclude_self) const {
   const std::size_t m = queries.size();
   const Scalar r2 = m_radius * m_radius;
   out.offsets.assign(m + 1, 0);
-  if (m_sorted_index.empty() || m == 0) {
+  if (m_count == 0 || m == 0) {
     out.indices.clear();
     return;
   }
@@ -271,7 +302,6 @@ void NeighborSearch::find(const Vec3Array& queries, NeighborList& out, bool excl
   if (buffers.size() < static_cast<std::size_t>(threads)) buffers.resize(static_cast<std::size_t>(threads));
   if (m_thread_candidates.size() < static_cast<std::size_t>(threads))
     m_thread_candidates.resize(static_cast<std::size_t>(threads));
-  [[maybe_unused]] const bool compress = avx512_copy();
   std::vector<int> chunk_owner(chunks);
   std::vector<std::size_t> chunk_start(chunks);
 #pragma omp parallel num_threads(threads)
@@ -279,6 +309,7 @@ void NeighborSearch::find(const Vec3Array& queries, NeighborList& out, bool excl
     const int thread = omp_get_thread_num();
     IndexArray& local = buffers[static_cast<std::size_t>(thread)];
     Candidates& candidates = m_thread_candidates[static_cast<std::size_t>(thread)];
+    CandidateRuns runs;
     std::size_t used =
         0;  // local is grown ahead of the writes; only its first `used` entries are this call's
 #pragma omp for schedule(dynamic, 1)
@@ -291,11 +322,33 @@ void NeighborSearch::find(const Vec3Array& queries, NeighborList& out, bool excl
       // row per query, skipping cells beyond the radius, read 24% fewer points but was slower: nine short
       // loops per query, each of a different length (bench/bench_neighbor_search, 1 thread: 23.6-41.4 ms
       // against 18.5-19.5 ms, bench/results/debian12-2core/neighbor_search_99939d6_vs_7d87b95.txt).
+      // The compressed scan reads the nine rows in place instead, the gather (four copies per row) costing
+      // more than its own per-row tails: in the dam break the particles drift between sorts, and a gather
+      // served only about three queries (0.35 gathers per query over 100 steps of the 59K run). The 59K
+      // PCISPH dam break ran 336K and 346K particle-steps/s on 1 thread against 322K and 332K with the
+      // gather (alternating); on the sorted block of bench_neighbor_search the two are even.
       bool buffered = false;
       Vec3i buffered_cell = Vec3i::Zero();
       for (std::size_t i = k * kParticleChunk; i < chunk_end; ++i) {
         const Vec3& x = queries[i];
         const Vec3i c = cell_of(x);
+        const Index self = exclude_self ? static_cast<Index>(i) : kNoIndex;
+#if DRENCH_HAS_COMPRESS_SCAN
+        if (m_compressed_scan) {
+          if (!buffered || c != buffered_cell) {
+            candidate_runs(c, runs);
+            buffered = true;
+            buffered_cell = c;
+          }
+          const std::size_t room = used + runs.total + kScanPadding;
+          if (local.size() < room) local.resize(std::max(2 * local.size(), room));
+          const std::size_t first = used;
+          used += scan_runs_compress(m_xs.data(), m_ys.data(), m_zs.data(), m_sorted_index.data(), runs.begin,
+                                     runs.end, runs.runs, x, r2, self, local.data() + used);
+          out.offsets[i + 1] = static_cast<std::uint32_t>(used - first);
+          continue;
+        }
+#endif
         if (!buffered || c != buffered_cell) {
           gather_candidates(c, candidates);
           buffered = true;
@@ -304,19 +357,8 @@ void NeighborSearch::find(const Vec3Array& queries, NeighborList& out, bool excl
         const std::size_t room = used + candidates.size + kScanPadding;
         if (local.size() < room) local.resize(std::max(2 * local.size(), room));
         const std::size_t first = used;
-        const Index self = exclude_self ? static_cast<Index>(i) : kNoIndex;
-#if DRENCH_HAS_COMPRESS_SCAN
-        if (compress) {
-          used += scan_candidates_compress(candidates.xs.data(), candidates.ys.data(), candidates.zs.data(),
-                                           candidates.indices.data(), candidates.size, x, r2, self,
-                                           local.data() + used);
-        } else
-#endif
-        {
-          used +=
-              scan_candidates(candidates.xs.data(), candidates.ys.data(), candidates.zs.data(),
-                              candidates.indices.data(), candidates.size, x, r2, self, local.data() + used);
-        }
+        used += scan_candidates(candidates.xs.data(), candidates.ys.data(), candidates.zs.data(),
+                                candidates.indices.data(), candidates.size, x, r2, self, local.data() + used);
         out.offsets[i + 1] = static_cast<std::uint32_t>(used - first);
       }
     }

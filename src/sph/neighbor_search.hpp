@@ -62,6 +62,13 @@ class NeighborSearch {
   /// that each layout is exercised).
   bool dense() const { return m_dense; }
 
+  /// Whether find() scans eight candidates at a time with AVX-512's compress, in place in the sorted arrays
+  /// (the default where the CPU has AVX-512), or gathers each block of 27 cells into one array and scans it
+  /// four at a time (the others). Both give the same lists, in the same order. `on` is ignored where the CPU
+  /// or the build lacks AVX-512; tests and benchmarks switch it off to run the other scan on such a CPU.
+  void set_compressed_scan(bool on);
+  bool compressed_scan() const { return m_compressed_scan; }
+
  private:
   /// The source points of a block of 3 x 3 x 3 cells, in find()'s order (by row of cells, then sorted order):
   /// coordinates (unit: m) and source indices, `size` of them; every array has at least kScanPadding (7)
@@ -72,6 +79,18 @@ class NeighborSearch {
     std::uint32_t size = 0;
   };
 
+  /// Where the candidates of a query lie in the sorted arrays (m_xs, ...): the runs [begin[r], end[r]),
+  /// r < runs, in find()'s order (nine rows of three cells in the dense grid, up to 27 cells in the hashed
+  /// one), `total` points in all.
+  struct CandidateRuns {
+    std::uint32_t begin[27];
+    std::uint32_t end[27];
+    int runs = 0;
+    std::uint32_t total = 0;
+  };
+
+  /// out = the runs of sorted points in the 27 cells around `cell`, in find()'s order (empty runs left out).
+  void candidate_runs(const Vec3i& cell, CandidateRuns& out) const;
   std::uint64_t key_of_cell(const Vec3i& cell) const;
   Vec3i cell_of(const Vec3& x) const;
   /// Slot of `key` in m_cell_keys, or -1.
@@ -91,12 +110,14 @@ class NeighborSearch {
   // Source points in sorted (cell) order, one array per coordinate (gather_candidates copies runs of them),
   // and the original index of each.
   ScalarArray m_xs, m_ys, m_zs;
-  IndexArray m_sorted_index;
+  IndexArray m_sorted_index;                // n entries, then kScanPadding
+  std::size_t m_count = 0;                  // source points of the last build
   std::vector<std::uint64_t> m_cell_keys;   // distinct keys, ascending
   std::vector<std::uint32_t> m_cell_begin;  // first sorted point of each cell; one extra end entry
   std::vector<std::int64_t> m_table;        // open-addressing hash: slot -> cell, -1 empty
   std::uint64_t m_table_mask = 0;
   bool m_dense = false;
+  bool m_compressed_scan = false;
   Vec3i m_lo = Vec3i::Zero();                        // dense mode: first cell of the grid
   Vec3i m_dims = Vec3i::Zero();                      // dense mode: cells per axis
   mutable std::vector<IndexArray> m_thread_buffers;  // find(): one gather buffer per thread, kept for reuse

@@ -17,6 +17,24 @@ using testing::expect_same_sets;
 using testing::random_points;
 using testing::z_ordered;
 
+/// search.find() with both scans: the in-place compressed one where this CPU has AVX-512, and the four-lane
+/// one over gathered candidates that the others run. They must give the same lists in the same order (the
+/// order fixes the bits of every pair sum); `list` gets the four-lane scan's.
+void find_with_both_scans(NeighborSearch& search, const Vec3Array& queries, NeighborList& list,
+                          bool exclude_self) {
+  search.set_compressed_scan(true);
+  const bool compressed = search.compressed_scan();
+  NeighborList other;
+  if (compressed) search.find(queries, other, exclude_self);
+  search.set_compressed_scan(false);
+  search.find(queries, list, exclude_self);
+  search.set_compressed_scan(true);
+  if (compressed) {
+    EXPECT_EQ(other.offsets, list.offsets) << "the two scans found different counts";
+    EXPECT_EQ(other.indices, list.indices) << "the two scans found different lists";
+  }
+}
+
 TEST(NeighborSearch, SelfQueryMatchesBruteForceOnRandomSets) {
   for (unsigned seed = 1; seed <= 5; ++seed) {
     const Vec3Array points = random_points(1500, Vec3(-0.3, -0.2, -0.1), Vec3(0.2, 0.3, 0.4), seed);
@@ -24,7 +42,7 @@ TEST(NeighborSearch, SelfQueryMatchesBruteForceOnRandomSets) {
     NeighborSearch search(radius);
     search.build(points);
     NeighborList list;
-    search.find(points, list, /*exclude_self=*/true);
+    find_with_both_scans(search, points, list, /*exclude_self=*/true);
     expect_same_sets(list, brute_force(points, points, radius, true));
   }
 }
@@ -37,7 +55,7 @@ TEST(NeighborSearch, CrossQueryMatchesBruteForceIncludingNegativeAndFarCoordinat
   NeighborSearch search(radius);
   search.build(sources);
   NeighborList list;
-  search.find(queries, list, /*exclude_self=*/false);
+  find_with_both_scans(search, queries, list, /*exclude_self=*/false);
   expect_same_sets(list, brute_force(queries, sources, radius, false));
 }
 
@@ -53,7 +71,7 @@ TEST(NeighborSearch, ZOrderedQueriesInRunsPerCellMatchBruteForce) {
   ASSERT_LT(runs, points.size() / 4) << "the queries should share cells in runs";
   search.build(points);
   NeighborList list;
-  search.find(points, list, /*exclude_self=*/true);
+  find_with_both_scans(search, points, list, /*exclude_self=*/true);
   expect_same_sets(list, brute_force(points, points, radius, true));
 }
 
@@ -65,9 +83,9 @@ bool expect_sorted_and_unsorted_queries_match_brute_force(NeighborSearch& search
   const Vec3Array sorted = z_ordered(search, points);
   search.build(sorted);
   NeighborList list;
-  search.find(sorted, list, /*exclude_self=*/true);
+  find_with_both_scans(search, sorted, list, /*exclude_self=*/true);
   expect_same_sets(list, brute_force(sorted, sorted, radius, true));
-  search.find(points, list, /*exclude_self=*/false);
+  find_with_both_scans(search, points, list, /*exclude_self=*/false);
   expect_same_sets(list, brute_force(points, sorted, radius, false));
   return search.dense();
 }
@@ -108,7 +126,7 @@ TEST(NeighborSearch, PointsExactlyAtTheRadiusAreNotNeighbors) {
   NeighborSearch search(0.1);
   search.build(points);
   NeighborList list;
-  search.find(points, list, true);
+  find_with_both_scans(search, points, list, true);
   EXPECT_EQ(list.count(0), 1u);
   EXPECT_EQ(*list.begin(0), 2u);
 }
@@ -214,7 +232,7 @@ TEST(NeighborSearch, EmptySourceSetGivesNoNeighbors) {
   NeighborSearch search(0.1);
   search.build({});
   NeighborList list;
-  search.find({Vec3::Zero()}, list, false);
+  find_with_both_scans(search, {Vec3::Zero()}, list, false);
   EXPECT_EQ(list.count(0), 0u);
 }
 
