@@ -1,7 +1,7 @@
 // The fluid's grid search alone: build + find on a block of 39^3 = 59,319 points at spacing 0.025 m, jittered
 // by up to 0.1 spacing and z-ordered as the fluid solver keeps its particles, support 0.05 m (the 59K dam
-// break's). Fluid onto itself, self excluded. Argument 1: the compressed scan (AVX-512 CPUs' default), 0: the
-// four-lane scan of the other CPUs (NeighborSearch::set_compressed_scan).
+// break's). Fluid onto itself, self excluded. Argument: the scan (NeighborSearch::set_candidate_scan), 2
+// AVX-512's compress (the default where the CPU has it), 1 AVX2's permute, 0 four lanes (CPUs without AVX2).
 //
 //   build-bench/bench/bench_neighbor_search --benchmark_repetitions=5
 // Thread count: OMP_NUM_THREADS.
@@ -26,9 +26,8 @@ void build_and_find_59k(benchmark::State& state) {
     }
   }
   drench::NeighborSearch search(2.0 * spacing);
-  search.set_compressed_scan(state.range(0) != 0);
-  if (state.range(0) != 0 && !search.compressed_scan()) {
-    state.SkipWithError("this CPU or build has no AVX-512 for the compressed scan");
+  if (!search.set_candidate_scan(static_cast<drench::CandidateScan>(state.range(0)))) {
+    state.SkipWithError("this CPU or build cannot run this scan");
     return;
   }
   const drench::IndexArray order = search.z_order(lattice);
@@ -45,7 +44,7 @@ void build_and_find_59k(benchmark::State& state) {
   state.counters["queries_per_s"] =
       benchmark::Counter(static_cast<double>(points.size()), benchmark::Counter::kIsIterationInvariantRate);
 }
-BENCHMARK(build_and_find_59k)->Arg(1)->Arg(0)->Unit(benchmark::kMillisecond);
+BENCHMARK(build_and_find_59k)->Arg(2)->Arg(1)->Arg(0)->Unit(benchmark::kMillisecond);
 
 }  // namespace
 

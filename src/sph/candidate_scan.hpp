@@ -1,30 +1,42 @@
 #pragma once
 /// The grid search's inner loop (sph/neighbor_search.cpp): of a run of candidate points, keep the indices of
-/// those within the support radius of one query, in their order. Two versions with the same result: four
-/// candidates at a time in GCC's vector extension (every copy of DRENCH_SIMD_CLONES), and eight at a time
-/// with AVX-512's compress for CPUs that have it. Internal to neighbor_search.cpp and its tests, which run
-/// both against each other.
+/// those within the support radius of one query, in their order. Three versions with the same result, the
+/// fastest the CPU has being used: eight candidates at a time with AVX-512's compress, eight at a time with
+/// AVX2's lane permute and a table of permutations, and four at a time in GCC's vector extension (every copy
+/// of DRENCH_SIMD_CLONES, the only one on CPUs before AVX2). Internal to neighbor_search.cpp and its tests,
+/// which run them all against each other.
 #include <algorithm>
+#include <array>
 #include <cstdint>
 #include <cstring>
 
 #include "common/parallel.hpp"
 #include "sph/packed_lanes.hpp"
 
-// The compressed scan needs AVX-512 (F, VL) and BMI2: compiled for x86-64-v4 by a target attribute where the
-// build makes DRENCH_SIMD_CLONES (the loader then tells whether the CPU has it), or with no attribute where
-// the whole build targets such a CPU.
+// The AVX-512 scan needs AVX-512 (F, VL) and BMI2, the AVX2 scan AVX2 and BMI2: each is compiled for its
+// x86-64 level by a target attribute where the build makes DRENCH_SIMD_CLONES (the loader then tells which
+// the CPU has), or with no attribute where the whole build targets such a CPU.
 #if DRENCH_HAS_SIMD_CLONES
-#define DRENCH_HAS_COMPRESS_SCAN 1
+#define DRENCH_HAS_AVX512_SCAN 1
+#define DRENCH_HAS_AVX2_SCAN 1
 #define DRENCH_TARGET_X86_64_V4 __attribute__((target("arch=x86-64-v4")))
-#elif defined(__x86_64__) && defined(__AVX512F__) && defined(__AVX512VL__) && defined(__BMI2__)
-#define DRENCH_HAS_COMPRESS_SCAN 1
+#define DRENCH_TARGET_X86_64_V3 __attribute__((target("arch=x86-64-v3")))
+#else
+#if defined(__x86_64__) && defined(__AVX512F__) && defined(__AVX512VL__) && defined(__BMI2__)
+#define DRENCH_HAS_AVX512_SCAN 1
 #define DRENCH_TARGET_X86_64_V4
 #else
-#define DRENCH_HAS_COMPRESS_SCAN 0
+#define DRENCH_HAS_AVX512_SCAN 0
+#endif
+#if defined(__x86_64__) && defined(__AVX2__) && defined(__BMI2__)
+#define DRENCH_HAS_AVX2_SCAN 1
+#define DRENCH_TARGET_X86_64_V3
+#else
+#define DRENCH_HAS_AVX2_SCAN 0
+#endif
 #endif
 
-#if DRENCH_HAS_COMPRESS_SCAN
+#if DRENCH_HAS_AVX512_SCAN || DRENCH_HAS_AVX2_SCAN
 #include <immintrin.h>
 #endif
 
@@ -70,13 +82,13 @@ constexpr std::uint32_t kScanPadding = 7;
   return count;
 }
 
-#if DRENCH_HAS_COMPRESS_SCAN
+#if DRENCH_HAS_AVX512_SCAN
 /// scan_candidates_lanes' result, eight candidates at a time: the kept lanes' indices are packed to the front
 /// of one vector (vpcompressd, register form: its memory form is microcoded on AMD's Zen 4) and the vector is
 /// stored whole at dst + count. The four-lane version spends a compare, an and and a dependent add per
 /// candidate on the packing. The distances are the same expression, rounded the same way (no fused
 /// multiply-add: these are separate intrinsics, and drench_core is built with -ffp-contract=off), so the
-/// kept set is the same. Call only when avx512_copy().
+/// kept set is the same. Call only when the CPU has AVX-512 (avx512_copy()).
 /// Precondition: as scan_candidates_lanes.
 DRENCH_TARGET_X86_64_V4 inline std::size_t scan_candidates_compress(const Scalar* xs, const Scalar* ys,
                                                                     const Scalar* zs, const Index* indices,
@@ -114,6 +126,77 @@ DRENCH_TARGET_X86_64_V4 inline std::size_t scan_runs_compress(
     const std::uint32_t b = begins[r];
     count +=
         scan_candidates_compress(xs + b, ys + b, zs + b, indices + b, ends[r] - b, x, r2, self, dst + count);
+  }
+  return count;
+}
+#endif
+
+#if DRENCH_HAS_AVX2_SCAN
+/// Entry m: the positions of the set bits of m (0-7) in increasing order, one per byte from the lowest,
+/// padded with zeros; the lane permutation that moves the kept lanes of mask m to the front.
+constexpr std::array<std::uint64_t, 256> make_kept_lane_permutations() {
+  std::array<std::uint64_t, 256> table{};
+  for (unsigned m = 0; m < 256; ++m) {
+    unsigned byte = 0;
+    for (unsigned lane = 0; lane < 8; ++lane) {
+      if (m & (1u << lane)) table[m] |= std::uint64_t{lane} << (8 * byte++);
+    }
+  }
+  return table;
+}
+constexpr std::array<std::uint64_t, 256> kKeptLanePermutations = make_kept_lane_permutations();
+
+/// Bit l set where the squared distance of point l of the four at xs, ys, zs from (x0, x1, x2) (broadcast)
+/// is below radius2: ordered, so false for NaN.
+DRENCH_TARGET_X86_64_V3 [[gnu::always_inline]] inline unsigned four_inside(const Scalar* xs, const Scalar* ys,
+                                                                           const Scalar* zs, __m256d x0,
+                                                                           __m256d x1, __m256d x2,
+                                                                           __m256d radius2) {
+  const __m256d d0 = _mm256_sub_pd(_mm256_loadu_pd(xs), x0);
+  const __m256d d1 = _mm256_sub_pd(_mm256_loadu_pd(ys), x1);
+  const __m256d d2 = _mm256_sub_pd(_mm256_loadu_pd(zs), x2);
+  const __m256d d_sq =
+      _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(d0, d0), _mm256_mul_pd(d1, d1)), _mm256_mul_pd(d2, d2));
+  return static_cast<unsigned>(_mm256_movemask_pd(_mm256_cmp_pd(d_sq, radius2, _CMP_LT_OQ)));
+}
+
+/// scan_candidates_lanes' result, eight candidates at a time on AVX2: the two halves' comparisons become one
+/// 8-bit mask, whose entry in kKeptLanePermutations moves the kept lanes' indices to the front of one vector
+/// (vpermd), stored whole at dst + count (AVX2 has no compress). The same distances, rounded the same way
+/// (as scan_candidates_compress), so the same kept set. Call only when the CPU has AVX2 and BMI2.
+/// Precondition: as scan_candidates_lanes.
+DRENCH_TARGET_X86_64_V3 inline std::size_t scan_candidates_permute(const Scalar* xs, const Scalar* ys,
+                                                                   const Scalar* zs, const Index* indices,
+                                                                   std::uint32_t end, const Vec3& x,
+                                                                   Scalar r2, Index self, Index* dst) {
+  const __m256d x0 = _mm256_set1_pd(x.x()), x1 = _mm256_set1_pd(x.y()), x2 = _mm256_set1_pd(x.z());
+  const __m256d radius2 = _mm256_set1_pd(r2);
+  const __m256i self_lanes = _mm256_set1_epi32(static_cast<int>(self));
+  std::size_t count = 0;
+  for (std::uint32_t q = 0; q < end; q += 8) {
+    const __m256i js = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(indices + q));
+    const unsigned is_self =
+        static_cast<unsigned>(_mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpeq_epi32(js, self_lanes))));
+    const unsigned inside = four_inside(xs + q, ys + q, zs + q, x0, x1, x2, radius2) |
+                            four_inside(xs + q + 4, ys + q + 4, zs + q + 4, x0, x1, x2, radius2) << 4;
+    const unsigned keep = inside & ~is_self & _bzhi_u32(0xffu, std::min(end - q, 8u));
+    const __m256i order =
+        _mm256_cvtepu8_epi32(_mm_cvtsi64_si128(static_cast<long long>(kKeptLanePermutations[keep])));
+    _mm256_storeu_si256(reinterpret_cast<__m256i*>(dst + count), _mm256_permutevar8x32_epi32(js, order));
+    count += static_cast<std::size_t>(__builtin_popcount(keep));
+  }
+  return count;
+}
+
+/// scan_runs_compress with scan_candidates_permute.
+DRENCH_TARGET_X86_64_V3 inline std::size_t scan_runs_permute(
+    const Scalar* xs, const Scalar* ys, const Scalar* zs, const Index* indices, const std::uint32_t* begins,
+    const std::uint32_t* ends, int runs, const Vec3& x, Scalar r2, Index self, Index* dst) {
+  std::size_t count = 0;
+  for (int r = 0; r < runs; ++r) {
+    const std::uint32_t b = begins[r];
+    count +=
+        scan_candidates_permute(xs + b, ys + b, zs + b, indices + b, ends[r] - b, x, r2, self, dst + count);
   }
   return count;
 }

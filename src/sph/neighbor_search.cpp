@@ -41,11 +41,19 @@ std::uint64_t hash_key(std::uint64_t key) {
   return key;
 }
 
-/// scan_candidates_lanes compiled for each copy of DRENCH_SIMD_CLONES (the CPUs without AVX-512).
-DRENCH_SIMD_CLONES std::size_t scan_candidates(const Scalar* xs, const Scalar* ys, const Scalar* zs,
-                                               const Index* indices, std::uint32_t end, const Vec3& x,
-                                               Scalar r2, Index self, Index* dst) {
-  return scan_candidates_lanes(xs, ys, zs, indices, end, x, r2, self, dst);
+/// scan_candidates_lanes over the runs [begins[r], ends[r]), r < runs, as scan_runs_compress: compiled for
+/// each copy of DRENCH_SIMD_CLONES, for the CPUs without AVX2 (and the tests).
+DRENCH_SIMD_CLONES std::size_t scan_runs_lanes(const Scalar* xs, const Scalar* ys, const Scalar* zs,
+                                               const Index* indices, const std::uint32_t* begins,
+                                               const std::uint32_t* ends, int runs, const Vec3& x, Scalar r2,
+                                               Index self, Index* dst) {
+  std::size_t count = 0;
+  for (int r = 0; r < runs; ++r) {
+    const std::uint32_t b = begins[r];
+    count +=
+        scan_candidates_lanes(xs + b, ys + b, zs + b, indices + b, ends[r] - b, x, r2, self, dst + count);
+  }
+  return count;
 }
 
 }  // namespace
@@ -53,11 +61,29 @@ DRENCH_SIMD_CLONES std::size_t scan_candidates(const Scalar* xs, const Scalar* y
 NeighborSearch::NeighborSearch(Scalar support_radius)
     : m_radius(support_radius), m_inv_cell(1.0 / support_radius) {
   assert(support_radius > 0.0);
-  set_compressed_scan(true);
+  for (const CandidateScan fastest :
+       {CandidateScan::kAvx512Compress, CandidateScan::kAvx2Permute, CandidateScan::kFourLanes}) {
+    if (set_candidate_scan(fastest)) break;
+  }
 }
 
-void NeighborSearch::set_compressed_scan(bool on) {
-  m_compressed_scan = on && DRENCH_HAS_COMPRESS_SCAN && avx512_copy();
+bool NeighborSearch::candidate_scan_available(CandidateScan scan) {
+  switch (scan) {
+    case CandidateScan::kAvx512Compress:
+      return DRENCH_HAS_AVX512_SCAN && avx512_copy();
+    case CandidateScan::kAvx2Permute:
+      // The AVX2 scan also uses BMI2's bzhi; every x86-64-v3 CPU has both.
+      return DRENCH_HAS_AVX2_SCAN && (avx2_copy() || avx512_copy());
+    case CandidateScan::kFourLanes:
+      return true;
+  }
+  return false;
+}
+
+bool NeighborSearch::set_candidate_scan(CandidateScan scan) {
+  if (!candidate_scan_available(scan)) return false;
+  m_scan = scan;
+  return true;
 }
 
 Vec3i NeighborSearch::cell_of(const Vec3& x) const {
@@ -223,40 +249,6 @@ std::int64_t NeighborSearch::lookup(std::uint64_t key) const {
   }
 }
 
-void NeighborSearch::gather_candidates(const Vec3i& cell, Candidates& out) const {
-  out.size = 0;
-  const auto append = [&](std::uint32_t b, std::uint32_t e) {
-    const std::size_t size = out.size + (e - b);
-    if (out.indices.size() < size + kScanPadding) {
-      // The scans read whole groups of up to eight.
-      const std::size_t grown = std::max(2 * out.indices.size(), size + kScanPadding);
-      out.xs.resize(grown);
-      out.ys.resize(grown);
-      out.zs.resize(grown);
-      out.indices.resize(grown);
-    }
-    std::copy(m_xs.begin() + b, m_xs.begin() + e, out.xs.begin() + out.size);
-    std::copy(m_ys.begin() + b, m_ys.begin() + e, out.ys.begin() + out.size);
-    std::copy(m_zs.begin() + b, m_zs.begin() + e, out.zs.begin() + out.size);
-    std::copy(m_sorted_index.begin() + b, m_sorted_index.begin() + e, out.indices.begin() + out.size);
-    out.size = static_cast<std::uint32_t>(size);
-  };
-  for (int dz = -1; dz <= 1; ++dz) {
-    for (int dy = -1; dy <= 1; ++dy) {
-      std::uint32_t b, e;
-      if (m_dense) {
-        // The row's cells are adjacent in the dense grid, so their points are one range: one lookup instead
-        // of three, the same points in the same order.
-        if (row_range(cell + Vec3i(-1, dy, dz), 3, b, e)) append(b, e);
-      } else {
-        for (int dx = -1; dx <= 1; ++dx) {
-          if (cell_range(cell + Vec3i(dx, dy, dz), b, e)) append(b, e);
-        }
-      }
-    }
-  }
-}
-
 void NeighborSearch::candidate_runs(const Vec3i& cell, CandidateRuns& out) const {
   out.runs = 0;
   out.total = 0;
@@ -300,15 +292,12 @@ void NeighborSearch::find(const Vec3Array& queries, NeighborList& out, bool excl
   // copied each buffer about twice over before its first write.
   std::vector<IndexArray>& buffers = m_thread_buffers;
   if (buffers.size() < static_cast<std::size_t>(threads)) buffers.resize(static_cast<std::size_t>(threads));
-  if (m_thread_candidates.size() < static_cast<std::size_t>(threads))
-    m_thread_candidates.resize(static_cast<std::size_t>(threads));
   std::vector<int> chunk_owner(chunks);
   std::vector<std::size_t> chunk_start(chunks);
 #pragma omp parallel num_threads(threads)
   {
     const int thread = omp_get_thread_num();
     IndexArray& local = buffers[static_cast<std::size_t>(thread)];
-    Candidates& candidates = m_thread_candidates[static_cast<std::size_t>(thread)];
     CandidateRuns runs;
     std::size_t used =
         0;  // local is grown ahead of the writes; only its first `used` entries are this call's
@@ -317,48 +306,48 @@ void NeighborSearch::find(const Vec3Array& queries, NeighborList& out, bool excl
       chunk_owner[k] = thread;
       chunk_start[k] = used;
       const std::size_t chunk_end = std::min(m, (k + 1) * kParticleChunk);
-      // The candidates of a cell are gathered once for the run of queries in it (z-ordered particles come
-      // in runs of about eight per cell), then each query scans them in one loop. Scanning the cells row by
-      // row per query, skipping cells beyond the radius, read 24% fewer points but was slower: nine short
-      // loops per query, each of a different length (bench/bench_neighbor_search, 1 thread: 23.6-41.4 ms
-      // against 18.5-19.5 ms, bench/results/debian12-2core/neighbor_search_99939d6_vs_7d87b95.txt).
-      // The compressed scan reads the nine rows in place instead, the gather (four copies per row) costing
-      // more than its own per-row tails: in the dam break the particles drift between sorts, and a gather
-      // served only about three queries (0.35 gathers per query over 100 steps of the 59K run). The 59K
-      // PCISPH dam break ran 336K and 346K particle-steps/s on 1 thread against 322K and 332K with the
-      // gather (alternating); on the sorted block of bench_neighbor_search the two are even.
+      // Each query scans the runs of its 27 cells in place in the sorted arrays (nine rows in the dense
+      // grid); the runs are looked up once per run of queries in one cell. Until 3b228c6 the candidates were
+      // copied into one array per run of queries and scanned in one loop; in the dam break particles drift
+      // between sorts and a copy served only about three queries (0.35 copies per query over 100 steps of the
+      // 59K run), so the eight-lane scans do better in place: the 59K PCISPH dam break on 1 thread ran 336K
+      // and 346K particle-steps/s against 322K and 332K with the copy (alternating); on the sorted block of
+      // bench_neighbor_search the two are even. The four-lane scan in place ran 19.7 ms there against 17.6-18
+      // with the copy (it serves only CPUs without AVX2). An earlier row-by-row scan that also skipped cells
+      // beyond the radius was slower still (23.6-41.4 ms against 18.5-19.5,
+      // bench/results/debian12-2core/neighbor_search_99939d6_vs_7d87b95.txt).
       bool buffered = false;
       Vec3i buffered_cell = Vec3i::Zero();
       for (std::size_t i = k * kParticleChunk; i < chunk_end; ++i) {
         const Vec3& x = queries[i];
         const Vec3i c = cell_of(x);
-        const Index self = exclude_self ? static_cast<Index>(i) : kNoIndex;
-#if DRENCH_HAS_COMPRESS_SCAN
-        if (m_compressed_scan) {
-          if (!buffered || c != buffered_cell) {
-            candidate_runs(c, runs);
-            buffered = true;
-            buffered_cell = c;
-          }
-          const std::size_t room = used + runs.total + kScanPadding;
-          if (local.size() < room) local.resize(std::max(2 * local.size(), room));
-          const std::size_t first = used;
-          used += scan_runs_compress(m_xs.data(), m_ys.data(), m_zs.data(), m_sorted_index.data(), runs.begin,
-                                     runs.end, runs.runs, x, r2, self, local.data() + used);
-          out.offsets[i + 1] = static_cast<std::uint32_t>(used - first);
-          continue;
-        }
-#endif
         if (!buffered || c != buffered_cell) {
-          gather_candidates(c, candidates);
+          candidate_runs(c, runs);
           buffered = true;
           buffered_cell = c;
         }
-        const std::size_t room = used + candidates.size + kScanPadding;
+        const Index self = exclude_self ? static_cast<Index>(i) : kNoIndex;
+        const std::size_t room = used + runs.total + kScanPadding;
         if (local.size() < room) local.resize(std::max(2 * local.size(), room));
         const std::size_t first = used;
-        used += scan_candidates(candidates.xs.data(), candidates.ys.data(), candidates.zs.data(),
-                                candidates.indices.data(), candidates.size, x, r2, self, local.data() + used);
+        Index* dst = local.data() + used;
+        switch (m_scan) {
+#if DRENCH_HAS_AVX512_SCAN
+          case CandidateScan::kAvx512Compress:
+            used += scan_runs_compress(m_xs.data(), m_ys.data(), m_zs.data(), m_sorted_index.data(),
+                                       runs.begin, runs.end, runs.runs, x, r2, self, dst);
+            break;
+#endif
+#if DRENCH_HAS_AVX2_SCAN
+          case CandidateScan::kAvx2Permute:
+            used += scan_runs_permute(m_xs.data(), m_ys.data(), m_zs.data(), m_sorted_index.data(),
+                                      runs.begin, runs.end, runs.runs, x, r2, self, dst);
+            break;
+#endif
+          default:
+            used += scan_runs_lanes(m_xs.data(), m_ys.data(), m_zs.data(), m_sorted_index.data(), runs.begin,
+                                    runs.end, runs.runs, x, r2, self, dst);
+        }
         out.offsets[i + 1] = static_cast<std::uint32_t>(used - first);
       }
     }

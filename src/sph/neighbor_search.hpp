@@ -28,6 +28,14 @@ struct NeighborList {
 /// (the same squared distance).
 using GradientFactorArray = std::vector<float>;
 
+/// The inner loop of NeighborSearch::find, which keeps the candidates within the radius of a query
+/// (sph/candidate_scan.hpp).
+enum class CandidateScan {
+  kFourLanes,       ///< four candidates at a time, GCC's vector extension: any CPU
+  kAvx2Permute,     ///< eight at a time, AVX2's lane permute and a table: CPUs with AVX2 (x86-64-v3)
+  kAvx512Compress,  ///< eight at a time, AVX-512's compress: CPUs with AVX-512 (x86-64-v4)
+};
+
 /// Uniform-grid neighbor search. `build` sorts the source points into cells; `find` answers, for every query
 /// point, all source points at distance strictly less than the support radius. When the points' bounding box
 /// holds few enough cells (at most 128 per point and 2^24 in all, or at most 4 per point), cells live in a
@@ -62,23 +70,15 @@ class NeighborSearch {
   /// that each layout is exercised).
   bool dense() const { return m_dense; }
 
-  /// Whether find() scans eight candidates at a time with AVX-512's compress, in place in the sorted arrays
-  /// (the default where the CPU has AVX-512), or gathers each block of 27 cells into one array and scans it
-  /// four at a time (the others). Both give the same lists, in the same order. `on` is ignored where the CPU
-  /// or the build lacks AVX-512; tests and benchmarks switch it off to run the other scan on such a CPU.
-  void set_compressed_scan(bool on);
-  bool compressed_scan() const { return m_compressed_scan; }
+  /// The inner loop of find(): the fastest the CPU and the build allow by default. All give the same lists in
+  /// the same order; tests and benchmarks pick each to compare them on one CPU.
+  CandidateScan candidate_scan() const { return m_scan; }
+  /// Picks find()'s inner loop; false (and no change) when the CPU or the build lacks it.
+  bool set_candidate_scan(CandidateScan scan);
+  /// True when the CPU and the build can run `scan`.
+  static bool candidate_scan_available(CandidateScan scan);
 
  private:
-  /// The source points of a block of 3 x 3 x 3 cells, in find()'s order (by row of cells, then sorted order):
-  /// coordinates (unit: m) and source indices, `size` of them; every array has at least kScanPadding (7)
-  /// entries of padding after them (the scans read groups of up to eight, sph/candidate_scan.hpp).
-  struct Candidates {
-    ScalarArray xs, ys, zs;
-    IndexArray indices;
-    std::uint32_t size = 0;
-  };
-
   /// Where the candidates of a query lie in the sorted arrays (m_xs, ...): the runs [begin[r], end[r]),
   /// r < runs, in find()'s order (nine rows of three cells in the dense grid, up to 27 cells in the hashed
   /// one), `total` points in all.
@@ -95,8 +95,6 @@ class NeighborSearch {
   Vec3i cell_of(const Vec3& x) const;
   /// Slot of `key` in m_cell_keys, or -1.
   std::int64_t lookup(std::uint64_t key) const;
-  /// out = the source points of the 27 cells around `cell`, the order of find()'s result.
-  void gather_candidates(const Vec3i& cell, Candidates& out) const;
   /// Sorted-point range [begin, end) of a cell; false when the cell is empty or unknown.
   bool cell_range(const Vec3i& cell, std::uint32_t& begin, std::uint32_t& end) const;
   /// Dense mode only: the sorted-point range of `count` cells from `cell` along +x (clipped to the grid);
@@ -107,7 +105,7 @@ class NeighborSearch {
 
   Scalar m_radius;
   Scalar m_inv_cell;
-  // Source points in sorted (cell) order, one array per coordinate (gather_candidates copies runs of them),
+  // Source points in sorted (cell) order, one array per coordinate (the scans read runs of them in place),
   // and the original index of each.
   ScalarArray m_xs, m_ys, m_zs;
   IndexArray m_sorted_index;                // n entries, then kScanPadding
@@ -117,11 +115,10 @@ class NeighborSearch {
   std::vector<std::int64_t> m_table;        // open-addressing hash: slot -> cell, -1 empty
   std::uint64_t m_table_mask = 0;
   bool m_dense = false;
-  bool m_compressed_scan = false;
+  CandidateScan m_scan = CandidateScan::kFourLanes;
   Vec3i m_lo = Vec3i::Zero();                        // dense mode: first cell of the grid
   Vec3i m_dims = Vec3i::Zero();                      // dense mode: cells per axis
-  mutable std::vector<IndexArray> m_thread_buffers;  // find(): one gather buffer per thread, kept for reuse
-  mutable std::vector<Candidates> m_thread_candidates;  // find(): one per thread, kept for reuse
+  mutable std::vector<IndexArray> m_thread_buffers;  // find(): one result buffer per thread, kept for reuse
 };
 
 }  // namespace drench

@@ -17,22 +17,22 @@ using testing::expect_same_sets;
 using testing::random_points;
 using testing::z_ordered;
 
-/// search.find() with both scans: the in-place compressed one where this CPU has AVX-512, and the four-lane
-/// one over gathered candidates that the others run. They must give the same lists in the same order (the
-/// order fixes the bits of every pair sum); `list` gets the four-lane scan's.
-void find_with_both_scans(NeighborSearch& search, const Vec3Array& queries, NeighborList& list,
+/// search.find() with every scan this CPU runs (NeighborSearch::set_candidate_scan): they must give the same
+/// lists in the same order (the order fixes the bits of every pair sum). `list` gets the four-lane scan's,
+/// which every CPU runs.
+void find_with_every_scan(NeighborSearch& search, const Vec3Array& queries, NeighborList& list,
                           bool exclude_self) {
-  search.set_compressed_scan(true);
-  const bool compressed = search.compressed_scan();
-  NeighborList other;
-  if (compressed) search.find(queries, other, exclude_self);
-  search.set_compressed_scan(false);
+  const CandidateScan fastest = search.candidate_scan();
+  ASSERT_TRUE(search.set_candidate_scan(CandidateScan::kFourLanes));
   search.find(queries, list, exclude_self);
-  search.set_compressed_scan(true);
-  if (compressed) {
-    EXPECT_EQ(other.offsets, list.offsets) << "the two scans found different counts";
-    EXPECT_EQ(other.indices, list.indices) << "the two scans found different lists";
+  for (const CandidateScan scan : {CandidateScan::kAvx2Permute, CandidateScan::kAvx512Compress}) {
+    if (!search.set_candidate_scan(scan)) continue;
+    NeighborList other;
+    search.find(queries, other, exclude_self);
+    EXPECT_EQ(other.offsets, list.offsets) << "scan " << static_cast<int>(scan) << " found other counts";
+    EXPECT_EQ(other.indices, list.indices) << "scan " << static_cast<int>(scan) << " found other lists";
   }
+  ASSERT_TRUE(search.set_candidate_scan(fastest));
 }
 
 TEST(NeighborSearch, SelfQueryMatchesBruteForceOnRandomSets) {
@@ -42,7 +42,7 @@ TEST(NeighborSearch, SelfQueryMatchesBruteForceOnRandomSets) {
     NeighborSearch search(radius);
     search.build(points);
     NeighborList list;
-    find_with_both_scans(search, points, list, /*exclude_self=*/true);
+    find_with_every_scan(search, points, list, /*exclude_self=*/true);
     expect_same_sets(list, brute_force(points, points, radius, true));
   }
 }
@@ -55,7 +55,7 @@ TEST(NeighborSearch, CrossQueryMatchesBruteForceIncludingNegativeAndFarCoordinat
   NeighborSearch search(radius);
   search.build(sources);
   NeighborList list;
-  find_with_both_scans(search, queries, list, /*exclude_self=*/false);
+  find_with_every_scan(search, queries, list, /*exclude_self=*/false);
   expect_same_sets(list, brute_force(queries, sources, radius, false));
 }
 
@@ -71,7 +71,7 @@ TEST(NeighborSearch, ZOrderedQueriesInRunsPerCellMatchBruteForce) {
   ASSERT_LT(runs, points.size() / 4) << "the queries should share cells in runs";
   search.build(points);
   NeighborList list;
-  find_with_both_scans(search, points, list, /*exclude_self=*/true);
+  find_with_every_scan(search, points, list, /*exclude_self=*/true);
   expect_same_sets(list, brute_force(points, points, radius, true));
 }
 
@@ -83,9 +83,9 @@ bool expect_sorted_and_unsorted_queries_match_brute_force(NeighborSearch& search
   const Vec3Array sorted = z_ordered(search, points);
   search.build(sorted);
   NeighborList list;
-  find_with_both_scans(search, sorted, list, /*exclude_self=*/true);
+  find_with_every_scan(search, sorted, list, /*exclude_self=*/true);
   expect_same_sets(list, brute_force(sorted, sorted, radius, true));
-  find_with_both_scans(search, points, list, /*exclude_self=*/false);
+  find_with_every_scan(search, points, list, /*exclude_self=*/false);
   expect_same_sets(list, brute_force(points, sorted, radius, false));
   return search.dense();
 }
@@ -126,7 +126,7 @@ TEST(NeighborSearch, PointsExactlyAtTheRadiusAreNotNeighbors) {
   NeighborSearch search(0.1);
   search.build(points);
   NeighborList list;
-  find_with_both_scans(search, points, list, true);
+  find_with_every_scan(search, points, list, true);
   EXPECT_EQ(list.count(0), 1u);
   EXPECT_EQ(*list.begin(0), 2u);
 }
@@ -181,14 +181,14 @@ IndexArray kept_by_definition(const CandidateRun& run, const Vec3& x, Scalar r2)
   return kept;
 }
 
-// Both scans of the grid search (sph/candidate_scan.hpp) against the definition, on runs of every length
+// The three scans of the grid search (sph/candidate_scan.hpp) against the definition, on runs of every length
 // from 0 to 40 (whole groups of four and eight and every tail): the same indices in the same order, nothing
 // from the padding, the query's own index left out, NaN and points at exactly the radius not kept.
-TEST(CandidateScan, BothScansKeepExactlyTheCandidatesWithinTheRadiusInOrder) {
+TEST(CandidateScan, EveryScanKeepsExactlyTheCandidatesWithinTheRadiusInOrder) {
   std::mt19937 rng(7);
   const Vec3 query(0.31, -0.72, 1.05);
   const Scalar radius = 0.05, r2 = radius * radius;
-  int compressed_runs = 0;
+  int avx2_runs = 0, avx512_runs = 0;
   for (int repeat = 0; repeat < 20; ++repeat) {
     for (std::uint32_t size = 0; size <= 40; ++size) {
       const CandidateRun run = candidate_run(size, query, radius, rng);
@@ -199,20 +199,33 @@ TEST(CandidateScan, BothScansKeepExactlyTheCandidatesWithinTheRadiusInOrder) {
                                 r2, run.self, dst.data());
       ASSERT_EQ(IndexArray(dst.begin(), dst.begin() + static_cast<std::ptrdiff_t>(count)), expected)
           << "four-lane scan, " << size << " candidates";
-#if DRENCH_HAS_COMPRESS_SCAN
-      if (avx512_copy()) {
+#if DRENCH_HAS_AVX2_SCAN
+      if (NeighborSearch::candidate_scan_available(CandidateScan::kAvx2Permute)) {
+        std::fill(dst.begin(), dst.end(), 0);
+        const std::size_t permuted =
+            scan_candidates_permute(run.xs.data(), run.ys.data(), run.zs.data(), run.indices.data(), size,
+                                    query, r2, run.self, dst.data());
+        ASSERT_EQ(IndexArray(dst.begin(), dst.begin() + static_cast<std::ptrdiff_t>(permuted)), expected)
+            << "AVX2 scan, " << size << " candidates";
+        ++avx2_runs;
+      }
+#endif
+#if DRENCH_HAS_AVX512_SCAN
+      if (NeighborSearch::candidate_scan_available(CandidateScan::kAvx512Compress)) {
         std::fill(dst.begin(), dst.end(), 0);
         const std::size_t compressed =
             scan_candidates_compress(run.xs.data(), run.ys.data(), run.zs.data(), run.indices.data(), size,
                                      query, r2, run.self, dst.data());
         ASSERT_EQ(IndexArray(dst.begin(), dst.begin() + static_cast<std::ptrdiff_t>(compressed)), expected)
-            << "compressed scan, " << size << " candidates";
-        ++compressed_runs;
+            << "AVX-512 scan, " << size << " candidates";
+        ++avx512_runs;
       }
 #endif
     }
   }
-  if (compressed_runs == 0) GTEST_SKIP() << "four-lane scan checked; this CPU has no AVX-512 for the other";
+  if (avx2_runs == 0 || avx512_runs == 0)
+    GTEST_SKIP() << "this CPU lacks AVX2 or AVX-512: checked the four-lane scan"
+                 << (avx2_runs ? " and AVX2's" : "");
 }
 
 TEST(NeighborSearch, ZOrderIsAPermutationGroupingEachCell) {
@@ -232,7 +245,7 @@ TEST(NeighborSearch, EmptySourceSetGivesNoNeighbors) {
   NeighborSearch search(0.1);
   search.build({});
   NeighborList list;
-  find_with_both_scans(search, {Vec3::Zero()}, list, false);
+  find_with_every_scan(search, {Vec3::Zero()}, list, false);
   EXPECT_EQ(list.count(0), 0u);
 }
 
