@@ -65,8 +65,9 @@ inline bool avx2_copy() {
 }
 
 /// True when the CPU runs the x86-64-v4 (AVX-512) copy of DRENCH_SIMD_CLONES functions, the loader picking it
-/// by the same test; without clones, when the build targets AVX-512. The grid search's compressed scan runs
-/// only then (sph/candidate_scan.hpp). Tested once; a read of a static after that.
+/// by the same test; without clones, when the build targets AVX-512. The grid search's scans check it, and
+/// avx2_copy(), to pick the AVX-512 or AVX2 scan (sph/candidate_scan.hpp). Tested once; a read of a static
+/// after that.
 inline bool avx512_copy() {
 #if DRENCH_HAS_SIMD_CLONES
   static const bool v4 = __builtin_cpu_supports("x86-64-v4");

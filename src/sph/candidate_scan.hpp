@@ -14,8 +14,9 @@
 #include "sph/packed_lanes.hpp"
 
 // The AVX-512 scan needs AVX-512 (F, VL) and BMI2, the AVX2 scan AVX2 and BMI2: each is compiled for its
-// x86-64 level by a target attribute where the build makes DRENCH_SIMD_CLONES (the loader then tells which
-// the CPU has), or with no attribute where the whole build targets such a CPU.
+// x86-64 level by a target attribute where the build makes DRENCH_SIMD_CLONES, or with no attribute where the
+// whole build targets such a CPU. They are not clones: NeighborSearch picks one at run time
+// (avx512_copy(), avx2_copy(); NeighborSearch::set_candidate_scan).
 #if DRENCH_HAS_SIMD_CLONES
 #define DRENCH_HAS_AVX512_SCAN 1
 #define DRENCH_HAS_AVX2_SCAN 1
@@ -86,10 +87,11 @@ constexpr std::uint32_t kScanPadding = 7;
 /// scan_candidates_lanes' result, eight candidates at a time: the kept lanes' indices are packed to the front
 /// of one vector (vpcompressd, register form: its memory form is microcoded on AMD's Zen 4) and the vector is
 /// stored whole at dst + count. The four-lane version spends a compare, an and and a dependent add per
-/// candidate on the packing. The distances are the same expression, rounded the same way (no fused
-/// multiply-add: these are separate intrinsics, and drench_core is built with -ffp-contract=off), so the
-/// kept set is the same. Call only when the CPU has AVX-512 (avx512_copy()).
-/// Precondition: as scan_candidates_lanes.
+/// candidate on the packing. The distances are the same expression, rounded the same way, so the kept set is
+/// the same: GCC treats these intrinsics as plain vector arithmetic and would fuse the multiplies and adds
+/// under its default -ffp-contract=fast, so every target including this header must be compiled with
+/// -ffp-contract=off (drench_core and the unit tests are). Call only when the CPU has AVX-512
+/// (avx512_copy()). Precondition: as scan_candidates_lanes.
 DRENCH_TARGET_X86_64_V4 inline std::size_t scan_candidates_compress(const Scalar* xs, const Scalar* ys,
                                                                     const Scalar* zs, const Index* indices,
                                                                     std::uint32_t end, const Vec3& x,

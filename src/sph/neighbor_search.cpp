@@ -148,7 +148,7 @@ void NeighborSearch::build(const Vec3Array& points) {
     build_hashed(points);
   }
   m_count = n;
-  // kScanPadding entries after the last point: the compressed scan reads the runs of cells in place.
+  // kScanPadding entries after the last point: the scans read runs of cells in place, whole groups.
   m_sorted_index.resize(n + kScanPadding, 0);
   m_xs.resize(n + kScanPadding);
   m_ys.resize(n + kScanPadding);
@@ -307,7 +307,7 @@ void NeighborSearch::find(const Vec3Array& queries, NeighborList& out, bool excl
       chunk_start[k] = used;
       const std::size_t chunk_end = std::min(m, (k + 1) * kParticleChunk);
       // Each query scans the runs of its 27 cells in place in the sorted arrays (nine rows in the dense
-      // grid); the runs are looked up once per run of queries in one cell. Until 3b228c6 the candidates were
+      // grid); the runs are looked up once per run of queries in one cell. Until 23c5ce9 the candidates were
       // copied into one array per run of queries and scanned in one loop; in the dam break particles drift
       // between sorts and a copy served only about three queries (0.35 copies per query over 100 steps of the
       // 59K run), so the eight-lane scans do better in place: the 59K PCISPH dam break on 1 thread ran 336K

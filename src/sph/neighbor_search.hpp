@@ -31,9 +31,9 @@ using GradientFactorArray = std::vector<float>;
 /// The inner loop of NeighborSearch::find, which keeps the candidates within the radius of a query
 /// (sph/candidate_scan.hpp).
 enum class CandidateScan {
-  kFourLanes,       ///< four candidates at a time, GCC's vector extension: any CPU
-  kAvx2Permute,     ///< eight at a time, AVX2's lane permute and a table: CPUs with AVX2 (x86-64-v3)
-  kAvx512Compress,  ///< eight at a time, AVX-512's compress: CPUs with AVX-512 (x86-64-v4)
+  kFourLanes = 0,       ///< four candidates at a time, GCC's vector extension: any CPU
+  kAvx2Permute = 1,     ///< eight at a time, AVX2's lane permute and a table: CPUs with AVX2 (x86-64-v3)
+  kAvx512Compress = 2,  ///< eight at a time, AVX-512's compress: CPUs with AVX-512 (x86-64-v4)
 };
 
 /// Uniform-grid neighbor search. `build` sorts the source points into cells; `find` answers, for every query

@@ -1,7 +1,7 @@
 #pragma once
 /// Four or eight neighbors at a time: the vector types and the loads shared by the SPH pair loops over
-/// PackedPoint arrays (sph/fluid_context.cpp, sph/forces/viscosity.cpp) and the grid search's scan
-/// (sph/neighbor_search.cpp). Internal to those files' DRENCH_SIMD_CLONES functions (and their tests, which
+/// PackedPoint arrays (sph/fluid_context.cpp, sph/forces/viscosity.cpp) and the grid search's four-lane scan
+/// (sph/candidate_scan.hpp). Internal to those files' DRENCH_SIMD_CLONES functions (and their tests, which
 /// run both eight-lane group types); everything is in an unnamed namespace and always inlined, so each copy
 /// compiles its own. A lambda in such a function must be
 /// always_inline as well: out of line it is compiled for the baseline only (XSPH ran 2.7 times slower so,

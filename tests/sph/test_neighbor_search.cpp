@@ -59,8 +59,8 @@ TEST(NeighborSearch, CrossQueryMatchesBruteForceIncludingNegativeAndFarCoordinat
   expect_same_sets(list, brute_force(queries, sources, radius, false));
 }
 
-// find() gathers a cell's candidates once for a run of queries in that cell: z-ordered queries come in such
-// runs, random ones (above) almost never do, so this set is z-ordered first.
+// find() looks a cell's runs of candidates up once for a run of queries in that cell: z-ordered queries come
+// in such runs, random ones (above) almost never do, so this set is z-ordered first.
 TEST(NeighborSearch, ZOrderedQueriesInRunsPerCellMatchBruteForce) {
   const Scalar radius = 0.05;
   NeighborSearch search(radius);
@@ -121,6 +121,22 @@ TEST(NeighborSearch, SpreadPointsInADenseGridOfMostlyEmptyCellsMatchBruteForce) 
       << "the test is about a dense grid of more than 4 cells per point";
 }
 
+// A NaN point (a particle the solver will name after the sub-step) sits in the grid's lowest cell: it is
+// nobody's neighbor and has none, with every scan, and the other points keep exactly their neighbors.
+TEST(NeighborSearch, ANaNPointIsNoNeighborAndHasNone) {
+  Vec3Array points = random_points(600, Vec3(-0.1, -0.1, -0.1), Vec3(0.1, 0.1, 0.1), 51);
+  const Scalar nan = std::numeric_limits<Scalar>::quiet_NaN();
+  points[17] = Vec3(nan, 0.0, 0.0);
+  points[300] = Vec3(nan, nan, nan);
+  NeighborSearch search(0.04);
+  search.build(points);
+  NeighborList list;
+  find_with_every_scan(search, points, list, /*exclude_self=*/true);
+  EXPECT_EQ(list.count(17), 0u);
+  EXPECT_EQ(list.count(300), 0u);
+  expect_same_sets(list, brute_force(points, points, 0.04, true));
+}
+
 TEST(NeighborSearch, PointsExactlyAtTheRadiusAreNotNeighbors) {
   const Vec3Array points = {Vec3(0, 0, 0), Vec3(0.1, 0, 0), Vec3(0, 0.0999999, 0)};
   NeighborSearch search(0.1);
@@ -131,9 +147,9 @@ TEST(NeighborSearch, PointsExactlyAtTheRadiusAreNotNeighbors) {
   EXPECT_EQ(*list.begin(0), 2u);
 }
 
-/// Candidate runs for the scans: random points around the query (about half inside the radius), some at the
-/// radius up to rounding, one NaN, the query's own index somewhere, and padding that would be kept if a scan
-/// read past the end (points at the query, indices that are not the query's).
+/// Candidate runs for the scans: random points around the query (about a quarter inside the radius), some at
+/// the radius up to rounding, some NaN, the query's own index somewhere, and padding that would be kept if a
+/// scan read past the end (points at the query, indices that are not the query's).
 struct CandidateRun {
   ScalarArray xs, ys, zs;
   IndexArray indices;
@@ -183,7 +199,8 @@ IndexArray kept_by_definition(const CandidateRun& run, const Vec3& x, Scalar r2)
 
 // The three scans of the grid search (sph/candidate_scan.hpp) against the definition, on runs of every length
 // from 0 to 40 (whole groups of four and eight and every tail): the same indices in the same order, nothing
-// from the padding, the query's own index left out, NaN and points at exactly the radius not kept.
+// from the padding, the query's own index and NaN left out, points at the radius up to rounding kept exactly
+// when the definition keeps them.
 TEST(CandidateScan, EveryScanKeepsExactlyTheCandidatesWithinTheRadiusInOrder) {
   std::mt19937 rng(7);
   const Vec3 query(0.31, -0.72, 1.05);
@@ -224,7 +241,7 @@ TEST(CandidateScan, EveryScanKeepsExactlyTheCandidatesWithinTheRadiusInOrder) {
     }
   }
   if (avx2_runs == 0 || avx512_runs == 0)
-    GTEST_SKIP() << "this CPU lacks AVX2 or AVX-512: checked the four-lane scan"
+    GTEST_SKIP() << "this CPU or build lacks AVX2 or AVX-512: checked the four-lane scan"
                  << (avx2_runs ? " and AVX2's" : "");
 }
 
