@@ -129,18 +129,55 @@ class StepContext {
     m_particle_changed.assign(m_x0.size(), 0);
     m_node_changed.assign(m_cloth.node_count(), 0);
   }
+  /// Marks in `only` (N entries) every particle that can be in a changed pair (pair_changed) whose boxes
+  /// overlap: the changed particles, and those whose box over the step (margin 0, as the CCD rounds' query)
+  /// overlaps the box of all changed triangles. A particle left unmarked has only unchanged pairs, or pairs
+  /// the broad phase would not report, so a query restricted to the marked ones finds every changed pair.
+  void mark_changed_candidates(std::vector<std::uint8_t>& only) const {
+    Box3 changed_triangles;
+    for (std::size_t t = 0; t < m_cloth.triangles.size(); ++t) {
+      const Triangle& tri = m_cloth.triangles[t];
+      if (!(m_node_changed[tri[0]] || m_node_changed[tri[1]] || m_node_changed[tri[2]])) continue;
+      const Box3 box = triangle_box(m_cloth, tri, 0.0);
+      // A box with a NaN overlaps nothing (its pairs are never reported); left out of the union, which it
+      // would otherwise poison.
+      if ((box.lo.array() <= box.hi.array()).all()) {
+        changed_triangles.extend(box.lo);
+        changed_triangles.extend(box.hi);
+      }
+    }
+    const std::size_t n = m_x0.size();
+    only.resize(n);
+#pragma omp parallel for schedule(static)
+    for (std::size_t p = 0; p < n; ++p) {
+      only[p] = m_particle_changed[p] || particle_box(m_x0[p], m_x1[p], 0.0).overlaps(changed_triangles);
+    }
+  }
+
   bool pair_changed(Index p, Index t) const {
     const Triangle& tri = triangle(t);
     return m_particle_changed[p] || m_node_changed[tri[0]] || m_node_changed[tri[1]] ||
            m_node_changed[tri[2]];
   }
 
-  const Vec3Array& x0() const { return m_x0; }
-  const Vec3Array& x1() const { return m_x1; }
-  ClothMesh& cloth() { return m_cloth; }
-  const ClothMesh& cloth() const { return m_cloth; }
-  double dt() const { return m_dt; }
-  CouplingStepStats& stats() { return m_stats; }
+  const Vec3Array& x0() const {
+    return m_x0;
+  }
+  const Vec3Array& x1() const {
+    return m_x1;
+  }
+  ClothMesh& cloth() {
+    return m_cloth;
+  }
+  const ClothMesh& cloth() const {
+    return m_cloth;
+  }
+  double dt() const {
+    return m_dt;
+  }
+  CouplingStepStats& stats() {
+    return m_stats;
+  }
 
  private:
   const Vec3Array& m_x0;
@@ -411,10 +448,13 @@ std::uint32_t Coupler::correct(const FluidView& fluid, ClothMesh& cloth, double 
   const auto ccd_start = Clock::now();
   std::vector<std::pair<Index, Impact>> impacts;
   std::vector<std::pair<Index, Index>> changed;
+  std::vector<std::uint8_t> only;
   for (int iteration = 0; iteration <= m_settings.max_ccd_iterations; ++iteration) {
     // Repulsion changed the motion, so the first round checks every pair; after it, only pairs whose motion
-    // changed in the previous round can have a new impact.
-    m_broad_phase->find_pairs(ctx.x0(), ctx.x1(), cloth, 0.0, nullptr, pairs);
+    // changed in the previous round can have a new impact, and only the particles that can be in one are
+    // queried: a second round queried all (1.7 rounds per step in jet_on_cloth.json).
+    if (iteration > 0) ctx.mark_changed_candidates(only);
+    m_broad_phase->find_pairs(ctx.x0(), ctx.x1(), cloth, 0.0, iteration > 0 ? &only : nullptr, pairs);
     if (iteration > 0) {
       changed.clear();
       for (const auto& pair : pairs) {

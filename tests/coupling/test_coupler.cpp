@@ -4,6 +4,8 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
+#include <limits>
 #include <random>
 
 #include "ccd/ccd_exact_reference.hpp"
@@ -70,6 +72,36 @@ TEST(Coupler, StopsAParticleWhenTheTriangleMovesTowardsIt) {
     plane += x.y() / 4.0;
   EXPECT_GT(particles.x1[0].y(), plane);
   EXPECT_GE(stats.ccd_impacts, 1u);
+}
+
+// The CCD rounds after the first query only particles that can meet a changed pair: here the first round's
+// impact throws the light cloth up, through a particle at rest above it that no first-round pair involved
+// (it is 3 cm above a cloth that was not moving). The second round must find that particle through the
+// triangles that changed, not through its own motion, and stop it on the cloth's upper side.
+TEST(Coupler, ALaterCcdRoundStopsAParticleThatTheClothWasThrownInto) {
+  const double dt = 0.01;
+  ClothMesh mesh = grid_mesh(2, 1.0, 0.0, 1.0 / 0.001);  // a free square of four 1 g nodes at rest at y = 0
+  Particles particles;
+  particles.add(Vec3(0.3, -0.05, 0.2), Vec3(0, 10, 0), dt, 0.1);  // heavy, fired up through the cloth
+  particles.add(Vec3(0.7, 0.03, 0.75), Vec3::Zero(), dt, kMass);  // at rest above the cloth
+  Coupler coupler(CouplingSettings{});
+  CouplingStepStats stats;
+  coupler.step(particles.view(), mesh, dt, stats);
+  ASSERT_GE(stats.ccd_iterations, 2u);
+  // The cloth's height under the resting particle at the step's end (the triangle whose xz projection holds
+  // it, interpolated).
+  const Vec3& x = particles.x1[1];
+  double height = std::numeric_limits<double>::quiet_NaN();
+  for (const Triangle& t : mesh.triangles) {
+    const Vec3 a = mesh.positions_t1[t[0]], b = mesh.positions_t1[t[1]], c = mesh.positions_t1[t[2]];
+    const double det = (b.x() - a.x()) * (c.z() - a.z()) - (c.x() - a.x()) * (b.z() - a.z());
+    const double u = ((x.x() - a.x()) * (c.z() - a.z()) - (c.x() - a.x()) * (x.z() - a.z())) / det;
+    const double v = ((b.x() - a.x()) * (x.z() - a.z()) - (x.x() - a.x()) * (b.z() - a.z())) / det;
+    if (u >= 0.0 && v >= 0.0 && u + v <= 1.0) height = a.y() + u * (b.y() - a.y()) + v * (c.y() - a.y());
+  }
+  ASSERT_TRUE(std::isfinite(height)) << "the resting particle is not over the cloth";
+  ASSERT_GT(height, 0.03) << "the cloth did not reach the resting particle: the test needs a stronger throw";
+  EXPECT_GT(x.y(), height) << "the cloth passed the resting particle";
 }
 
 TEST(Coupler, LetsAParticleBesideTheClothFallPast) {
