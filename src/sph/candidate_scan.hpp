@@ -83,6 +83,29 @@ constexpr std::uint32_t kScanPadding = 7;
   return count;
 }
 
+/// The signature of the scans above and below.
+using CandidateScanFunction = std::size_t (*)(const Scalar*, const Scalar*, const Scalar*, const Index*,
+                                              std::uint32_t, const Vec3&, Scalar, Index, Index*);
+
+/// `Scan` over the runs [begins[r], ends[r]), r < runs, of the arrays, in place, the kept indices one after
+/// the other in dst: no copy of the candidates into one array first. Inlined into one function per scan,
+/// compiled for that scan's CPU (scan_runs_compress, scan_runs_permute, and neighbor_search.cpp's
+/// scan_runs_lanes), so that the scan inlines and its set-up is hoisted out of the runs. Precondition: xs,
+/// ys, zs and indices hold kScanPadding entries after every run's end; dst has room for all the runs'
+/// candidates + kScanPadding.
+template <CandidateScanFunction Scan>
+[[gnu::always_inline]] inline std::size_t scan_runs(const Scalar* xs, const Scalar* ys, const Scalar* zs,
+                                                    const Index* indices, const std::uint32_t* begins,
+                                                    const std::uint32_t* ends, int runs, const Vec3& x,
+                                                    Scalar r2, Index self, Index* dst) {
+  std::size_t count = 0;
+  for (int r = 0; r < runs; ++r) {
+    const std::uint32_t b = begins[r];
+    count += Scan(xs + b, ys + b, zs + b, indices + b, ends[r] - b, x, r2, self, dst + count);
+  }
+  return count;
+}
+
 #if DRENCH_HAS_AVX512_SCAN
 /// scan_candidates_lanes' result, eight candidates at a time: the kept lanes' indices are packed to the front
 /// of one vector (vpcompressd, register form: its memory form is microcoded on AMD's Zen 4) and the vector is
@@ -116,20 +139,11 @@ DRENCH_TARGET_X86_64_V4 inline std::size_t scan_candidates_compress(const Scalar
   return count;
 }
 
-/// scan_candidates_compress over the runs [begins[r], ends[r]), r < runs, of the arrays, in place, the kept
-/// indices one after the other in dst: no copy of the candidates into one array first. Precondition: xs, ys,
-/// zs and indices hold kScanPadding entries after every run's end; dst has room for all the runs'
-/// candidates + kScanPadding.
+/// scan_runs with scan_candidates_compress, compiled for x86-64-v4.
 DRENCH_TARGET_X86_64_V4 inline std::size_t scan_runs_compress(
     const Scalar* xs, const Scalar* ys, const Scalar* zs, const Index* indices, const std::uint32_t* begins,
     const std::uint32_t* ends, int runs, const Vec3& x, Scalar r2, Index self, Index* dst) {
-  std::size_t count = 0;
-  for (int r = 0; r < runs; ++r) {
-    const std::uint32_t b = begins[r];
-    count +=
-        scan_candidates_compress(xs + b, ys + b, zs + b, indices + b, ends[r] - b, x, r2, self, dst + count);
-  }
-  return count;
+  return scan_runs<scan_candidates_compress>(xs, ys, zs, indices, begins, ends, runs, x, r2, self, dst);
 }
 #endif
 
@@ -190,17 +204,11 @@ DRENCH_TARGET_X86_64_V3 inline std::size_t scan_candidates_permute(const Scalar*
   return count;
 }
 
-/// scan_runs_compress with scan_candidates_permute.
+/// scan_runs with scan_candidates_permute, compiled for x86-64-v3.
 DRENCH_TARGET_X86_64_V3 inline std::size_t scan_runs_permute(
     const Scalar* xs, const Scalar* ys, const Scalar* zs, const Index* indices, const std::uint32_t* begins,
     const std::uint32_t* ends, int runs, const Vec3& x, Scalar r2, Index self, Index* dst) {
-  std::size_t count = 0;
-  for (int r = 0; r < runs; ++r) {
-    const std::uint32_t b = begins[r];
-    count +=
-        scan_candidates_permute(xs + b, ys + b, zs + b, indices + b, ends[r] - b, x, r2, self, dst + count);
-  }
-  return count;
+  return scan_runs<scan_candidates_permute>(xs, ys, zs, indices, begins, ends, runs, x, r2, self, dst);
 }
 #endif
 

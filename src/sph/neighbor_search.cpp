@@ -41,19 +41,12 @@ std::uint64_t hash_key(std::uint64_t key) {
   return key;
 }
 
-/// scan_candidates_lanes over the runs [begins[r], ends[r]), r < runs, as scan_runs_compress: compiled for
-/// each copy of DRENCH_SIMD_CLONES, for the CPUs without AVX2 (and the tests).
+/// scan_runs with scan_candidates_lanes, compiled for each copy of DRENCH_SIMD_CLONES: the CPUs without AVX2.
 DRENCH_SIMD_CLONES std::size_t scan_runs_lanes(const Scalar* xs, const Scalar* ys, const Scalar* zs,
                                                const Index* indices, const std::uint32_t* begins,
                                                const std::uint32_t* ends, int runs, const Vec3& x, Scalar r2,
                                                Index self, Index* dst) {
-  std::size_t count = 0;
-  for (int r = 0; r < runs; ++r) {
-    const std::uint32_t b = begins[r];
-    count +=
-        scan_candidates_lanes(xs + b, ys + b, zs + b, indices + b, ends[r] - b, x, r2, self, dst + count);
-  }
-  return count;
+  return scan_runs<scan_candidates_lanes>(xs, ys, zs, indices, begins, ends, runs, x, r2, self, dst);
 }
 
 }  // namespace
