@@ -6,6 +6,8 @@
 #include <cmath>
 #include <cstdint>
 
+#include "common/key_index_table.hpp"
+
 namespace drench {
 namespace {
 
@@ -28,7 +30,7 @@ class GridBroadPhase final : public TriangleBroadPhase {
         [&](const Box3& box, std::vector<Index>& candidates) {
           candidates.assign(m_everywhere.begin(), m_everywhere.end());
           const bool binned = for_cells(box, [&](std::uint64_t key) {
-            const std::int64_t cell = lookup(key);
+            const std::int64_t cell = m_cells.find(key);
             if (cell < 0) return;
             for (std::uint32_t e = m_cell_begin[cell]; e < m_cell_begin[cell + 1]; ++e)
               candidates.push_back(m_entries[e].second);
@@ -61,45 +63,18 @@ class GridBroadPhase final : public TriangleBroadPhase {
       if (!binned) m_everywhere.push_back(static_cast<Index>(t));
     }
     std::sort(m_entries.begin(), m_entries.end());
-    // Each distinct key's run of entries, found through an open-addressing table (a binary search of all the
-    // entries per cell was the grid's cost).
-    m_cell_keys.clear();
+    // Each distinct key's run of entries, found through a hash table (a binary search of all the entries
+    // per cell was the grid's cost).
+    std::vector<std::uint64_t> keys;
     m_cell_begin.clear();
     for (std::size_t e = 0; e < m_entries.size(); ++e) {
       if (e == 0 || m_entries[e].first != m_entries[e - 1].first) {
-        m_cell_keys.push_back(m_entries[e].first);
+        keys.push_back(m_entries[e].first);
         m_cell_begin.push_back(static_cast<std::uint32_t>(e));
       }
     }
     m_cell_begin.push_back(static_cast<std::uint32_t>(m_entries.size()));
-    std::size_t capacity = 16;
-    while (capacity < 2 * m_cell_keys.size())
-      capacity *= 2;
-    m_table.assign(capacity, -1);
-    m_table_mask = capacity - 1;
-    for (std::size_t c = 0; c < m_cell_keys.size(); ++c) {
-      std::uint64_t slot = mix(m_cell_keys[c]) & m_table_mask;
-      while (m_table[slot] >= 0)
-        slot = (slot + 1) & m_table_mask;
-      m_table[slot] = static_cast<std::int64_t>(c);
-    }
-  }
-
-  /// The distinct-key index of `key`, or -1.
-  std::int64_t lookup(std::uint64_t key) const {
-    std::uint64_t slot = mix(key) & m_table_mask;
-    while (true) {
-      const std::int64_t c = m_table[slot];
-      if (c < 0 || m_cell_keys[static_cast<std::size_t>(c)] == key) return c;
-      slot = (slot + 1) & m_table_mask;
-    }
-  }
-
-  static std::uint64_t mix(std::uint64_t key) {
-    key ^= key >> 31;
-    key *= 0xbf58476d1ce4e5b9ULL;
-    key ^= key >> 29;
-    return key;
+    m_cells.build(std::move(keys));
   }
 
   /// Visits the keys of the cells the box covers; returns false, visiting nothing, when they are too many (a
@@ -131,10 +106,8 @@ class GridBroadPhase final : public TriangleBroadPhase {
   double m_cell = 1.0;
   std::vector<Box3> m_boxes;
   std::vector<std::pair<std::uint64_t, Index>> m_entries;
-  std::vector<std::uint64_t> m_cell_keys;   // distinct keys of m_entries, ascending
+  KeyIndexTable m_cells;                    // the distinct keys of m_entries, ascending
   std::vector<std::uint32_t> m_cell_begin;  // first entry of each distinct key; one extra end entry
-  std::vector<std::int64_t> m_table{-1};    // open addressing: slot -> distinct key, -1 empty
-  std::uint64_t m_table_mask = 0;
   std::vector<Index> m_everywhere;
   TriangleBoxKey m_built_for;
 };

@@ -31,16 +31,6 @@ std::uint64_t spread_bits(std::uint64_t v) {
   return v;
 }
 
-std::uint64_t hash_key(std::uint64_t key) {
-  // splitmix64 finaliser: Morton keys of neighbouring cells differ in few bits, so they need mixing.
-  key ^= key >> 30;
-  key *= 0xbf58476d1ce4e5b9ULL;
-  key ^= key >> 27;
-  key *= 0x94d049bb133111ebULL;
-  key ^= key >> 31;
-  return key;
-}
-
 /// scan_runs with scan_candidates_lanes, compiled for each copy of DRENCH_SIMD_CLONES: the CPUs without AVX2.
 DRENCH_SIMD_CLONES std::size_t scan_runs_lanes(const Scalar* xs, const Scalar* ys, const Scalar* zs,
                                                const Index* indices, const std::uint32_t* begins,
@@ -173,35 +163,23 @@ void NeighborSearch::build_dense(const std::vector<Vec3i>& cells, const Vec3i& l
   m_sorted_index.resize(cells.size());
   for (std::size_t i = 0; i < cells.size(); ++i)
     m_sorted_index[next[linear(cells[i])]++] = static_cast<Index>(i);
-  m_cell_keys.clear();
-  m_table.clear();
+  m_cells.clear();
 }
 
 void NeighborSearch::build_hashed(const Vec3Array& points) {
   m_sorted_index = z_order(points);
   const std::size_t n = points.size();
-  m_cell_keys.clear();
+  std::vector<std::uint64_t> keys;
   m_cell_begin.clear();
   for (std::size_t k = 0; k < n; ++k) {
     const std::uint64_t key = cell_key(points[m_sorted_index[k]]);
-    if (m_cell_keys.empty() || m_cell_keys.back() != key) {
-      m_cell_keys.push_back(key);
+    if (keys.empty() || keys.back() != key) {
+      keys.push_back(key);
       m_cell_begin.push_back(static_cast<std::uint32_t>(k));
     }
   }
   m_cell_begin.push_back(static_cast<std::uint32_t>(n));
-
-  std::size_t capacity = 16;
-  while (capacity < 2 * m_cell_keys.size())
-    capacity *= 2;
-  m_table.assign(capacity, -1);
-  m_table_mask = capacity - 1;
-  for (std::size_t c = 0; c < m_cell_keys.size(); ++c) {
-    std::uint64_t slot = hash_key(m_cell_keys[c]) & m_table_mask;
-    while (m_table[slot] >= 0)
-      slot = (slot + 1) & m_table_mask;
-    m_table[slot] = static_cast<std::int64_t>(c);
-  }
+  m_cells.build(std::move(keys));
 }
 
 bool NeighborSearch::cell_range(const Vec3i& cell, std::uint32_t& begin, std::uint32_t& end) const {
@@ -211,7 +189,7 @@ bool NeighborSearch::cell_range(const Vec3i& cell, std::uint32_t& begin, std::ui
     if ((local.array() < 0).any() || (local.array() >= m_dims.array()).any()) return false;
     slot = (static_cast<std::size_t>(local.z()) * m_dims.y() + local.y()) * m_dims.x() + local.x();
   } else {
-    const std::int64_t c = lookup(key_of_cell(cell));
+    const std::int64_t c = m_cells.find(key_of_cell(cell));
     if (c < 0) return false;
     slot = static_cast<std::size_t>(c);
   }
@@ -230,16 +208,6 @@ bool NeighborSearch::row_range(const Vec3i& cell, int count, std::uint32_t& begi
   begin = m_cell_begin[row + x_first];
   end = m_cell_begin[row + x_last + 1];
   return begin < end;
-}
-
-std::int64_t NeighborSearch::lookup(std::uint64_t key) const {
-  std::uint64_t slot = hash_key(key) & m_table_mask;
-  while (true) {
-    const std::int64_t c = m_table[slot];
-    if (c < 0) return -1;
-    if (m_cell_keys[static_cast<std::size_t>(c)] == key) return c;
-    slot = (slot + 1) & m_table_mask;
-  }
 }
 
 void NeighborSearch::candidate_runs(const Vec3i& cell, CandidateRuns& out) const {

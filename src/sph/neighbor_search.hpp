@@ -4,6 +4,7 @@
 
 #include <cstdint>
 
+#include "common/key_index_table.hpp"
 #include "common/types.hpp"
 
 namespace drench {
@@ -93,8 +94,6 @@ class NeighborSearch {
   void candidate_runs(const Vec3i& cell, CandidateRuns& out) const;
   std::uint64_t key_of_cell(const Vec3i& cell) const;
   Vec3i cell_of(const Vec3& x) const;
-  /// Slot of `key` in m_cell_keys, or -1.
-  std::int64_t lookup(std::uint64_t key) const;
   /// Sorted-point range [begin, end) of a cell; false when the cell is empty or unknown.
   bool cell_range(const Vec3i& cell, std::uint32_t& begin, std::uint32_t& end) const;
   /// Dense mode only: the sorted-point range of `count` cells from `cell` along +x (clipped to the grid);
@@ -110,10 +109,8 @@ class NeighborSearch {
   ScalarArray m_xs, m_ys, m_zs;
   IndexArray m_sorted_index;                // n entries, then kScanPadding
   std::size_t m_count = 0;                  // source points of the last build
-  std::vector<std::uint64_t> m_cell_keys;   // distinct keys, ascending
+  KeyIndexTable m_cells;                    // hashed mode: the distinct keys, ascending, and their table
   std::vector<std::uint32_t> m_cell_begin;  // first sorted point of each cell; one extra end entry
-  std::vector<std::int64_t> m_table;        // open-addressing hash: slot -> cell, -1 empty
-  std::uint64_t m_table_mask = 0;
   bool m_dense = false;
   CandidateScan m_scan = CandidateScan::kFourLanes;
   Vec3i m_lo = Vec3i::Zero();                        // dense mode: first cell of the grid

@@ -1,0 +1,64 @@
+#pragma once
+/// Distinct 64-bit keys and an open-addressing table that finds a key's position among them in O(1): the
+/// hashed cells of the fluid's grid search (sph/neighbor_search.cpp) and of the grid broad phase
+/// (coupling/broad_phase.cpp), where a binary search over the keys cost log n comparisons per cell.
+
+#include <cstdint>
+#include <utility>
+#include <vector>
+
+namespace drench {
+
+class KeyIndexTable {
+ public:
+  /// Takes `keys` (distinct, in any order; they keep it) and indexes them. The table is at most half full,
+  /// linear probing.
+  void build(std::vector<std::uint64_t> keys) {
+    m_keys = std::move(keys);
+    std::size_t capacity = 16;
+    while (capacity < 2 * m_keys.size())
+      capacity *= 2;
+    m_slots.assign(capacity, -1);
+    m_mask = capacity - 1;
+    for (std::size_t k = 0; k < m_keys.size(); ++k) {
+      std::uint64_t slot = mix(m_keys[k]) & m_mask;
+      while (m_slots[slot] >= 0)
+        slot = (slot + 1) & m_mask;
+      m_slots[slot] = static_cast<std::int64_t>(k);
+    }
+  }
+
+  /// Forgets the keys (find() then answers -1).
+  void clear() { build({}); }
+
+  /// The position of `key` in the keys given to build(), or -1.
+  std::int64_t find(std::uint64_t key) const {
+    std::uint64_t slot = mix(key) & m_mask;
+    while (true) {
+      const std::int64_t k = m_slots[slot];
+      if (k < 0 || m_keys[static_cast<std::size_t>(k)] == key) return k;
+      slot = (slot + 1) & m_mask;
+    }
+  }
+
+  const std::vector<std::uint64_t>& keys() const { return m_keys; }
+
+ private:
+  /// splitmix64's finaliser: neighbouring cells' keys (Morton codes, or products of coordinates) differ in
+  /// few bits, so they need mixing before the mask.
+  static std::uint64_t mix(std::uint64_t key) {
+    key ^= key >> 30;
+    key *= 0xbf58476d1ce4e5b9ULL;
+    key ^= key >> 27;
+    key *= 0x94d049bb133111ebULL;
+    key ^= key >> 31;
+    return key;
+  }
+
+  std::vector<std::uint64_t> m_keys;
+  std::vector<std::int64_t> m_slots =
+      std::vector<std::int64_t>(16, -1);  // slot -> position in m_keys, -1 empty
+  std::uint64_t m_mask = 15;
+};
+
+}  // namespace drench
