@@ -41,8 +41,6 @@ class KeyIndexTable {
     }
   }
 
-  const std::vector<std::uint64_t>& keys() const { return m_keys; }
-
  private:
   /// splitmix64's finaliser: neighbouring cells' keys (Morton codes, or products of coordinates) differ in
   /// few bits, so they need mixing before the mask.

@@ -104,7 +104,12 @@ struct EightPointsF {
   Floats8 x, y, z, w;
 };
 
-/// Loads the points js[0..7] with eight-float vectors only: lane l holds point js[l].
+/// Loads the points js[0..7] with eight-float vectors only: lane l holds point js[l]. The same transpose as
+/// packed_lanes.hpp's load_eight, kept apart because the two types want different loads: one template with
+/// load_eight's named loads ran the float passes of the AVX2 copy 1-7% slower (densities 2.34-2.51 against
+/// 2.32-2.35 ms), and with this array the double densities of the AVX-512 copy 5.43 against 2.80 ms
+/// (`OMP_NUM_THREADS=1 bench_pair_loops --benchmark_filter='densities_float/0|densities/0'`, builds for
+/// x86-64-v3 without clones and cloned, alternating with this code; patches not kept).
 [[gnu::always_inline]] inline void load_eight_float(const PackedPointF* points, const Index* js,
                                                     EightPointsF& out) {
   Floats4 r[8];
