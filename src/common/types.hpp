@@ -4,6 +4,7 @@
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include <array>
 #include <cstdint>
 #include <vector>
 
@@ -17,6 +18,8 @@ using Vec3Array = std::vector<Vec3>;
 using ScalarArray = std::vector<Scalar>;
 using Index = std::uint32_t;
 using IndexArray = std::vector<Index>;
+/// A triangle as three node indices, counter-clockwise seen from the side its normal points to.
+using Triangle = std::array<Index, 3>;
 
 /// The 3 N coordinates of `points` as one array of doubles (x0 y0 z0 x1 ...), for loops that gather by index;
 /// nullptr when there are none. A cast, not `points.data()->data()`, which accesses a member through a null

@@ -11,9 +11,6 @@
 
 namespace drench {
 
-/// A triangle as three node indices, counter-clockwise seen from the side its normal points to.
-using Triangle = std::array<Index, 3>;
-
 /// A triangle mesh moving linearly over one step. All arrays of nodes have M entries, `triangles` has F.
 struct ClothMesh {
   Vec3Array positions_t0;  ///< M, node positions at the start of the step (unit: m)

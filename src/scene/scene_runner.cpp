@@ -11,7 +11,7 @@
 #include "common/error.hpp"
 #include "common/stopwatch.hpp"
 #include "io/atomic_file.hpp"
-#include "io/ply_writer.hpp"
+#include "scene/frame_files.hpp"
 
 namespace drench {
 
@@ -122,8 +122,7 @@ RunResult run_scene(Simulation& sim, const RunOptions& options) {
       write_particles_ply((frames / frame_name("fluid", frame)).string(), sim.particles());
       if (const ClothEngine* cloth = sim.cloth()) {
         // Between steps positions_t1 is where the cloth is now (end_step wrote it back to the engine).
-        const ClothMesh& mesh = cloth->mesh();
-        write_mesh_ply((frames / frame_name("cloth", frame)).string(), mesh.positions_t1, mesh.triangles);
+        write_cloth_ply((frames / frame_name("cloth", frame)).string(), cloth->mesh());
       }
       ++frame;
     }

@@ -10,7 +10,7 @@
 /// +4% density, where PCISPH's pressure grew without bound in the first step (measured).
 
 #include "common/types.hpp"
-#include "scene/scene_config.hpp"
+#include "sph/boundary_settings.hpp"
 
 namespace drench {
 

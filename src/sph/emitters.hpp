@@ -3,7 +3,7 @@
 
 #include <cstdint>
 
-#include "scene/scene_config.hpp"
+#include "sph/emitter_settings.hpp"
 #include "sph/particle_set.hpp"
 
 namespace drench {

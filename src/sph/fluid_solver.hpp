@@ -6,9 +6,10 @@
 #include <memory>
 #include <string>
 
-#include "scene/scene_config.hpp"
 #include "sph/boundary_sampling.hpp"
+#include "sph/boundary_settings.hpp"
 #include "sph/cubic_spline_kernel.hpp"
+#include "sph/fluid_settings.hpp"
 #include "sph/forces/viscosity.hpp"
 #include "sph/particle_set.hpp"
 #include "sph/pressure/pressure_solver.hpp"

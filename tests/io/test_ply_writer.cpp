@@ -5,10 +5,12 @@
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <stdexcept>
 
 #include "common/error.hpp"
 #include "io/atomic_file.hpp"
 #include "io/ply_writer.hpp"
+#include "scene/frame_files.hpp"
 
 namespace drench {
 namespace {
@@ -41,6 +43,41 @@ TEST(PlyWriter, WritesHeaderAndLittleEndianRecordsThatReadBack) {
   EXPECT_EQ(values[5], 3.0f);
   EXPECT_EQ(values[6], 1001.0f);
   EXPECT_EQ(id, 4000000000u);
+}
+
+TEST(PlyWriter, MeshWritesNormalsThenNamedPropertiesPerVertex) {
+  // A unit right triangle in the xz plane, counter-clockwise seen from +y: every vertex normal is +y.
+  const Vec3Array positions = {Vec3(0, 0, 0), Vec3(0, 0, 1), Vec3(1, 0, 0)};
+  const std::vector<Triangle> triangles = {{0, 1, 2}};
+  const ScalarArray wetness = {0.0, 0.5, 1.0};
+  const std::string ply =
+      mesh_to_ply("cloth mesh", positions, triangles, {PlyProperty::scalar("wetness", wetness)});
+
+  const std::string end = "end_header\n";
+  const std::size_t body = ply.find(end);
+  ASSERT_NE(body, std::string::npos);
+  const std::string header = ply.substr(0, body);
+  EXPECT_NE(header.find("property float nz\nproperty float wetness\nelement face 1\n"), std::string::npos)
+      << header;
+  const std::size_t record = 7 * 4;
+  ASSERT_EQ(ply.size(), body + end.size() + 3 * record + (1 + 3 * 4));
+  float values[7];
+  std::memcpy(values, ply.data() + body + end.size() + record, sizeof values);  // second vertex
+  EXPECT_EQ(values[2], 1.0f);                                                   // z
+  EXPECT_EQ(values[4], 1.0f);                                                   // ny
+  EXPECT_EQ(values[6], 0.5f);                                                   // wetness
+}
+
+TEST(PlyWriter, APropertyOfTheWrongLengthIsRejectedByName) {
+  const Vec3Array positions = {Vec3(0, 0, 0), Vec3(1, 0, 0)};
+  const ScalarArray short_values = {1.0};
+  try {
+    points_to_ply("test", positions, {PlyProperty::scalar("pressure", short_values)});
+    FAIL() << "no exception";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("'pressure' has 1 values for 2 vertices"), std::string::npos)
+        << e.what();
+  }
 }
 
 TEST(AtomicFile, ReplacesWholeFileAndLeavesNoTemporary) {

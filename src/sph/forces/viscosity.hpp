@@ -3,8 +3,8 @@
 
 #include <memory>
 
-#include "scene/scene_config.hpp"
 #include "sph/fluid_context.hpp"
+#include "sph/fluid_settings.hpp"
 
 namespace drench {
 

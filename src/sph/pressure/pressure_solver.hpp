@@ -4,8 +4,8 @@
 #include <memory>
 #include <string>
 
-#include "scene/scene_config.hpp"
 #include "sph/fluid_context.hpp"
+#include "sph/fluid_settings.hpp"
 
 namespace drench {
 
