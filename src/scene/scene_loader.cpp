@@ -4,7 +4,6 @@
 
 #include <algorithm>
 #include <cerrno>
-#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -13,359 +12,21 @@
 #include <utility>
 
 #include "common/error.hpp"
+#include "scene/json_reader.hpp"
+#include "scene/load_sections.hpp"
 
 namespace drench {
 namespace {
 
-using nlohmann::json;
+using loader::join;
+using loader::json;
+using loader::kNonNegative;
+using loader::kPositive;
+using loader::Node;
+using loader::ObjectReader;
+using loader::show;
 
-constexpr double kInf = std::numeric_limits<double>::infinity();
-
-/// Shows a value in a message as JSON, shortened so that a misplaced object does not flood the terminal.
-std::string show(const json& value) {
-  // dump() would print non-finite numbers (only possible in documents built in code, or --set 1e999) as null.
-  if (value.is_number_float() && !std::isfinite(value.get<double>()))
-    return format_number(value.get<double>());
-  std::string text = value.dump(-1, ' ', false, json::error_handler_t::replace);
-  if (text.size() > 80) text = text.substr(0, 77) + "...";
-  return text;
-}
-
-/// A limit computed from another key, shortest form (5, not 5.0: it may be an iteration count).
-std::string show(double v) {
-  std::string text = show(json(v));
-  if (text.size() > 2 && text.compare(text.size() - 2, 2, ".0") == 0) text.resize(text.size() - 2);
-  return text;
-}
-
-std::string show(const Vec3& v) {
-  return show(json::array({v.x(), v.y(), v.z()}));
-}
-
-std::string join(const std::vector<std::string>& items, bool quoted) {
-  std::string text;
-  for (const std::string& item : items) {
-    if (!text.empty()) text += ", ";
-    text += quoted ? "\"" + item + "\"" : item;
-  }
-  return text;
-}
-
-/// Allowed interval of a number; an infinite end means unbounded on that side.
-struct Range {
-  double lo = -kInf;
-  bool lo_open = false;
-  double hi = kInf;
-  bool hi_open = false;
-
-  bool contains(double v) const { return (lo_open ? v > lo : v >= lo) && (hi_open ? v < hi : v <= hi); }
-  std::string describe() const {
-    if (std::isinf(hi)) return std::string(lo_open ? "> " : ">= ") + format_number(lo);
-    if (std::isinf(lo)) return std::string(hi_open ? "< " : "<= ") + format_number(hi);
-    return std::string("in ") + (lo_open ? "(" : "[") + format_number(lo) + ", " + format_number(hi) +
-           (hi_open ? ")" : "]");
-  }
-};
-
-const Range kAny{};
-const Range kPositive{0.0, true, kInf, false};
-const Range kNonNegative{0.0, false, kInf, false};
-const Range kAtLeastOne{1.0, false, kInf, false};
-
-template <class Enum>
-using Choices = std::vector<std::pair<std::string, Enum>>;
-
-/// A value (possibly absent) at a JSON path of the scene named `source`: all an error message needs, so each
-/// check is one call instead of hand-assembled text per key.
-class Node {
- public:
-  Node(const json* value, std::string path, const std::string& source)
-      : m_value(value), m_path(std::move(path)), m_source(&source) {}
-
-  bool present() const { return m_value != nullptr; }
-  const json& value() const { return *m_value; }
-  const std::string& path() const { return m_path; }
-  const std::string& source() const { return *m_source; }
-  std::string name() const { return m_path.empty() ? "the scene" : m_path; }
-
-  /// Throws `<path> <problem>, got <value> (<source>)`.
-  [[noreturn]] void fail(const std::string& problem) const {
-    throw SceneError(name() + " " + problem + ", got " + show(*m_value) + " (" + *m_source + ")");
-  }
-  /// Throws `<path> <problem> (<source>)<suffix>` for problems without a value (missing or unknown keys).
-  [[noreturn]] void fail_without_value(const std::string& problem, const std::string& suffix = "") const {
-    throw SceneError(name() + " " + problem + " (" + *m_source + ")" + suffix);
-  }
-
-  Node child(const std::string& key) const {
-    const json* found = nullptr;
-    if (present() && m_value->is_object()) {
-      const auto it = m_value->find(key);
-      if (it != m_value->end()) found = &*it;
-    }
-    return Node(found, m_path.empty() ? key : m_path + "." + key, *m_source);
-  }
-  Node element(std::size_t index) const {
-    return Node(&m_value->at(index), m_path + "[" + std::to_string(index) + "]", *m_source);
-  }
-
-  const json& array() const {
-    if (!m_value->is_array()) fail("must be an array");
-    return *m_value;
-  }
-  double number(const Range& range = kAny) const {
-    if (!m_value->is_number()) fail("must be a number");
-    const double v = m_value->get<double>();
-    if (!std::isfinite(v)) fail("must be finite");
-    if (!range.contains(v)) fail("must be " + range.describe());
-    return v;
-  }
-  /// Only JSON integers are accepted: 1.0 for a count more likely hides a mistake than saves typing.
-  template <class Int>
-  Int integer(const Range& range) const {
-    if (!m_value->is_number_integer()) fail("must be an integer");
-    const double approx = m_value->get<double>();
-    // Every range here excludes negatives, so only the upper end of Int can be exceeded.
-    constexpr Int max = std::numeric_limits<Int>::max();
-    const bool fits = m_value->is_number_unsigned()
-                          ? m_value->get<std::uint64_t>() <= static_cast<std::uint64_t>(max)
-                          : m_value->get<std::int64_t>() <= max;
-    if (!fits || !range.contains(approx))
-      fail("must be " + (fits ? range.describe() : "<= " + std::to_string(max)));
-    return static_cast<Int>(m_value->get<std::int64_t>());
-  }
-  bool boolean() const {
-    if (!m_value->is_boolean()) fail("must be true or false");
-    return m_value->get<bool>();
-  }
-  std::string string() const {
-    if (!m_value->is_string()) fail("must be a string");
-    return m_value->get<std::string>();
-  }
-  Vec3 vec3() const {
-    if (!m_value->is_array() || m_value->size() != 3) fail("must be an array of 3 numbers");
-    return Vec3(element(0).number(), element(1).number(), element(2).number());
-  }
-  /// A non-zero vector, normalised: directions and normals are stored as unit vectors.
-  Vec3 unit_vec3() const {
-    const Vec3 v = vec3();
-    const double length = v.stableNorm();
-    if (!(length > 0.0)) fail("must be non-zero");
-    return v / length;
-  }
-  template <class Enum>
-  Enum choice(const Choices<Enum>& choices) const {
-    std::vector<std::string> names;
-    for (const auto& [name, value] : choices) {
-      if (m_value->is_string() && m_value->get<std::string>() == name) return value;
-      names.push_back(name);
-    }
-    fail("must be one of " + join(names, true));
-  }
-
- private:
-  const json* m_value;
-  std::string m_path;
-  const std::string* m_source;
-};
-
-/// An object whose keys are checked against `known` up front, so a misspelt key is reported instead of being
-/// silently replaced by its default. An absent object reads nothing and leaves every default in place.
-class ObjectReader {
- public:
-  ObjectReader(const Node& node, const std::vector<std::string>& known) : m_node(node) {
-    if (!node.present()) return;
-    if (!node.value().is_object()) node.fail("must be an object");
-    for (const auto& item : node.value().items()) {
-      if (std::find(known.begin(), known.end(), item.key()) == known.end())
-        node.child(item.key()).fail_without_value("is not a known key", "; known: " + join(known, false));
-    }
-  }
-
-  Node operator[](const std::string& key) const { return m_node.child(key); }
-
-  void read(const std::string& key, Scalar& out, const Range& range = kAny) const {
-    if (const Node n = m_node.child(key); n.present()) out = n.number(range);
-  }
-  void read(const std::string& key, int& out, const Range& range) const {
-    if (const Node n = m_node.child(key); n.present()) out = n.integer<int>(range);
-  }
-  void read(const std::string& key, std::int64_t& out, const Range& range) const {
-    if (const Node n = m_node.child(key); n.present()) out = n.integer<std::int64_t>(range);
-  }
-  void read(const std::string& key, bool& out) const {
-    if (const Node n = m_node.child(key); n.present()) out = n.boolean();
-  }
-  void read(const std::string& key, Vec3& out) const {
-    if (const Node n = m_node.child(key); n.present()) out = n.vec3();
-  }
-  void read_unit(const std::string& key, Vec3& out) const {
-    if (const Node n = m_node.child(key); n.present()) out = n.unit_vec3();
-  }
-  template <class Enum>
-  void read_choice(const std::string& key, Enum& out, const Choices<Enum>& choices) const {
-    if (const Node n = m_node.child(key); n.present()) out = n.choice(choices);
-  }
-
-  /// Reports `lo_key` > `hi_key` on the key the user actually wrote (the other may be a default).
-  void require_order(const std::string& lo_key, double lo, const std::string& hi_key, double hi) const {
-    if (lo <= hi) return;
-    if (const Node n = m_node.child(hi_key); n.present())
-      n.fail("must be >= " + m_node.child(lo_key).path() + " = " + show(lo));
-    m_node.child(lo_key).fail("must be <= " + m_node.child(hi_key).path() + " = " + show(hi));
-  }
-  void require_box(const Vec3& min, const Vec3& max) const {
-    if ((max.array() > min.array()).all()) return;
-    if (const Node n = m_node.child("max"); n.present())
-      n.fail("must be > " + m_node.child("min").path() + " = " + show(min) + " on every axis");
-    m_node.child("min").fail("must be < " + m_node.child("max").path() + " = " + show(max) +
-                             " on every axis");
-  }
-
- private:
-  Node m_node;
-};
-
-/// The required `type` of a list element; checked before the keys, since the type decides which are known.
-template <class Enum>
-Enum read_type(const Node& node, const Choices<Enum>& choices) {
-  if (!node.value().is_object()) node.fail("must be an object");
-  const Node type = node.child("type");
-  if (!type.present()) {
-    std::vector<std::string> names;
-    for (const auto& choice : choices)
-      names.push_back(choice.first);
-    type.fail_without_value("is missing; must be one of " + join(names, true));
-  }
-  return type.choice(choices);
-}
-
-template <class T>
-std::vector<T> read_list(const Node& node, T (*read_one)(const Node&)) {
-  std::vector<T> items;
-  if (!node.present()) return items;
-  for (std::size_t i = 0; i < node.array().size(); ++i)
-    items.push_back(read_one(node.element(i)));
-  return items;
-}
-
-FluidSettings read_fluid(const Node& node) {
-  FluidSettings fluid;
-  const ObjectReader r(node, {"rest_density", "particle_spacing", "pressure_solver", "wcsph", "pcisph",
-                              "viscosity", "cfl", "sort_interval"});
-  r.read("rest_density", fluid.rest_density, kPositive);
-  r.read("particle_spacing", fluid.particle_spacing, kPositive);
-  r.read_choice("pressure_solver", fluid.pressure_solver,
-                Choices<PressureSolverKind>{{"pcisph", PressureSolverKind::PCISPH},
-                                            {"wcsph", PressureSolverKind::WCSPH}});
-  r.read("cfl", fluid.cfl, Range{0.0, true, 1.0, false});
-  r.read("sort_interval", fluid.sort_interval, kAtLeastOne);
-
-  const ObjectReader wcsph(r["wcsph"], {"speed_of_sound", "exponent"});
-  // null is accepted as "auto" so that --set fluid.wcsph.speed_of_sound=null can undo a file's value.
-  if (const Node c = wcsph["speed_of_sound"]; c.present() && !c.value().is_null())
-    fluid.wcsph.speed_of_sound = c.number(kPositive);
-  wcsph.read("exponent", fluid.wcsph.exponent, kAtLeastOne);
-
-  const ObjectReader pcisph(r["pcisph"],
-                            {"eta", "min_iterations", "max_iterations", "max_compression_per_iteration",
-                             "max_relief_per_substep", "precision"});
-  pcisph.read("eta", fluid.pcisph.eta, Range{0.0, true, 1.0, true});
-  pcisph.read("min_iterations", fluid.pcisph.min_iterations, kAtLeastOne);
-  pcisph.read("max_iterations", fluid.pcisph.max_iterations, kAtLeastOne);
-  pcisph.read_choice("precision", fluid.pcisph.precision,
-                     Choices<IterationPrecision>{{"single", IterationPrecision::SINGLE},
-                                                 {"double", IterationPrecision::DOUBLE}});
-  pcisph.require_order("min_iterations", fluid.pcisph.min_iterations, "max_iterations",
-                       fluid.pcisph.max_iterations);
-  // null is "no limit" (the published PCISPH), so that --set can undo the default.
-  for (auto [key, limit] :
-       {std::pair{"max_compression_per_iteration", &fluid.pcisph.max_compression_per_iteration},
-        std::pair{"max_relief_per_substep", &fluid.pcisph.max_relief_per_substep}}) {
-    if (const Node c = pcisph[key]; c.present()) {
-      if (c.value().is_null()) {
-        limit->reset();
-      } else {
-        *limit = c.number(kPositive);
-      }
-    }
-  }
-
-  const ObjectReader viscosity(r["viscosity"], {"method", "coefficient"});
-  viscosity.read_choice(
-      "method", fluid.viscosity.method,
-      Choices<ViscosityKind>{{"xsph", ViscosityKind::XSPH}, {"artificial", ViscosityKind::ARTIFICIAL}});
-  viscosity.read("coefficient", fluid.viscosity.coefficient, kNonNegative);
-  return fluid;
-}
-
-EmitterSettings read_emitter(const Node& node) {
-  using Kind = EmitterSettings::Kind;
-  EmitterSettings emitter;
-  emitter.kind = read_type(node, Choices<Kind>{{"nozzle", Kind::NOZZLE}, {"box", Kind::BOX}});
-  if (emitter.kind == Kind::NOZZLE) {
-    NozzleEmitterSettings& nozzle = emitter.nozzle;
-    const ObjectReader r(node,
-                         {"type", "center", "direction", "radius", "speed", "start_time", "max_particles"});
-    r.read("center", nozzle.center);
-    r.read_unit("direction", nozzle.direction);
-    r.read("radius", nozzle.radius, kPositive);
-    r.read("speed", nozzle.speed, kPositive);
-    r.read("start_time", nozzle.start_time, kNonNegative);
-    r.read("max_particles", nozzle.max_particles, kNonNegative);
-  } else {
-    BoxEmitterSettings& box = emitter.box;
-    const ObjectReader r(node, {"type", "min", "max", "velocity"});
-    r.read("min", box.min);
-    r.read("max", box.max);
-    r.read("velocity", box.velocity);
-    r.require_box(box.min, box.max);
-  }
-  return emitter;
-}
-
-BoundarySettings read_boundary(const Node& node) {
-  using Kind = BoundarySettings::Kind;
-  BoundarySettings boundary;
-  boundary.kind = read_type(node, Choices<Kind>{{"box", Kind::BOX}, {"plane", Kind::PLANE}});
-  if (boundary.kind == Kind::BOX) {
-    const ObjectReader r(node, {"type", "min", "max", "open_top", "layers"});
-    r.read("min", boundary.min);
-    r.read("max", boundary.max);
-    r.read("open_top", boundary.open_top);
-    r.read("layers", boundary.layers, kAtLeastOne);
-    r.require_box(boundary.min, boundary.max);
-  } else {
-    const ObjectReader r(node, {"type", "point", "normal", "size", "layers"});
-    r.read("point", boundary.point);
-    r.read_unit("normal", boundary.normal);
-    if (const Node size = r["size"]; size.present()) {
-      if (!size.value().is_array() || size.value().size() != 2) size.fail("must be an array of 2 numbers");
-      for (std::size_t i = 0; i < 2; ++i)
-        boundary.size[i] = size.element(i).number(kPositive);
-    }
-    r.read("layers", boundary.layers, kAtLeastOne);
-  }
-  return boundary;
-}
-
-KillRegionSettings read_kill_region(const Node& node) {
-  using Kind = KillRegionSettings::Kind;
-  KillRegionSettings region;
-  region.kind = read_type(node, Choices<Kind>{{"plane", Kind::PLANE}, {"box", Kind::BOX}});
-  if (region.kind == Kind::PLANE) {
-    const ObjectReader r(node, {"type", "point", "normal"});
-    r.read("point", region.point);
-    r.read_unit("normal", region.normal);
-  } else {
-    const ObjectReader r(node, {"type", "min", "max"});
-    r.read("min", region.min);
-    r.read("max", region.max);
-    r.require_box(region.min, region.max);
-  }
-  return region;
-}
-
+/// `time` (TimeSettings): the step, the duration and the frame rate; the step may not exceed the duration.
 TimeSettings read_time(const Node& node) {
   TimeSettings time;
   const ObjectReader r(node, {"dt", "duration", "frame_rate"});
@@ -376,65 +37,8 @@ TimeSettings read_time(const Node& node) {
   return time;
 }
 
-ClothSettings read_cloth(const Node& node) {
-  ClothSettings cloth;
-  const ObjectReader r(
-      node, {"mesh", "center", "size", "nodes", "area_density", "pinned", "position_iterations", "substeps",
-             "stretch_stiffness", "bending_stiffness", "damping"});
-  if (const Node mesh = r["mesh"]; mesh.present()) {
-    cloth.mesh = mesh.string();
-    if (cloth.mesh.empty()) mesh.fail("must be \"patch\" or the path of an OBJ file");
-  }
-  r.read("center", cloth.center);
-  if (const Node size = r["size"]; size.present()) {
-    if (!size.value().is_array() || size.value().size() != 2)
-      size.fail("must be an array of 2 numbers [x, z]");
-    cloth.size_x = size.element(0).number(kPositive);
-    cloth.size_z = size.element(1).number(kPositive);
-  }
-  if (const Node nodes = r["nodes"]; nodes.present()) {
-    if (!nodes.value().is_array() || nodes.value().size() != 2)
-      nodes.fail("must be an array of 2 integers [x, z]");
-    cloth.nodes_x = nodes.element(0).integer<int>(Range{2.0, false, 4096.0, false});
-    cloth.nodes_z = nodes.element(1).integer<int>(Range{2.0, false, 4096.0, false});
-  }
-  r.read("area_density", cloth.area_density, kPositive);
-  if (const Node pinned = r["pinned"]; pinned.present()) {
-    cloth.pinned = pinned.string();
-    if (cloth.pinned != "corners" && cloth.pinned != "corner" && cloth.pinned != "none")
-      pinned.fail("must be one of \"corners\", \"corner\", \"none\"");
-  }
-  r.read("position_iterations", cloth.position_iterations, Range{1.0, false, 1000.0, false});
-  r.read("substeps", cloth.substeps, Range{1.0, false, 1000.0, false});
-  r.read("stretch_stiffness", cloth.stretch_stiffness, Range{0.0, true, 1.0, false});
-  r.read("bending_stiffness", cloth.bending_stiffness, Range{0.0, false, 1.0, false});
-  r.read("damping", cloth.damping, Range{0.0, false, 1.0, false});
-  return cloth;
-}
-
-CouplingSettings read_coupling(const Node& node) {
-  CouplingSettings coupling;
-  const ObjectReader r(
-      node, {"cloth_thickness", "repulsion_stiffness", "repulsion_sweeps", "continuous", "substep_obstacle",
-             "scheme", "max_ccd_iterations", "slip", "friction_coefficient", "broad_phase"});
-  r.read("cloth_thickness", coupling.cloth_thickness, kPositive);
-  r.read("repulsion_stiffness", coupling.repulsion_stiffness, kNonNegative);
-  r.read("repulsion_sweeps", coupling.repulsion_sweeps, kAtLeastOne);
-  r.read("continuous", coupling.continuous);
-  r.read("substep_obstacle", coupling.substep_obstacle);
-  r.read_choice("scheme", coupling.scheme,
-                Choices<CouplingScheme>{{"carried_water", CouplingScheme::CARRIED_WATER},
-                                        {"impulses", CouplingScheme::IMPULSES}});
-  r.read("max_ccd_iterations", coupling.max_ccd_iterations, kAtLeastOne);
-  r.read_choice(
-      "slip", coupling.slip,
-      Choices<SlipCondition>{{"friction", SlipCondition::FRICTION}, {"no_slip", SlipCondition::NO_SLIP}});
-  r.read("friction_coefficient", coupling.friction_coefficient, kNonNegative);
-  r.read_choice("broad_phase", coupling.broad_phase,
-                Choices<BroadPhaseKind>{{"grid", BroadPhaseKind::GRID}, {"fcl", BroadPhaseKind::FCL}});
-  return coupling;
-}
-
+/// `effects`: names from known_effects(), each at most once. Whether the scene has what they need is
+/// checked by parse_scene once every section is read.
 std::vector<std::string> read_effects(const Node& node) {
   std::vector<std::string> effects;
   if (!node.present()) return effects;
@@ -561,13 +165,13 @@ SceneConfig parse_scene(const nlohmann::json& document, const std::string& sourc
   SceneConfig config;
   config.source = source;
   r.read("gravity", config.gravity);
-  config.fluid = read_fluid(r["fluid"]);
-  config.emitters = read_list(r["emitters"], read_emitter);
-  config.boundaries = read_list(r["boundaries"], read_boundary);
-  config.kill_regions = read_list(r["kill_regions"], read_kill_region);
+  config.fluid = loader::read_fluid(r["fluid"]);
+  config.emitters = loader::read_list(r["emitters"], loader::read_emitter);
+  config.boundaries = loader::read_list(r["boundaries"], loader::read_boundary);
+  config.kill_regions = loader::read_list(r["kill_regions"], loader::read_kill_region);
   config.time = read_time(r["time"]);
-  if (r["cloth"].present()) config.cloth = read_cloth(r["cloth"]);
-  config.coupling = read_coupling(r["coupling"]);
+  if (r["cloth"].present()) config.cloth = loader::read_cloth(r["cloth"]);
+  config.coupling = loader::read_coupling(r["coupling"]);
   config.effects = read_effects(r["effects"]);
   // An effect that needs something the scene lacks, or settings of an effect the scene does not run, would be
   // silently ignored: both are errors.

@@ -20,9 +20,10 @@ namespace drench {
 /// Builds and steps everything a SceneConfig names. Only effects listed in `effects` are constructed.
 class Simulation {
  public:
-  /// @throws SceneError when the scene cannot be built (e.g. no emitter ever creates a particle is fine, but
-  /// a
-  ///         non-finite derived quantity is not).
+  /// @throws SceneError when the scene cannot be built: it has a cloth but no cloth_factory, or settings
+  /// built
+  ///         in code fail a check the loader would have made (e.g. the coupler's). A scene whose emitters
+  ///         never create a particle is fine.
   /// @param cloth_factory  builds the scene's cloth (the Bullet adapter's cloth_engine_factory()); required
   ///        when the scene has a `cloth`, else SceneError
   explicit Simulation(const SceneConfig& config, const ClothEngineFactory& cloth_factory = {});
@@ -36,8 +37,7 @@ class Simulation {
   /// (with "carried_water", carrying the water near it and handing its share back); the coupling corrects
   /// the particles and, per coupling.scheme, the cloth now or at its next step (repulsion, friction,
   /// continuous handling); the leak audit checks the final motion; the cloth takes its corrections; kill
-  /// regions remove the particles that left. Stages of effects
-  /// the scene does not list are never built.
+  /// regions remove the particles that left. Stages of effects the scene does not list are never built.
   StepStatus step() { return step(m_config.time.dt); }
   /// The same with a step other than the scene's (unit: s, > 0).
   StepStatus step(Scalar dt);
