@@ -63,8 +63,8 @@ class GridBroadPhase final : public TriangleBroadPhase {
       if (!binned) m_everywhere.push_back(static_cast<Index>(t));
     }
     std::sort(m_entries.begin(), m_entries.end());
-    // Each distinct key's run of entries, found through a hash table (a binary search of all the entries
-    // per cell was the grid's cost).
+    // Each distinct key's run of entries, found through a hash table: a binary search of all the entries
+    // per cell would dominate the grid's queries (README, "Coupling broad phase").
     std::vector<std::uint64_t> keys;
     m_cell_begin.clear();
     for (std::size_t e = 0; e < m_entries.size(); ++e) {

@@ -46,9 +46,9 @@ bool collect_triangle(fcl::CollisionObjectd* leaf, fcl::CollisionObjectd* /*quer
 }
 
 /// One query per particle, in parallel: the tree is only read during the queries. A second tree of the
-/// particles queried tree against tree was measured slower on the bench's cases (15K and 150K particles, 6K
-/// triangles): building the particles' tree alone took longer than all the per-particle queries, and the
-/// recursion runs on one thread. Refitting the triangles' tree (update()) costs a fraction of rebuilding it.
+/// particles, queried tree against tree, is slower on bench_coupling's cases: the particles move every step,
+/// building their tree takes longer than all the per-particle queries, and FCL's recursion runs on one
+/// thread. Refitting the triangles' tree (update()) costs a fraction of rebuilding it.
 class FclBroadPhase final : public TriangleBroadPhase {
  public:
   void find_pairs(const Vec3Array& particles_t0, const Vec3Array& particles_t1, const ClothMesh& cloth,

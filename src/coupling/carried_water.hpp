@@ -13,8 +13,8 @@
 /// What is carried is the contact set: the particles whose impulse the cloth takes in this step (the
 /// coupler's of the previous step, the sub-step obstacle's of this one). Water that is only near the cloth
 /// is not: carried, it would lend a node its mass at the node's velocity, not its own, and a node moving
-/// through water would push its neighbours with momentum no water has (the cloth swinging through a pool:
-/// nodes at 9.8-20 m/s for carry distances of 1.2-6 mm, 2.6 m/s for the contact set; its dry swing 2.9).
+/// through water would push its neighbours with momentum no water has (a cloth swinging through a pool:
+/// tests/bullet_adapter/test_jet_on_cloth.cpp, ClothSwingingThroughAPool, bounds its nodes' speed).
 ///
 /// Per step: attach() after the fluid step, ClothEngine::set_carried_masses(carried_masses()), the impulses
 /// and the engine's step, then hand_back().

@@ -73,9 +73,8 @@ void ClothObstacle::apply(const Vec3Array& positions_before, ParticleSet& partic
       inverse_mass += w[i] * w[i] * m_inverse_masses[tri[i]];
     }
     const double relative = (v - cloth_velocity).dot(normal);
-    // No separating speed: one of 1% of the thickness per sub-step grew as the fluid's CFL sub-steps shrank,
-    // feeding the fast particles that shrink them (full jet, 3 mm thickness: particles at 47 m/s, 12
-    // without).
+    // No separating speed: 1% of the thickness per sub-step is a speed that grows as the fluid's CFL
+    // sub-steps shrink, and it would feed the fast particles that shrink them.
     if (relative >= 0.0) continue;
     const double j = -relative / inverse_mass;  // eq. 2, mass-weighted (N s)
     v += (j / particles.masses[p]) * normal;

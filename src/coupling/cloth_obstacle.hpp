@@ -26,8 +26,7 @@ class ClothObstacle final : public SubstepConstraint {
   ///        FCL's tree is refitted rather than rebuilt)
   /// @param kinematic_cloth  true: particles are stopped against the cloth's start velocity, which their
   ///        impulses do not change within the step (CouplingScheme::CARRIED_WATER: one heavy particle would
-  ///        otherwise throw a light node within a single sub-step: its bookkept velocity reached -36 m/s in
-  ///        one 4 ms step of the reduced Fig. 3 jet); false: eq. 2 mass-weighted on both sides
+  ///        otherwise throw a light node within a single sub-step); false: eq. 2 mass-weighted on both sides
   ClothObstacle(double thickness, BroadPhaseKind broad_phase, bool kinematic_cloth = false);
 
   /// Starts a step: the cloth's positions_t0 become the obstacle (copied); its inverse masses (unless

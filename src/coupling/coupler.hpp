@@ -81,7 +81,7 @@ class Coupler {
   const ImpulseLinks& impulse_links() const { return m_impulse_links; }
 
  private:
-  /// step() after its set-up: repulsion, friction, continuous handling.
+  /// step() after its set-up: the stages of sec. 3 in the paper's order (coupler_stages.hpp).
   std::uint32_t correct(const FluidView& fluid, ClothMesh& cloth, double dt, CouplingStepStats& stats);
 
   CouplingSettings m_settings;

@@ -15,20 +15,19 @@ enum class SlipCondition : std::uint8_t {
 /// Which broad phase finds particle-triangle candidates; both give the same pairs (tests check it).
 enum class BroadPhaseKind : std::uint8_t {
   GRID = 0,  ///< triangles binned into a uniform grid
-  FCL =
-      1,  ///< FCL DynamicAABBTreeCollisionManager of the triangles, refitted each step (measured faster:
-          ///< 1.2-2.4x on 15K and 150K particles over 6,272 triangles, bench/bench_coupling.cpp; the default)
+  /// FCL's DynamicAABBTreeCollisionManager of the triangles, refitted when the cloth moved. The default: the
+  /// coupler's whole step is faster with it (bench/bench_coupling.cpp, the coupler_step rows).
+  FCL = 1,
 };
 
 /// How the cloth takes the fluid's impulses.
 enum class CouplingScheme : std::uint8_t {
-  /// drench's scheme for a light cloth under heavy water (coupling/carried_water.hpp): the coupler and
-  /// the sub-step obstacle correct the particles against the cloth as the cloth engine moved it; the
-  /// cloth's share of every impulse reaches it at the start of its next step, and the particles that gave
-  /// those impulses (the water in contact) move with it through the engine's step as node mass. The default:
-  /// with the paper's
-  /// scheme the reduced Fig. 3 jet drove nodes to 526-10,399 m/s (added-mass instability,
-  /// tests/bullet_adapter/test_jet_on_cloth.cpp).
+  /// drench's scheme for a light cloth under heavy water (coupling/carried_water.hpp): the coupler and the
+  /// sub-step obstacle correct the particles against the cloth as the cloth engine moved it; the cloth's
+  /// share of every impulse reaches it at the start of its next step, and the particles that gave those
+  /// impulses (the water in contact) move with it through the engine's step as node mass. The default: with
+  /// the paper's scheme the reduced Fig. 3 jet throws the nodes at hundreds of m/s (the added-mass
+  /// instability; tests/bullet_adapter/test_jet_on_cloth.cpp, NeverLeaksWithContinuousHandling).
   CARRIED_WATER = 0,
   /// The paper as written (sec. 3.2, 5): impulses move both sides' end positions within the step,
   /// mass-weighted. Right for a static mesh or a cloth as heavy as its water.
