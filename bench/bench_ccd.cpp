@@ -25,10 +25,10 @@
 #include <utility>
 #include <vector>
 
-#include "ccd/ccd_exact_reference.hpp"
-#include "ccd/ccd_query_file.hpp"
-#include "ccd/point_triangle_ccd.hpp"
-#include "common/error.hpp"
+#include <drench/ccd/ccd_exact_reference.hpp>
+#include <drench/ccd/ccd_query_file.hpp>
+#include <drench/ccd/point_triangle_ccd.hpp>
+#include <drench/common/error.hpp>
 
 namespace {
 

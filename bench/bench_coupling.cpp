@@ -35,10 +35,10 @@
 #include <utility>
 #include <vector>
 
-#include "coupling/broad_phase.hpp"
-#include "coupling/cloth_mesh.hpp"
-#include "coupling/coupler.hpp"
-#include "coupling/coupling_settings.hpp"
+#include <drench/coupling/broad_phase.hpp>
+#include <drench/coupling/cloth_mesh.hpp>
+#include <drench/coupling/coupler.hpp>
+#include <drench/coupling/coupling_settings.hpp>
 
 namespace {
 

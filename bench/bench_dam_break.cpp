@@ -14,8 +14,8 @@
 #include <chrono>
 #include <string>
 
-#include "scene/scene_loader.hpp"
-#include "scene/simulation.hpp"
+#include <drench/scene/scene_loader.hpp>
+#include <drench/scene/simulation.hpp>
 
 namespace {
 

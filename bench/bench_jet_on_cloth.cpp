@@ -16,9 +16,9 @@
 #include <string>
 #include <vector>
 
-#include "bullet_adapter/bullet_cloth.hpp"
-#include "scene/scene_loader.hpp"
-#include "scene/simulation.hpp"
+#include <drench/bullet/bullet_cloth.hpp>
+#include <drench/scene/scene_loader.hpp>
+#include <drench/scene/simulation.hpp>
 
 namespace {
 

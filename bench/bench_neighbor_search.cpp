@@ -10,7 +10,7 @@
 
 #include <random>
 
-#include "sph/neighbor_search.hpp"
+#include <drench/sph/neighbor_search.hpp>
 
 namespace {
 

@@ -18,13 +18,13 @@
 #include <string>
 #include <vector>
 
-#include "common/parallel.hpp"
-#include "scene/scene_loader.hpp"
-#include "scene/simulation.hpp"
-#include "sph/fluid_context.hpp"
-#include "sph/forces/viscosity.hpp"
-#include "sph/pressure/pressure_pcisph.hpp"
-#include "sph/verlet_neighbor_lists.hpp"
+#include <drench/common/parallel.hpp>
+#include <drench/scene/scene_loader.hpp>
+#include <drench/scene/simulation.hpp>
+#include <drench/sph/fluid_context.hpp>
+#include <drench/sph/forces/viscosity.hpp>
+#include <drench/sph/pressure/pressure_pcisph.hpp>
+#include <drench/sph/verlet_neighbor_lists.hpp>
 
 namespace {
 

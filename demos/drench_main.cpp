@@ -17,13 +17,13 @@
 #include <utility>
 #include <vector>
 
-#include "bullet_adapter/bullet_cloth.hpp"
-#include "ccd/ccd_query_file.hpp"
-#include "ccd/point_triangle_ccd.hpp"
-#include "common/error.hpp"
-#include "scene/scene_loader.hpp"
-#include "scene/scene_runner.hpp"
-#include "scene/simulation.hpp"
+#include <drench/bullet/bullet_cloth.hpp>
+#include <drench/ccd/ccd_query_file.hpp>
+#include <drench/ccd/point_triangle_ccd.hpp>
+#include <drench/common/error.hpp>
+#include <drench/scene/scene_loader.hpp>
+#include <drench/scene/scene_runner.hpp>
+#include <drench/scene/simulation.hpp>
 
 namespace {
 

@@ -14,7 +14,7 @@
 
 #include <cstdio>
 
-#include "bullet_adapter/coupled_world.hpp"
+#include <drench/bullet/coupled_world.hpp>
 
 int main() {
   // ---- The user's Bullet world and cloth ------------------------------------------------------------------

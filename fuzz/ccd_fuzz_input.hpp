@@ -31,7 +31,7 @@
 #include <limits>
 #include <vector>
 
-#include "ccd/point_triangle_ccd.hpp"
+#include <drench/ccd/point_triangle_ccd.hpp>
 
 namespace drench::fuzz {
 

@@ -19,8 +19,8 @@
 #include <exception>
 #include <string>
 
-#include "ccd/ccd_exact_reference.hpp"
-#include "ccd/point_triangle_ccd.hpp"
+#include <drench/ccd/ccd_exact_reference.hpp>
+#include <drench/ccd/point_triangle_ccd.hpp>
 #include "ccd_fuzz_input.hpp"
 
 namespace {

@@ -12,8 +12,8 @@
 #include <cstdlib>
 #include <exception>
 
-#include "common/error.hpp"
-#include "scene/scene_loader.hpp"
+#include <drench/common/error.hpp>
+#include <drench/scene/scene_loader.hpp>
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   nlohmann::json document;

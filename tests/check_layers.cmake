@@ -1,5 +1,5 @@
 # Layers only look down (docs/architecture.md): common <- {sph, ccd, io} <- coupling <- {surface, wetting}
-# <- scene, and only bullet_adapter/ (with its tests and the embedding demo, which are its users) includes
+# <- scene, and only bullet_adapter/ (with its tests, the consumer test and the embedding demo, its users) includes
 # Bullet. Run by ctest as `cmake -DSOURCE_DIR=<repo> -P check_layers.cmake`; fails naming each file and
 # include that breaks a rule.
 
@@ -20,10 +20,13 @@ set(violations "")
 
 file(GLOB_RECURSE core_files RELATIVE "${SOURCE_DIR}" "${SOURCE_DIR}/src/*.hpp" "${SOURCE_DIR}/src/*.cpp")
 foreach(file IN LISTS core_files)
-  string(REGEX MATCH "^src/([a-z_]+)/" _ "${file}")
+  if(NOT file MATCHES "^src/drench/([a-z_]+)/")
+    list(APPEND violations "${file}: the core's files live under src/drench/<layer>/, so that they are included as <drench/<layer>/...>")
+    continue()
+  endif()
   set(layer "${CMAKE_MATCH_1}")
   if(NOT layer IN_LIST layers)
-    list(APPEND violations "${file}: folder src/${layer}/ has no place in the layer order of tests/check_layers.cmake")
+    list(APPEND violations "${file}: folder src/drench/${layer}/ has no place in the layer order of tests/check_layers.cmake")
     continue()
   endif()
   file(STRINGS "${SOURCE_DIR}/${file}" includes REGEX "^[ \t]*#[ \t]*include")
@@ -32,6 +35,12 @@ foreach(file IN LISTS core_files)
       list(APPEND violations "${file}: includes Bullet (${line}), which only bullet_adapter/ may")
     endif()
     if(line MATCHES "#[ \t]*include[ \t]*\"([a-z_]+)/")
+      list(APPEND violations "${file}: ${line}: drench's headers are included as <drench/${CMAKE_MATCH_1}/...>")
+    endif()
+    if(line MATCHES "#[ \t]*include[ \t]*<drench/bullet/")
+      list(APPEND violations "${file}: includes the Bullet adapter (${line}), which the core may not")
+    endif()
+    if(line MATCHES "#[ \t]*include[ \t]*<drench/([a-z_]+)/")
       set(target "${CMAKE_MATCH_1}")
       if(target IN_LIST layers AND NOT target IN_LIST allowed_${layer})
         string(REPLACE ";" ", " allowed "${allowed_${layer}}")
@@ -46,7 +55,7 @@ file(GLOB_RECURSE other_files RELATIVE "${SOURCE_DIR}" "${SOURCE_DIR}/demos/*.cp
      "${SOURCE_DIR}/tests/*.cpp" "${SOURCE_DIR}/tests/*.hpp" "${SOURCE_DIR}/bench/*.cpp" "${SOURCE_DIR}/bench/*.hpp"
      "${SOURCE_DIR}/fuzz/*.cpp" "${SOURCE_DIR}/fuzz/*.hpp")
 foreach(file IN LISTS other_files)
-  if(file MATCHES "^tests/bullet_adapter/" OR file STREQUAL "demos/embed_in_bullet.cpp")
+  if(file MATCHES "^tests/(bullet_adapter|consumer)/" OR file STREQUAL "demos/embed_in_bullet.cpp")
     continue()
   endif()
   file(STRINGS "${SOURCE_DIR}/${file}" includes REGEX "${bullet_header_regex}")

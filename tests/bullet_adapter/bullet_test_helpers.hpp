@@ -10,8 +10,8 @@
 #include <functional>
 #include <string>
 
-#include "common/error.hpp"
-#include "coupling/cloth_engine.hpp"
+#include <drench/common/error.hpp>
+#include <drench/coupling/cloth_engine.hpp>
 
 namespace drench::bullet::test {
 

@@ -1,7 +1,7 @@
 // BulletCloth: node state in and out of btSoftBody exactly, pinned nodes left alone, masses as set, gravity
 // and settings applied, and Bullet's own integrator seen through the adapter.
 
-#include "bullet_adapter/bullet_cloth.hpp"
+#include <drench/bullet/bullet_cloth.hpp>
 
 #include <BulletSoftBody/btSoftBody.h>
 #include <BulletSoftBody/btSoftBodyHelpers.h>
@@ -17,7 +17,7 @@
 #include <string>
 #include <vector>
 
-#include "bullet_adapter/soft_body_builder.hpp"
+#include <drench/bullet/soft_body_builder.hpp>
 #include "bullet_test_helpers.hpp"
 
 namespace drench::bullet {

@@ -1,7 +1,7 @@
 // CoupledWorld: one Bullet step per coupled step, the documented order, the attach-mode checks, and the
 // fluid built as the scene code builds it.
 
-#include "bullet_adapter/coupled_world.hpp"
+#include <drench/bullet/coupled_world.hpp>
 
 #include <BulletSoftBody/btSoftBodyHelpers.h>
 #include <BulletSoftBody/btSoftBodyRigidBodyCollisionConfiguration.h>
@@ -13,8 +13,8 @@
 #include <cstring>
 #include <limits>
 
+#include <drench/scene/simulation.hpp>
 #include "bullet_test_helpers.hpp"
-#include "scene/simulation.hpp"
 
 namespace drench::bullet {
 namespace {

@@ -8,9 +8,9 @@
 #include <cstdio>
 #include <string>
 
-#include "bullet_adapter/bullet_cloth.hpp"
-#include "common/triangle_geometry.hpp"
-#include "scene/simulation.hpp"
+#include <drench/bullet/bullet_cloth.hpp>
+#include <drench/common/triangle_geometry.hpp>
+#include <drench/scene/simulation.hpp>
 
 namespace drench {
 namespace {

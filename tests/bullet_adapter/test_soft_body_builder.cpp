@@ -1,7 +1,7 @@
 // The soft bodies the adapter builds from ClothSettings: topology, masses, pins, and the two builders that
 // replace Bullet helpers with quadratic memory, compared link by link with those helpers.
 
-#include "bullet_adapter/soft_body_builder.hpp"
+#include <drench/bullet/soft_body_builder.hpp>
 
 #include <BulletSoftBody/btSoftBodyHelpers.h>
 #include <gtest/gtest.h>

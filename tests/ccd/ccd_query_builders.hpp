@@ -5,7 +5,7 @@
 #include <array>
 #include <random>
 
-#include "ccd/point_triangle_ccd.hpp"
+#include <drench/ccd/point_triangle_ccd.hpp>
 
 namespace drench::ccd::test {
 

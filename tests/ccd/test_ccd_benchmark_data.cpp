@@ -6,9 +6,9 @@
 #include <map>
 #include <string>
 
-#include "ccd/ccd_exact_reference.hpp"
-#include "ccd/ccd_query_file.hpp"
-#include "ccd/point_triangle_ccd.hpp"
+#include <drench/ccd/ccd_exact_reference.hpp>
+#include <drench/ccd/ccd_query_file.hpp>
+#include <drench/ccd/point_triangle_ccd.hpp>
 #include "ccd_test_data.hpp"
 
 namespace drench::ccd {

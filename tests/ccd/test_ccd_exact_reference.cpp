@@ -5,7 +5,7 @@
 #include <limits>
 #include <utility>
 
-#include "ccd/ccd_exact_reference.hpp"
+#include <drench/ccd/ccd_exact_reference.hpp>
 #include "ccd_query_builders.hpp"
 
 namespace drench::ccd {

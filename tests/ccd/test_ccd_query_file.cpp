@@ -1,4 +1,4 @@
-#include "ccd/ccd_query_file.hpp"
+#include <drench/ccd/ccd_query_file.hpp>
 
 #include <gtest/gtest.h>
 #include <unistd.h>
@@ -14,8 +14,8 @@
 #include <string>
 #include <vector>
 
+#include <drench/common/error.hpp>
 #include "ccd_test_data.hpp"
-#include "common/error.hpp"
 
 namespace drench::ccd {
 namespace {

@@ -8,8 +8,8 @@
 #include <limits>
 #include <string>
 
-#include "ccd/ccd_exact_reference.hpp"
-#include "ccd/point_triangle_ccd.hpp"
+#include <drench/ccd/ccd_exact_reference.hpp>
+#include <drench/ccd/point_triangle_ccd.hpp>
 #include "ccd_query_builders.hpp"
 
 namespace drench::ccd {

@@ -4,8 +4,8 @@
 #include <random>
 #include <vector>
 
-#include "coupling/cloth_mesh.hpp"
-#include "coupling/coupler.hpp"
+#include <drench/coupling/cloth_mesh.hpp>
+#include <drench/coupling/coupler.hpp>
 
 namespace drench::test {
 

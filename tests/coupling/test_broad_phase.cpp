@@ -7,7 +7,7 @@
 #include <memory>
 #include <random>
 
-#include "coupling/broad_phase.hpp"
+#include <drench/coupling/broad_phase.hpp>
 #include "coupling_fixtures.hpp"
 
 namespace drench {

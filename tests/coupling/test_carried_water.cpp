@@ -3,7 +3,7 @@
 
 #include <gtest/gtest.h>
 
-#include "coupling/carried_water.hpp"
+#include <drench/coupling/carried_water.hpp>
 #include "coupling_fixtures.hpp"
 
 namespace drench {

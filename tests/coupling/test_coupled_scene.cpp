@@ -6,8 +6,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include <drench/scene/simulation.hpp>
 #include "coupling_fixtures.hpp"
-#include "scene/simulation.hpp"
 
 namespace drench {
 namespace {

@@ -8,9 +8,9 @@
 #include <limits>
 #include <random>
 
-#include "ccd/ccd_exact_reference.hpp"
-#include "common/triangle_geometry.hpp"
-#include "coupling/coupler.hpp"
+#include <drench/ccd/ccd_exact_reference.hpp>
+#include <drench/common/triangle_geometry.hpp>
+#include <drench/coupling/coupler.hpp>
 #include "coupling_fixtures.hpp"
 
 namespace drench {

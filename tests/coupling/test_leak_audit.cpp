@@ -2,7 +2,7 @@
 
 #include <gtest/gtest.h>
 
-#include "coupling/leak_audit.hpp"
+#include <drench/coupling/leak_audit.hpp>
 #include "coupling_fixtures.hpp"
 
 namespace drench {

@@ -7,10 +7,10 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "common/error.hpp"
-#include "io/atomic_file.hpp"
-#include "io/ply_writer.hpp"
-#include "scene/frame_files.hpp"
+#include <drench/common/error.hpp>
+#include <drench/io/atomic_file.hpp>
+#include <drench/io/ply_writer.hpp>
+#include <drench/scene/frame_files.hpp>
 
 namespace drench {
 namespace {

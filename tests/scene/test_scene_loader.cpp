@@ -1,4 +1,4 @@
-#include "scene/scene_loader.hpp"
+#include <drench/scene/scene_loader.hpp>
 
 #include <gtest/gtest.h>
 #include <unistd.h>
@@ -10,7 +10,7 @@
 #include <limits>
 #include <string>
 
-#include "common/error.hpp"
+#include <drench/common/error.hpp>
 
 namespace drench {
 namespace {

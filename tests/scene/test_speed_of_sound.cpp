@@ -5,7 +5,7 @@
 
 #include <cmath>
 
-#include "scene/simulation.hpp"
+#include <drench/scene/simulation.hpp>
 
 namespace drench {
 namespace {

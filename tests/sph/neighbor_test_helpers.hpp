@@ -6,7 +6,7 @@
 #include <algorithm>
 #include <random>
 
-#include "sph/neighbor_search.hpp"
+#include <drench/sph/neighbor_search.hpp>
 
 namespace drench::testing {
 

@@ -5,8 +5,8 @@
 #include <string>
 #include <vector>
 
-#include "scene/scene_loader.hpp"
-#include "scene/simulation.hpp"
+#include <drench/scene/scene_loader.hpp>
+#include <drench/scene/simulation.hpp>
 
 namespace drench::testing {
 

@@ -3,7 +3,7 @@
 #include <cmath>
 #include <random>
 
-#include "sph/cubic_spline_kernel.hpp"
+#include <drench/sph/cubic_spline_kernel.hpp>
 
 namespace drench {
 namespace {

@@ -4,8 +4,8 @@
 #include <cmath>
 #include <set>
 
-#include "scene/simulation.hpp"
-#include "sph/emitters.hpp"
+#include <drench/scene/simulation.hpp>
+#include <drench/sph/emitters.hpp>
 
 namespace drench {
 namespace {

@@ -1,10 +1,11 @@
-// The pair loops over packed points (src/sph/fluid_context.cpp, XSPH in src/sph/forces/viscosity.cpp) read
-// eight (densities, XSPH) or four (pressure) neighbors at a time and transpose them in registers. They must
-// give the textbook sums: SPH density (Akinci et al. 2012 eq. 6), symmetric pressure acceleration (eq. 10)
-// and XSPH (Monaghan 1989), written here pair by pair with Eigen, for every neighbor count modulo eight, and
-// with a last group that ends the list (padded with copies, not the next particle's entries). The eight-lane
-// loops have two group types (two vectors of four doubles in the AVX2 copy, one of eight in the others); the
-// public functions run the one of this CPU's copy, so a last test runs both and requires the same bits.
+// The pair loops over packed points (src/drench/sph/fluid_context.cpp, XSPH in
+// src/drench/sph/forces/viscosity.cpp) read eight (densities, XSPH) or four (pressure) neighbors at a time
+// and transpose them in registers. They must give the textbook sums: SPH density (Akinci et al. 2012 eq. 6),
+// symmetric pressure acceleration (eq. 10) and XSPH (Monaghan 1989), written here pair by pair with Eigen,
+// for every neighbor count modulo eight, and with a last group that ends the list (padded with copies, not
+// the next particle's entries). The eight-lane loops have two group types (two vectors of four doubles in the
+// AVX2 copy, one of eight in the others); the public functions run the one of this CPU's copy, so a last test
+// runs both and requires the same bits.
 
 #include <gtest/gtest.h>
 
@@ -15,11 +16,11 @@
 #include <utility>
 #include <vector>
 
+#include <drench/sph/float_lanes.hpp>
+#include <drench/sph/fluid_context.hpp>
+#include <drench/sph/forces/viscosity.hpp>
+#include <drench/sph/packed_lanes.hpp>
 #include "neighbor_test_helpers.hpp"
-#include "sph/float_lanes.hpp"
-#include "sph/fluid_context.hpp"
-#include "sph/forces/viscosity.hpp"
-#include "sph/packed_lanes.hpp"
 
 namespace drench {
 namespace {

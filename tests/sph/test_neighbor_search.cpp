@@ -5,9 +5,9 @@
 #include <limits>
 #include <random>
 
+#include <drench/sph/candidate_scan.hpp>
+#include <drench/sph/neighbor_search.hpp>
 #include "neighbor_test_helpers.hpp"
-#include "sph/candidate_scan.hpp"
-#include "sph/neighbor_search.hpp"
 
 namespace drench {
 namespace {

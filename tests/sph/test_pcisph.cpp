@@ -7,9 +7,9 @@
 #include <algorithm>
 #include <optional>
 
-#include "scene/scene_config.hpp"
-#include "sph/emitters.hpp"
-#include "sph/fluid_solver.hpp"
+#include <drench/scene/scene_config.hpp>
+#include <drench/sph/emitters.hpp>
+#include <drench/sph/fluid_solver.hpp>
 
 namespace drench {
 namespace {

@@ -12,10 +12,10 @@
 #include <unordered_map>
 #include <utility>
 
-#include "scene/scene_config.hpp"
-#include "sph/boundary_sampling.hpp"
-#include "sph/emitters.hpp"
-#include "sph/fluid_solver.hpp"
+#include <drench/scene/scene_config.hpp>
+#include <drench/sph/boundary_sampling.hpp>
+#include <drench/sph/emitters.hpp>
+#include <drench/sph/fluid_solver.hpp>
 
 namespace drench {
 namespace {

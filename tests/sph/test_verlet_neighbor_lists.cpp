@@ -5,8 +5,8 @@
 #include <numeric>
 #include <random>
 
+#include <drench/sph/verlet_neighbor_lists.hpp>
 #include "neighbor_test_helpers.hpp"
-#include "sph/verlet_neighbor_lists.hpp"
 
 namespace drench {
 namespace {

@@ -1,0 +1,205 @@
+#include <drench/bullet/bullet_cloth.hpp>
+
+#include <BulletSoftBody/btSoftBody.h>
+#include <BulletSoftBody/btSoftBodyRigidBodyCollisionConfiguration.h>
+#include <BulletSoftBody/btSoftRigidDynamicsWorld.h>
+#include <btBulletDynamicsCommon.h>
+
+#include <cassert>
+#include <stdexcept>
+#include <string>
+
+#include <drench/bullet/soft_body_builder.hpp>
+#include <drench/common/error.hpp>
+
+namespace drench::bullet {
+
+/// Everything an owned cloth needs, in construction order; destroyed in reverse.
+struct BulletCloth::OwnedWorld {
+  btSoftBodyRigidBodyCollisionConfiguration configuration;
+  btCollisionDispatcher dispatcher{&configuration};
+  btDbvtBroadphase broadphase;
+  btSequentialImpulseConstraintSolver solver;
+  btSoftRigidDynamicsWorld world{&dispatcher, &broadphase, &solver, &configuration};
+  std::unique_ptr<btSoftBody> body;
+
+  ~OwnedWorld() {
+    if (body) world.removeSoftBody(body.get());
+  }
+};
+
+BulletCloth::BulletCloth(btSoftBody& body, btSoftRigidDynamicsWorld* world) : m_body(&body), m_world(world) {
+  read_topology();
+}
+
+BulletCloth::BulletCloth(const ClothSettings& settings, const Vec3& gravity) {
+  if (!gravity.allFinite()) {
+    throw SceneError("gravity must be finite, got (" + format_number(gravity.x()) + ", " +
+                     format_number(gravity.y()) + ", " + format_number(gravity.z()) + ")");
+  }
+  m_owned = std::make_unique<OwnedWorld>();
+  btSoftRigidDynamicsWorld& world = m_owned->world;
+  // Soft bodies ignore world.setGravity and take worldInfo.m_gravity (default (0, -10, 0)); rigid bodies the
+  // other way round. Set both.
+  world.setGravity(to_bt(gravity));
+  // (The world's constructor already gave worldInfo its broadphase, dispatcher and sparse SDF.)
+  btSoftBodyWorldInfo& info = world.getWorldInfo();
+  info.m_gravity = to_bt(gravity);
+
+  m_owned->body = create_cloth_body(info, settings);
+  m_owned->body->setActivationState(DISABLE_DEACTIVATION);
+  world.addSoftBody(m_owned->body.get());
+  m_body = m_owned->body.get();
+  m_substeps = settings.substeps;
+  m_world = &world;
+  read_topology();
+}
+
+BulletCloth::~BulletCloth() {
+  restore_masses();  // an attached body outlives us: it keeps its own masses
+}
+
+void BulletCloth::read_topology() {
+  const btSoftBody& body = *m_body;
+  const int m = body.m_nodes.size();
+  m_mesh.positions_t0.resize(m);
+  for (int i = 0; i < m; ++i)
+    m_mesh.positions_t0[i] = to_vec3(body.m_nodes[i].m_x);
+  m_mesh.positions_t1 = m_mesh.positions_t0;
+  m_predicted = m_mesh.positions_t0;
+  m_mesh.triangles.resize(body.m_faces.size());
+  for (int f = 0; f < body.m_faces.size(); ++f) {
+    for (int k = 0; k < 3; ++k)
+      m_mesh.triangles[f][k] = static_cast<Index>(node_index(body, body.m_faces[f].m_n[k]));
+  }
+  read_inverse_masses();
+}
+
+void BulletCloth::read_inverse_masses() {
+  const btSoftBody& body = *m_body;
+  m_mesh.inverse_masses.resize(body.m_nodes.size());
+  for (int i = 0; i < body.m_nodes.size(); ++i)
+    m_mesh.inverse_masses[i] = body.m_nodes[i].m_im;
+}
+
+void BulletCloth::begin_step() {
+  restore_masses();  // carried masses set for a step that never ran are not the cloth's
+  const btSoftBody& body = *m_body;
+  if (static_cast<std::size_t>(body.m_nodes.size()) != m_mesh.node_count() ||
+      static_cast<std::size_t>(body.m_faces.size()) != m_mesh.triangle_count()) {
+    read_topology();
+  } else {
+    read_inverse_masses();
+  }
+  for (int i = 0; i < body.m_nodes.size(); ++i)
+    m_mesh.positions_t0[i] = to_vec3(body.m_nodes[i].m_x);
+}
+
+void BulletCloth::apply_impulses(const Vec3Array& impulses) {
+  btSoftBody& body = *m_body;
+  if (impulses.size() != static_cast<std::size_t>(body.m_nodes.size())) {
+    throw std::invalid_argument("BulletCloth::apply_impulses: " + std::to_string(impulses.size()) +
+                                " impulses for " + std::to_string(body.m_nodes.size()) + " nodes");
+  }
+  for (int i = 0; i < body.m_nodes.size(); ++i) {
+    btSoftBody::Node& node = body.m_nodes[i];
+    node.m_v += to_bt(impulses[i]) * node.m_im;
+  }
+}
+
+void BulletCloth::set_carried_masses(const ScalarArray& carried) {
+  btSoftBody& body = *m_body;
+  if (carried.size() != static_cast<std::size_t>(body.m_nodes.size())) {
+    throw std::invalid_argument("BulletCloth::set_carried_masses: " + std::to_string(carried.size()) +
+                                " masses for " + std::to_string(body.m_nodes.size()) + " nodes");
+  }
+  restore_masses();
+  for (int i = 0; i < body.m_nodes.size(); ++i) {
+    btSoftBody::Node& node = body.m_nodes[i];
+    if (!(node.m_im > 0.0) || !(carried[i] > 0.0)) continue;
+    m_saved_inverse_masses.emplace_back(i, node.m_im);
+    node.m_im = 1.0 / (1.0 / node.m_im + carried[i]);
+  }
+  if (!m_saved_inverse_masses.empty()) body.updateLinkConstants();
+}
+
+void BulletCloth::restore_masses() {
+  if (m_saved_inverse_masses.empty()) return;
+  for (const auto& [i, im] : m_saved_inverse_masses)
+    m_body->m_nodes[i].m_im = im;
+  m_saved_inverse_masses.clear();
+  m_body->updateLinkConstants();
+}
+
+void BulletCloth::step(double dt) {
+  assert(dt > 0.0);
+  if (m_world != nullptr) {
+    // maxSubSteps 0: exactly one step of the given length each time (no accumulator, no interpolation).
+    for (int k = 0; k < m_substeps; ++k)
+      m_world->stepSimulation(dt / m_substeps, 0);
+  }
+  capture_end();
+}
+
+void BulletCloth::capture_end() {
+  restore_masses();
+  const btSoftBody& body = *m_body;
+  assert(static_cast<std::size_t>(body.m_nodes.size()) == m_mesh.node_count());
+  m_predicted.resize(body.m_nodes.size());
+  for (int i = 0; i < body.m_nodes.size(); ++i)
+    m_predicted[i] = to_vec3(body.m_nodes[i].m_x);
+  m_mesh.positions_t1 = m_predicted;
+}
+
+void BulletCloth::end_step(double dt) {
+  assert(dt > 0.0);
+  btSoftBody& body = *m_body;
+  assert(static_cast<std::size_t>(body.m_nodes.size()) == m_mesh.node_count());
+  bool moved = false;
+  for (int i = 0; i < body.m_nodes.size(); ++i) {
+    Vec3& corrected = m_mesh.positions_t1[i];
+    const Vec3& predicted = m_predicted[i];
+    if (corrected == predicted) continue;
+    btSoftBody::Node& node = body.m_nodes[i];
+    if (!corrected.allFinite()) {
+      ++m_non_finite;
+      corrected = predicted;
+      continue;
+    }
+    if (!(node.m_im > 0.0)) {
+      ++m_ignored_pinned;
+      corrected = predicted;
+      continue;
+    }
+    const Vec3 dv = (corrected - predicted) / dt;
+    node.m_x = to_bt(corrected);
+    node.m_v += to_bt(dv);
+    moved = true;
+  }
+  if (moved) {
+    body.updateNormals();
+    body.activate();
+  }
+}
+
+Vec3Array BulletCloth::velocities() const {
+  const btSoftBody& body = *m_body;
+  Vec3Array v(body.m_nodes.size());
+  for (int i = 0; i < body.m_nodes.size(); ++i)
+    v[i] = to_vec3(body.m_nodes[i].m_v);
+  return v;
+}
+
+double BulletCloth::total_mass() const {
+  return m_body->getTotalMass();
+}
+
+std::unique_ptr<ClothEngine> make_bullet_cloth_engine(const ClothSettings& settings, const Vec3& gravity) {
+  return std::make_unique<BulletCloth>(settings, gravity);
+}
+
+ClothEngineFactory cloth_engine_factory() {
+  return &make_bullet_cloth_engine;
+}
+
+}  // namespace drench::bullet

@@ -1,0 +1,43 @@
+#pragma once
+/// Bullet's vectors to drench's and back, and the check that Bullet's headers are compiled in the precision
+/// drench::bullet was built with. Every header of the adapter includes this one, so a translation unit that
+/// sees Bullet's headers in the other precision fails to compile instead of linking silently against
+/// libraries whose btScalar differs.
+
+#include <LinearMath/btScalar.h>
+#include <LinearMath/btVector3.h>
+
+#include <drench/common/types.hpp>
+
+#ifndef DRENCH_BULLET_DOUBLE
+#error "DRENCH_BULLET_DOUBLE is not defined: link the CMake target drench::bullet (or use drench-bullet.pc)"
+#endif
+
+#if DRENCH_BULLET_DOUBLE
+static_assert(
+    sizeof(btScalar) == sizeof(double),
+    "drench::bullet was built with double-precision Bullet (DRENCH_BULLET_PRECISION=double), but "
+    "Bullet's headers are compiled here in single precision: add -DBT_USE_DOUBLE_PRECISION (linking "
+    "drench::bullet, or pkg-config bullet-float64, does), or rebuild drench with "
+    "-DDRENCH_BULLET_PRECISION=single");
+#else
+static_assert(sizeof(btScalar) == sizeof(float),
+              "drench::bullet was built with single-precision Bullet (DRENCH_BULLET_PRECISION=single), but "
+              "Bullet's headers are compiled here with BT_USE_DOUBLE_PRECISION: drop that define, or rebuild "
+              "drench with -DDRENCH_BULLET_PRECISION=double");
+#endif
+
+namespace drench::bullet {
+
+/// Exact in both precisions: a float widens to a double without rounding.
+inline Vec3 to_vec3(const btVector3& v) {
+  return Vec3(v.x(), v.y(), v.z());
+}
+
+/// Exact with double Bullet; with float Bullet each coordinate rounds to the nearest float (a relative error
+/// of at most 2^-24), which is why BulletCloth reads back what it wrote before the leak audit sees it.
+inline btVector3 to_bt(const Vec3& v) {
+  return btVector3(static_cast<btScalar>(v.x()), static_cast<btScalar>(v.y()), static_cast<btScalar>(v.z()));
+}
+
+}  // namespace drench::bullet

@@ -1,0 +1,133 @@
+#include <drench/bullet/coupled_world.hpp>
+
+#include <BulletSoftBody/btSoftBody.h>
+#include <BulletSoftBody/btSoftRigidDynamicsWorld.h>
+
+#include <algorithm>
+#include <cassert>
+#include <cmath>
+
+#include <drench/common/error.hpp>
+#include <drench/common/stopwatch.hpp>
+#include <drench/scene/simulation.hpp>
+#include <drench/sph/boundary_sampling.hpp>
+
+namespace drench::bullet {
+
+namespace {
+
+std::string format_vec3(const Vec3& v) {
+  return "(" + format_number(v.x()) + ", " + format_number(v.y()) + ", " + format_number(v.z()) + ")";
+}
+
+void check_scene(const SceneConfig& scene) {
+  if (!(scene.time.dt > 0.0) || !std::isfinite(scene.time.dt)) {
+    throw SceneError("time.dt must be > 0 and finite, got " + format_number(scene.time.dt) + " (" +
+                     scene.source + ")");
+  }
+  if (!scene.gravity.allFinite()) {
+    throw SceneError("gravity must be finite, got " + format_vec3(scene.gravity) + " (" + scene.source + ")");
+  }
+}
+
+std::unique_ptr<BulletCloth> attach(btSoftRigidDynamicsWorld& world, btSoftBody& cloth,
+                                    const SceneConfig& scene) {
+  check_scene(scene);
+  const Vec3 soft_gravity = to_vec3(world.getWorldInfo().m_gravity);
+  // Soft bodies fall with worldInfo.m_gravity, which world.setGravity does not touch (Bullet's default is
+  // (0, -10, 0)); a fluid and a cloth under different gravity would drift apart at rest.
+  if ((soft_gravity - scene.gravity).norm() > 1e-12 * std::max(1.0, scene.gravity.norm())) {
+    throw SceneError("gravity " + format_vec3(scene.gravity) + " (" + scene.source +
+                     ") differs from the Bullet world's soft-body gravity getWorldInfo().m_gravity " +
+                     format_vec3(soft_gravity) +
+                     "; set world.getWorldInfo().m_gravity to the scene's gravity");
+  }
+  const btSoftBodyArray& bodies = world.getSoftBodyArray();
+  if (bodies.findLinearSearch(&cloth) == bodies.size()) {
+    throw SceneError("the cloth soft body is not in the Bullet world: call world.addSoftBody(cloth) first");
+  }
+  return std::make_unique<BulletCloth>(cloth, &world);
+}
+
+std::unique_ptr<BulletCloth> own(const SceneConfig& scene) {
+  check_scene(scene);
+  if (!scene.cloth) {
+    throw SceneError("cloth: the scene has none, and no Bullet cloth was given to couple with (" +
+                     scene.source + ")");
+  }
+  try {
+    return std::make_unique<BulletCloth>(*scene.cloth, scene.gravity);
+  } catch (const SceneError& e) {
+    throw SceneError(std::string(e.what()) + " (" + scene.source + ")");
+  }
+}
+
+/// a - b for the per-step figures of a report, from the simulation's running sums.
+CouplingStepStats difference(const CouplingStepStats& a, const CouplingStepStats& b) {
+  CouplingStepStats d;
+  d.contacts = a.contacts - b.contacts;
+  d.ccd_impacts = a.ccd_impacts - b.ccd_impacts;
+  d.ccd_iterations = a.ccd_iterations - b.ccd_iterations;
+  d.failsafe_activations = a.failsafe_activations - b.failsafe_activations;
+  d.obstacle_stops = a.obstacle_stops - b.obstacle_stops;
+  d.slip_sum_mps = a.slip_sum_mps - b.slip_sum_mps;
+  d.vertical_impulse_on_cloth = a.vertical_impulse_on_cloth - b.vertical_impulse_on_cloth;
+  d.seconds_repulsion = a.seconds_repulsion - b.seconds_repulsion;
+  d.seconds_ccd = a.seconds_ccd - b.seconds_ccd;
+  return d;
+}
+
+LeakAuditStats difference(const LeakAuditStats& a, const LeakAuditStats& b) {
+  LeakAuditStats d;
+  d.leaks = a.leaks - b.leaks;
+  d.pairs = a.pairs - b.pairs;
+  d.exact_checks = a.exact_checks - b.exact_checks;
+  d.seconds = a.seconds - b.seconds;
+  return d;
+}
+
+}  // namespace
+
+CoupledWorld::CoupledWorld(btSoftRigidDynamicsWorld& world, btSoftBody& cloth, const SceneConfig& scene)
+    : CoupledWorld(attach(world, cloth, scene), scene) {}
+
+CoupledWorld::CoupledWorld(const SceneConfig& scene) : CoupledWorld(own(scene), scene) {}
+
+CoupledWorld::CoupledWorld(std::unique_ptr<BulletCloth> cloth, const SceneConfig& scene)
+    : m_cloth(cloth.get()) {
+  m_simulation = std::make_unique<Simulation>(scene, std::move(cloth));
+}
+
+CoupledWorld::~CoupledWorld() = default;
+
+CoupledStepReport CoupledWorld::step(double dt) {
+  assert(dt > 0.0);
+  CoupledStepReport report;
+  Simulation& sim = *m_simulation;
+  const CouplingStepStats coupling_before = sim.coupling_stats();
+  const LeakAuditStats leaks_before = sim.leak_stats();
+  const std::int64_t created_before = sim.created();
+  const std::int64_t removed_before = sim.removed();
+  const double emit_before = sim.emit_seconds();
+  const double fluid_before = sim.fluid().statistics().timings_s.total;
+  const double cloth_before = sim.cloth_seconds();
+  const double coupling_before_s = sim.coupling_seconds() + leaks_before.seconds;
+  {
+    ScopedTimer total(report.seconds.total);
+    report.fluid = sim.step(dt);
+  }
+  report.non_finite_node = sim.non_finite_cloth_node();
+  report.coupling = sim.last_coupling_status();
+  report.coupling_stats = difference(sim.coupling_stats(), coupling_before);
+  report.leak_stats = difference(sim.leak_stats(), leaks_before);
+  report.coupled = sim.config().has_effect("coupling") && report.ok();
+  report.emitted = static_cast<std::size_t>(sim.created() - created_before);
+  report.removed = static_cast<std::size_t>(sim.removed() - removed_before);
+  report.seconds.emit = sim.emit_seconds() - emit_before;
+  report.seconds.fluid = sim.fluid().statistics().timings_s.total - fluid_before;
+  report.seconds.cloth = sim.cloth_seconds() - cloth_before;
+  report.seconds.coupling = sim.coupling_seconds() + sim.leak_stats().seconds - coupling_before_s;
+  return report;
+}
+
+}  // namespace drench::bullet

@@ -1,0 +1,95 @@
+#pragma once
+/// Builds a Bullet soft body for cloth from ClothSettings (docs/scenes.md, `cloth`): a regular patch from
+/// btSoftBodyHelpers::CreatePatch or a triangle mesh from an OBJ file, with node masses from the area
+/// density, pinned nodes, stretch stiffness, bending links, damping and a small collision margin.
+
+#include <BulletSoftBody/btSoftBody.h>
+
+#include <memory>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <drench/bullet/bullet_conversions.hpp>
+#include <drench/coupling/cloth_engine.hpp>
+#include <drench/coupling/cloth_mesh.hpp>
+
+namespace drench::bullet {
+
+/// Collision margin of the soft bodies the adapter builds (unit: m). Bullet's default, 0.25 m, is almost the
+/// size of the default patch: rigid bodies would be stopped a quarter metre from the cloth. The fluid never
+/// sees this margin; the coupling has its own thickness (CouplingSettings::cloth_thickness).
+inline constexpr double CLOTH_COLLISION_MARGIN = 0.005;
+
+/// A triangle mesh as read from a file.
+struct TriangleMesh {
+  Vec3Array positions;              ///< M vertices (unit: m)
+  std::vector<Triangle> triangles;  ///< F, indices < M
+};
+
+/// Throws SceneError naming the first field of `settings` out of its range (the ranges are those documented
+/// in coupling/cloth_engine.hpp), as `cloth.<field> must be <range>, got <value>`.
+void validate_cloth_settings(const ClothSettings& settings);
+
+/// Reads an OBJ file with tinyobjloader, polygons triangulated (quads along a diagonal, larger polygons as
+/// fans), every object of the file in one mesh; materials are not read. Vertices that no face uses are
+/// dropped; the others keep their order. Lines and points are ignored. The text is checked first for what
+/// tinyobjloader 2.0rc10 accepts silently: a coordinate such as "nan" (read as 0) and a face of fewer than 3
+/// vertices (dropped).
+/// @throws SceneError naming the file (and the line where there is one): it cannot be read or parsed, a
+///         coordinate is not a finite number, a face has fewer than 3 vertices or is not a triangle after
+///         triangulation, an index is out of range, a face repeats a vertex or has zero area, no faces.
+TriangleMesh load_obj_mesh(const std::string& path);
+
+/// A soft body with one node per vertex (mass 1 each, to be set), one face per triangle and one link per
+/// edge, built exactly as btSoftBodyHelpers::CreateFromTriMesh(world_info, ..., randomizeConstraints = true)
+/// builds it (the tests compare them link by link). That helper keeps a vertices x vertices table of booleans
+/// (2.5 GB for 50K vertices); this one keeps a hash set of edges.
+/// @param mesh  valid: indices < M, no repeated index in a triangle
+std::unique_ptr<btSoftBody> create_from_triangles(btSoftBodyWorldInfo& world_info, const TriangleMesh& mesh);
+
+/// Appends a bending link, made of `material`, between every two nodes two links apart; the same links in the
+/// same order as btSoftBody::generateBendingConstraints(2, material), which fills a nodes x nodes table of
+/// distances first (42 MB and 0.14 s for the 57 x 57 patch, 683 MB and 3.8 s for 113 x 113, 10 GB for
+/// 225 x 225; measured). This one visits the neighbours of neighbours: O(nodes x degree^2).
+/// @return the number of links appended
+int append_bending_links(btSoftBody& body, btSoftBody::Material* material);
+
+/// Node masses of a cloth of uniform `area_density` (unit: kg/m^2): each triangle's mass, density x area,
+/// split equally among its three nodes (unit: kg). M entries; a node in no face gets 0.
+ScalarArray node_masses_from_area(const btSoftBody& body, double area_density);
+
+/// The nodes ClothSettings::pinned names: "none" (none), "corner" (the node with the smallest x + z) or
+/// "corners" (the nodes with the largest -x-z, x-z, -x+z and x+z: the four corners of a patch in the xz
+/// plane). Ties go to the lowest index. Sorted, without repeats.
+std::vector<int> pinned_nodes(const btSoftBody& body, const std::string& pinned);
+
+/// The soft body ClothSettings describes, in `world_info` (which must outlive it; it is not added to a
+/// world): patch or OBJ mesh, node masses from area density with the pinned nodes at mass 0, stretch
+/// stiffness kLST on the default material, bending links (when bending_stiffness > 0) on a second material,
+/// piterations, kDP, collision margin CLOTH_COLLISION_MARGIN, rigid-soft collision only (no self collision).
+/// The patch spans [center.x -+ size_x / 2] x [center.z -+ size_z / 2] at y = center.y, node (i, k) at index
+/// k nodes_x + i (i along x, k along z), with diagonal shear links; 2 (nodes_x - 1)(nodes_z - 1) triangles.
+/// @throws SceneError as validate_cloth_settings and load_obj_mesh
+std::unique_ptr<btSoftBody> create_cloth_body(btSoftBodyWorldInfo& world_info, const ClothSettings& settings);
+
+/// Sets node masses of a body that may already have moved, keeping every link's rest length. Use it instead
+/// of btSoftBody::setMass on a cloth that has stepped: setMass flags the body's constants for an update, and
+/// at its next step Bullet 3.24 (btSoftBody::updateConstants) resets every link's rest length to its current
+/// length, so a sagging cloth keeps its stretch for good, and a cloth whose masses change every step (a
+/// wetting cloth) creeps without bound (measured: a 21 x 21 patch, corners pinned, 0.25 kg added to the
+/// masses of its centre 25 nodes every step, dt 1 ms: a link 26 times its rest length after 0.5 s; 1.6 times
+/// with the rest lengths kept). Here only the link constants that depend on the masses (Link::m_c0) are
+/// recomputed.
+/// @param masses  (node index, mass) pairs; mass in kg, >= 0 and finite; 0 pins the node where it is (its
+///        velocity is set to zero: Bullet moves a node by its velocity whatever its mass)
+/// @throws std::invalid_argument naming the first pair whose index is out of range or whose mass is negative
+///         or not finite; nothing is changed then
+void set_node_masses(btSoftBody& body, const std::vector<std::pair<int, double>>& masses);
+
+/// Index of a node of `body` from a pointer into its node array (Node::index is never set by Bullet).
+inline int node_index(const btSoftBody& body, const btSoftBody::Node* node) {
+  return static_cast<int>(node - &body.m_nodes[0]);
+}
+
+}  // namespace drench::bullet

@@ -1,0 +1,473 @@
+#include <drench/ccd/point_triangle_ccd.hpp>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <string>
+
+#include <drench/ccd/ccd_exact_reference.hpp>
+#include <drench/common/triangle_geometry.hpp>
+
+// Method: a certified floating-point filter in Bernstein form, with the exact rational reference as fallback.
+//
+// Why this and not a plain cubic solver: Provot's solver (and the paper's eq. 6 solved in floating point)
+// finds the roots of the coplanarity cubic and then tests the point against the triangle with a tolerance;
+// both steps round, and the published counts on the benchmark this project is tested on are 16 + 12 missed
+// collisions. Tight-Inclusion (Wang et al. 2021) never misses but needs a tolerance and reports every near
+// miss. Here the decision is exact: with separation 0 and touching counted, it agrees with rational
+// arithmetic on every input.
+//
+// The contact condition at time t is: f(t) = 0 (eq. 6) and g_a, g_b, g_c >= 0 (the point inside the closed
+// triangle), with n = (b - a) x (c - a), f = (p - a).n and g_a = ((b - p) x (c - p)).n, etc. (g_a / |n|^2 is
+// the barycentric weight of a when the point is in the plane). The vertices move linearly, so the Bernstein
+// coefficients on [0, 1] of every difference are the differences at t0 and t1; f is a cubic and the g's are
+// quartics, built by Bernstein products (Farouki & Rajan 1988). Every coefficient carries a rigorous bound on
+// its rounding error (running error analysis, Higham 2002 sec. 3.3), so "all coefficients > their error"
+// proves the polynomial positive on the interval (convex hull property). The filter walks [0, 1] left to
+// right, halving intervals by de Casteljau's algorithm:
+//   - f certainly one-signed, or some g certainly negative: no contact in the interval, skip it;
+//   - f certainly changes sign between the ends and every g certainly positive: a contact, the earliest one
+//   since
+//     everything to the left was skipped; halve until the interval is narrower than the toi tolerance;
+//   - neither: halve, until the interval budget runs out; then the exact reference decides from that time on.
+// The fallback takes the queries that are degenerate or within rounding of degenerate: contact exactly on an
+// edge or a vertex, a tangential (double) root, motion inside the triangle's plane, zero-area triangles,
+// roots exactly at t = 0 or 1. Those are where floating-point solvers miss (Brochu, Edwards, Bridson 2012
+// make the same observation and go exact everywhere; Wang et al. 2021 list them as the hard cases of their
+// benchmark).
+
+namespace drench::ccd {
+namespace {
+
+constexpr double kUnitRoundoff = 0x1p-53;
+// The error bounds are themselves computed in floating point; this factor and the absolute term cover the
+// roundings of that computation and any underflow (at most 2^-1075 per operation), with a wide margin. The
+// absolute term is far above the subnormal range on purpose: error terms are multiplied together, and a
+// subnormal operand or result costs ~100 cycles per operation on x86 (a microcode assist), which made the
+// filter four times slower. The price: values below ~1e-150 (lengths below ~1e-30 m) are left to the exact
+// reference.
+constexpr double kGrow = 1.0 + 0x1p-45;
+constexpr double kTiny = 0x1p-500;
+
+/// A computed value and a bound on its distance to the exact value.
+struct Ev {
+  double v;
+  double e;
+};
+
+inline Ev exact(double v) {
+  return {v, 0.0};
+}
+
+inline double bound(double terms, double result) {
+  return (terms + kUnitRoundoff * std::abs(result)) * kGrow + kTiny;
+}
+
+inline Ev operator+(Ev a, Ev b) {
+  const double s = a.v + b.v;
+  return {s, bound(a.e + b.e, s)};
+}
+
+inline Ev operator-(Ev a, Ev b) {
+  const double s = a.v - b.v;
+  return {s, bound(a.e + b.e, s)};
+}
+
+inline Ev operator*(Ev a, Ev b) {
+  const double m = a.v * b.v;
+  return {m, bound(std::abs(a.v) * b.e + std::abs(b.v) * a.e + a.e * b.e, m)};
+}
+
+/// Division by a small positive integer constant.
+inline Ev divide(Ev a, double d) {
+  const double q = a.v / d;
+  return {q, bound(a.e / d, q)};
+}
+
+/// Midpoint of two values: the de Casteljau step at 1/2.
+inline Ev midpoint(Ev a, Ev b) {
+  const double m = 0.5 * (a.v + b.v);
+  return {m, bound(0.5 * (a.e + b.e), m)};
+}
+
+using V3 = std::array<Ev, 3>;
+
+inline V3 operator+(const V3& a, const V3& b) {
+  return {a[0] + b[0], a[1] + b[1], a[2] + b[2]};
+}
+inline V3 half(const V3& a) {
+  return {divide(a[0], 2.0), divide(a[1], 2.0), divide(a[2], 2.0)};
+}
+
+inline V3 cross(const V3& a, const V3& b) {
+  return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
+}
+
+inline Ev dot(const V3& a, const V3& b) {
+  return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+}
+
+/// Difference y - x of two vertices as a linear vector polynomial: its Bernstein coefficients at t0 and t1.
+inline std::array<V3, 2> difference(const Vec3& x_t0, const Vec3& x_t1, const Vec3& y_t0, const Vec3& y_t1) {
+  std::array<V3, 2> d;
+  for (int k = 0; k < 3; ++k) {
+    d[0][k] = exact(y_t0[k]) - exact(x_t0[k]);
+    d[1][k] = exact(y_t1[k]) - exact(x_t1[k]);
+  }
+  return d;
+}
+
+/// Cross product of two linear vector polynomials: a quadratic, in Bernstein form.
+inline std::array<V3, 3> cross(const std::array<V3, 2>& u, const std::array<V3, 2>& w) {
+  return {cross(u[0], w[0]), half(cross(u[0], w[1]) + cross(u[1], w[0])), cross(u[1], w[1])};
+}
+
+/// Bernstein coefficients of a polynomial of degree N - 1 on the current interval.
+template <std::size_t N>
+using Bernstein = std::array<Ev, N>;
+
+/// Quadratic times linear (dot product): a cubic.
+inline Bernstein<4> dot(const std::array<V3, 3>& q, const std::array<V3, 2>& r) {
+  const Ev two_q1r0 = dot(q[1], r[0]) + dot(q[1], r[0]);
+  const Ev two_q1r1 = dot(q[1], r[1]) + dot(q[1], r[1]);
+  return {dot(q[0], r[0]), divide(two_q1r0 + dot(q[0], r[1]), 3.0), divide(dot(q[2], r[0]) + two_q1r1, 3.0),
+          dot(q[2], r[1])};
+}
+
+/// Quadratic times quadratic (dot product): a quartic.
+inline Bernstein<5> dot(const std::array<V3, 3>& q, const std::array<V3, 3>& s) {
+  const Ev q1s1 = dot(q[1], s[1]);
+  const Ev four_q1s1 = q1s1 + q1s1 + q1s1 + q1s1;
+  return {dot(q[0], s[0]), divide(dot(q[0], s[1]) + dot(q[1], s[0]), 2.0),
+          divide(dot(q[0], s[2]) + four_q1s1 + dot(q[2], s[0]), 6.0),
+          divide(dot(q[1], s[2]) + dot(q[2], s[1]), 2.0), dot(q[2], s[2])};
+}
+
+template <std::size_t N>
+bool certainly_positive(const Bernstein<N>& b) {
+  for (const Ev& c : b) {
+    if (!(c.v - c.e > 0.0)) return false;
+  }
+  return true;
+}
+
+template <std::size_t N>
+bool certainly_negative(const Bernstein<N>& b) {
+  for (const Ev& c : b) {
+    if (!(c.v + c.e < 0.0)) return false;
+  }
+  return true;
+}
+
+inline int certain_sign(const Ev& c) {
+  if (c.v - c.e > 0.0) return 1;
+  if (c.v + c.e < 0.0) return -1;
+  return 0;
+}
+
+/// de Casteljau at 1/2: the coefficients on the left and right halves.
+template <std::size_t N>
+void subdivide(const Bernstein<N>& b, Bernstein<N>& left, Bernstein<N>& right) {
+  Bernstein<N> work = b;
+  for (std::size_t level = 0; level < N; ++level) {
+    left[level] = work[0];
+    right[N - 1 - level] = work[N - 1 - level];
+    for (std::size_t k = 0; k + 1 + level < N; ++k)
+      work[k] = midpoint(work[k], work[k + 1]);
+  }
+}
+
+/// de Casteljau at the fraction r of the interval (r and 1 - r exact doubles).
+template <std::size_t N>
+void subdivide_at(const Bernstein<N>& b, double r, Bernstein<N>& left, Bernstein<N>& right) {
+  Bernstein<N> work = b;
+  for (std::size_t level = 0; level < N; ++level) {
+    left[level] = work[0];
+    right[N - 1 - level] = work[N - 1 - level];
+    for (std::size_t k = 0; k + 1 + level < N; ++k)
+      work[k] = exact(1.0 - r) * work[k] + exact(r) * work[k + 1];
+  }
+}
+
+// A split point must be exactly the double the Bernstein coefficients were subdivided at; deep enough into
+// [0, 1] a midpoint no longer fits in a double, and the filter hands over to the exact reference there.
+bool exact_split(double lo, double mid, double hi, double r) {
+  return lo < mid && mid < hi && mid - lo == r * (hi - lo) && hi - mid == (1.0 - r) * (hi - lo);
+}
+
+// When eq. 6 vanishes exactly at a midpoint (hand-built and symmetric scenes put roots at t = 1/2, 1/4, ...),
+// no error bound can certify its sign there, so the root's side is unknown. Splitting a little off the middle
+// instead puts the root strictly inside one half, where the sign change is certain.
+constexpr double kOffCentre = 63.0 / 128.0;
+
+/// Deepest level of halving; 2^-60 of the step is far below what a double time near 1 resolves anyway.
+constexpr int kMaxDepth = 60;
+
+/// The filter's polynomials on one interval [t_lo, t_hi] of the step.
+struct Span {
+  double t_lo, t_hi;
+  Bernstein<4> f;                 // coplanarity, eq. 6
+  std::array<Bernstein<5>, 3> g;  // inside tests of the vertices a, b, c
+
+  void split(Span& left, Span& right) const {
+    const double mid = 0.5 * (t_lo + t_hi);
+    left.t_lo = t_lo;
+    left.t_hi = mid;
+    right.t_lo = mid;
+    right.t_hi = t_hi;
+    subdivide(f, left.f, right.f);
+    for (int i = 0; i < 3; ++i)
+      subdivide(g[i], left.g[i], right.g[i]);
+  }
+};
+
+/// Coplanarity cubic (eq. 6) on [0, 1]; `n` receives the triangle normal's Bernstein coefficients.
+Bernstein<4> coplanarity(const VertexFaceQuery& q, std::array<V3, 3>& n) {
+  n = cross(difference(q.a_t0, q.a_t1, q.b_t0, q.b_t1), difference(q.a_t0, q.a_t1, q.c_t0, q.c_t1));
+  return dot(n, difference(q.a_t0, q.a_t1, q.p_t0, q.p_t1));
+}
+
+/// The inside tests on [0, 1], given the normal's coefficients.
+std::array<Bernstein<5>, 3> inside_tests(const VertexFaceQuery& q, const std::array<V3, 3>& n) {
+  const auto pa = difference(q.p_t0, q.p_t1, q.a_t0, q.a_t1);
+  const auto pb = difference(q.p_t0, q.p_t1, q.b_t0, q.b_t1);
+  const auto pc = difference(q.p_t0, q.p_t1, q.c_t0, q.c_t1);
+  return {dot(cross(pb, pc), n), dot(cross(pc, pa), n), dot(cross(pa, pb), n)};
+}
+
+template <std::size_t N>
+bool all_finite(const Bernstein<N>& b) {
+  for (const Ev& c : b) {
+    if (!std::isfinite(c.v) || !std::isfinite(c.e)) return false;
+  }
+  return true;
+}
+
+/// f divided by t (when f(0) = 0 exactly) or by 1 - t (when f(1) = 0), degree-elevated back to a cubic. The
+/// quotient has the sign of f inside (0, 1) and usually no zero at that end, so the filter can certify it
+/// there.
+Bernstein<4> deflate(const Bernstein<4>& b, bool at_end) {
+  const Ev three = exact(3.0);
+  const Ev three_halves = exact(1.5);
+  const std::array<Ev, 3> q = at_end ? std::array<Ev, 3>{b[0], three_halves * b[1], three * b[2]}
+                                     : std::array<Ev, 3>{three * b[1], three_halves * b[2], b[3]};
+  return {q[0], divide(q[0] + exact(2.0) * q[1], 3.0), divide(exact(2.0) * q[1] + q[2], 3.0), q[2]};
+}
+
+enum class Verdict { NO_CONTACT, CONTACT, UNDECIDED };
+
+Verdict classify(const Span& s) {
+  if (certainly_positive(s.f) || certainly_negative(s.f)) return Verdict::NO_CONTACT;
+  for (const auto& gi : s.g) {
+    if (certainly_negative(gi)) return Verdict::NO_CONTACT;
+  }
+  const int sign_lo = certain_sign(s.f.front());
+  const int sign_hi = certain_sign(s.f.back());
+  if (sign_lo * sign_hi < 0 && certainly_positive(s.g[0]) && certainly_positive(s.g[1]) &&
+      certainly_positive(s.g[2])) {
+    return Verdict::CONTACT;
+  }
+  return Verdict::UNDECIDED;
+}
+
+Vec3 at(const Vec3& x_t0, const Vec3& x_t1, double t) {
+  return (1.0 - t) * x_t0 + t * x_t1;
+}
+
+CcdResult contact_at(const VertexFaceQuery& q, double toi, CcdPath path) {
+  CcdResult r;
+  r.hit = true;
+  r.toi = std::clamp(toi, 0.0, 1.0);
+  r.path = path;
+  r.barycentric = closest_point_barycentric(at(q.p_t0, q.p_t1, r.toi), at(q.a_t0, q.a_t1, r.toi),
+                                            at(q.b_t0, q.b_t1, r.toi), at(q.c_t0, q.c_t1, r.toi));
+  return r;
+}
+
+CcdResult exact_from(const VertexFaceQuery& q, double t_from, const CcdSettings& settings) {
+  const ExactCcdResult exact = point_triangle_ccd_exact(q, t_from, settings.toi_tolerance);
+  if (!exact.hit) {
+    CcdResult r;
+    r.path = CcdPath::EXACT;
+    return r;
+  }
+  return contact_at(q, exact.toi_lower, CcdPath::EXACT);
+}
+
+/// The earliest contact in a span classified CONTACT: every g is positive on the whole span, so it is the
+/// first root of f there. Halves f alone (g stays positive on every sub-interval) until the span is narrower
+/// than the toi tolerance; hands over to the exact reference if rounding hides which half holds the first
+/// root. Bisection for the single root of a cubic that is certainly monotone on the span: point values
+/// suffice, in plain double with one error bound for all of them, so each step costs a dozen flops instead of
+/// a subdivision with error tracking. Returns false when rounding hides the sign at a bisection point.
+bool bisect_monotone(const Span& s, double toi_tolerance, double& toi) {
+  for (std::size_t i = 0; i + 1 < s.f.size(); ++i) {
+    if (certain_sign(s.f[i + 1] - s.f[i]) * certain_sign(s.f[1] - s.f[0]) <= 0) return false;
+  }
+  double max_error = 0.0;
+  double max_value = 0.0;
+  for (const Ev& c : s.f) {
+    max_error = std::max(max_error, c.e);
+    max_value = std::max(max_value, std::abs(c.v));
+  }
+  // de Casteljau at an exact r in [0, 1] is three levels of convex combinations (1 - r is exact for the
+  // dyadic r used here): each level adds at most 2 roundings of the largest coefficient.
+  const double bound = (max_error + 8.0 * kUnitRoundoff * max_value) * kGrow + kTiny;
+  const int sign_lo = certain_sign(s.f.front());
+  const double width = s.t_hi - s.t_lo;
+  double r_lo = 0.0;
+  double r_hi = 1.0;
+  while ((r_hi - r_lo) * width > 0.5 * toi_tolerance) {  // half: leaves room for the rounding below
+    const double r = 0.5 * (r_lo + r_hi);
+    if (!(r_lo < r && r < r_hi)) return false;
+    std::array<double, 4> b = {s.f[0].v, s.f[1].v, s.f[2].v, s.f[3].v};
+    for (int level = 3; level > 0; --level) {
+      for (int k = 0; k < level; ++k)
+        b[k] = (1.0 - r) * b[k] + r * b[k + 1];
+    }
+    if (std::abs(b[0]) <= bound) return false;
+    if ((b[0] > 0.0 ? 1 : -1) == sign_lo) {
+      r_lo = r;
+    } else {
+      r_hi = r;
+    }
+  }
+  // s.t_lo + r_lo * width may round up by an ulp or two; step down so toi stays a lower bound.
+  const double t = s.t_lo + r_lo * width;
+  toi = std::nextafter(std::nextafter(t, 0.0), 0.0);
+  toi = std::max(toi, s.t_lo);
+  return true;
+}
+
+CcdResult earliest_root(const VertexFaceQuery& q, const Span& s, const CcdSettings& settings) {
+  double toi = 0.0;
+  if (bisect_monotone(s, settings.toi_tolerance, toi)) return contact_at(q, toi, CcdPath::FILTER);
+  double lo = s.t_lo;
+  double hi = s.t_hi;
+  Bernstein<4> f = s.f;
+  while (hi - lo > settings.toi_tolerance) {
+    bool narrowed = false;
+    for (const double r : {0.5, kOffCentre}) {
+      Bernstein<4> left, right;
+      if (r == 0.5) {
+        subdivide(f, left, right);
+      } else {
+        subdivide_at(f, r, left, right);
+      }
+      const double mid = lo + r * (hi - lo);
+      if (!exact_split(lo, mid, hi, r)) break;
+      if (certainly_positive(left) || certainly_negative(left)) {
+        f = right;
+        lo = mid;
+      } else if (certain_sign(left.front()) * certain_sign(left.back()) < 0) {
+        f = left;
+        hi = mid;
+      } else if (certain_sign(left.back()) == 0) {
+        continue;  // eq. 6 is (nearly) zero at mid: try off centre
+      } else {
+        break;  // more than one root may lie in the left half
+      }
+      narrowed = true;
+      break;
+    }
+    if (!narrowed) return exact_from(q, lo, settings);
+  }
+  return contact_at(q, lo, CcdPath::FILTER);
+}
+
+}  // namespace
+
+void check_query_finite(const VertexFaceQuery& query) {
+  const Vec3* vertices[8] = {&query.p_t0, &query.a_t0, &query.b_t0, &query.c_t0,
+                             &query.p_t1, &query.a_t1, &query.b_t1, &query.c_t1};
+  static const char* const names[8] = {"p_t0", "a_t0", "b_t0", "c_t0", "p_t1", "a_t1", "b_t1", "c_t1"};
+  for (int v = 0; v < 8; ++v) {
+    for (int k = 0; k < 3; ++k) {
+      const double x = (*vertices[v])[k];
+      if (!std::isfinite(x)) {
+        throw InvalidQueryError("CCD query coordinate " + std::string(names[v]) + "." + "xyz"[k] +
+                                " is not finite, got " + format_number(x));
+      }
+    }
+  }
+}
+
+CcdResult point_triangle_ccd(const VertexFaceQuery& query, const CcdSettings& settings) {
+  check_query_finite(query);
+  // A point that starts on a vertex (a mesh vertex tested against its own triangle, or a particle resting on
+  // a node) touches at t = 0: decided by exact comparison, before any rounding.
+  const std::array<const Vec3*, 3> vertices_t0 = {&query.a_t0, &query.b_t0, &query.c_t0};
+  for (int i = 0; i < 3; ++i) {
+    if (query.p_t0 == *vertices_t0[i]) {
+      CcdResult r;
+      r.hit = true;
+      r.toi = 0.0;
+      r.barycentric[i] = 1.0;
+      return r;
+    }
+  }
+
+  Span root;
+  root.t_lo = 0.0;
+  root.t_hi = 1.0;
+  std::array<V3, 3> normal;
+  root.f = coplanarity(query, normal);
+  if (!all_finite(root.f)) return exact_from(query, 0.0, settings);  // overflow: only exact arithmetic helps
+  if (certainly_positive(root.f) || certainly_negative(root.f)) return CcdResult{};  // never coplanar
+  root.g = inside_tests(query, normal);
+  for (const auto& g : root.g) {
+    if (!all_finite(g)) return exact_from(query, 0.0, settings);
+  }
+
+  // A point exactly in the plane at t = 0 or t = 1 (resting contact, hand-built scenes) makes eq. 6 vanish at
+  // that end, which no rounding error bound can certify; exact signs decide, and f is divided by the root.
+  bool contact_at_end = false;    // the point is strictly inside the triangle at t = 1
+  bool undecided_at_end = false;  // the point is in the plane at t = 1, on the triangle's boundary or near it
+  for (const bool at_end : {false, true}) {
+    const int end = at_end ? 3 : 0;
+    const int g_end = at_end ? 4 : 0;
+    if (certain_sign(root.f[end]) != 0 || coplanarity_sign_exact(query, at_end) != 0) continue;
+    const bool inside = certain_sign(root.g[0][g_end]) > 0 && certain_sign(root.g[1][g_end]) > 0 &&
+                        certain_sign(root.g[2][g_end]) > 0;
+    const bool outside = certain_sign(root.g[0][g_end]) < 0 || certain_sign(root.g[1][g_end]) < 0 ||
+                         certain_sign(root.g[2][g_end]) < 0;
+    if (!at_end) {
+      if (inside) return contact_at(query, 0.0, CcdPath::FILTER);
+      if (!outside) return exact_from(query, 0.0, settings);  // on an edge or a vertex at t = 0
+    } else {
+      // Whatever happens at t = 1 matters only if nothing touches earlier: decided after the search.
+      contact_at_end = inside;
+      undecided_at_end = !inside && !outside;
+    }
+    root.f = deflate(root.f, at_end);
+  }
+
+  // Depth-first, left half first, so intervals are visited in time order. The stack holds at most one pending
+  // right half per level, so its size bounds the depth.
+  const int budget = std::max(settings.max_filter_intervals, 1);
+  std::array<Span, kMaxDepth + 1> stack;
+  std::array<int, kMaxDepth + 1> depth;
+  int top = 0;
+  stack[top] = root;
+  depth[top++] = 0;
+  for (int splits = 0; top > 0;) {
+    --top;
+    const Verdict verdict = classify(stack[top]);
+    if (verdict == Verdict::NO_CONTACT) continue;
+    if (verdict == Verdict::CONTACT) return earliest_root(query, stack[top], settings);
+    const Span s = stack[top];
+    const int d = depth[top];
+    const double mid = 0.5 * (s.t_lo + s.t_hi);
+    if (++splits > budget || d >= kMaxDepth || !exact_split(s.t_lo, mid, s.t_hi, 0.5)) {
+      return exact_from(query, s.t_lo, settings);
+    }
+    s.split(stack[top + 1], stack[top]);  // right half below, left half on top
+    depth[top++] = d + 1;
+    depth[top++] = d + 1;
+  }
+  if (contact_at_end) return contact_at(query, 1.0, CcdPath::FILTER);
+  if (undecided_at_end) return exact_from(query, 1.0, settings);
+  return CcdResult{};
+}
+
+}  // namespace drench::ccd

@@ -1,0 +1,199 @@
+#include <drench/coupling/broad_phase.hpp>
+
+#include <omp.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+
+#include <drench/common/key_index_table.hpp>
+
+namespace drench {
+namespace {
+
+/// Triangles binned into a uniform grid of cells about one triangle box in size: a particle looks only at the
+/// cells its swept box covers. Keys are hashed cell coordinates, sorted once per step; a hash collision only
+/// adds candidates, which the exact box test removes.
+class GridBroadPhase final : public TriangleBroadPhase {
+ public:
+  void find_pairs(const Vec3Array& particles_t0, const Vec3Array& particles_t1, const ClothMesh& cloth,
+                  double margin, const std::vector<std::uint8_t>* only,
+                  std::vector<std::pair<Index, Index>>& pairs) override {
+    pairs.clear();
+    const std::size_t f = cloth.triangles.size();
+    const std::size_t n = particles_t0.size();
+    if (f == 0 || n == 0) return;
+    if (!m_built_for.same_as_last(cloth)) bin_triangles(cloth);
+
+    collect_pairs(
+        particles_t0, particles_t1, margin, only, m_boxes,
+        [&](const Box3& box, std::vector<Index>& candidates) {
+          candidates.assign(m_everywhere.begin(), m_everywhere.end());
+          const bool binned = for_cells(box, [&](std::uint64_t key) {
+            const std::int64_t cell = m_cells.find(key);
+            if (cell < 0) return;
+            for (std::uint32_t e = m_cell_begin[cell]; e < m_cell_begin[cell + 1]; ++e)
+              candidates.push_back(m_entries[e].second);
+          });
+          if (!binned) {
+            candidates.resize(f);
+            for (std::size_t t = 0; t < f; ++t)
+              candidates[t] = static_cast<Index>(t);
+          }
+        },
+        pairs);
+  }
+
+ private:
+  void bin_triangles(const ClothMesh& cloth) {
+    const std::size_t f = cloth.triangles.size();
+    m_boxes.resize(f);
+    double extent_sum = 0.0;
+    for (std::size_t t = 0; t < f; ++t) {
+      m_boxes[t] = triangle_box(cloth, cloth.triangles[t], 0.0);
+      extent_sum += (m_boxes[t].hi - m_boxes[t].lo).maxCoeff();
+    }
+    m_cell = std::max(extent_sum / static_cast<double>(f), 1e-9);
+    m_entries.clear();
+    m_everywhere.clear();  // triangles too large for the grid: candidates of every particle
+    for (std::size_t t = 0; t < f; ++t) {
+      const bool binned = for_cells(m_boxes[t], [&](std::uint64_t key) {
+        m_entries.push_back({key, static_cast<Index>(t)});
+      });
+      if (!binned) m_everywhere.push_back(static_cast<Index>(t));
+    }
+    std::sort(m_entries.begin(), m_entries.end());
+    // Each distinct key's run of entries, found through a hash table: a binary search of all the entries
+    // per cell would dominate the grid's queries (README, "Coupling broad phase").
+    std::vector<std::uint64_t> keys;
+    m_cell_begin.clear();
+    for (std::size_t e = 0; e < m_entries.size(); ++e) {
+      if (e == 0 || m_entries[e].first != m_entries[e - 1].first) {
+        keys.push_back(m_entries[e].first);
+        m_cell_begin.push_back(static_cast<std::uint32_t>(e));
+      }
+    }
+    m_cell_begin.push_back(static_cast<std::uint32_t>(m_entries.size()));
+    m_cells.build(std::move(keys));
+  }
+
+  /// Visits the keys of the cells the box covers; returns false, visiting nothing, when they are too many (a
+  /// particle flying across the domain in one step), and the caller tests every triangle instead.
+  template <class Visit>
+  bool for_cells(const Box3& box, Visit&& visit) const {
+    const Eigen::Array3d lo = (box.lo / m_cell).array().floor();
+    const Eigen::Array3d hi = (box.hi / m_cell).array().floor();
+    const Eigen::Array3d count = hi - lo + 1.0;
+    if (!(count.prod() <= kMaxCellsPerBox)) return false;
+    for (double z = lo[2]; z <= hi[2]; z += 1.0) {
+      for (double y = lo[1]; y <= hi[1]; y += 1.0) {
+        for (double x = lo[0]; x <= hi[0]; x += 1.0)
+          visit(key(x, y, z));
+      }
+    }
+    return true;
+  }
+
+  static constexpr double kMaxCellsPerBox = 4096.0;
+
+  static std::uint64_t key(double x, double y, double z) {
+    const auto i = static_cast<std::uint64_t>(static_cast<std::int64_t>(x));
+    const auto j = static_cast<std::uint64_t>(static_cast<std::int64_t>(y));
+    const auto k = static_cast<std::uint64_t>(static_cast<std::int64_t>(z));
+    return (i * 73856093ULL) ^ (j * 19349663ULL) ^ (k * 83492791ULL);
+  }
+
+  double m_cell = 1.0;
+  std::vector<Box3> m_boxes;
+  std::vector<std::pair<std::uint64_t, Index>> m_entries;
+  KeyIndexTable m_cells;                    // the distinct keys of m_entries, ascending
+  std::vector<std::uint32_t> m_cell_begin;  // first entry of each distinct key; one extra end entry
+  std::vector<Index> m_everywhere;
+  TriangleBoxKey m_built_for;
+};
+
+}  // namespace
+
+bool TriangleBoxKey::same_as_last(const ClothMesh& cloth) {
+  if (m_valid && cloth.positions_t0 == m_positions_t0 && cloth.positions_t1 == m_positions_t1 &&
+      cloth.triangles == m_triangles) {
+    return true;
+  }
+  m_valid = true;
+  m_positions_t0 = cloth.positions_t0;
+  m_positions_t1 = cloth.positions_t1;
+  m_triangles = cloth.triangles;
+  return false;
+}
+
+Box3 particle_box(const Vec3& x_t0, const Vec3& x_t1, double margin) {
+  Box3 box;
+  box.extend(x_t0);
+  box.extend(x_t1);
+  box.grow(margin);
+  return box;
+}
+
+Box3 triangle_box(const ClothMesh& cloth, const Triangle& t, double margin) {
+  Box3 box;
+  for (Index v : t) {
+    box.extend(cloth.positions_t0[v]);
+    box.extend(cloth.positions_t1[v]);
+  }
+  box.grow(margin);
+  return box;
+}
+
+void collect_pairs(const Vec3Array& particles_t0, const Vec3Array& particles_t1, double margin,
+                   const std::vector<std::uint8_t>* only, const std::vector<Box3>& triangle_boxes,
+                   const std::function<void(const Box3& box, std::vector<Index>& candidates)>& propose,
+                   std::vector<std::pair<Index, Index>>& pairs) {
+  pairs.clear();
+  const std::size_t n = particles_t0.size();
+  const int threads = omp_get_max_threads();
+  std::vector<std::vector<std::pair<Index, Index>>> found(static_cast<std::size_t>(threads));
+#pragma omp parallel
+  {
+    std::vector<std::pair<Index, Index>>& mine = found[static_cast<std::size_t>(omp_get_thread_num())];
+    std::vector<Index> candidates;
+#pragma omp for schedule(static)
+    for (std::size_t p = 0; p < n; ++p) {
+      if (only && !(*only)[p]) continue;
+      const Box3 box = particle_box(particles_t0[p], particles_t1[p], 2.0 * margin);
+      candidates.clear();
+      propose(box, candidates);
+      std::sort(candidates.begin(), candidates.end());
+      candidates.erase(std::unique(candidates.begin(), candidates.end()), candidates.end());
+      for (Index t : candidates) {
+        if (box.overlaps(triangle_boxes[t])) mine.emplace_back(static_cast<Index>(p), t);
+      }
+    }
+  }
+  // Static scheduling hands out particles in blocks in thread order: concatenating keeps particle order.
+  for (const auto& part : found)
+    pairs.insert(pairs.end(), part.begin(), part.end());
+}
+
+void find_pairs_brute_force(const Vec3Array& particles_t0, const Vec3Array& particles_t1,
+                            const ClothMesh& cloth, double margin,
+                            std::vector<std::pair<Index, Index>>& pairs) {
+  pairs.clear();
+  std::vector<Box3> boxes;
+  for (const Triangle& t : cloth.triangles)
+    boxes.push_back(triangle_box(cloth, t, 0.0));
+  for (std::size_t p = 0; p < particles_t0.size(); ++p) {
+    const Box3 box = particle_box(particles_t0[p], particles_t1[p], 2.0 * margin);
+    for (std::size_t t = 0; t < boxes.size(); ++t) {
+      if (box.overlaps(boxes[t])) pairs.emplace_back(static_cast<Index>(p), static_cast<Index>(t));
+    }
+  }
+}
+
+std::unique_ptr<TriangleBroadPhase> make_broad_phase_fcl();  // broad_phase_fcl.cpp
+
+std::unique_ptr<TriangleBroadPhase> make_broad_phase(BroadPhaseKind kind) {
+  if (kind == BroadPhaseKind::FCL) return make_broad_phase_fcl();
+  return std::make_unique<GridBroadPhase>();
+}
+
+}  // namespace drench

@@ -1,0 +1,94 @@
+#pragma once
+/// Broad phase of the coupling (Huber et al. 2013 sec. 5 uses spatial hashing [THM*03]): which particles can
+/// touch which triangles during a step. Boxes are swept over the step (start and end positions) and grown by
+/// a margin, so the same candidates serve the proximity test at the start (sec. 3.1) and the CCD (sec. 3.3).
+/// Two boxes each grown by m overlap exactly when one grown by 2 m overlaps the other bare: the triangles'
+/// boxes are kept bare, so that one tree serves every margin.
+/// Two implementations behind one interface, measured side by side in bench/bench_coupling.cpp.
+
+#include <functional>
+#include <memory>
+#include <utility>
+#include <vector>
+
+#include <drench/common/types.hpp>
+#include <drench/coupling/cloth_mesh.hpp>
+#include <drench/coupling/coupling_settings.hpp>
+
+namespace drench {
+
+/// An axis-aligned box (unit: m).
+struct Box3 {
+  Vec3 lo = Vec3::Constant(std::numeric_limits<double>::infinity());
+  Vec3 hi = Vec3::Constant(-std::numeric_limits<double>::infinity());
+
+  void extend(const Vec3& p) {
+    lo = lo.cwiseMin(p);
+    hi = hi.cwiseMax(p);
+  }
+  void grow(double margin) {
+    lo.array() -= margin;
+    hi.array() += margin;
+  }
+  bool overlaps(const Box3& o) const {
+    return (lo.array() <= o.hi.array()).all() && (o.lo.array() <= hi.array()).all();
+  }
+};
+
+/// A particle's box over the step: x_t0 and x_t1 grown by `margin` (unit: m).
+Box3 particle_box(const Vec3& x_t0, const Vec3& x_t1, double margin);
+
+/// A triangle's box over the step: its nodes at both ends grown by `margin` (unit: m).
+Box3 triangle_box(const ClothMesh& cloth, const Triangle& t, double margin);
+
+/// The cloth a broad phase last built its triangle boxes for. Within one step the same cloth is queried many
+/// times (every fluid sub-step's obstacle and the carried water's search, every CCD round of a kinematic
+/// cloth); its boxes are rebuilt (FCL's tree refitted) only when it changed, not for every query.
+class TriangleBoxKey {
+ public:
+  /// True when `cloth` (both position sets, triangles) equals, bit for bit, that of the last call that
+  /// returned false; else remembers it and returns false.
+  bool same_as_last(const ClothMesh& cloth);
+
+ private:
+  bool m_valid = false;
+  Vec3Array m_positions_t0, m_positions_t1;
+  std::vector<Triangle> m_triangles;
+};
+
+/// What every broad phase shares, once: for each particle (in parallel; the result in particle order, so the
+/// same for any thread count) the triangles `propose` names for its swept box grown by 2 margin, duplicates
+/// removed, kept when that box and the triangle's bare box in `triangle_boxes` overlap exactly. `propose` may
+/// over-report.
+void collect_pairs(const Vec3Array& particles_t0, const Vec3Array& particles_t1, double margin,
+                   const std::vector<std::uint8_t>* only, const std::vector<Box3>& triangle_boxes,
+                   const std::function<void(const Box3& box, std::vector<Index>& candidates)>& propose,
+                   std::vector<std::pair<Index, Index>>& pairs);
+
+/// Candidate (particle, triangle) pairs: every pair whose swept boxes, each grown by the margin, overlap
+/// (tested as the particle's grown by twice the margin against the triangle's bare box), sorted by particle
+/// then triangle, each pair once. Implementations must return exactly this set (tests compare with brute
+/// force).
+class TriangleBroadPhase {
+ public:
+  virtual ~TriangleBroadPhase() = default;
+
+  /// @param particles_t0, particles_t1  N particle positions at the start and end of the step (unit: m)
+  /// @param cloth  the mesh, with positions_t0 and positions_t1
+  /// @param margin  growth of every box (unit: m), >= 0
+  /// @param only  when not null, N flags: pairs only for particles whose flag is set
+  /// @param pairs  output, replaced
+  virtual void find_pairs(const Vec3Array& particles_t0, const Vec3Array& particles_t1,
+                          const ClothMesh& cloth, double margin, const std::vector<std::uint8_t>* only,
+                          std::vector<std::pair<Index, Index>>& pairs) = 0;
+};
+
+/// The broad phase of a kind. FCL is linked privately; its types never appear in a header.
+std::unique_ptr<TriangleBroadPhase> make_broad_phase(BroadPhaseKind kind);
+
+/// Reference for tests: every pair tested, O(N F).
+void find_pairs_brute_force(const Vec3Array& particles_t0, const Vec3Array& particles_t1,
+                            const ClothMesh& cloth, double margin,
+                            std::vector<std::pair<Index, Index>>& pairs);
+
+}  // namespace drench

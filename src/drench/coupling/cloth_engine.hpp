@@ -1,0 +1,77 @@
+#pragma once
+/// A cloth simulator seen from the coupled step (Huber et al. 2013 sec. 5): it advances alone, exposes start
+/// and end positions as a ClothMesh, and takes the coupling's corrections back. The core knows no engine; the
+/// Bullet adapter (bullet_adapter/) implements this for btSoftBody, and a scene runner receives engines from
+/// a factory.
+
+#include <functional>
+#include <memory>
+#include <string>
+
+#include <drench/common/types.hpp>
+#include <drench/coupling/cloth_mesh.hpp>
+
+namespace drench {
+
+/// A rectangular patch of cloth or a mesh from an OBJ file, as a scene describes it (docs/scenes.md,
+/// `cloth`).
+struct ClothSettings {
+  std::string mesh = "patch";      ///< "patch" (a regular grid) or the path of an OBJ file (triangulated)
+  Vec3 center = Vec3::Zero();      ///< patch centre (unit: m); the patch lies in the plane y = center.y
+  double size_x = 0.6;             ///< patch extent along x (unit: m), > 0
+  double size_z = 0.6;             ///< patch extent along z (unit: m), > 0
+  int nodes_x = 57;                ///< patch nodes along x, >= 2
+  int nodes_z = 57;                ///< patch nodes along z, >= 2
+  double area_density = 0.2;       ///< mass per area (unit: kg/m^2), > 0
+  std::string pinned = "corners";  ///< "corners", "none", or "corner" (one corner, x and z smallest)
+  int position_iterations = 4;     ///< Bullet's piterations, >= 4 (1 blows the 57 x 57 patch up at dt = 1 ms,
+                                   ///< ../shared/notes/bullet-and-fcl.md)
+  int substeps = 1;  ///< cloth steps per simulation step, >= 1; the coupling still runs once per
+                     ///< step. A position-based cloth stretches less under load with smaller steps
+  double stretch_stiffness = 1.0;  ///< Bullet's linear stiffness kLST, in (0, 1]
+  double bending_stiffness = 0.5;  ///< stiffness of the bending links (distance 2), in [0, 1]; 0 = none
+  double damping = 0.0;            ///< Bullet's kDP, in [0, 1]
+};
+
+/// One cloth in a coupled simulation.
+class ClothEngine {
+ public:
+  virtual ~ClothEngine() = default;
+
+  /// Records the node positions at the start of the step (mesh().positions_t0).
+  virtual void begin_step() = 0;
+  /// Adds impulses to the node velocities before step(): v += J / m per node, pinned nodes unchanged.
+  /// `impulses` has M entries (unit: N s). The cloth solver then carries them through its own constraints
+  /// within the step, so a load on a few nodes pulls the cloth around them along (drench's sub-step obstacle
+  /// uses this).
+  virtual void apply_impulses(const Vec3Array& impulses) = 0;
+  /// For the next step() only, node i moves as if it weighed m_i + carried[i] (unit: kg, M entries, >= 0):
+  /// the water resting on it (coupling/carried_water.hpp), which the engine's constraints must accelerate
+  /// with the node. Nodes with inverse mass 0 stay pinned. After step() the node masses are the engine's own
+  /// again, exactly, and nothing else about the cloth (rest lengths) has changed. The engine applies its
+  /// gravity (the scene's) to the carried mass too; the caller removes that with an impulse, since the water
+  /// fell in the fluid's step. Call between begin_step() and step(); an engine whose nodes are all pinned may
+  /// ignore it.
+  /// @throws std::invalid_argument if `carried` does not have one entry per node
+  virtual void set_carried_masses(const ScalarArray& carried) = 0;
+  /// Advances the cloth alone by dt (unit: s); afterwards mesh().positions_t1 holds the predicted end
+  /// positions.
+  virtual void step(double dt) = 0;
+  /// Start and end positions, inverse masses, triangles. The coupler corrects positions_t1 in place.
+  virtual ClothMesh& mesh() = 0;
+  /// The same mesh, read-only (output, statistics).
+  const ClothMesh& mesh() const { return const_cast<ClothEngine*>(this)->mesh(); }
+  /// Takes the corrected end positions back: positions = positions_t1, velocity += (corrected - predicted) /
+  /// dt.
+  virtual void end_step(double dt) = 0;
+  /// Current node velocities (unit: m/s), M entries; for output and statistics.
+  virtual Vec3Array velocities() const = 0;
+  /// Total mass of the cloth (unit: kg).
+  virtual double total_mass() const = 0;
+};
+
+/// Builds the cloth engine of a scene. `gravity` in m/s^2. Throws SceneError for settings it cannot honour.
+using ClothEngineFactory =
+    std::function<std::unique_ptr<ClothEngine>(const ClothSettings& settings, const Vec3& gravity)>;
+
+}  // namespace drench

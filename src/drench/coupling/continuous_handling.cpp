@@ -1,0 +1,171 @@
+// Continuous intersection handling (Huber et al. 2013 sec. 3.3, eq. 5-6): rounds of point-triangle CCD on
+// the corrected motion, an inelastic impulse at each particle's earliest impact, and the fail-safe.
+// resolve_ccd is declared and documented in coupler_stages.hpp.
+
+#include <cmath>
+#include <cstdint>
+#include <utility>
+#include <vector>
+
+#include <drench/ccd/ccd_exact_reference.hpp>
+#include <drench/ccd/point_triangle_ccd.hpp>
+#include <drench/coupling/coupler_stages.hpp>
+
+namespace drench {
+namespace coupling_detail {
+namespace {
+
+/// A particle's earliest impact in one CCD round: the triangle it hits and the CCD's answer.
+struct Impact {
+  Index triangle = 0;
+  ccd::CcdResult ccd;
+};
+
+/// Earliest impact per particle among `pairs` (queries in parallel, reduction in pair order).
+/// @param pairs  (particle, triangle) sorted by particle, then triangle
+/// @param impacts  output, replaced: (particle, impact) in particle order, one per particle that hits
+void find_impacts(const StepContext& ctx, const std::vector<std::pair<Index, Index>>& pairs,
+                  std::vector<std::pair<Index, Impact>>& impacts) {
+  std::vector<ccd::CcdResult> results(pairs.size());
+#pragma omp parallel for schedule(dynamic, 256)
+  for (std::size_t k = 0; k < pairs.size(); ++k)
+    results[k] = ccd::point_triangle_ccd(ctx.query(pairs[k].first, pairs[k].second));
+  impacts.clear();
+  for (std::size_t k = 0; k < pairs.size(); ++k) {
+    if (!results[k].hit) continue;
+    // A particle that starts exactly in the triangle (distance 0: it has no side yet) touches at t = 0
+    // whatever it does next; pushing it would flip it back and forth. Repulsion handles it. Anything else at
+    // toi = 0 may be a contact just after the start (toi is a lower bound) and is resolved.
+    if (results[k].toi == 0.0 &&
+        ccd::coplanarity_sign_exact(ctx.query(pairs[k].first, pairs[k].second), false) == 0) {
+      continue;
+    }
+    const Index p = pairs[k].first;
+    if (!impacts.empty() && impacts.back().first == p) {
+      // One impact per particle: the earliest; a hit through a shared edge or vertex is handled once.
+      if (results[k].toi < impacts.back().second.ccd.toi)
+        impacts.back().second = {pairs[k].second, results[k]};
+      continue;
+    }
+    impacts.push_back({p, {pairs[k].second, results[k]}});
+  }
+}
+
+/// The inelastic impulse at an impact, Bridson, Fedkiw, Anderson 2002's response as sec. 3.3 uses it: the
+/// relative normal velocity at the contact point becomes a small separating speed, 1% of the cloth thickness
+/// per step, so the corrected motion stays on its side instead of ending exactly in the plane.
+/// @param thickness  the cloth thickness (unit: m), > 0
+void resolve_impact(StepContext& ctx, Index p, const Impact& impact, double thickness) {
+  const Triangle& tri = ctx.triangle(impact.triangle);
+  const ClothMesh& cloth = ctx.cloth();
+  const double t = impact.ccd.toi;
+  const Vec3& w = impact.ccd.barycentric;
+  const auto at = [&](Index node) {
+    return ((1.0 - t) * cloth.positions_t0[node] + t * cloth.positions_t1[node]).eval();
+  };
+  const Vec3 v = ctx.relative_velocity(p, impact.triangle, w);
+  Vec3 normal = (at(tri[1]) - at(tri[0])).cross(at(tri[2]) - at(tri[0]));
+  const double length = normal.norm();
+  if (length > 0.0 && std::isfinite(length)) {
+    normal /= length;
+    // Towards the side the particle comes from: the sign of eq. 6 just before the impact (not at the start of
+    // the step: the particle may pass the triangle's plane beside the triangle before it hits it, and a fast
+    // turning cloth may turn the plane under it).
+    const double before = 0.99 * t;
+    const auto before_at = [&](const Vec3& x0, const Vec3& x1) {
+      return ((1.0 - before) * x0 + before * x1).eval();
+    };
+    const Vec3 a = before_at(cloth.positions_t0[tri[0]], cloth.positions_t1[tri[0]]);
+    const Vec3 b = before_at(cloth.positions_t0[tri[1]], cloth.positions_t1[tri[1]]);
+    const Vec3 c = before_at(cloth.positions_t0[tri[2]], cloth.positions_t1[tri[2]]);
+    const Vec3 x = before_at(ctx.x0()[p], ctx.x1()[p]);
+    const Vec3 n_before = (b - a).cross(c - a);
+    const double side = (x - a).dot(n_before) * (n_before.dot(normal) >= 0.0 ? 1.0 : -1.0);
+    // A particle in the plane just before (an impact at t = 0, or grazing) keeps the side it comes from.
+    if (side < 0.0 || (side == 0.0 && v.dot(normal) > 0.0)) normal = -normal;
+  } else {
+    normal = v.norm() > 0.0 ? Vec3(-v.normalized()) : Vec3::UnitY();  // zero-area triangle: push back
+  }
+  const double target = 0.01 * thickness / ctx.dt();
+  const double vn = v.dot(normal);
+  if (vn >= target) return;
+  ctx.apply(p, impact.triangle, w, (target - vn) / ctx.inverse_mass(p, impact.triangle, w) * normal);
+}
+
+}  // namespace
+
+void StepContext::mark_changed_candidates(std::vector<std::uint8_t>& only) const {
+  Box3 changed_triangles;
+  for (std::size_t t = 0; t < m_cloth.triangles.size(); ++t) {
+    const Triangle& tri = m_cloth.triangles[t];
+    if (!(m_node_changed[tri[0]] || m_node_changed[tri[1]] || m_node_changed[tri[2]])) continue;
+    const Box3 box = triangle_box(m_cloth, tri, 0.0);
+    // A box with a NaN overlaps nothing (its pairs are never reported); left out of the union, which it
+    // would otherwise poison.
+    if ((box.lo.array() <= box.hi.array()).all()) {
+      changed_triangles.extend(box.lo);
+      changed_triangles.extend(box.hi);
+    }
+  }
+  const std::size_t n = m_x0.size();
+  only.resize(n);
+#pragma omp parallel for schedule(static)
+  for (std::size_t p = 0; p < n; ++p) {
+    only[p] = m_particle_changed[p] || particle_box(m_x0[p], m_x1[p], 0.0).overlaps(changed_triangles);
+  }
+}
+
+std::uint32_t resolve_ccd(StepContext& ctx, TriangleBroadPhase& broad_phase,
+                          const CouplingSettings& settings) {
+  std::uint32_t status = COUPLING_OK;
+  ClothMesh& cloth = ctx.cloth();
+  CouplingStepStats& stats = ctx.stats();
+  const double thickness = settings.cloth_thickness;
+  std::vector<std::pair<Index, Index>> pairs;
+  std::vector<std::pair<Index, Impact>> impacts;
+  std::vector<std::pair<Index, Index>> changed;
+  std::vector<std::uint8_t> only;
+  for (int iteration = 0; iteration <= settings.max_ccd_iterations; ++iteration) {
+    // Repulsion changed the motion, so the first round checks every pair; after it, only pairs whose motion
+    // changed in the previous round can have a new impact, so the broad phase is asked only for the particles
+    // that can be in one, and only the changed pairs are queried.
+    if (iteration > 0) ctx.mark_changed_candidates(only);
+    broad_phase.find_pairs(ctx.x0(), ctx.x1(), cloth, 0.0, iteration > 0 ? &only : nullptr, pairs);
+    if (iteration > 0) {
+      changed.clear();
+      for (const auto& pair : pairs) {
+        if (ctx.pair_changed(pair.first, pair.second)) changed.push_back(pair);
+      }
+      pairs.swap(changed);
+    }
+    ctx.clear_changes();
+    ++stats.ccd_iterations;
+    find_impacts(ctx, pairs, impacts);
+    if (impacts.empty()) break;
+    if (iteration == settings.max_ccd_iterations) {
+      // Fail-safe: the particle follows its triangle's contact point over the step, so that triangle cannot
+      // cross it; a last CCD round checks every pair again.
+      status |= COUPLING_FAILSAFE_USED;
+      for (const auto& [p, impact] : impacts) {
+        const Triangle& tri = cloth.triangles[impact.triangle];
+        const Vec3& w = impact.ccd.barycentric;
+        Vec3 shift = Vec3::Zero();
+        for (int i = 0; i < 3; ++i)
+          shift += w[i] * (cloth.positions_t1[tri[i]] - cloth.positions_t0[tri[i]]);
+        ctx.place(p, ctx.x0()[p] + shift);
+        ++stats.failsafe_activations;
+      }
+      broad_phase.find_pairs(ctx.x0(), ctx.x1(), cloth, 0.0, nullptr, pairs);
+      find_impacts(ctx, pairs, impacts);
+      if (!impacts.empty()) status |= COUPLING_UNRESOLVED;
+      break;
+    }
+    stats.ccd_impacts += impacts.size();
+    for (const auto& [p, impact] : impacts)
+      resolve_impact(ctx, p, impact, thickness);
+  }
+  return status;
+}
+
+}  // namespace coupling_detail
+}  // namespace drench

@@ -1,0 +1,94 @@
+#pragma once
+/// Two-way coupling of fluid particles and a cloth mesh by impulses (Huber et al. 2013 sec. 3): repulsion
+/// within the cloth thickness (eq. 1-4), tangential boundary conditions (eq. 7-8) and continuous intersection
+/// handling (eq. 5-6) until the step is free of crossings. Knows nothing of Bullet or of the SPH solver: both
+/// sides are given as start and end positions (sec. 5), and the coupler corrects the end positions and the
+/// velocities.
+
+#include <cstdint>
+#include <memory>
+
+#include <drench/common/types.hpp>
+#include <drench/coupling/cloth_mesh.hpp>
+#include <drench/coupling/coupling_settings.hpp>
+#include <drench/coupling/impulse_link.hpp>
+
+namespace drench {
+
+/// The fluid side of one step: N particles.
+struct FluidView {
+  const Vec3Array* positions_t0 = nullptr;  ///< N, at the start of the step (unit: m)
+  Vec3Array* positions_t1 = nullptr;        ///< N, predicted end positions, corrected in place (m)
+  Vec3Array* velocities = nullptr;          ///< N, end-of-step velocities, changed by the impulses (m/s)
+  const ScalarArray* masses = nullptr;      ///< N, > 0 (unit: kg)
+  /// N particle ids, or null; given, the coupler reports each particle's largest impulse
+  /// (Coupler::impulse_links)
+  const std::vector<std::uint32_t>* ids = nullptr;
+};
+
+/// What one coupling step did; accumulated into the run's summary.json.
+struct CouplingStepStats {
+  std::uint64_t contacts = 0;        ///< particle-triangle pairs within the cloth thickness (sec. 3.1)
+  std::uint64_t ccd_impacts = 0;     ///< impacts found by the continuous handling and stopped (sec. 3.3)
+  std::uint64_t ccd_iterations = 0;  ///< rounds of CCD run
+  std::uint64_t failsafe_activations = 0;  ///< particles the fail-safe moved with their triangle
+  std::uint64_t obstacle_stops = 0;        ///< particles stopped by the cloth inside fluid sub-steps
+  double slip_sum_mps = 0.0;  ///< sum over contacts of the relative tangential speed after coupling
+  double vertical_impulse_on_cloth = 0.0;  ///< sum of the y components of the impulses on cloth nodes (N s)
+  double seconds_repulsion = 0.0;          ///< wall time of proximity + repulsion + friction (unit: s)
+  double seconds_ccd = 0.0;                ///< wall time of the continuous handling (unit: s)
+};
+
+/// Bit flags of a coupling step's trouble (Jolt-style status, never an exception inside a step).
+enum CouplingStatus : std::uint32_t {
+  COUPLING_OK = 0,
+  /// The continuous handling needed the fail-safe; fine when rare. Raise max_ccd_iterations if frequent.
+  COUPLING_FAILSAFE_USED = 1u << 0,
+  /// Even the fail-safe left a crossing (the leak audit will count it). Smaller dt helps.
+  COUPLING_UNRESOLVED = 1u << 1,
+};
+
+class TriangleBroadPhase;
+
+/// Couples one fluid and one cloth mesh, step after step. Not thread-safe; uses OpenMP inside.
+class Coupler {
+ public:
+  /// @throws SceneError for settings out of range (the message names the setting)
+  explicit Coupler(const CouplingSettings& settings);
+  ~Coupler();
+  Coupler(const Coupler&) = delete;
+  Coupler& operator=(const Coupler&) = delete;
+
+  /// One coupling step of length dt (unit: s, > 0): repulsion (eq. 1-4), friction (eq. 7-8), then continuous
+  /// handling (eq. 5-6) on the corrected motion until no particle crosses a triangle. Impulses go to both
+  /// sides, mass-weighted, the triangle's share to its nodes by barycentric weights, so the total linear
+  /// momentum is conserved exactly (up to rounding); pinned nodes (inverse mass 0) never move.
+  /// @param fluid  N particles; positions_t1 and velocities are changed
+  /// @param cloth  validated mesh; positions_t1 are changed (the engine adds (change / dt) to its velocities)
+  /// @return COUPLING_* flags
+  std::uint32_t step(const FluidView& fluid, ClothMesh& cloth, double dt, CouplingStepStats& stats);
+
+  const CouplingSettings& settings() const { return m_settings; }
+
+  /// The impulse each cloth node received in the last step() (unit: N s), M entries, nodes with inverse
+  /// mass 0 included: a caller that stepped a moving cloth as kinematic (inverse masses 0) hands these to
+  /// the cloth itself (CouplingScheme::CARRIED_WATER), so momentum is still exchanged.
+  const Vec3Array& node_impulses() const { return m_node_impulses; }
+
+  /// For every particle that received an impulse in the last step() (in particle order), the triangle, the
+  /// weights and the size of its largest one; empty unless FluidView::ids was given. With node_impulses(),
+  /// what CarriedWater::attach needs to carry each particle with the nodes its impulse goes to.
+  const ImpulseLinks& impulse_links() const { return m_impulse_links; }
+
+ private:
+  /// step() after its set-up: the stages of sec. 3 in the paper's order (coupler_stages.hpp).
+  std::uint32_t correct(const FluidView& fluid, ClothMesh& cloth, double dt, CouplingStepStats& stats);
+
+  CouplingSettings m_settings;
+  Vec3Array m_node_impulses;
+  ImpulseLinks m_largest;  // N, scratch of step()
+  ImpulseLinks m_impulse_links;
+  std::unique_ptr<TriangleBroadPhase> m_broad_phase;
+};
+
+}  // namespace drench

@@ -1,0 +1,32 @@
+#include <drench/scene/frame_files.hpp>
+
+#include <drench/io/ply_writer.hpp>
+
+namespace drench {
+
+namespace {
+
+std::vector<PlyProperty> particle_properties(const ParticleSet& particles) {
+  return {PlyProperty::component("vx", particles.velocities, 0),
+          PlyProperty::component("vy", particles.velocities, 1),
+          PlyProperty::component("vz", particles.velocities, 2),
+          PlyProperty::scalar("density", particles.densities),
+          PlyProperty::scalar("pressure", particles.pressures),
+          PlyProperty::uint32("id", particles.ids)};
+}
+
+}  // namespace
+
+std::string particles_to_ply(const ParticleSet& particles) {
+  return points_to_ply("fluid particles", particles.positions, particle_properties(particles));
+}
+
+void write_particles_ply(const std::string& path, const ParticleSet& particles) {
+  write_points_ply(path, "fluid particles", particles.positions, particle_properties(particles));
+}
+
+void write_cloth_ply(const std::string& path, const ClothMesh& mesh) {
+  write_mesh_ply(path, "cloth mesh", mesh.positions_t1, mesh.triangles);
+}
+
+}  // namespace drench

@@ -1,0 +1,23 @@
+#pragma once
+/// The frame files of a run (docs/output.md): the fluid's particles and the cloth as PLY, written through
+/// io/ply_writer.hpp, which knows arrays only.
+
+#include <string>
+
+#include <drench/coupling/cloth_mesh.hpp>
+#include <drench/sph/particle_set.hpp>
+
+namespace drench {
+
+/// The particles as a PLY point cloud: one `vertex` per particle with float properties x y z (unit: m),
+/// vx vy vz (unit: m/s), density (unit: kg/m^3), pressure (unit: Pa) and uint id.
+std::string particles_to_ply(const ParticleSet& particles);
+
+/// particles_to_ply written atomically to `path`. @throws IoError
+void write_particles_ply(const std::string& path, const ParticleSet& particles);
+
+/// The cloth where it is now (`positions_t1`, unit: m) as a PLY triangle surface with vertex normals.
+/// @throws IoError
+void write_cloth_ply(const std::string& path, const ClothMesh& mesh);
+
+}  // namespace drench

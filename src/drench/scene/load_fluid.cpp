@@ -1,0 +1,60 @@
+/// `fluid` of a scene: rest density and spacing, the pressure solver with its settings, viscosity, CFL and
+/// sorting (FluidSettings, scene_config.hpp).
+
+#include <utility>
+
+#include <drench/scene/load_sections.hpp>
+
+namespace drench::loader {
+
+FluidSettings read_fluid(const Node& node) {
+  FluidSettings fluid;
+  const ObjectReader r(node, {"rest_density", "particle_spacing", "pressure_solver", "wcsph", "pcisph",
+                              "viscosity", "cfl", "sort_interval"});
+  r.read("rest_density", fluid.rest_density, kPositive);
+  r.read("particle_spacing", fluid.particle_spacing, kPositive);
+  r.read_choice("pressure_solver", fluid.pressure_solver,
+                Choices<PressureSolverKind>{{"pcisph", PressureSolverKind::PCISPH},
+                                            {"wcsph", PressureSolverKind::WCSPH}});
+  r.read("cfl", fluid.cfl, Range{0.0, true, 1.0, false});
+  r.read("sort_interval", fluid.sort_interval, kAtLeastOne);
+
+  const ObjectReader wcsph(r["wcsph"], {"speed_of_sound", "exponent"});
+  // null is accepted as "auto" so that --set fluid.wcsph.speed_of_sound=null can undo a file's value.
+  if (const Node c = wcsph["speed_of_sound"]; c.present() && !c.value().is_null())
+    fluid.wcsph.speed_of_sound = c.number(kPositive);
+  wcsph.read("exponent", fluid.wcsph.exponent, kAtLeastOne);
+
+  const ObjectReader pcisph(r["pcisph"],
+                            {"eta", "min_iterations", "max_iterations", "max_compression_per_iteration",
+                             "max_relief_per_substep", "precision"});
+  pcisph.read("eta", fluid.pcisph.eta, Range{0.0, true, 1.0, true});
+  pcisph.read("min_iterations", fluid.pcisph.min_iterations, kAtLeastOne);
+  pcisph.read("max_iterations", fluid.pcisph.max_iterations, kAtLeastOne);
+  pcisph.read_choice("precision", fluid.pcisph.precision,
+                     Choices<IterationPrecision>{{"single", IterationPrecision::SINGLE},
+                                                 {"double", IterationPrecision::DOUBLE}});
+  pcisph.require_order("min_iterations", fluid.pcisph.min_iterations, "max_iterations",
+                       fluid.pcisph.max_iterations);
+  // null is "no limit" (the published PCISPH), so that --set can undo the default.
+  for (auto [key, limit] :
+       {std::pair{"max_compression_per_iteration", &fluid.pcisph.max_compression_per_iteration},
+        std::pair{"max_relief_per_substep", &fluid.pcisph.max_relief_per_substep}}) {
+    if (const Node c = pcisph[key]; c.present()) {
+      if (c.value().is_null()) {
+        limit->reset();
+      } else {
+        *limit = c.number(kPositive);
+      }
+    }
+  }
+
+  const ObjectReader viscosity(r["viscosity"], {"method", "coefficient"});
+  viscosity.read_choice(
+      "method", fluid.viscosity.method,
+      Choices<ViscosityKind>{{"xsph", ViscosityKind::XSPH}, {"artificial", ViscosityKind::ARTIFICIAL}});
+  viscosity.read("coefficient", fluid.viscosity.coefficient, kNonNegative);
+  return fluid;
+}
+
+}  // namespace drench::loader

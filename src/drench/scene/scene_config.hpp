@@ -1,0 +1,65 @@
+#pragma once
+/// The settings of a whole scene, filled from JSON by scene_loader.hpp or built in code by tests, benchmarks
+/// and users. It composes the settings each module keeps beside its code (sph/fluid_settings.hpp,
+/// sph/emitter_settings.hpp, sph/boundary_settings.hpp, coupling/coupling_settings.hpp, ClothSettings in
+/// coupling/cloth_engine.hpp) with the scene's own: time, kill regions, effects. Every member states its
+/// unit and default; `docs/scenes.md` documents the same keys. A SceneConfig builds a Simulation
+/// (scene/simulation.hpp).
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <drench/common/types.hpp>
+#include <drench/coupling/cloth_engine.hpp>
+#include <drench/coupling/coupling_settings.hpp>
+#include <drench/sph/boundary_settings.hpp>
+#include <drench/sph/emitter_settings.hpp>
+#include <drench/sph/fluid_settings.hpp>
+
+namespace drench {
+
+/// Removes particles that leave the region of interest; the summary counts them as `removed`.
+struct KillRegionSettings {
+  enum class Kind {
+    PLANE,  ///< removes particles with (x - point) . normal < 0
+    BOX     ///< removes particles outside [min, max]
+  } kind = Kind::PLANE;
+  Vec3 point = Vec3::Zero();          ///< PLANE (unit: m)
+  Vec3 normal = Vec3(0.0, 1.0, 0.0);  ///< PLANE: normalised on load, non-zero; points into the kept region
+  Vec3 min = Vec3::Zero();            ///< BOX (unit: m)
+  Vec3 max = Vec3::Ones();            ///< BOX (unit: m)
+};
+
+struct TimeSettings {
+  Scalar dt = 0.005;      ///< step of the whole simulation (unit: s), > 0; the fluid may sub-step inside it
+  Scalar duration = 1.0;  ///< simulated time (unit: s), > 0
+  Scalar frame_rate = 30.0;  ///< frames written per simulated second (unit: 1/s), >= 0; 0 writes no frames
+};
+
+/// A complete scene. The effects named in `effects` are the only optional physics that get constructed.
+struct SceneConfig {
+  std::string source = "<code>";         ///< file the scene came from, used in error messages
+  Vec3 gravity = Vec3(0.0, -9.81, 0.0);  ///< (unit: m/s^2); +y is up
+  FluidSettings fluid;
+  std::vector<EmitterSettings> emitters;
+  std::vector<BoundarySettings> boundaries;
+  std::vector<KillRegionSettings> kill_regions;
+  TimeSettings time;
+  /// The cloth (Bullet soft body through the adapter); absent: a fluid-only scene.
+  std::optional<ClothSettings> cloth;
+  /// Coupling of fluid and cloth; used when `effects` lists "coupling" (and "friction" for the tangential
+  /// boundary conditions).
+  CouplingSettings coupling;
+  std::vector<std::string> effects;  ///< names from known_effects(), each at most once
+
+  /// True when `effects` lists `name`, i.e. that optional physics is to be constructed.
+  bool has_effect(const std::string& name) const;
+};
+
+/// The effect names a scene may list in `effects`: "viscosity", "coupling" (repulsion and continuous
+/// handling, sec. 3.1-3.3), "friction" (tangential boundary conditions, sec. 3.4), "leak_audit" (counts
+/// particles crossing the cloth): the one list the loader checks.
+const std::vector<std::string>& known_effects();
+
+}  // namespace drench

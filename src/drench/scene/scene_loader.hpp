@@ -1,0 +1,46 @@
+#pragma once
+/// Scene files: JSON in SI units -> SceneConfig, with every key validated. The schema is documented key by
+/// key in docs/scenes.md; every error names the file, the JSON path and the value.
+
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include <drench/scene/scene_config.hpp>
+
+namespace drench {
+
+/// Reads a scene file, applies `overrides` and validates the result.
+/// @param path  scene file (JSON)
+/// @param overrides  assignments `json.path=value` (the `--set` flag), applied in order before validation;
+///        `value` is parsed as JSON and taken as a string when it is not valid JSON; paths use dots for
+///        object keys and `[i]` (or `.i`) for array elements, e.g. `time.dt=0.004`, `emitters[0].speed=5`.
+/// @throws IoError when the file cannot be read; SceneError for malformed JSON (with line and column), an
+///         unknown key, a wrong type, a value out of range, or an override whose path does not exist. The
+///         message names the file (and the override), the JSON path and the value.
+SceneConfig load_scene_file(const std::string& path, const std::vector<std::string>& overrides = {});
+
+/// How errors name a scene read from `path` with `overrides`: `<path> with --set a=1 --set b=2`.
+std::string scene_source(const std::string& path, const std::vector<std::string>& overrides);
+
+/// Validates an already parsed scene document. `source` names it in error messages.
+/// @throws SceneError as load_scene_file.
+SceneConfig parse_scene(const nlohmann::json& document, const std::string& source);
+
+/// Applies one `json.path=value` assignment to `document` in place.
+/// @throws SceneError when the assignment has no `=`, the path is empty or malformed, an intermediate element
+///         is missing or not an object/array, or an array index is out of range.
+void apply_override(nlohmann::json& document, const std::string& assignment);
+
+/// The effective scene document after overrides, serialised canonically (sorted keys, no spaces): the text
+/// whose SHA-256 the summary reports as `scene_sha256`.
+std::string canonical_scene_text(const nlohmann::json& document);
+
+/// Reads a scene file and applies overrides without validating (for `scene_sha256`).
+/// @throws IoError, SceneError (malformed JSON, bad override)
+nlohmann::json read_scene_document(const std::string& path, const std::vector<std::string>& overrides = {});
+
+/// Lowercase hex SHA-256 of `bytes` (OpenSSL's EVP digest).
+std::string sha256_hex(const std::string& bytes);
+
+}  // namespace drench

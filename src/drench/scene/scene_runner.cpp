@@ -1,0 +1,147 @@
+#include <drench/scene/scene_runner.hpp>
+
+#include <omp.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+
+#include <drench/common/error.hpp>
+#include <drench/common/stopwatch.hpp>
+#include <drench/io/atomic_file.hpp>
+#include <drench/scene/frame_files.hpp>
+
+namespace drench {
+
+namespace {
+
+std::string frame_name(const char* what, std::int64_t frame) {
+  char name[48];
+  std::snprintf(name, sizeof name, "%s_%04lld.ply", what, static_cast<long long>(frame));
+  return name;
+}
+
+/// A single self-overwriting line on a terminal, at most five times a second; silent elsewhere.
+class ProgressLine {
+ public:
+  explicit ProgressLine(bool wanted) : m_enabled(wanted && ::isatty(STDERR_FILENO)) {}
+  void update(const Simulation& sim, std::int64_t last_step, double wall) {
+    if (!m_enabled || wall - m_last < 0.2) return;
+    m_last = wall;
+    const double rate = sim.steps_done() / std::max(wall, 1e-9);
+    const double eta = (last_step - sim.steps_done()) / std::max(rate, 1e-9);
+    std::fprintf(stderr, "\r  t = %.3f / %.3f s   %.1f steps/s   %zu particles   ETA %.0f s   ", sim.time(),
+                 last_step * sim.config().time.dt, rate, sim.particles().size(), eta);
+    std::fflush(stderr);
+  }
+  ~ProgressLine() {
+    if (m_enabled && m_last > 0) std::fprintf(stderr, "\n");
+  }
+
+ private:
+  bool m_enabled;
+  double m_last = 0;
+};
+
+}  // namespace
+
+nlohmann::json make_summary(const Simulation& sim, double wall_seconds, const std::string& scene_sha256,
+                            const StepStatus& status) {
+  const FluidStatistics& f = sim.fluid().statistics();
+  const double substeps = std::max<std::int64_t>(f.substeps, 1);
+  const auto& t = f.timings_s;
+  nlohmann::json s;
+  s["steps"] = sim.steps_done();
+  s["sim_time_s"] = sim.time();
+  s["particles"] = sim.particles().size();
+  s["created"] = sim.created();
+  s["removed"] = sim.removed();
+  s["density_error"] = {{"mean", f.density_error_sum / substeps},
+                        {"max", f.density_error_max},
+                        {"particle_max", f.particle_density_error_max}};
+  s["pressure_iterations"] = {{"mean", f.pressure_iterations / substeps}, {"max", f.max_pressure_iterations}};
+  s["fluid_substeps"] = {{"total", f.substeps}, {"max_per_step", f.max_substeps_per_step}};
+  s["boundary_guards"] = f.boundary_guards;
+  s["timings_s"] = {{"fluid", t.total},          {"neighbors", t.neighbors}, {"density", t.density},
+                    {"forces", t.forces},        {"pressure", t.pressure},   {"integrate", t.integrate},
+                    {"emit", sim.emit_seconds()}};
+  s["wall_s"] = wall_seconds;
+  s["threads"] = omp_get_max_threads();
+  s["version"] = DRENCH_VERSION;
+  s["scene_sha256"] = scene_sha256;
+  s["effects"] = sim.effects();
+  s["pressure_solver"] =
+      sim.config().fluid.pressure_solver == PressureSolverKind::PCISPH ? "pcisph" : "wcsph";
+  s["speed_of_sound_mps"] = sim.speed_of_sound();
+  s["status"] = status.describe().empty() ? "ok" : status.describe();
+  if (const ClothEngine* cloth = sim.cloth()) {
+    const CouplingStepStats& c = sim.coupling_stats();
+    s["cloth_faces"] = cloth->mesh().triangle_count();
+    s["cloth_mass_kg"] = cloth->total_mass();
+    s["contacts"] = c.contacts;
+    s["ccd_impacts"] = c.ccd_impacts;
+    s["ccd_iterations"] = c.ccd_iterations;
+    s["failsafe_activations"] = c.failsafe_activations;
+    s["obstacle_stops"] = c.obstacle_stops;
+    s["mean_contact_slip_mps"] = c.contacts > 0 ? c.slip_sum_mps / static_cast<double>(c.contacts) : 0.0;
+    s["coupling_status"] = sim.coupling_status();
+    s["timings_s"]["cloth"] = sim.cloth_seconds();
+    s["timings_s"]["coupling"] = sim.coupling_seconds();
+    s["timings_s"]["repulsion"] = c.seconds_repulsion;
+    s["timings_s"]["ccd"] = c.seconds_ccd;
+    if (sim.config().has_effect("leak_audit")) {
+      s["leaks"] = sim.leak_stats().leaks;
+      s["timings_s"]["leak_audit"] = sim.leak_stats().seconds;
+    }
+  }
+  return s;
+}
+
+RunResult run_scene(Simulation& sim, const RunOptions& options) {
+  namespace fs = std::filesystem;
+  const fs::path out(options.out_dir);
+  const fs::path frames = out / "frames";
+  std::error_code ec;
+  fs::create_directories(frames, ec);
+  if (ec) throw IoError("cannot create " + frames.string() + ": " + ec.message());
+
+  const auto start = std::chrono::steady_clock::now();
+  auto wall = [&] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(); };
+  const std::int64_t last_step =
+      options.max_steps ? std::min(*options.max_steps, sim.total_steps()) : sim.total_steps();
+  const double frame_rate = sim.config().time.frame_rate;
+  double output_seconds = 0;
+  std::int64_t frame = 0;
+  auto write_due_frames = [&] {
+    if (frame_rate <= 0) return;
+    // A frame is due when the simulated time has reached its time, up to a thousandth of a step.
+    while (frame / frame_rate <= sim.time() + 1e-3 * sim.config().time.dt) {
+      ScopedTimer timer(output_seconds);
+      write_particles_ply((frames / frame_name("fluid", frame)).string(), sim.particles());
+      if (const ClothEngine* cloth = sim.cloth()) {
+        // Between steps positions_t1 is where the cloth is now (end_step wrote it back to the engine).
+        write_cloth_ply((frames / frame_name("cloth", frame)).string(), cloth->mesh());
+      }
+      ++frame;
+    }
+  };
+
+  RunResult result;
+  ProgressLine progress(options.progress);
+  write_due_frames();
+  while (sim.steps_done() < last_step) {
+    result.status |= sim.step();
+    if (!result.status.ok()) break;
+    write_due_frames();
+    progress.update(sim, last_step, wall());
+  }
+  result.summary = make_summary(sim, wall(), options.scene_sha256, result.status);
+  result.summary["frames"] = frame;
+  result.summary["timings_s"]["output"] = output_seconds;
+  write_file_atomic((out / "summary.json").string(), result.summary.dump(2) + "\n");
+  return result;
+}
+
+}  // namespace drench

@@ -1,0 +1,36 @@
+#pragma once
+/// Runs a Simulation to its end while writing frames, a progress line and summary.json: what `drench run`
+/// does, available to tests and embedding programs.
+
+#include <cstdint>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+
+#include <drench/scene/simulation.hpp>
+
+namespace drench {
+
+struct RunOptions {
+  std::string out_dir;                    ///< receives frames/ and summary.json; created if missing
+  std::optional<std::int64_t> max_steps;  ///< stop after this many steps (the `--steps` flag)
+  std::string scene_sha256;               ///< reported as `scene_sha256`
+  bool progress = true;                   ///< print a progress line when stderr is a terminal
+};
+
+struct RunResult {
+  nlohmann::json summary;  ///< what summary.json holds
+  StepStatus status;       ///< all flags raised during the run
+};
+
+/// Steps `simulation` until it finishes (or max_steps), writing `frames/fluid_NNNN.ply` at the scene's frame
+/// rate (frame 0 is the initial state) and `summary.json` at the end, each through a temporary name. A step
+/// with a non-finite state ends the run early; the summary is still written and says so in `status`.
+/// @throws IoError when out_dir or a file cannot be written.
+RunResult run_scene(Simulation& simulation, const RunOptions& options);
+
+/// The summary of a run so far; keys are documented in docs/output.md.
+nlohmann::json make_summary(const Simulation& simulation, double wall_seconds,
+                            const std::string& scene_sha256, const StepStatus& status);
+
+}  // namespace drench

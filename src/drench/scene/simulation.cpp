@@ -1,0 +1,275 @@
+#include <drench/scene/simulation.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include <drench/common/error.hpp>
+#include <drench/common/stopwatch.hpp>
+#include <drench/coupling/cloth_obstacle.hpp>
+#include <drench/sph/boundary_sampling.hpp>
+
+namespace drench {
+
+namespace {
+
+/// Holds a mesh's inverse masses at 0 while it lives (the cloth kinematic for the coupler), then puts them
+/// back, also when the coupler throws.
+class KinematicCloth {
+ public:
+  explicit KinematicCloth(ClothMesh& mesh) : m_mesh(mesh) {
+    m_own.swap(mesh.inverse_masses);
+    mesh.inverse_masses.assign(m_own.size(), 0.0);
+  }
+  ~KinematicCloth() { m_mesh.inverse_masses.swap(m_own); }
+  KinematicCloth(const KinematicCloth&) = delete;
+  KinematicCloth& operator=(const KinematicCloth&) = delete;
+  const ScalarArray& own_inverse_masses() const { return m_own; }
+
+ private:
+  ClothMesh& m_mesh;
+  ScalarArray m_own;
+};
+
+}  // namespace
+
+Scalar automatic_speed_of_sound(const SceneConfig& config) {
+  const Scalar g = config.gravity.norm();
+  const Vec3 up = g > 0.0 ? Vec3(-config.gravity / g) : Vec3::UnitY();
+  Scalar low = std::numeric_limits<Scalar>::infinity();
+  Scalar high = -low;
+  auto include = [&](const Vec3& x) {
+    low = std::min(low, x.dot(up));
+    high = std::max(high, x.dot(up));
+  };
+  auto include_box = [&](const Vec3& a, const Vec3& b) {
+    for (int corner = 0; corner < 8; ++corner) {
+      include(Vec3(corner & 1 ? b.x() : a.x(), corner & 2 ? b.y() : a.y(), corner & 4 ? b.z() : a.z()));
+    }
+  };
+  Scalar emit_speed = 0.0;
+  for (const auto& e : config.emitters) {
+    if (e.kind == EmitterSettings::Kind::BOX) {
+      include_box(e.box.min, e.box.max);
+      emit_speed = std::max(emit_speed, e.box.velocity.norm());
+    } else {
+      include(e.nozzle.center);
+      emit_speed = std::max(emit_speed, e.nozzle.speed);
+    }
+  }
+  for (const auto& b : config.boundaries) {
+    if (b.kind == BoundarySettings::Kind::BOX) {
+      include_box(b.min, b.max);
+    } else {
+      include(b.point);
+    }
+  }
+  // A patch cloth is where a jet lands: its fall from the nozzle counts. An OBJ cloth's extent is known only
+  // once the engine has loaded it; scenes with one set the speed of sound or a boundary below.
+  if (config.cloth && config.cloth->mesh == "patch") {
+    const ClothSettings& cloth = *config.cloth;
+    const Vec3 half(0.5 * cloth.size_x, 0.0, 0.5 * cloth.size_z);
+    include_box(cloth.center - half, cloth.center + half);
+  }
+  const Scalar height = high > low ? high - low : 0.0;
+  return std::max(1.0, 10.0 * (std::sqrt(2.0 * g * height) + emit_speed));
+}
+
+namespace {
+
+BoundaryParticles sample_boundaries(const SceneConfig& config) {
+  const Scalar s = config.fluid.particle_spacing;
+  BoundaryParticles all;
+  for (const auto& b : config.boundaries) {
+    all.append(b.kind == BoundarySettings::Kind::BOX
+                   ? sample_box_container(b.min, b.max, s, b.layers, b.open_top)
+                   : sample_plane(b.point, b.normal, b.size, s, b.layers));
+  }
+  return all;
+}
+
+}  // namespace
+
+namespace {
+
+std::unique_ptr<ClothEngine> build_cloth(const SceneConfig& config, const ClothEngineFactory& factory) {
+  if (!config.cloth) return nullptr;
+  if (!factory) {
+    throw SceneError(
+        "cloth: this program has no cloth engine; run the scene with the drench command, which "
+        "links the Bullet adapter (" +
+        config.source + ")");
+  }
+  return factory(*config.cloth, config.gravity);
+}
+
+}  // namespace
+
+Simulation::Simulation(const SceneConfig& config, const ClothEngineFactory& cloth_factory)
+    : Simulation(config, build_cloth(config, cloth_factory)) {}
+
+Simulation::Simulation(const SceneConfig& config, std::unique_ptr<ClothEngine> cloth)
+    : m_config(config),
+      m_speed_of_sound(config.fluid.wcsph.speed_of_sound.value_or(automatic_speed_of_sound(config))),
+      m_cloth(std::move(cloth)) {
+  m_fluid =
+      std::make_unique<FluidSolver>(m_config.fluid, m_config.gravity, sample_boundaries(m_config),
+                                    m_config.boundaries, m_config.has_effect("viscosity"), m_speed_of_sound);
+  m_total_steps = std::max<std::int64_t>(1, std::llround(m_config.time.duration / m_config.time.dt));
+  const Scalar mass = m_fluid->particle_mass();
+  for (const auto& e : m_config.emitters) {
+    if (e.kind == EmitterSettings::Kind::BOX) {
+      emit_box(e.box, m_config.fluid.particle_spacing, mass, m_fluid->particles(), m_next_id);
+    } else {
+      m_nozzles.emplace_back(e.nozzle, m_config.fluid.particle_spacing);
+    }
+  }
+  if (m_cloth) m_cloth->mesh().validate();
+  if (m_cloth && m_config.has_effect("coupling")) m_coupler = std::make_unique<Coupler>(m_config.coupling);
+  const bool carried_water = m_config.coupling.scheme == CouplingScheme::CARRIED_WATER;
+  if (m_coupler && m_config.coupling.continuous && m_config.coupling.substep_obstacle) {
+    m_obstacle = std::make_unique<ClothObstacle>(m_config.coupling.cloth_thickness,
+                                                 m_config.coupling.broad_phase, carried_water);
+  }
+  if (m_coupler && carried_water) m_carried = std::make_unique<CarriedWater>();
+  if (m_cloth) m_pending_cloth_impulses.assign(m_cloth->mesh().node_count(), Vec3::Zero());
+  m_leak_audit = m_cloth && m_config.has_effect("leak_audit");
+}
+
+bool Simulation::finished() const {
+  return m_steps >= m_total_steps;
+}
+
+StepStatus Simulation::step(Scalar dt) {
+  {
+    ScopedTimer timer(m_emit_seconds);
+    for (auto& nozzle : m_nozzles) {
+      nozzle.emit(time(), dt, m_fluid->particle_mass(), m_fluid->particles(), m_next_id);
+    }
+  }
+  if (m_cloth) m_cloth->begin_step();
+  // The cloth at its start positions is an obstacle inside the fluid's sub-steps
+  // (coupling/cloth_obstacle.hpp).
+  if (m_obstacle) m_obstacle->begin_step(m_cloth->mesh(), m_cloth->velocities());
+  StepStatus status = m_fluid->step(dt, m_obstacle.get());
+  if (m_cloth) step_cloth_and_couple(dt, status);
+  ++m_steps;
+  m_time += dt;
+  if (!m_config.kill_regions.empty()) {
+    ScopedTimer timer(m_emit_seconds);
+    remove_killed();
+  }
+  return status;
+}
+
+void Simulation::step_cloth_and_couple(Scalar dt, StepStatus& status) {
+  ParticleSet& p = m_fluid->particles();
+  ClothMesh& mesh = m_cloth->mesh();
+  // CouplingScheme::CARRIED_WATER: the water near the cloth weighs on its nodes through the engine's step.
+  const bool carry = m_carried && status.ok();
+  Vec3Array before_impulses;
+  if (carry) {
+    ScopedTimer timer(m_coupling_seconds);
+    // The particles whose impulses the cloth takes in this step (coupling/carried_water.hpp).
+    ImpulseLinks links = m_pending_links;
+    if (m_obstacle) {
+      const ImpulseLinks& stops = m_obstacle->impulse_links();
+      links.insert(links.end(), stops.begin(), stops.end());
+    }
+    m_carried->attach(mesh, p.masses, p.ids, std::move(links));
+    m_cloth->set_carried_masses(m_carried->carried_masses());
+    before_impulses = m_cloth->velocities();
+  }
+  // Before the cloth steps, so that its solver spreads the load over the cloth's links in this step: what
+  // the previous step owes the cloth, and what the particles gave it inside the fluid's sub-steps.
+  // (An engine whose node count changed since has lost what it was owed: begin_step re-read its mesh.)
+  Vec3Array impulses(mesh.node_count(), Vec3::Zero());
+  if (m_pending_cloth_impulses.size() == impulses.size()) impulses.swap(m_pending_cloth_impulses);
+  m_pending_cloth_impulses.assign(mesh.node_count(), Vec3::Zero());
+  m_pending_links.clear();
+  if (m_obstacle) {
+    const Vec3Array& stopped = m_obstacle->impulses();
+    for (std::size_t i = 0; i < impulses.size(); ++i)
+      impulses[i] += stopped[i];
+    m_coupling_stats.obstacle_stops += m_obstacle->stops();
+    m_coupling_stats.vertical_impulse_on_cloth += m_obstacle->vertical_impulse();
+  }
+  if (carry) {
+    // The engine applies gravity to the carried mass too, but the water fell in the fluid's step already.
+    const ScalarArray& carried = m_carried->carried_masses();
+    for (std::size_t i = 0; i < impulses.size(); ++i)
+      impulses[i] -= (carried[i] * dt) * m_config.gravity;
+  }
+  m_cloth->apply_impulses(impulses);
+  {
+    ScopedTimer timer(m_cloth_seconds);
+    m_cloth->step(dt);
+  }
+  m_non_finite_node = -1;
+  for (std::size_t i = 0; i < mesh.node_count(); ++i) {
+    if (!mesh.positions_t1[i].allFinite()) {
+      m_non_finite_node = static_cast<std::int64_t>(i);
+      status.flags |= StepStatus::NON_FINITE_CLOTH;
+      status.non_finite_node = m_non_finite_node;
+      break;
+    }
+  }
+  if (carry && m_non_finite_node < 0) {
+    ScopedTimer timer(m_coupling_seconds);
+    const Vec3 given = m_carried->hand_back(before_impulses, m_cloth->velocities(), mesh, dt, p.positions,
+                                            p.velocities, p.masses);
+    m_coupling_stats.vertical_impulse_on_cloth -= given.y();
+  }
+  // A cloth or fluid that went non-finite is not coupled: its state means nothing any more.
+  const bool coupled = m_coupler && m_non_finite_node < 0 && status.ok();
+  m_last_coupling_status = 0;
+  if (coupled) {
+    ScopedTimer timer(m_coupling_seconds);
+    const FluidView view{&p.positions_t0, &p.positions, &p.velocities, &p.masses,
+                         m_carried ? &p.ids : nullptr};
+    if (m_carried) {
+      // The particles are corrected against the cloth where its engine put it; the cloth's share of every
+      // impulse reaches it at its next step (moving a light node with heavy water here is what the links
+      // would snap back).
+      const KinematicCloth kinematic(mesh);
+      m_last_coupling_status = m_coupler->step(view, mesh, dt, m_coupling_stats);
+      const Vec3Array& given = m_coupler->node_impulses();
+      for (std::size_t i = 0; i < given.size(); ++i) {
+        if (kinematic.own_inverse_masses()[i] > 0.0) m_pending_cloth_impulses[i] += given[i];
+      }
+      m_pending_links = m_coupler->impulse_links();
+    } else {
+      m_last_coupling_status = m_coupler->step(view, mesh, dt, m_coupling_stats);
+    }
+    m_coupling_status |= m_last_coupling_status;
+  }
+  if (m_leak_audit && m_non_finite_node < 0 && status.ok()) {
+    audit_leaks(p.positions_t0, p.positions, mesh, m_leak_stats);
+  }
+  ScopedTimer timer(m_cloth_seconds);
+  m_cloth->end_step(dt);
+}
+
+void Simulation::remove_killed() {
+  ParticleSet& particles = m_fluid->particles();
+  const std::size_t n = particles.size();
+  std::vector<std::uint8_t> remove(n, 0);
+  std::size_t flagged = 0;
+#pragma omp parallel for schedule(static) reduction(+ : flagged)
+  for (std::size_t i = 0; i < n; ++i) {
+    const Vec3& x = particles.positions[i];
+    for (const auto& region : m_config.kill_regions) {
+      const bool out = region.kind == KillRegionSettings::Kind::PLANE
+                           ? (x - region.point).dot(region.normal) < 0.0
+                           : ((x.array() < region.min.array()) || (x.array() > region.max.array())).any();
+      if (out) {
+        remove[i] = 1;
+        ++flagged;
+        break;
+      }
+    }
+  }
+  if (flagged > 0) m_removed += static_cast<std::int64_t>(particles.remove_flagged(remove));
+}
+
+}  // namespace drench

@@ -1,0 +1,127 @@
+#pragma once
+/// A scene brought to life: fluid, boundaries, emitters and kill regions built from a SceneConfig, stepped at
+/// the scene's dt.
+
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include <drench/coupling/carried_water.hpp>
+#include <drench/coupling/cloth_engine.hpp>
+#include <drench/coupling/cloth_obstacle.hpp>
+#include <drench/coupling/coupler.hpp>
+#include <drench/coupling/leak_audit.hpp>
+#include <drench/scene/scene_config.hpp>
+#include <drench/sph/emitters.hpp>
+#include <drench/sph/fluid_solver.hpp>
+
+namespace drench {
+
+/// Builds and steps everything a SceneConfig names. Only effects listed in `effects` are constructed.
+class Simulation {
+ public:
+  /// @throws SceneError when the scene cannot be built: it has a cloth but no cloth_factory, or settings
+  /// built
+  ///         in code fail a check the loader would have made (e.g. the coupler's). A scene whose emitters
+  ///         never create a particle is fine.
+  /// @param cloth_factory  builds the scene's cloth (the Bullet adapter's cloth_engine_factory()); required
+  ///        when the scene has a `cloth`, else SceneError
+  explicit Simulation(const SceneConfig& config, const ClothEngineFactory& cloth_factory = {});
+
+  /// With a cloth engine built by the caller (e.g. attached to a Bullet world the caller owns); config.cloth
+  /// is then not used. `cloth` may be null for a fluid-only simulation.
+  Simulation(const SceneConfig& config, std::unique_ptr<ClothEngine> cloth);
+
+  /// One step of the scene's dt, in the paper's pipeline order (sec. 5): the cloth records its start
+  /// positions; nozzles emit; the fluid advances alone (sub-stepping as it must); the cloth advances alone
+  /// (with "carried_water", carrying the water near it and handing its share back); the coupling corrects
+  /// the particles and, per coupling.scheme, the cloth now or at its next step (repulsion, friction,
+  /// continuous handling); the leak audit checks the final motion; the cloth takes its corrections; kill
+  /// regions remove the particles that left. Stages of effects the scene does not list are never built.
+  StepStatus step() { return step(m_config.time.dt); }
+  /// The same with a step other than the scene's (unit: s, > 0).
+  StepStatus step(Scalar dt);
+
+  /// True once the simulated time has reached the scene's duration (within a thousandth of a step).
+  bool finished() const;
+  /// Steps the scene's duration takes, round(duration / dt).
+  std::int64_t total_steps() const { return m_total_steps; }
+  std::int64_t steps_done() const { return m_steps; }
+  Scalar time() const { return m_time; }
+
+  const SceneConfig& config() const { return m_config; }
+  FluidSolver& fluid() { return *m_fluid; }
+  const FluidSolver& fluid() const { return *m_fluid; }
+  const ParticleSet& particles() const { return m_fluid->particles(); }
+  /// Particles removed by kill regions so far.
+  std::int64_t removed() const { return m_removed; }
+  /// Particles ever created.
+  std::int64_t created() const { return m_next_id; }
+  /// The effects that were constructed (the scene's `effects`, in its order).
+  const std::vector<std::string>& effects() const { return m_config.effects; }
+  /// The speed of sound in use (unit: m/s): the scene's, or the automatic one.
+  Scalar speed_of_sound() const { return m_speed_of_sound; }
+  /// Wall time spent emitting and removing particles (unit: s).
+  double emit_seconds() const { return m_emit_seconds; }
+
+  /// The coupler, or nullptr when the scene does not list "coupling" (or has no cloth).
+  Coupler* coupler() { return m_coupler.get(); }
+  /// The cloth, or nullptr for a fluid-only scene.
+  ClothEngine* cloth() { return m_cloth.get(); }
+  const ClothEngine* cloth() const { return m_cloth.get(); }
+  /// Coupling figures summed over all steps (zero without the "coupling" effect).
+  const CouplingStepStats& coupling_stats() const { return m_coupling_stats; }
+  /// Leak audit figures summed over all steps (zero without the "leak_audit" effect).
+  const LeakAuditStats& leak_stats() const { return m_leak_stats; }
+  /// Wall time of the cloth's own steps and of the whole coupling stage (unit: s).
+  double cloth_seconds() const { return m_cloth_seconds; }
+  double coupling_seconds() const { return m_coupling_seconds; }
+  /// COUPLING_* flags raised so far.
+  std::uint32_t coupling_status() const { return m_coupling_status; }
+  /// COUPLING_* flags of the last step.
+  std::uint32_t last_coupling_status() const { return m_last_coupling_status; }
+  /// Index of the first cloth node that was not finite after the cloth's own last step, or -1; the coupling
+  /// was then skipped and the step reports NON_FINITE_STATE.
+  std::int64_t non_finite_cloth_node() const { return m_non_finite_node; }
+  /// Impulses the last step owes the cloth, given at the start of its next step (unit: N s), M entries
+  /// (CouplingScheme::CARRIED_WATER; zero otherwise). Part of the total momentum between steps.
+  const Vec3Array& pending_cloth_impulses() const { return m_pending_cloth_impulses; }
+
+ private:
+  /// The cloth's side of a step, after the fluid's: impulses, the engine's step, the coupling (sec. 3,
+  /// 5), the leak audit, the corrections back into the engine.
+  void step_cloth_and_couple(Scalar dt, StepStatus& status);
+  void remove_killed();
+
+  SceneConfig m_config;
+  Scalar m_speed_of_sound;
+  std::unique_ptr<FluidSolver> m_fluid;
+  std::vector<NozzleEmitter> m_nozzles;
+  std::uint32_t m_next_id = 0;
+  std::int64_t m_steps = 0;
+  std::int64_t m_total_steps = 0;
+  std::int64_t m_removed = 0;
+  double m_emit_seconds = 0;
+  std::unique_ptr<ClothEngine> m_cloth;
+  std::unique_ptr<Coupler> m_coupler;
+  std::unique_ptr<ClothObstacle> m_obstacle;  // the cloth inside fluid sub-steps, kept across steps
+  std::unique_ptr<CarriedWater> m_carried;    // CouplingScheme::CARRIED_WATER only
+  Vec3Array m_pending_cloth_impulses;         // M, owed to the cloth at its next step (unit: N s)
+  ImpulseLinks m_pending_links;               // the particles that gave them, carried in that step
+  bool m_leak_audit = false;
+  CouplingStepStats m_coupling_stats;
+  LeakAuditStats m_leak_stats;
+  std::uint32_t m_coupling_status = 0;
+  std::uint32_t m_last_coupling_status = 0;
+  std::int64_t m_non_finite_node = -1;
+  Scalar m_time = 0;
+  double m_cloth_seconds = 0;
+  double m_coupling_seconds = 0;
+};
+
+/// Speed of sound a scene gets when fluid.wcsph.speed_of_sound is unset: 10 (sqrt(2 |g| H) + v_emit) (unit:
+/// m/s), H the scene's extent along gravity over its emitters, boundaries and patch cloth (not an OBJ cloth:
+/// its extent is unknown before the engine loads it), v_emit the fastest nozzle; at least 1 m/s.
+Scalar automatic_speed_of_sound(const SceneConfig& config);
+
+}  // namespace drench

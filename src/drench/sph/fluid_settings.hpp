@@ -1,0 +1,86 @@
+#pragma once
+/// Settings of the SPH fluid: rest state, pressure solver, viscosity, sub-stepping. Plain structs, kept apart
+/// from the solver they configure (fluid_solver.hpp), filled from a scene's `fluid` section by the scene
+/// loader or set in code. Every member states its unit and default; docs/scenes.md documents the same keys.
+
+#include <optional>
+
+#include <drench/common/types.hpp>
+
+namespace drench {
+
+/// Which pressure solver runs. Selected by name in the scene (`fluid.pressure_solver`).
+enum class PressureSolverKind { WCSPH, PCISPH };
+
+/// Weakly compressible SPH, Becker & Teschner 2007: Tait equation p = B ((rho / rho0)^gamma - 1).
+struct WcsphSettings {
+  /// Numerical speed of sound c (unit: m/s), B = rho0 c^2 / gamma. Unset: 10 x the scene's expected maximum
+  /// speed (sqrt(2 g H) over the scene's height H plus the fastest emitter), i.e. Mach 0.1 and about 1%
+  /// density variation (Monaghan 1994).
+  std::optional<Scalar> speed_of_sound;
+  Scalar exponent = 7.0;  ///< gamma of the Tait equation (dimensionless), >= 1
+};
+
+/// Floating-point precision of PCISPH's iterations: the density and pressure passes over neighbor pairs that
+/// each iteration runs (fluid.pcisph.precision). Pressures, densities, velocities and positions are double
+/// either way.
+enum class IterationPrecision {
+  SINGLE,  ///< the pair sums in float (sph_densities_float, pressure_accelerations_float)
+  DOUBLE   ///< the pair sums in double (sph_densities, pressure_accelerations)
+};
+
+/// Predictive-corrective incompressible SPH, Solenthaler & Pajarola 2009.
+struct PcisphSettings {
+  Scalar eta = 0.001;      ///< target average density error (fraction of rest density), > 0
+  int min_iterations = 3;  ///< at least this many correction iterations per sub-step, >= 1 (SPlisHSPlasH: 3)
+  int max_iterations = 100;  ///< at most this many, >= min_iterations
+  /// The largest compression (fraction of rest density, > 0) one iteration corrects for one particle; unset
+  /// = none, as published. A drench addition: a compression made outside the fluid's forces (the
+  /// coupling's position corrections, a hand-back, an emitter) is otherwise undone within one CFL sub-step,
+  /// at a speed of about compression x spacing / sub-step that shrinks the next sub-step and feeds itself.
+  /// With the limit it is undone over several iterations and sub-steps; a settled or smoothly moving fluid
+  /// stays below it and is not changed. Without it the jet on a 5 mm cloth blows up (docs/accuracy.md).
+  std::optional<Scalar> max_compression_per_iteration = 0.05;
+  /// The largest compression (fraction of rest density, > 0) one sub-step relieves for one particle; unset
+  /// = all of it, as published. A drench addition: a particle that enters a sub-step compressed by more
+  /// (its density at the sub-step's start) is driven to that density minus this limit instead of the rest
+  /// density, the rest left to the next sub-steps; the compression its motion within the sub-step would
+  /// add is resisted in full, as published. Stopping water against a moving cloth stacks particles between
+  /// the fluid's steps, and undoing that inside one CFL sub-step throws them far faster than the flow;
+  /// without the limit the jet on a cloth at dt 4 ms blows up (docs/accuracy.md).
+  std::optional<Scalar> max_relief_per_substep = 0.05;
+  /// Precision of the iterations' pair sums. Single (the default) agrees with double to about 1e-5 of a
+  /// density and is faster (bench_dam_break's double rows, docs/performance.md). Double is also used,
+  /// whatever this says, when particle masses differ.
+  IterationPrecision precision = IterationPrecision::SINGLE;
+};
+
+/// Viscosity method. Constructed only when the scene's `effects` lists "viscosity".
+enum class ViscosityKind {
+  XSPH,       ///< velocity smoothing v_i += c sum_j m_j / rho_j (v_j - v_i) W_ij (Monaghan 1989)
+  ARTIFICIAL  ///< Monaghan's artificial viscosity Pi_ij with coefficient alpha (Monaghan 1992)
+};
+
+struct ViscositySettings {
+  ViscosityKind method = ViscosityKind::XSPH;
+  /// Dimensionless coefficient (XSPH c or artificial alpha), >= 0. 0.01 is SPlisHSPlasH's standard value.
+  Scalar coefficient = 0.01;
+};
+
+/// The fluid of a scene (`fluid` in docs/scenes.md).
+struct FluidSettings {
+  Scalar rest_density = 1000.0;    ///< rho0 (unit: kg/m^3), > 0
+  Scalar particle_spacing = 0.05;  ///< rest spacing of the particle lattice (unit: m), > 0; particle mass is
+                                   ///< rho0 spacing^3 and the kernel support radius is 2 spacing
+  PressureSolverKind pressure_solver = PressureSolverKind::PCISPH;
+  WcsphSettings wcsph;
+  PcisphSettings pcisph;
+  ViscositySettings viscosity;
+  /// CFL factor lambda (dimensionless), in (0, 1]: a fluid sub-step never exceeds lambda spacing / v_max,
+  /// with v_max the fastest particle (plus the speed of sound for WCSPH).
+  Scalar cfl = 0.4;
+  /// Fluid sub-steps between re-sorting particles along a z-order curve for cache locality, >= 1.
+  int sort_interval = 10;
+};
+
+}  // namespace drench

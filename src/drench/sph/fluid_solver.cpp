@@ -1,0 +1,187 @@
+#include <drench/sph/fluid_solver.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include <drench/common/parallel.hpp>
+#include <drench/common/stopwatch.hpp>
+#include <drench/sph/boundary_sampling.hpp>
+
+namespace drench {
+
+namespace {
+/// Skin of a neighbor search whose lists are reused over sub-steps, as a fraction of the kernel support. 0.2:
+/// (1.2)^3 = 1.73 times the candidates of an exact search, kept while no particle moves 0.1 support.
+constexpr Scalar kSkinOfSupport = 0.2;
+}  // namespace
+
+StepStatus& StepStatus::operator|=(const StepStatus& other) {
+  flags |= other.flags;
+  if (non_finite_particle < 0) non_finite_particle = other.non_finite_particle;
+  if (non_finite_node < 0) non_finite_node = other.non_finite_node;
+  return *this;
+}
+
+std::string StepStatus::describe() const {
+  std::string text;
+  if (flags & NON_FINITE_STATE) {
+    text += "NON_FINITE_STATE: particle id " + std::to_string(non_finite_particle) +
+            " has a NaN or infinite position or velocity (lower time.dt or fluid.cfl)";
+  }
+  if (flags & PRESSURE_NOT_CONVERGED) {
+    if (!text.empty()) text += "; ";
+    text += "PRESSURE_NOT_CONVERGED: PCISPH reached fluid.pcisph.max_iterations above eta";
+  }
+  if (flags & NON_FINITE_CLOTH) {
+    if (!text.empty()) text += "; ";
+    text += "NON_FINITE_CLOTH: cloth node " + std::to_string(non_finite_node) +
+            " has a NaN or infinite position (lower time.dt, raise cloth.position_iterations)";
+  }
+  return text;
+}
+
+FluidSolver::FluidSolver(const FluidSettings& settings, const Vec3& gravity, BoundaryParticles boundary,
+                         std::vector<BoundarySettings> guards, bool with_viscosity, Scalar speed_of_sound)
+    : m_settings(settings),
+      m_gravity(gravity),
+      m_kernel(settings.particle_spacing),
+      m_guards(std::move(guards)),
+      m_neighbors(m_kernel, kSkinOfSupport * m_kernel.support_radius(), std::move(boundary.positions)),
+      m_pressure(make_pressure_solver(settings, speed_of_sound)) {
+  const Vec3Array& points = m_neighbors.boundary_points();
+  m_boundary_packed.resize(points.size());
+  for (std::size_t b = 0; b < points.size(); ++b)
+    m_boundary_packed[b] = packed(points[b], settings.rest_density * boundary.volumes[b]);
+  if (with_viscosity) m_viscosity = make_viscosity(settings.viscosity, speed_of_sound);
+}
+
+Scalar FluidSolver::particle_mass() const {
+  const Scalar s = m_settings.particle_spacing;
+  return m_settings.rest_density * s * s * s;
+}
+
+void FluidSolver::update_neighbors(Scalar max_displacement) {
+  ScopedTimer timer(m_stats.timings_s.neighbors);
+  if (m_stats.substeps % m_settings.sort_interval == 0) {
+    m_particles.permute(m_neighbors.z_order(m_particles.positions));
+  }
+  // A search with a skin pays for (1 + kSkinOfSupport)^3 more candidates, so it is made only when its lists
+  // can serve at least two sub-steps (the fastest particle moving less than a quarter of the skin per
+  // sub-step): WCSPH's short sub-steps; PCISPH's long ones search exactly to the support every time.
+  const Scalar skin = kSkinOfSupport * m_kernel.support_radius();
+  if (m_neighbors.update(m_particles.positions, m_particles.ids, 4.0 * max_displacement <= skin ? skin : 0.0))
+    ++m_stats.neighbor_searches;
+}
+
+Scalar FluidSolver::max_speed() const {
+  Scalar max_speed_sq = 0.0;
+  const auto& v = m_particles.velocities;
+#pragma omp parallel for schedule(static) reduction(max : max_speed_sq)
+  for (std::size_t i = 0; i < v.size(); ++i)
+    max_speed_sq = std::max(max_speed_sq, v[i].squaredNorm());
+  return std::sqrt(max_speed_sq);
+}
+
+Scalar FluidSolver::cfl_limit(Scalar max_speed) const {
+  const Scalar speed = max_speed + m_pressure->signal_speed();
+  if (!(speed > 0.0)) return std::numeric_limits<Scalar>::infinity();
+  return m_settings.cfl * m_settings.particle_spacing / speed;
+}
+
+StepStatus FluidSolver::step(Scalar dt, SubstepConstraint* constraint) {
+  ScopedTimer timer(m_stats.timings_s.total);
+  StepStatus status;
+  ++m_stats.steps;
+  m_particles.positions_t0 = m_particles.positions;
+  if (m_particles.empty()) return status;
+  Scalar remaining = dt;
+  int count = 0;
+  while (true) {
+    const Scalar speed = max_speed();
+    const Scalar limit = cfl_limit(speed);
+    // A NaN limit means a NaN velocity: take one sub-step so that the check below names the particle.
+    const Scalar wanted = std::isfinite(limit) ? std::ceil(remaining / limit) : 1.0;
+    const int n = static_cast<int>(std::clamp(wanted, 1.0, 1e6));
+    const Scalar sub = n == 1 ? remaining : remaining / n;
+    status |= substep(sub, speed, constraint);
+    ++count;
+    if (n == 1 || !status.ok()) break;
+    remaining -= sub;
+  }
+  m_stats.max_substeps_per_step = std::max(m_stats.max_substeps_per_step, count);
+  return status;
+}
+
+StepStatus FluidSolver::substep(Scalar dt, Scalar max_speed, SubstepConstraint* constraint) {
+  update_neighbors(max_speed * dt);
+  ++m_stats.substeps;
+  const std::size_t n = m_particles.size();
+  const FluidContext ctx{m_kernel,
+                         m_particles,
+                         m_neighbors.fluid(),
+                         m_neighbors.boundary(),
+                         m_boundary_packed,
+                         m_settings.rest_density,
+                         m_settings.particle_spacing,
+                         m_neighbors.fluid_gradient_factors(),
+                         m_neighbors.boundary_gradient_factors(),
+                         m_particles.common_mass()};
+  {
+    ScopedTimer timer(m_stats.timings_s.density);
+    m_positions_mass.resize(n);
+#pragma omp parallel for schedule(static)
+    for (std::size_t i = 0; i < n; ++i)
+      m_positions_mass[i] = packed(m_particles.positions[i], m_particles.masses[i]);
+    for_each_chunk(n, [&](std::size_t begin, std::size_t end) {
+      sph_densities(ctx, m_positions_mass, begin, end, &m_particles.densities[begin]);
+    });
+  }
+  {
+    ScopedTimer timer(m_stats.timings_s.forces);
+    m_accelerations.assign(n, m_gravity);
+    if (m_viscosity) m_viscosity->add_accelerations(ctx, dt, m_accelerations);
+    m_velocities_adv.resize(n);
+#pragma omp parallel for schedule(static)
+    for (std::size_t i = 0; i < n; ++i)
+      m_velocities_adv[i] = m_particles.velocities[i] + dt * m_accelerations[i];
+  }
+  PressureStats pressure;
+  {
+    ScopedTimer timer(m_stats.timings_s.pressure);
+    pressure = m_pressure->solve(ctx, m_velocities_adv, dt, m_pressure_accelerations);
+  }
+  m_stats.pressure_iterations += pressure.iterations;
+  m_stats.max_pressure_iterations = std::max(m_stats.max_pressure_iterations, pressure.iterations);
+  m_stats.density_error_sum += pressure.average_density_error;
+  m_stats.density_error_max = std::max(m_stats.density_error_max, pressure.average_density_error);
+  m_stats.particle_density_error_max =
+      std::max(m_stats.particle_density_error_max, pressure.max_density_error);
+
+  StepStatus status;
+  if (!pressure.converged) status.flags |= StepStatus::PRESSURE_NOT_CONVERGED;
+  ScopedTimer timer(m_stats.timings_s.integrate);
+  if (constraint) m_positions_before = m_particles.positions;
+  std::size_t first_bad = n;
+  std::int64_t guarded = 0;
+#pragma omp parallel for schedule(static) reduction(min : first_bad) reduction(+ : guarded)
+  for (std::size_t i = 0; i < n; ++i) {
+    Vec3& v = m_particles.velocities[i];
+    Vec3& x = m_particles.positions[i];
+    v = m_velocities_adv[i] + dt * m_pressure_accelerations[i];
+    const Vec3 x_t0 = x;
+    x += dt * v;
+    for (const BoundarySettings& guard : m_guards)
+      guarded += enforce_boundary(guard, x_t0, x, v) ? 1 : 0;
+    if (!v.allFinite() || !x.allFinite()) first_bad = std::min(first_bad, i);
+  }
+  m_stats.boundary_guards += guarded;
+  if (constraint) constraint->apply(m_positions_before, m_particles, dt);
+  if (first_bad < n) {
+    status.flags |= StepStatus::NON_FINITE_STATE;
+    status.non_finite_particle = m_particles.ids[first_bad];
+  }
+  return status;
+}
+
+}  // namespace drench

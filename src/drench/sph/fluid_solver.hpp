@@ -1,0 +1,124 @@
+#pragma once
+/// The SPH fluid: neighbor search, density, non-pressure forces, pressure solve and symplectic Euler
+/// integration, sub-stepped under a CFL limit inside the scene's step.
+
+#include <cstdint>
+#include <memory>
+#include <string>
+
+#include <drench/sph/boundary_sampling.hpp>
+#include <drench/sph/boundary_settings.hpp>
+#include <drench/sph/cubic_spline_kernel.hpp>
+#include <drench/sph/fluid_settings.hpp>
+#include <drench/sph/forces/viscosity.hpp>
+#include <drench/sph/particle_set.hpp>
+#include <drench/sph/pressure/pressure_solver.hpp>
+#include <drench/sph/verlet_neighbor_lists.hpp>
+
+namespace drench {
+
+/// Outcome of a step. Numerical trouble inside a step is reported here, never thrown.
+struct StepStatus {
+  enum Flag : std::uint32_t {
+    /// A particle's position or velocity became NaN or infinite; `non_finite_particle` names its id. The
+    /// state is no longer meaningful: lower dt or the CFL factor, or check the scene's stiffness.
+    NON_FINITE_STATE = 1u << 0,
+    /// PCISPH stopped at max_iterations with the density error above eta in some sub-step. The step is still
+    /// usable; raise max_iterations or lower dt if it persists.
+    PRESSURE_NOT_CONVERGED = 1u << 1,
+    /// A cloth node's position became NaN or infinite after the cloth's own step; `non_finite_node` names it
+    /// and the coupling was skipped. Lower dt, raise the cloth's position iterations, check its masses.
+    NON_FINITE_CLOTH = 1u << 2,
+  };
+  std::uint32_t flags = 0;
+  std::int64_t non_finite_particle = -1;  ///< id of the first non-finite particle, or -1
+  std::int64_t non_finite_node = -1;      ///< index of the first non-finite cloth node, or -1
+
+  bool ok() const { return (flags & (NON_FINITE_STATE | NON_FINITE_CLOTH)) == 0; }
+  StepStatus& operator|=(const StepStatus& other);
+  /// One line naming each raised flag (and the particle id), empty when no flag is raised.
+  std::string describe() const;
+};
+
+/// Counters and timers over the fluid's whole life, the source of the summary's fluid keys.
+struct FluidStatistics {
+  std::int64_t steps = 0;
+  std::int64_t substeps = 0;
+  int max_substeps_per_step = 0;
+  std::int64_t pressure_iterations = 0;   ///< summed over sub-steps
+  int max_pressure_iterations = 0;        ///< in one sub-step
+  Scalar density_error_sum = 0;           ///< sum over sub-steps of the average density error
+  Scalar density_error_max = 0;           ///< largest average density error of a sub-step
+  Scalar particle_density_error_max = 0;  ///< largest density error of any particle in any sub-step
+  std::int64_t boundary_guards = 0;       ///< particles put back by enforce_boundary, over all sub-steps
+  std::int64_t neighbor_searches = 0;     ///< sub-steps whose neighbor lists came from a grid search (the
+                                          ///< others reused the last search's candidates)
+  struct Timings {
+    double total = 0, neighbors = 0, density = 0, forces = 0, pressure = 0, integrate = 0;
+  } timings_s;  ///< wall time per stage (unit: s)
+};
+
+/// An SPH fluid with static boundary particles.
+/// A constraint applied at the end of every fluid sub-step, after integration: the coupling uses it to let
+/// the fluid see the cloth inside its sub-steps (coupling/cloth_obstacle.hpp). The fluid solver knows nothing
+/// else about it.
+class SubstepConstraint {
+ public:
+  virtual ~SubstepConstraint() = default;
+  /// @param positions_before  N particle positions at the start of the sub-step (unit: m)
+  /// @param particles  after integration; positions and velocities may be changed
+  /// @param dt  the sub-step (unit: s)
+  virtual void apply(const Vec3Array& positions_before, ParticleSet& particles, Scalar dt) = 0;
+};
+
+class FluidSolver {
+ public:
+  /// @param gravity  (unit: m/s^2)
+  /// @param boundary  boundary particles, e.g. from sample_box_container
+  /// @param guards  the analytic boundaries behind those particles, enforced by enforce_boundary
+  /// @param with_viscosity  builds the viscosity of settings.viscosity (the "viscosity" effect)
+  /// @param speed_of_sound  WCSPH's c and the artificial viscosity's c (unit: m/s), > 0
+  FluidSolver(const FluidSettings& settings, const Vec3& gravity, BoundaryParticles boundary,
+              std::vector<BoundarySettings> guards, bool with_viscosity, Scalar speed_of_sound);
+
+  ParticleSet& particles() { return m_particles; }
+  const ParticleSet& particles() const { return m_particles; }
+  const Vec3Array& boundary_positions() const { return m_neighbors.boundary_points(); }
+  const FluidSettings& settings() const { return m_settings; }
+  const CubicSplineKernel& kernel() const { return m_kernel; }
+  const FluidStatistics& statistics() const { return m_stats; }
+  /// Mass of one particle, rest_density * spacing^3 (unit: kg).
+  Scalar particle_mass() const;
+
+  /// Advances the fluid by dt (unit: s, > 0), in as many equal-ish sub-steps as the CFL limit asks.
+  /// @param constraint  optional, applied after every sub-step (must outlive the call)
+  StepStatus step(Scalar dt, SubstepConstraint* constraint = nullptr);
+
+ private:
+  /// @param max_displacement  how far the fastest particle may move in the coming sub-step (unit: m): decides
+  ///        the skin of a new grid search
+  void update_neighbors(Scalar max_displacement);
+  StepStatus substep(Scalar dt, Scalar max_speed, SubstepConstraint* constraint);
+  /// Fastest particle speed (unit: m/s); NaN when a velocity is NaN.
+  Scalar max_speed() const;
+  /// The CFL sub-step for the fastest particle moving at `max_speed` (unit: s); infinite when nothing moves.
+  Scalar cfl_limit(Scalar max_speed) const;
+
+  FluidSettings m_settings;
+  Vec3 m_gravity;
+  CubicSplineKernel m_kernel;
+  ParticleSet m_particles;
+  std::vector<BoundarySettings> m_guards;
+  PackedPointArray m_boundary_packed;  // x_b (unit: m), w = Akinci's Psi_b = rho0 V_b (unit: kg)
+  VerletNeighborLists m_neighbors;
+  PackedPointArray m_positions_mass;  // positions (unit: m), w = mass (unit: kg), for the densities
+  Vec3Array m_positions_before;       // sub-step start positions, kept only for a SubstepConstraint
+  std::unique_ptr<PressureSolver> m_pressure;
+  std::unique_ptr<NonPressureForce> m_viscosity;
+  Vec3Array m_accelerations;
+  Vec3Array m_velocities_adv;
+  Vec3Array m_pressure_accelerations;
+  FluidStatistics m_stats;
+};
+
+}  // namespace drench

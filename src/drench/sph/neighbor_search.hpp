@@ -1,0 +1,121 @@
+#pragma once
+/// Fixed-radius neighbor search on a uniform grid of cells one support radius wide, with cells keyed by
+/// z-order (Morton) codes so that sorting particles by key also sorts them along a space-filling curve.
+
+#include <cstdint>
+
+#include <drench/common/key_index_table.hpp>
+#include <drench/common/types.hpp>
+
+namespace drench {
+
+/// Neighbors of N query points in compressed rows: the neighbors of point i are
+/// indices[offsets[i] .. offsets[i + 1]), in a deterministic order (by cell, then by source index).
+struct NeighborList {
+  std::vector<std::uint32_t> offsets;  ///< N + 1
+  IndexArray indices;                  ///< indices into the source point set
+
+  std::size_t count(std::size_t i) const { return offsets[i + 1] - offsets[i]; }
+  const Index* begin(std::size_t i) const { return indices.data() + offsets[i]; }
+  const Index* end(std::size_t i) const { return indices.data() + offsets[i + 1]; }
+};
+
+/// One number per entry of a NeighborList: the kernel gradient factor f of the pair (grad W = f (x_i - x_j),
+/// unit: 1/m^5), in single precision. PCISPH's pressure loop streams the factors every iteration; as floats
+/// the stream is a third smaller (with the indices), and the 59K dam break's pressure phase ran 2-21% faster
+/// in five interleaved 100-step runs on 1 thread (README, Performance, has the command; a warm-cache
+/// benchmark of the loop alone showed no difference, so the gain is the cache the other passes keep). The
+/// relative rounding, at most 2^-24, is far below any solver tolerance, and f_ij = f_ji still holds exactly
+/// (the same squared distance).
+using GradientFactorArray = std::vector<float>;
+
+/// The inner loop of NeighborSearch::find, which keeps the candidates within the radius of a query
+/// (sph/candidate_scan.hpp).
+enum class CandidateScan {
+  kFourLanes = 0,       ///< four candidates at a time, GCC's vector extension: any CPU
+  kAvx2Permute = 1,     ///< eight at a time, AVX2's lane permute and a table: CPUs with AVX2 (x86-64-v3)
+  kAvx512Compress = 2,  ///< eight at a time, AVX-512's compress: CPUs with AVX-512 (x86-64-v4)
+};
+
+/// Uniform-grid neighbor search. `build` sorts the source points into cells; `find` answers, for every query
+/// point, all source points at distance strictly less than the support radius. When the points' bounding box
+/// holds few enough cells (at most 128 per point and 2^24 in all, or at most 4 per point), cells live in a
+/// dense array filled by a counting sort;
+/// otherwise (a jet spread far) in an open-addressing hash of their Morton keys, so the domain is unbounded
+/// (up to 2^20 cells from the origin on each axis; farther points are clamped into the outermost cells,
+/// which stays correct but slow).
+class NeighborSearch {
+ public:
+  /// @param support_radius  search radius and cell size (unit: m), > 0
+  explicit NeighborSearch(Scalar support_radius);
+
+  Scalar support_radius() const { return m_radius; }
+
+  /// Sorts `points` (N, unit: m, finite) into cells. The points are copied; later calls to `find` use them.
+  void build(const Vec3Array& points);
+
+  /// For each query point, the source points within the support radius. Not to be called concurrently on one
+  /// object (it reuses per-thread scratch buffers).
+  /// @param queries  M points (unit: m, finite)
+  /// @param exclude_self  skip source index i for query i (queries and sources are the same set)
+  void find(const Vec3Array& queries, NeighborList& out, bool exclude_self) const;
+
+  /// Permutation that orders `points` along the z-order curve of their cells (ties by index): new position k
+  /// holds old index order[k].
+  IndexArray z_order(const Vec3Array& points) const;
+
+  /// Morton key of the cell holding `x`.
+  std::uint64_t cell_key(const Vec3& x) const;
+
+  /// True when the last build kept its cells in the dense array, false when it hashed them (the tests check
+  /// that each layout is exercised).
+  bool dense() const { return m_dense; }
+
+  /// The inner loop of find(): the fastest the CPU and the build allow by default. All give the same lists in
+  /// the same order; tests and benchmarks pick each to compare them on one CPU.
+  CandidateScan candidate_scan() const { return m_scan; }
+  /// Picks find()'s inner loop; false (and no change) when the CPU or the build lacks it.
+  bool set_candidate_scan(CandidateScan scan);
+  /// True when the CPU and the build can run `scan`.
+  static bool candidate_scan_available(CandidateScan scan);
+
+ private:
+  /// Where the candidates of a query lie in the sorted arrays (m_xs, ...): the runs [begin[r], end[r]),
+  /// r < runs, in find()'s order (nine rows of three cells in the dense grid, up to 27 cells in the hashed
+  /// one), `total` points in all.
+  struct CandidateRuns {
+    std::uint32_t begin[27];
+    std::uint32_t end[27];
+    int runs = 0;
+    std::uint32_t total = 0;
+  };
+
+  /// out = the runs of sorted points in the 27 cells around `cell`, in find()'s order (empty runs left out).
+  void candidate_runs(const Vec3i& cell, CandidateRuns& out) const;
+  std::uint64_t key_of_cell(const Vec3i& cell) const;
+  Vec3i cell_of(const Vec3& x) const;
+  /// Sorted-point range [begin, end) of a cell; false when the cell is empty or unknown.
+  bool cell_range(const Vec3i& cell, std::uint32_t& begin, std::uint32_t& end) const;
+  /// Dense mode only: the sorted-point range of `count` cells from `cell` along +x (clipped to the grid);
+  /// false when empty.
+  bool row_range(const Vec3i& cell, int count, std::uint32_t& begin, std::uint32_t& end) const;
+  void build_dense(const std::vector<Vec3i>& cells, const Vec3i& lo, const Vec3i& dims);
+  void build_hashed(const Vec3Array& points);
+
+  Scalar m_radius;
+  Scalar m_inv_cell;
+  // Source points in sorted (cell) order, one array per coordinate (the scans read runs of them in place),
+  // and the original index of each.
+  ScalarArray m_xs, m_ys, m_zs;
+  IndexArray m_sorted_index;                // n entries, then kScanPadding
+  std::size_t m_count = 0;                  // source points of the last build
+  KeyIndexTable m_cells;                    // hashed mode: the distinct keys, ascending, and their table
+  std::vector<std::uint32_t> m_cell_begin;  // first sorted point of each cell; one extra end entry
+  bool m_dense = false;
+  CandidateScan m_scan = CandidateScan::kFourLanes;
+  Vec3i m_lo = Vec3i::Zero();                        // dense mode: first cell of the grid
+  Vec3i m_dims = Vec3i::Zero();                      // dense mode: cells per axis
+  mutable std::vector<IndexArray> m_thread_buffers;  // find(): one result buffer per thread, kept for reuse
+};
+
+}  // namespace drench
