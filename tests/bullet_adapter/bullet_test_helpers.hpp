@@ -4,16 +4,38 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <limits>
 #include <string>
 
+#include <drench/bullet/bullet_conversions.hpp>
 #include <drench/common/error.hpp>
 #include <drench/coupling/cloth_engine.hpp>
 
 namespace drench::bullet::test {
+
+/// Bullet's unit roundoff: 2^-52 with BT_USE_DOUBLE_PRECISION, 2^-23 in single precision.
+inline constexpr double kBulletEpsilon = std::numeric_limits<btScalar>::epsilon();
+
+/// A value as Bullet stores it: itself with double Bullet, rounded to float with single.
+inline double as_bullet(double x) {
+  return static_cast<double>(static_cast<btScalar>(x));
+}
+inline Vec3 as_bullet(const Vec3& v) {
+  return to_vec3(to_bt(v));
+}
+
+/// The tolerance of an expectation on a value of about `magnitude` that went through Bullet's storage or
+/// arithmetic: the one the double build is held to, or `ulps` units of Bullet's rounding of the magnitude,
+/// whichever is larger. The double build keeps its tolerance; a single-precision build is held to its own
+/// rounding, not excused from the check.
+inline double bullet_tolerance(double double_tolerance, double magnitude, double ulps = 4.0) {
+  return std::max(double_tolerance, ulps * kBulletEpsilon * magnitude);
+}
 
 inline ClothSettings patch_settings(int nodes_x, int nodes_z, const std::string& pinned = "corners") {
   ClothSettings s;

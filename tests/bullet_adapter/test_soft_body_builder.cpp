@@ -15,6 +15,8 @@
 namespace drench::bullet {
 namespace {
 
+using test::as_bullet;
+using test::bullet_tolerance;
 using test::expect_scene_error;
 using test::patch_settings;
 using test::write_temp_file;
@@ -93,8 +95,9 @@ TEST(SoftBodyBuilder, PatchNodesLieOnTheGridInThePlaneOfTheCentre) {
     for (int i = 0; i < s.nodes_x; ++i) {
       const Vec3 expected = s.center + Vec3(-0.5 * s.size_x + i * dx, 0.0, -0.5 * s.size_z + k * dz);
       const Vec3 x = to_vec3(body->m_nodes[k * s.nodes_x + i].m_x);
-      EXPECT_LT((x - expected).norm(), 1e-15) << "node (" << i << ", " << k << ")";  // lerp rounding (m)
-      EXPECT_EQ(x.y(), s.center.y());
+      EXPECT_LT((x - expected).norm(), bullet_tolerance(1e-15, expected.norm()))
+          << "node (" << i << ", " << k << ")";  // lerp rounding (m)
+      EXPECT_EQ(x.y(), as_bullet(s.center.y()));
     }
   }
 }
@@ -110,18 +113,25 @@ TEST(SoftBodyBuilder, NodeMassesAreAreaDensityTimesAdjacentAreaOverThree) {
       ++adjacent[node_index(*body, body->m_faces[f].m_n[k])];
   }
   const ScalarArray set = node_masses_from_area(*body, s.area_density);
+  // The areas come from corners Bullet stores rounded: an edge of length l between points of size |x| is off
+  // by about |x| / l units of rounding.
+  const double area_ulps = 4.0 * (s.center.norm() + s.size_x) / (s.size_z / (s.nodes_z - 1));
   double total = 0;
   for (int i = 0; i < body->m_nodes.size(); ++i) {
     const double expected = s.area_density * adjacent[i] * (0.5 * cell) / 3.0;
     const double im = body->m_nodes[i].m_im;
-    EXPECT_EQ(im, 1.0 / set[i]) << "node " << i;  // setMass stores exactly 1 / mass
-    EXPECT_NEAR(1.0 / im, expected, 1e-12 * expected) << "node " << i;
-    EXPECT_NEAR(body->getMass(i), expected, 1e-12 * expected) << "node " << i;
+    EXPECT_EQ(im, as_bullet(1.0 / as_bullet(set[i]))) << "node " << i;  // setMass stores exactly 1 / mass
+    EXPECT_NEAR(1.0 / im, expected, bullet_tolerance(1e-12 * expected, expected, area_ulps)) << "node " << i;
+    EXPECT_NEAR(body->getMass(i), expected, bullet_tolerance(1e-12 * expected, expected, area_ulps))
+        << "node " << i;
     total += 1.0 / im;
   }
   const double cloth_mass = s.area_density * s.size_x * s.size_z;
-  EXPECT_NEAR(total, cloth_mass, 1e-12 * cloth_mass);
-  EXPECT_NEAR(body->getTotalMass(), cloth_mass, 1e-12 * cloth_mass);
+  // A sum of n rounded terms is within n units of rounding of the total.
+  const double n = body->m_nodes.size();
+  EXPECT_NEAR(total, cloth_mass, bullet_tolerance(1e-12 * cloth_mass, cloth_mass, area_ulps + n));
+  EXPECT_NEAR(body->getTotalMass(), cloth_mass,
+              bullet_tolerance(1e-12 * cloth_mass, cloth_mass, area_ulps + n));
 }
 
 TEST(SoftBodyBuilder, PinnedNodesHaveInverseMassZeroAndNoOtherDoes) {
@@ -161,13 +171,13 @@ TEST(SoftBodyBuilder, SettingsReachTheBody) {
   s.bending_stiffness = 0.3;
   s.damping = 0.05;
   const auto body = create_cloth_body(info, s);
-  EXPECT_EQ(body->getCollisionShape()->getMargin(), CLOTH_COLLISION_MARGIN);
+  EXPECT_EQ(body->getCollisionShape()->getMargin(), as_bullet(CLOTH_COLLISION_MARGIN));
   EXPECT_EQ(body->m_cfg.piterations, 7);
-  EXPECT_EQ(body->m_cfg.kDP, 0.05);
+  EXPECT_EQ(body->m_cfg.kDP, as_bullet(0.05));
   EXPECT_EQ(body->m_cfg.collisions, int(btSoftBody::fCollision::SDF_RS));
   ASSERT_EQ(body->m_materials.size(), 2);
-  EXPECT_EQ(body->m_materials[0]->m_kLST, 0.8);
-  EXPECT_EQ(body->m_materials[1]->m_kLST, 0.3);
+  EXPECT_EQ(body->m_materials[0]->m_kLST, as_bullet(0.8));
+  EXPECT_EQ(body->m_materials[1]->m_kLST, as_bullet(0.3));
   int bending = 0;
   for (int l = 0; l < body->m_links.size(); ++l) {
     const bool is_bending = body->m_links[l].m_bbending != 0;
@@ -211,9 +221,9 @@ TEST(SoftBodyBuilder, BendingLinksEqualBulletsGenerateBendingConstraints) {
 TEST(SoftBodyBuilder, FromTrianglesEqualsBulletsCreateFromTriMesh) {
   btSoftBodyWorldInfo info;
   const TriangleMesh mesh = irregular_mesh();
-  std::vector<double> vertices;
+  std::vector<btScalar> vertices;
   for (const Vec3& x : mesh.positions)
-    vertices.insert(vertices.end(), {x.x(), x.y(), x.z()});
+    vertices.insert(vertices.end(), {btScalar(x.x()), btScalar(x.y()), btScalar(x.z())});
   std::vector<int> indices;
   for (const Triangle& t : mesh.triangles)
     indices.insert(indices.end(), {int(t[0]), int(t[1]), int(t[2])});
@@ -263,7 +273,7 @@ TEST(SoftBodyBuilder, ObjMeshIsTriangulatedAndUnusedVerticesDropped) {
   EXPECT_EQ(body->m_nodes.size(), 6);
   EXPECT_EQ(body->m_faces.size(), 4);
   const double cloth_mass = 0.3 * 1.0 * 0.5;
-  EXPECT_NEAR(body->getTotalMass(), cloth_mass, 1e-12 * cloth_mass);
+  EXPECT_NEAR(body->getTotalMass(), cloth_mass, bullet_tolerance(1e-12 * cloth_mass, cloth_mass, 6));
 
   s.pinned = "corners";  // the nodes extreme in -x-z, x-z, -x+z, x+z: the strip's four corners
   const auto pinned = create_cloth_body(info, s);

@@ -174,6 +174,7 @@ void BulletCloth::end_step(double dt) {
     const Vec3 dv = (corrected - predicted) / dt;
     node.m_x = to_bt(corrected);
     node.m_v += to_bt(dv);
+    corrected = to_vec3(node.m_x);  // what a single-precision Bullet holds, for the leak audit after this
     moved = true;
   }
   if (moved) {

@@ -8,7 +8,8 @@
 ///                  ClothSettings::substeps, else 1); then capture_end()
 ///   capture_end()  positions_t1 = m_x, remembered as the predicted end positions
 ///   (the coupler corrects mesh().positions_t1 in place)
-///   end_step(dt)   for every node that can move: m_x = corrected, m_v += (corrected - predicted) / dt
+///   end_step(dt)   for every node that can move: m_x = corrected, m_v += (corrected - predicted) / dt,
+///                  and positions_t1 = m_x (rounded to float with DRENCH_BULLET_PRECISION=single)
 ///
 /// Why between steps: Bullet's next step starts from m_x and m_v (predictMotion: v += g dt, q = x, x += v
 /// dt), so a change written there survives; one written inside Bullet's step after the soft-body solve would

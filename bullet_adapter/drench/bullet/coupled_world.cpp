@@ -36,7 +36,9 @@ std::unique_ptr<BulletCloth> attach(btSoftRigidDynamicsWorld& world, btSoftBody&
   const Vec3 soft_gravity = to_vec3(world.getWorldInfo().m_gravity);
   // Soft bodies fall with worldInfo.m_gravity, which world.setGravity does not touch (Bullet's default is
   // (0, -10, 0)); a fluid and a cloth under different gravity would drift apart at rest.
-  if ((soft_gravity - scene.gravity).norm() > 1e-12 * std::max(1.0, scene.gravity.norm())) {
+  // Compared as Bullet stores it: a single-precision world holds the scene's gravity rounded to float.
+  const Vec3 scene_gravity_in_bullet = to_vec3(to_bt(scene.gravity));
+  if ((soft_gravity - scene_gravity_in_bullet).norm() > 1e-12 * std::max(1.0, scene.gravity.norm())) {
     throw SceneError("gravity " + format_vec3(scene.gravity) + " (" + scene.source +
                      ") differs from the Bullet world's soft-body gravity getWorldInfo().m_gravity " +
                      format_vec3(soft_gravity) +

@@ -62,7 +62,8 @@ class ClothEngine {
   /// The same mesh, read-only (output, statistics).
   const ClothMesh& mesh() const { return const_cast<ClothEngine*>(this)->mesh(); }
   /// Takes the corrected end positions back: positions = positions_t1, velocity += (corrected - predicted) /
-  /// dt.
+  /// dt. Leaves in positions_t1 what the engine now holds (an engine that stores floats rounds), since the
+  /// leak audit after it checks that cloth.
   virtual void end_step(double dt) = 0;
   /// Current node velocities (unit: m/s), M entries; for output and statistics.
   virtual Vec3Array velocities() const = 0;
