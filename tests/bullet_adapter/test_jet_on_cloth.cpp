@@ -438,10 +438,9 @@ TEST(JetOnCloth, WaterBetweenTheLayersOfAFoldedClothStaysBetweenThem) {
 
 // Stress (issue 4): a 0.1 m cloth of 11 x 11 nodes (node mass 1.7e-5 kg, each particle weighs 60 of them)
 // pinned at one corner swings down through a pool of water (1 cm spacing) in an open box. No leak, nothing
-// non-finite, nothing faster than twice the free-fall speed over the scene's height (0.25 m). Measured:
-// lowest node -0.128 m, particles 2.5 m/s, nodes 2.6 m/s (the dry swing: 2.91). While the carried water was
-// all water within 6 mm of the cloth, not only the water in contact, nodes reached 11.2 m/s: a node moving
-// through water carried it at its own speed, not the water's (coupling/carried_water.hpp).
+// non-finite, nothing faster than twice the free-fall speed over the scene's height (0.25 m). It is why only
+// the water in contact is carried: carrying all water near the cloth, a node moving through water carries it
+// at its own speed, not the water's, and is thrown past the bound (coupling/carried_water.hpp).
 TEST(JetOnCloth, ClothSwingingThroughAPool) {
   SceneConfig c;
   c.fluid.particle_spacing = 0.01;
