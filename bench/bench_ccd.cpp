@@ -1,8 +1,7 @@
 // Point-triangle CCD on the labelled vertex-face queries of ../shared/data/ccd-vertex-face (Wang et al. 2021
 // handcrafted sample; Belgrod et al. 2023 simulation sample; README.md there). The targets: mean time
-// per query at most 5 us on the handcrafted part and 2 us on the simulation part, no miss. Tight-Inclusion on
-// this machine, for comparison: 0 misses, 85 false positives on the handcrafted part, 106 (every negative) on
-// the simulation part, 0.4-2 ms per query.
+// per query at most 5 us on the handcrafted part and 2 us on the simulation part, no miss. Tight-Inclusion,
+// for comparison, misses none either but reports false positives and is far slower (docs/performance.md).
 //
 //   build-b/bench/bench_ccd --benchmark_out=bench/results/<machine>/ccd.csv --benchmark_out_format=csv
 //       [--benchmark_filter='^ccd/(handcrafted|simulation-belgrod2023)$']

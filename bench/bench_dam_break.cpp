@@ -5,7 +5,7 @@
 //
 //   build-bench/bench/bench_dam_break --benchmark_out=bench/results/<machine>/dam_break.csv
 //       --benchmark_out_format=csv [--benchmark_filter=...]
-// Thread count: OMP_NUM_THREADS (the README's numbers: 1 and 2).
+// Thread count: OMP_NUM_THREADS (docs/performance.md's numbers: 1 and 2).
 
 #include <benchmark/benchmark.h>
 #include <omp.h>
@@ -24,8 +24,8 @@ drench::SceneConfig reference_dam_break(double spacing, const std::string& solve
                                         const std::string& precision) {
   const double block = spacing > 0.04 ? 0.95 : spacing > 0.02 ? 0.975 : 1.0;
   // Issue 2's steps, 5 ms at 0.05 m and 2.5 ms at 0.025 m, are 0.1 s per metre of spacing; the 1M block keeps
-  // that ratio (1 ms). At 2.5 ms it was unstable: PCISPH hit its limit of 100 iterations within 6 steps and
-  // corner particles reached 1.9 m/s at t = 0.015 s, where the block should move at 0.15 m/s (measured).
+  // that ratio (1 ms): at 2.5 ms it is unstable, PCISPH hitting its limit of 100 iterations within a few
+  // steps and corner particles moving ten times faster than the block.
   const double dt = 0.1 * spacing;  // unit: s
   return drench::load_scene_file(
       std::string(DRENCH_SOURCE_DIR) + "/demos/scenes/dam_break.json",

@@ -104,9 +104,8 @@ void leaks_repulsion_only_dt_1ms(benchmark::State& s) {
   run(s, {"coupling.continuous=false", "time.duration=0.15"}, false);
 }
 // Fig. 4, right: continuous handling at dt 4 ms (the fluid sub-steps under its CFL limit inside the step).
-// Before PCISPH's max_relief_per_substep and the contact-set carried water this scene blew up at t = 0.356 s
-// with the default settings (particles at 308 m/s) and ran at 19 m/s only with
-// max_compression_per_iteration 0.02 (2026-11-22, first session).
+// The scene that needs PCISPH's max_relief_per_substep and the contact-set carried water: without them it
+// blows up (PcisphSettings::max_relief_per_substep; docs/accuracy.md, Stability).
 void leaks_continuous_dt_4ms(benchmark::State& s) {
   run(s, {"time.dt=0.004"});
 }

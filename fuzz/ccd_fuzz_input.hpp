@@ -40,10 +40,9 @@ inline constexpr std::array<int, 4> kGridFractionBits = {0, 1, 4, 10};
 /// Escape byte of a coordinate.
 inline constexpr std::uint8_t kEscape = 0x80;
 /// Raw finite doubles keep their binary exponent (frexp's, mantissa in [0.5, 1)) in [-this, this], so their
-/// magnitudes lie in [2^-65, 2^64). The GMP reference slows down with the bits of the coordinates: under ASan
-/// about 0.3 ms a query on the unit grid, 2-3 ms near 2^64, 100-200 ms at DBL_MAX, which would starve the
-/// fuzzer. The range where the fast solver's double arithmetic overflows (|x| above about 2^340) is therefore
-/// left to the unit tests.
+/// magnitudes lie in [2^-65, 2^64). The GMP reference slows down with the bits of the coordinates, by
+/// hundreds of times from the unit grid to DBL_MAX, which would starve the fuzzer. The range where the fast
+/// solver's double arithmetic overflows (|x| above about 2^340) is therefore left to the unit tests.
 inline constexpr int kRawExponentLimit = 64;
 
 /// Values an escape with k < 16 selects: non-finite ones, signed zero, magnitudes at the ends of the raw

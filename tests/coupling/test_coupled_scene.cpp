@@ -70,7 +70,7 @@ TEST(CoupledScene, JetOnAStaticPlateNeverLeaks) {
     EXPECT_GT(sim.coupling_stats().contacts, 0u) << "dt " << dt;
     EXPECT_EQ(sim.coupling_stats().failsafe_activations, 0u) << "dt " << dt;
     // No splash faster than twice what the jet can reach by falling (3 m/s + sqrt(2 g 0.1 m)): at 4 ms a jet
-    // stopped only once per step piled its layers up and splashed at 5-50x that.
+    // stopped only once per step piles its layers up and splashes at several times that.
     double fastest = 0.0;
     for (const Vec3& v : sim.particles().velocities)
       fastest = std::max(fastest, v.norm());

@@ -64,10 +64,10 @@ TEST(Pcisph, ReliefPerSubstepIsLimited) {
   const Relief published = relieve(std::nullopt);
   ASSERT_GT(limited.before, 0.2) << "the test needs a particle far beyond any sub-step's own compression";
   ASSERT_EQ(limited.before, published.before);
-  // As published, PCISPH undoes nearly all of it in one sub-step (measured: 0.32 -> 0.02 of rest density).
+  // As published, PCISPH undoes nearly all of it in one sub-step (recorded as after_published).
   EXPECT_LT(published.after, 0.25 * published.before);
   // With the limit the particle is driven to 0.05 below its density; its neighbours, compressed by
-  // it, relieve their own share and push it further (measured: 0.32 -> 0.22). It still relieves, by less
+  // it, relieve their own share and push it further (recorded as after_limited). It still relieves, by less
   // than half of what published PCISPH does, and the pressure throws nothing as fast.
   const double relief_limited = limited.before - limited.after;
   const double relief_published = published.before - published.after;

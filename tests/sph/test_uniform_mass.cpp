@@ -142,15 +142,14 @@ void expect_single_gives_the_fluid_of_double(const Vec3& offset, bool floor) {
   EXPECT_GT(d.fastest, 1e-3);  // the stacked particle was pushed apart: the loops did work
 }
 
-/// At the origin (printed as [ measured ]): densities 3.4e-7 apart (relative), pressures 4.6 Pa of 53.6 kPa
-/// (the stacked particle's), velocities 1.7e-5 of 5.9 m/s.
+/// Near the origin, where floats are finest (the differences are printed as [ measured ]).
 TEST(Pcisph, SinglePrecisionIterationsGiveTheFluidOfDouble) {
   expect_single_gives_the_fluid_of_double(Vec3::Zero(), false);
 }
 
 /// 1 km from the origin, on a floor of boundary points: a float there is 61 um coarse, 0.6% of the spacing,
 /// so this holds only because the float records are taken relative to the fluid's centre (boundary points
-/// included). Printed: densities 2.8e-7 apart, pressures 4.9 Pa of 52 kPa, velocities 1.6e-5 of 5.9 m/s.
+/// included).
 TEST(Pcisph, SinglePrecisionFarFromTheOriginOverAFloorGivesTheFluidOfDouble) {
   expect_single_gives_the_fluid_of_double(Vec3(1000.0, -200.0, 300.0), true);
 }

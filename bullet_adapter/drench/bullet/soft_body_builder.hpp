@@ -50,8 +50,8 @@ std::unique_ptr<btSoftBody> create_from_triangles(btSoftBodyWorldInfo& world_inf
 
 /// Appends a bending link, made of `material`, between every two nodes two links apart; the same links in the
 /// same order as btSoftBody::generateBendingConstraints(2, material), which fills a nodes x nodes table of
-/// distances first (42 MB and 0.14 s for the 57 x 57 patch, 683 MB and 3.8 s for 113 x 113, 10 GB for
-/// 225 x 225; measured). This one visits the neighbours of neighbours: O(nodes x degree^2).
+/// distances first (42 MB for the 57 x 57 patch, 683 MB for 113 x 113, 10 GB for 225 x 225). This one visits
+/// the neighbours of neighbours: O(nodes x degree^2).
 /// @return the number of links appended
 int append_bending_links(btSoftBody& body, btSoftBody::Material* material);
 
@@ -76,11 +76,9 @@ std::unique_ptr<btSoftBody> create_cloth_body(btSoftBodyWorldInfo& world_info, c
 /// Sets node masses of a body that may already have moved, keeping every link's rest length. Use it instead
 /// of btSoftBody::setMass on a cloth that has stepped: setMass flags the body's constants for an update, and
 /// at its next step Bullet 3.24 (btSoftBody::updateConstants) resets every link's rest length to its current
-/// length, so a sagging cloth keeps its stretch for good, and a cloth whose masses change every step (a
-/// wetting cloth) creeps without bound (measured: a 21 x 21 patch, corners pinned, 0.25 kg added to the
-/// masses of its centre 25 nodes every step, dt 1 ms: a link 26 times its rest length after 0.5 s; 1.6 times
-/// with the rest lengths kept). Here only the link constants that depend on the masses (Link::m_c0) are
-/// recomputed.
+/// length (test_bullet_cloth, SetNodeMassesKeepsRestLengthsWhereSetMassResetsThem), so a sagging cloth keeps
+/// its stretch for good, and a cloth whose masses change every step (a wetting cloth) creeps without bound.
+/// Here only the link constants that depend on the masses (Link::m_c0) are recomputed.
 /// @param masses  (node index, mass) pairs; mass in kg, >= 0 and finite; 0 pins the node where it is (its
 ///        velocity is set to zero: Bullet moves a node by its velocity whatever its mass)
 /// @throws std::invalid_argument naming the first pair whose index is out of range or whose mass is negative

@@ -44,8 +44,8 @@ constexpr double kUnitRoundoff = 0x1p-53;
 // roundings of that computation and any underflow (at most 2^-1075 per operation), with a wide margin. The
 // absolute term is far above the subnormal range on purpose: error terms are multiplied together, and a
 // subnormal operand or result costs ~100 cycles per operation on x86 (a microcode assist), which made the
-// filter four times slower. The price: values below ~1e-150 (lengths below ~1e-30 m) are left to the exact
-// reference.
+// filter four times slower (bench_ccd). The price: values below ~1e-150 (lengths below ~1e-30 m) are left to
+// the exact reference.
 constexpr double kGrow = 1.0 + 0x1p-45;
 constexpr double kTiny = 0x1p-500;
 

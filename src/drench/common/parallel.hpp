@@ -18,9 +18,9 @@ inline constexpr std::size_t kParticleChunk = 256;
 /// each chunk going to the next free thread (`schedule(dynamic, 1)` over chunks). For loops whose body per
 /// chunk is a DRENCH_SIMD_CLONES function: one dispatch per chunk, not per particle. A chunk's results do not
 /// depend on the thread that computes it (the body writes per-particle or per-chunk results only), so the
-/// dynamic deal keeps runs bit-identical; it let a thread whose core runs slower (the other core busy on a
-/// shared host) take fewer chunks, where the static deal made the other wait at every loop's end: PCISPH's
-/// 59K dam break on 2 threads 7-25% faster in six interleaved runs of 60 steps (measured).
+/// dynamic deal keeps runs bit-identical; it lets a thread whose core runs slower (the other core busy on a
+/// shared host) take fewer chunks, where the static deal made the other wait at every loop's end
+/// (bench_pair_loops densities, counter chunks_last_thread; bench_dam_break pcisph_59k on 2 threads).
 template <class Body>
 void for_each_chunk(std::size_t n, Body body) {
   const std::size_t chunks = (n + kParticleChunk - 1) / kParticleChunk;
@@ -36,8 +36,9 @@ void for_each_chunk(std::size_t n, Body body) {
 /// time by the CPU (GCC's target_clones, an ifunc). Every thread runs the same copy, so runs stay
 /// bit-identical. A loop that fixes its lanes and summation order (sph/packed_lanes.hpp) gives the same bits
 /// in every copy as well: drench_core is built with -ffp-contract=off, so no copy fuses a multiply and an add
-/// (the 59K dam break's frames are identical with the clones disabled, built for x86-64 or x86-64-v3,
-/// measured). Only for non-inline, non-template functions: what they inline is compiled into each copy.
+/// (the dam break's frames are identical with the clones disabled, built for x86-64 or x86-64-v3; the
+/// PackedLanes and FloatLanes tests of test_fluid_context compare the group types). Only for non-inline,
+/// non-template functions: what they inline is compiled into each copy.
 #if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && defined(__linux__) && \
     !defined(DRENCH_NO_SIMD_CLONES)
 #define DRENCH_SIMD_CLONES __attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default")))

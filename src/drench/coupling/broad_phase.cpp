@@ -64,7 +64,7 @@ class GridBroadPhase final : public TriangleBroadPhase {
     }
     std::sort(m_entries.begin(), m_entries.end());
     // Each distinct key's run of entries, found through a hash table: a binary search of all the entries
-    // per cell would dominate the grid's queries (README, "Coupling broad phase").
+    // per cell would dominate the grid's queries (bench_coupling find_pairs, docs/performance.md).
     std::vector<std::uint64_t> keys;
     m_cell_begin.clear();
     for (std::size_t e = 0; e < m_entries.size(); ++e) {

@@ -4,7 +4,8 @@
 /// a margin, so the same candidates serve the proximity test at the start (sec. 3.1) and the CCD (sec. 3.3).
 /// Two boxes each grown by m overlap exactly when one grown by 2 m overlaps the other bare: the triangles'
 /// boxes are kept bare, so that one tree serves every margin.
-/// Two implementations behind one interface, measured side by side in bench/bench_coupling.cpp.
+/// Two implementations behind one interface, compared side by side by bench_coupling find_pairs and
+/// coupler_step.
 
 #include <functional>
 #include <memory>

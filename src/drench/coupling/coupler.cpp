@@ -83,7 +83,7 @@ std::uint32_t Coupler::correct(const FluidView& fluid, ClothMesh& cloth, double 
   // start): the particle's start point and the triangle's swept box, each grown by half the thickness,
   // overlap for every such pair. Querying the particle's swept box with both boxes grown by the whole
   // thickness finds the same contacts among several times the pairs, which the 5 mm row of bench_jet_on_cloth
-  // pays for in repulsion time (README, "The coupled jet on a cloth").
+  // pays for in repulsion time (bench_jet_on_cloth table_thickness_5mm, docs/performance.md).
   m_broad_phase->find_pairs(ctx.x0(), ctx.x0(), cloth, 0.5 * thickness, nullptr, pairs);
   std::vector<Contact> contacts = find_contacts(ctx, pairs, thickness);  // sec. 3.1, eq. 1
   stats.contacts += contacts.size();

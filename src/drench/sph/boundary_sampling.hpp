@@ -7,7 +7,7 @@
 /// which gives exactly rest density to fluid at rest spacing, at walls and in corners alike. Akinci's eq. 4,
 /// V_b = 1 / sum_k W_bk over boundary neighbours, is made for irregular single-layer samplings; on these
 /// two-layer walls it overestimates V_b (it misses the fluid side), putting the corner particles of a tank at
-/// +4% density, where PCISPH's pressure grew without bound in the first step (measured).
+/// +4% density, where PCISPH's pressure grew without bound in the first step.
 
 #include <drench/common/types.hpp>
 #include <drench/sph/boundary_settings.hpp>
@@ -50,8 +50,8 @@ void plane_axes(const Vec3& normal, Vec3& first, Vec3& second);
 /// x_t0 to x_t1 that would end behind the boundary's surface is put back on the surface and loses the
 /// velocity component into it. Boundary particles repel only through pressure, and a lone fast droplet has
 /// none (its density is below rest density), so without this guard 180 of 8,000 dam-break particles left the
-/// box within 1 s (measured). A BOX guards only particles that start inside it; a PLANE only those crossing
-/// its rectangle from the side its normal points to.
+/// box within 1 s (test_dam_break checks that they stay inside). A BOX guards only particles that start
+/// inside it; a PLANE only those crossing its rectangle from the side its normal points to.
 /// @return true when the particle was moved
 bool enforce_boundary(const BoundarySettings& boundary, const Vec3& x_t0, Vec3& x_t1, Vec3& velocity);
 

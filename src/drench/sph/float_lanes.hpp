@@ -5,12 +5,10 @@
 /// always_inline apply here too).
 ///
 /// Why single precision: a record is 16 bytes instead of 32, and a vector holds twice the lanes, so the
-/// densities of the 59K state ran 2.06 ms per pass against 2.95 ms in double (medians of five interleaved
-/// repetitions, `OMP_NUM_THREADS=1 build-bench/bench/bench_pair_loops --benchmark_filter=densities
-/// --benchmark_repetitions=5 --benchmark_enable_random_interleaving=true`), with a largest relative
-/// difference of 2.3e-6 (its counter max_relative_difference); README, Performance, has the solver-level
-/// numbers. Positions in float carry 2^-24 of their magnitude: 0.24 um at 4 m, 1e-5 of a 25 mm spacing,
-/// against PCISPH's tolerance of 5e-4 on the average density.
+/// densities pass runs about 1.4 times faster than in double for a largest relative difference of a few
+/// 1e-6 (bench_pair_loops densities_float, its counter max_relative_difference; solver-level figures in
+/// docs/performance.md). Positions in float carry 2^-24 of their magnitude: 0.24 um at 4 m, 1e-5 of a
+/// 25 mm spacing, against PCISPH's tolerance of 5e-4 on the average density.
 ///
 /// A group of sixteen lanes is one of two types with the same lanes, arithmetic and summation order, so the
 /// same bits, as the eight-lane groups of packed_lanes.hpp: FloatHalvesGroup, two vectors of eight floats,
@@ -105,11 +103,9 @@ struct EightPointsF {
 };
 
 /// Loads the points js[0..7] with eight-float vectors only: lane l holds point js[l]. The same transpose as
-/// packed_lanes.hpp's load_eight, kept apart because the two types want different loads: one template with
-/// load_eight's named loads ran the float passes of the AVX2 copy 1-7% slower (densities 2.34-2.51 against
-/// 2.32-2.35 ms), and with this array the double densities of the AVX-512 copy 5.43 against 2.80 ms
-/// (`OMP_NUM_THREADS=1 bench_pair_loops --benchmark_filter='densities_float/0|densities/0'`, builds for
-/// x86-64-v3 without clones and cloned, alternating with this code; patches not kept).
+/// packed_lanes.hpp's load_eight, kept apart because the two types want different loads: a shared template
+/// with load_eight's named loads slowed the float passes of the AVX2 copy, and with this array it halved the
+/// speed of the double densities of the AVX-512 copy (bench_pair_loops densities_float/0 and densities/0).
 [[gnu::always_inline]] inline void load_eight_float(const PackedPointF* points, const Index* js,
                                                     EightPointsF& out) {
   Floats4 r[8];

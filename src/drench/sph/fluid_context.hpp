@@ -14,8 +14,8 @@ namespace drench {
 
 /// A point and one scalar that the pair loops read with it (w: a mass, Akinci's Psi_b, or p / rho^2), in one
 /// aligned 32-byte record: a neighbor is one vector load instead of four gathered scalars, and four or eight
-/// neighbors are transposed into x, y, z and w vectors in registers. PCISPH's pressure solve ran 1.6x faster
-/// over these than over gathered N x 3 coordinates (59K dam break, 1 thread, measured).
+/// neighbors are transposed into x, y, z and w vectors in registers. PCISPH's pressure solve runs about 1.6x
+/// faster over these than over gathered N x 3 coordinates (bench_dam_break pcisph_59k).
 struct alignas(4 * sizeof(Scalar)) PackedPoint {
   Scalar x, y, z;  ///< (unit: m)
   Scalar w;        ///< unit of the loop that reads it
@@ -54,8 +54,8 @@ struct FluidContext {
   Scalar particle_spacing;  ///< (unit: m)
   /// For every entry of fluid_neighbors.indices, f with grad W(x_i - x_j) = f (x_i - x_j) at the current
   /// positions (unit: 1/m^5), in float (GradientFactorArray). One number instead of a 3-vector per pair:
-  /// PCISPH's pressure loop streams these every iteration and was memory-bound on 3-vectors (34% of its
-  /// sub-step, measured).
+  /// PCISPH's pressure loop streams these every iteration and was memory-bound on 3-vectors, a third of its
+  /// sub-step (bench_pair_loops pcisph_solve).
   const GradientFactorArray& fluid_gradient_factors;
   /// The same for every entry of boundary_neighbors.indices, with x_b in place of x_j (unit: 1/m^5)
   const GradientFactorArray& boundary_gradient_factors;
@@ -82,8 +82,9 @@ void sph_densities(const FluidContext& ctx, const PackedPointArray& x_mass, std:
 /// The boundary term is the negative gradient of the internal energy that the boundary's density contribution
 /// adds, so it conserves energy; pressure mirroring (2 p_i, as some codes use) made a closed tank gain
 /// kinetic energy without bound, and a hydrostatic extrapolation of p_b (Adami et al. 2012) drove corner
-/// particles up at 1 m/s with PCISPH's noisy pressures (both measured). Compiled as sph_densities; the sums
-/// run over four neighbors at a time in a fixed order, then the last (count mod 4) one by one.
+/// particles up at 1 m/s with PCISPH's noisy pressures (both tried and rejected; test_dam_break bounds the
+/// energy). Compiled as sph_densities; the sums run over four neighbors at a time in a fixed order, then the
+/// last (count mod 4) one by one.
 void pressure_accelerations(const FluidContext& ctx, const PackedPointArray& x_p_over_rho2, std::size_t begin,
                             std::size_t end, Vec3* out);
 

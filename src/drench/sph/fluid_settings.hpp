@@ -39,7 +39,8 @@ struct PcisphSettings {
   /// coupling's position corrections, a hand-back, an emitter) is otherwise undone within one CFL sub-step,
   /// at a speed of about compression x spacing / sub-step that shrinks the next sub-step and feeds itself.
   /// With the limit it is undone over several iterations and sub-steps; a settled or smoothly moving fluid
-  /// stays below it and is not changed. Without it the jet on a 5 mm cloth blows up (docs/accuracy.md).
+  /// stays below it and is not changed. Without it the jet on a 5 mm cloth blows up (bench_jet_on_cloth
+  /// table_thickness_5mm, docs/accuracy.md).
   std::optional<Scalar> max_compression_per_iteration = 0.05;
   /// The largest compression (fraction of rest density, > 0) one sub-step relieves for one particle; unset
   /// = all of it, as published. A drench addition: a particle that enters a sub-step compressed by more
@@ -47,7 +48,8 @@ struct PcisphSettings {
   /// density, the rest left to the next sub-steps; the compression its motion within the sub-step would
   /// add is resisted in full, as published. Stopping water against a moving cloth stacks particles between
   /// the fluid's steps, and undoing that inside one CFL sub-step throws them far faster than the flow;
-  /// without the limit the jet on a cloth at dt 4 ms blows up (docs/accuracy.md).
+  /// without the limit the jet on a cloth at dt 4 ms blows up (bench_jet_on_cloth leaks_continuous_dt_4ms,
+  /// docs/accuracy.md).
   std::optional<Scalar> max_relief_per_substep = 0.05;
   /// Precision of the iterations' pair sums. Single (the default) agrees with double to about 1e-5 of a
   /// density and is faster (bench_dam_break's double rows, docs/performance.md). Double is also used,

@@ -118,10 +118,10 @@ void NeighborSearch::build(const Vec3Array& points) {
   const Vec3i dims = n > 0 ? Vec3i(hi - lo + Vec3i::Ones()) : Vec3i::Zero();
   const double cell_count = static_cast<double>(dims.x()) * dims.y() * dims.z();
   // Dense while it costs at most 128 cells (512 bytes of cell starts, one counting-sort pass) per point, up
-  // to 2^24 cells (64 MB), or 4 per point whatever their number: a query run then reads nine row ranges
-  // where the hash takes 27 lookups. The jet on a cloth (15K particles spread over up to 71 cells each)
-  // spent 3.1-3.7 s in its neighbor phase over 0.5 s with this rule against 3.9-5.1 s with the earlier
-  // limit of 4 per point (alternating runs, 2 threads), frames bit-identical.
+  // to 2^24 cells (64 MB), or 4 per point (plus 4,096) whatever their number: a query run then reads nine
+  // row ranges where the hash takes 27 lookups. The 128 is for a jet on a cloth (15K particles spread over up
+  // to 71 cells each), whose neighbor phase is faster with it than with 4 per point alone, frames identical
+  // (bench_jet_on_cloth).
   const double point_count = static_cast<double>(n);
   m_dense = n > 0 &&
             (cell_count <= 4.0 * point_count + 4096.0 || cell_count <= std::min(128.0 * point_count, 0x1p24));
@@ -268,15 +268,11 @@ void NeighborSearch::find(const Vec3Array& queries, NeighborList& out, bool excl
       chunk_start[k] = used;
       const std::size_t chunk_end = std::min(m, (k + 1) * kParticleChunk);
       // Each query scans the runs of its 27 cells in place in the sorted arrays (nine rows in the dense
-      // grid); the runs are looked up once per run of queries in one cell. Until 23c5ce9 the candidates were
-      // copied into one array per run of queries and scanned in one loop; in the dam break particles drift
-      // between sorts and a copy served only about three queries (0.35 copies per query over 100 steps of the
-      // 59K run), so the eight-lane scans do better in place: the 59K PCISPH dam break on 1 thread ran 336K
-      // and 346K particle-steps/s against 322K and 332K with the copy (alternating); on the sorted block of
-      // bench_neighbor_search the two are even. The four-lane scan in place ran 19.7 ms there against 17.6-18
-      // with the copy (it serves only CPUs without AVX2). An earlier row-by-row scan that also skipped cells
-      // beyond the radius was slower still (23.6-41.4 ms against 18.5-19.5,
-      // bench/results/debian12-2core/neighbor_search_99939d6_vs_7d87b95.txt).
+      // grid); the runs are looked up once per run of queries in one cell. Copying the candidates into one
+      // array per run of queries first was rejected: particles drift between sorts, so a copy serves only
+      // about three queries, and the eight-lane scans do better in place (bench_dam_break pcisph_59k; on the
+      // sorted block of bench_neighbor_search they are even, and only the four-lane scan, for CPUs without
+      // AVX2, loses a little). A row-by-row scan that skipped cells beyond the radius was slower still.
       bool buffered = false;
       Vec3i buffered_cell = Vec3i::Zero();
       for (std::size_t i = k * kParticleChunk; i < chunk_end; ++i) {
@@ -316,8 +312,8 @@ void NeighborSearch::find(const Vec3Array& queries, NeighborList& out, bool excl
   for (std::size_t i = 0; i < m; ++i)
     out.offsets[i + 1] += out.offsets[i];
   // The copy is parallel too: a serial concatenation was a tenth of WCSPH's sub-step on two threads
-  // (measured). The list keeps its old entries until the copy overwrites every one: cleared first, the
-  // resize zero-filled the whole list (a memset of 4 bytes per pair) on every search.
+  // (bench_dam_break wcsph_59k). The list keeps its old entries until the copy overwrites every one: cleared
+  // first, the resize zero-filled the whole list (a memset of 4 bytes per pair) on every search.
   out.indices.resize(out.offsets[m]);
 #pragma omp parallel for schedule(static)
   for (std::size_t k = 0; k < chunks; ++k) {

@@ -22,11 +22,11 @@ struct NeighborList {
 
 /// One number per entry of a NeighborList: the kernel gradient factor f of the pair (grad W = f (x_i - x_j),
 /// unit: 1/m^5), in single precision. PCISPH's pressure loop streams the factors every iteration; as floats
-/// the stream is a third smaller (with the indices), and the 59K dam break's pressure phase ran 2-21% faster
-/// in five interleaved 100-step runs on 1 thread (README, Performance, has the command; a warm-cache
-/// benchmark of the loop alone showed no difference, so the gain is the cache the other passes keep). The
-/// relative rounding, at most 2^-24, is far below any solver tolerance, and f_ij = f_ji still holds exactly
-/// (the same squared distance).
+/// the stream is a third smaller (with the indices), which makes the dam break's pressure phase faster
+/// (bench_dam_break pcisph_59k) though the loop alone with a warm cache is not (bench_pair_loops
+/// pressure_accelerations_float): the gain is the cache the other passes keep. The relative rounding, at
+/// most 2^-24, is far below any solver tolerance, and f_ij = f_ji still holds exactly (the same squared
+/// distance).
 using GradientFactorArray = std::vector<float>;
 
 /// The inner loop of NeighborSearch::find, which keeps the candidates within the radius of a query
@@ -39,11 +39,10 @@ enum class CandidateScan {
 
 /// Uniform-grid neighbor search. `build` sorts the source points into cells; `find` answers, for every query
 /// point, all source points at distance strictly less than the support radius. When the points' bounding box
-/// holds few enough cells (at most 128 per point and 2^24 in all, or at most 4 per point), cells live in a
-/// dense array filled by a counting sort;
-/// otherwise (a jet spread far) in an open-addressing hash of their Morton keys, so the domain is unbounded
-/// (up to 2^20 cells from the origin on each axis; farther points are clamped into the outermost cells,
-/// which stays correct but slow).
+/// holds few enough cells (at most 128 per point and 2^24 in all, or at most 4 per point plus 4,096), cells
+/// live in a dense array filled by a counting sort; otherwise (a jet spread far) in an open-addressing hash
+/// of their Morton keys, so the domain is unbounded (up to 2^20 cells from the origin on each axis; farther
+/// points are clamped into the outermost cells, which stays correct but slow).
 class NeighborSearch {
  public:
   /// @param support_radius  search radius and cell size (unit: m), > 0

@@ -3,27 +3,22 @@
 /// PackedPoint arrays (sph/fluid_context.cpp, sph/forces/viscosity.cpp) and the grid search's four-lane scan
 /// (sph/candidate_scan.hpp). Internal to those files' DRENCH_SIMD_CLONES functions (and their tests, which
 /// run both eight-lane group types); everything is in an unnamed namespace and always inlined, so each copy
-/// compiles its own. A lambda in such a function must be
-/// always_inline as well: out of line it is compiled for the baseline only (XSPH ran 2.7 times slower so,
-/// timed in-process against the inlined version on bench_pair_loops' 59K state; that harness is not kept).
+/// compiles its own. A lambda in such a function must be always_inline as well: out of line it is compiled
+/// for the baseline only, which made XSPH about 2.7 times slower (bench_pair_loops xsph).
 ///
 /// The double-precision loops that evaluate the kernel (densities, XSPH) take eight neighbors at a time (the
 /// single-precision ones of sph/float_lanes.hpp, sixteen, through the same for_each_group and kernel_sum): a
-/// square root of eight lanes costs what one of four does on the AVX-512 copy. The densities of the 59K state
-/// ran 1.88-1.97 ms per pass against 2.54-2.57 ms at four lanes (`OMP_NUM_THREADS=1
-/// build-bench/bench/bench_pair_loops
-/// --benchmark_filter=densities`, this build against bf7bffb's, alternating; a third round of the old build
-/// took 3.93 ms). The pressure loop, a few multiplies per pair, stays at four: an eight-lane version (not
-/// kept) ran 1.1-1.4 times slower, in and out of cache, timed in-process against this one on the same state.
+/// square root of eight lanes costs what one of four does on the AVX-512 copy, which makes the densities
+/// pass about 1.3 times faster than at four lanes (bench_pair_loops densities). The pressure loop, a few
+/// multiplies per pair, stays at four lanes: at eight it ran slower, in and out of cache (bench_pair_loops
+/// pressure_accelerations).
 ///
 /// An eight-lane group is one of two types with the same lanes, arithmetic and summation order, so the same
 /// bits: HalvesGroup, two vectors of four doubles, for the AVX2 copy, and WideGroup, one vector of eight, for
 /// the others (avx2_copy() tells which copy runs). GCC lowers an eight-double vector on AVX2 through the
-/// stack: the AVX2 copy of the densities spent 402 of its 1,380 instructions on stack loads and stores and
-/// ran 3.5 times slower than the AVX-512 copy (10.7-11.2 against 3.0-3.4 ms per pass on the 59K state, a
-/// build for x86-64-v3 against the cloned build on the same AMD EPYC VM; 3.4-5.2 ms with the halves). In the
-/// baseline copy (SSE2) the halves were no faster for the densities and 1.7 times slower for XSPH (a build
-/// without clones, `bench_pair_loops --benchmark_filter='densities/0|xsph'`), so it keeps WideGroup.
+/// stack, which made the AVX2 copy of the densities several times slower than the AVX-512 copy; hence the
+/// halves there. In the baseline copy (SSE2) the halves were no faster for the densities and slower for
+/// XSPH, so it keeps WideGroup (bench_pair_loops densities and xsph, in a build without clones).
 #include <cmath>
 #include <cstdint>
 #include <cstring>

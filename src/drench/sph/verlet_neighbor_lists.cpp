@@ -13,8 +13,8 @@ namespace {
 /// factors[n] = the kernel's gradient factor of the pair n of `list`, rounded to float, for the rows [begin,
 /// end): query i at xs[3i..3i+2], source j at ss[3j..3j+2] (unit: m). The distance is NeighborSearch::find's
 /// expression (source minus query, summed x, y, z). Compiled per CPU (DRENCH_SIMD_CLONES): a square root and
-/// a division per pair, which the baseline copy did two at a time (5% of a 59K PCISPH step: perf record -e
-/// cpu-clock of 150 steps of the README's 60-step drench run).
+/// a division per pair, which the baseline copy does only two at a time, in a loop that is a visible share of
+/// a PCISPH step (bench_pair_loops neighbor_lists).
 DRENCH_SIMD_CLONES void gradient_factor_rows(const CubicSplineKernel& kernel, const NeighborList& list,
                                              const Scalar* xs, const Scalar* ss, std::size_t begin,
                                              std::size_t end, float* factors) {
@@ -22,8 +22,8 @@ DRENCH_SIMD_CLONES void gradient_factor_rows(const CubicSplineKernel& kernel, co
   for (std::size_t i = begin; i < end; ++i) {
     const Scalar x0 = xs[3 * i], x1 = xs[3 * i + 1], x2 = xs[3 * i + 2];
     // Eight pairs per vector step: the AVX-512 copy otherwise took sixteen (two vectors) and left a row's
-    // last up to fifteen pairs (of about 27) to scalar code. bench_pair_loops' neighbor_lists (exact lists
-    // and factors of the 59K state, 1 thread): 17.0-17.3 ms against 17.5-18.2, four alternating rounds.
+    // last up to fifteen pairs (of about 27) to scalar code, which is slower (bench_pair_loops
+    // neighbor_lists).
 #pragma omp simd simdlen(8)
     for (std::uint32_t n = list.offsets[i]; n < list.offsets[i + 1]; ++n) {
       const std::size_t j = 3 * std::size_t{js[n]};

@@ -18,7 +18,8 @@ namespace drench {
 /// fresh search, in a deterministic order (candidates' order: by cell at the rebuild, then by index).
 ///
 /// Why: WCSPH takes many short sub-steps (its sound speed bounds them), in which particles move a few
-/// hundredths of a spacing, and a fresh grid search every sub-step was 60% of its time (measured).
+/// hundredths of a spacing, and a fresh grid search every sub-step was 60% of its time (bench_dam_break
+/// wcsph_59k).
 class VerletNeighborLists {
  public:
   /// @param kernel  the SPH kernel, copied: its support is the neighbor radius

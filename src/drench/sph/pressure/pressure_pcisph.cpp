@@ -89,14 +89,10 @@ PressureStats PressurePcisph::solve(const FluidContext& ctx, const Vec3Array& ve
                                 : std::numeric_limits<Scalar>::infinity();
   const Scalar max_relief = m_settings.max_relief_per_substep ? *m_settings.max_relief_per_substep * rho0
                                                               : std::numeric_limits<Scalar>::infinity();
-  // Every solve starts from zero pressure, as Solenthaler & Pajarola and SPlisHSPlasH do. Warm starts were
-  // measured (patches not kept). From the last sub-step's pressures, pressures only raised: 3x fewer
-  // iterations in a settled tank, but its leftover over-pressure kept the tank's corner particles oscillating
-  // at 0.5 m/s. From the last pressures scaled by w, the iterations also lowering pressures (clamped at 0):
-  // w = 0.5 halved the iterations (hydrostatic_tank.json 10.9 against 21.0 per sub-step, the 59K dam break's
-  // first 100 steps 13.8 against 26.1), but the settled tank moved at up to 0.08 m/s against 0.05; from
-  // w = 0.7 up the tank did not settle (0.3-1.7 m/s after 2 s), nor with the last pressures smoothed
-  // (Shepard average over the neighbors) or a stopping rule that also counts over-pressure.
+  // Every solve starts from zero pressure, as Solenthaler & Pajarola and SPlisHSPlasH do. Warm starts from
+  // the last sub-step's pressures (as they were, scaled down or smoothed) were tried and rejected: they cut
+  // the iterations by 2-3x, but their leftover over-pressure kept the hydrostatic tank moving or from
+  // settling at all (demos/scenes/hydrostatic_tank.json, test_hydrostatic_tank).
   std::fill(particles.pressures.begin(), particles.pressures.end(), 0.0);
   std::fill(accelerations.begin(), accelerations.end(), Vec3::Zero());
   if (n == 0) return stats;
