@@ -49,7 +49,7 @@ install(FILES ${PROJECT_BINARY_DIR}/drenchConfig.cmake ${PROJECT_BINARY_DIR}/dre
 if(drench_core_type STREQUAL "STATIC_LIBRARY")
   # fcl.pc's Cflags carry -std=c++11, which would override a user's C++17: its libraries go in by name.
   set(drench_pc_requires_private "gmpxx libcrypto ccd octomap")
-  set(drench_pc_libs_private "-lfcl")
+  set(drench_pc_libs_private "-lfcl -lopenvdb -ltbb")
   set(drench_bullet_pc_libs_private "-ltinyobjloader_double")
 else()
   set(drench_pc_requires_private "")

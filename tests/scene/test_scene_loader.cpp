@@ -275,7 +275,7 @@ TEST(SceneLoader, RejectsNonObjectTopLevel) {
 TEST(SceneLoader, RejectsUnknownTopLevelKeyListingKnownKeys) {
   EXPECT_TRUE(scene_error(R"({"gravty": [0, 0, 0]})",
                           "gravty is not a known key (x.json); known: gravity, fluid, emitters, boundaries, "
-                          "kill_regions, time, cloth, coupling, effects"));
+                          "kill_regions, time, cloth, coupling, surface, effects"));
 }
 
 TEST(SceneLoader, RejectsMisspeltFluidKeyListingKnownKeys) {
@@ -622,10 +622,29 @@ TEST(SceneLoader, RejectsUnknownTimeKey) {
 // ---------------------------------------------------------------------------------------------------------
 // effects
 
+TEST(SceneLoader, ReadsTheSurfaceSection) {
+  const SceneConfig c = parse(
+      R"({"effects": ["surface"], "surface": {"cell_size": 0.004, "contact_aware": false, "contact_offset": 0}})");
+  EXPECT_EQ(c.surface.cell_size, 0.004);
+  EXPECT_FALSE(c.surface.contact_aware);
+  EXPECT_EQ(c.surface.contact_offset, 0.0);
+}
+
+TEST(SceneLoader, RejectsANonPositiveSurfaceCellSize) {
+  EXPECT_TRUE(scene_error(R"({"effects": ["surface"], "surface": {"cell_size": 0}})", "surface.cell_size"));
+  EXPECT_TRUE(
+      scene_error(R"({"effects": ["surface"], "surface": {"cell_size": -0.004}})", "surface.cell_size"));
+}
+
+TEST(SceneLoader, RejectsSurfaceSettingsWithoutTheSurfaceEffect) {
+  EXPECT_TRUE(scene_error(R"({"surface": {"cell_size": 0.004}})", "effects does not list \"surface\""));
+}
+
 TEST(SceneLoader, RejectsUnknownEffectListingKnownEffects) {
   EXPECT_TRUE(
       scene_error(R"({"effects": ["viscosity", "magic"]})",
-                  "effects[1] must be one of \"viscosity\", \"coupling\", \"friction\", \"leak_audit\", got "
+                  "effects[1] must be one of \"viscosity\", \"coupling\", \"friction\", \"leak_audit\", "
+                  "\"surface\", got "
                   "\"magic\" (x.json)"));
 }
 
@@ -633,7 +652,7 @@ TEST(SceneLoader, RejectsDuplicateEffectListingKnownEffects) {
   EXPECT_TRUE(
       scene_error(R"({"effects": ["viscosity", "viscosity"]})",
                   "effects[1] repeats effects[0]; list each of \"viscosity\", \"coupling\", \"friction\", "
-                  "\"leak_audit\" at most once, got \"viscosity\""));
+                  "\"leak_audit\", \"surface\" at most once, got \"viscosity\""));
 }
 
 TEST(SceneLoader, RejectsEffectsGivenAsString) {

@@ -29,4 +29,8 @@ void write_cloth_ply(const std::string& path, const ClothMesh& mesh) {
   write_mesh_ply(path, "cloth mesh", mesh.positions_t1, mesh.triangles);
 }
 
+void write_surface_ply(const std::string& path, const SurfaceMesh& mesh) {
+  write_mesh_ply(path, "fluid surface", mesh.positions, mesh.triangles);
+}
+
 }  // namespace drench

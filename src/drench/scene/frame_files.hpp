@@ -6,6 +6,7 @@
 
 #include <drench/coupling/cloth_mesh.hpp>
 #include <drench/sph/particle_set.hpp>
+#include <drench/surface/surface_reconstruction.hpp>
 
 namespace drench {
 
@@ -19,5 +20,8 @@ void write_particles_ply(const std::string& path, const ParticleSet& particles);
 /// The cloth where it is now (`positions_t1`, unit: m) as a PLY triangle surface with vertex normals.
 /// @throws IoError
 void write_cloth_ply(const std::string& path, const ClothMesh& mesh);
+/// The fluid's reconstructed surface (surface/surface_reconstruction.hpp) as a PLY triangle surface with
+/// vertex normals (unit: m). @throws IoError
+void write_surface_ply(const std::string& path, const SurfaceMesh& mesh);
 
 }  // namespace drench

@@ -24,5 +24,7 @@ ClothSettings read_cloth(const Node& node);
 
 /// `coupling` (load_coupling.cpp): the coupling of fluid and cloth; absent: every default.
 CouplingSettings read_coupling(const Node& node);
+/// `surface` (load_surface.cpp): the surface reconstruction; absent: every default.
+SurfaceSettings read_surface(const Node& node);
 
 }  // namespace drench::loader

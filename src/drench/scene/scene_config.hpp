@@ -16,6 +16,7 @@
 #include <drench/sph/boundary_settings.hpp>
 #include <drench/sph/emitter_settings.hpp>
 #include <drench/sph/fluid_settings.hpp>
+#include <drench/surface/surface_settings.hpp>
 
 namespace drench {
 
@@ -51,6 +52,8 @@ struct SceneConfig {
   /// Coupling of fluid and cloth; used when `effects` lists "coupling" (and "friction" for the tangential
   /// boundary conditions).
   CouplingSettings coupling;
+  /// Reconstruction of the fluid's surface at every frame (sec. 4); used when `effects` lists "surface".
+  SurfaceSettings surface;
   std::vector<std::string> effects;  ///< names from known_effects(), each at most once
 
   /// True when `effects` lists `name`, i.e. that optional physics is to be constructed.
@@ -59,7 +62,8 @@ struct SceneConfig {
 
 /// The effect names a scene may list in `effects`: "viscosity", "coupling" (repulsion and continuous
 /// handling, sec. 3.1-3.3), "friction" (tangential boundary conditions, sec. 3.4), "leak_audit" (counts
-/// particles crossing the cloth): the one list the loader checks.
+/// particles crossing the cloth), "surface" (the fluid's surface mesh at every frame, sec. 4): the one list
+/// the loader checks.
 const std::vector<std::string>& known_effects();
 
 }  // namespace drench

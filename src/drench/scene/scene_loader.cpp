@@ -161,7 +161,7 @@ json parse_override_value(const std::string& text, const std::string& assignment
 SceneConfig parse_scene(const nlohmann::json& document, const std::string& source) {
   const Node root(&document, "", source);
   const ObjectReader r(root, {"gravity", "fluid", "emitters", "boundaries", "kill_regions", "time", "cloth",
-                              "coupling", "effects"});
+                              "coupling", "surface", "effects"});
   SceneConfig config;
   config.source = source;
   r.read("gravity", config.gravity);
@@ -172,6 +172,7 @@ SceneConfig parse_scene(const nlohmann::json& document, const std::string& sourc
   config.time = read_time(r["time"]);
   if (r["cloth"].present()) config.cloth = loader::read_cloth(r["cloth"]);
   config.coupling = loader::read_coupling(r["coupling"]);
+  config.surface = loader::read_surface(r["surface"]);
   config.effects = read_effects(r["effects"]);
   // An effect that needs something the scene lacks, or settings of an effect the scene does not run, would be
   // silently ignored: both are errors.
@@ -183,6 +184,8 @@ SceneConfig parse_scene(const nlohmann::json& document, const std::string& sourc
     if (config.has_effect(needs_cloth) && !config.cloth)
       effect_node(needs_cloth).fail("needs a cloth; the scene has no \"cloth\"");
   }
+  if (r["surface"].present() && !config.has_effect("surface"))
+    r["surface"].fail("sets the surface reconstruction, but effects does not list \"surface\"");
   if (config.has_effect("friction") && !config.has_effect("coupling"))
     effect_node("friction").fail("needs the \"coupling\" effect");
   const bool tangential =
