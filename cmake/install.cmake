@@ -49,12 +49,10 @@ install(FILES ${PROJECT_BINARY_DIR}/drenchConfig.cmake ${PROJECT_BINARY_DIR}/dre
 if(drench_core_type STREQUAL "STATIC_LIBRARY")
   # fcl.pc's Cflags carry -std=c++11, which would override a user's C++17: its libraries go in by name.
   set(drench_pc_requires_private "gmpxx libcrypto ccd octomap")
-  set(drench_pc_libs_private "-lfcl -lopenvdb -ltbb")
-  set(drench_bullet_pc_libs_private "-ltinyobjloader_double")
+  set(drench_pc_libs_private "-lfcl -lopenvdb -ltbb -ltinyobjloader_double")
 else()
   set(drench_pc_requires_private "")
   set(drench_pc_libs_private "")
-  set(drench_bullet_pc_libs_private "")
 endif()
 # Relocatable: the prefix is found from the .pc file's own place, so `cmake --install --prefix P` works.
 file(RELATIVE_PATH drench_pc_up "/root/${CMAKE_INSTALL_LIBDIR}/pkgconfig" "/root")

@@ -139,6 +139,80 @@ TEST(CoupledWorld, StepRecordsStartAndEndOfBothSides) {
     EXPECT_LT(p.positions_t0[i].y(), 0.8 + 1e-12);  // at or below the nozzle at the step's start (unit: m)
 }
 
+/// A flat square of 2 n^2 triangles at height y over [x0, x0 + size] x [z0, z0 + size], in a btTriangleMesh
+/// (Bullet's own indexed storage, btScalar vertices, 32-bit indices) as a game would build level geometry.
+std::unique_ptr<btTriangleMesh> square_mesh(int n, double size) {
+  auto mesh = std::make_unique<btTriangleMesh>();
+  auto node = [&](int i, int j) { return btVector3(size * i / n, 0.0, size * j / n); };
+  for (int j = 0; j < n; ++j) {
+    for (int i = 0; i < n; ++i) {
+      mesh->addTriangle(node(i, j), node(i, j + 1), node(i + 1, j), true);
+      mesh->addTriangle(node(i + 1, j), node(i, j + 1), node(i + 1, j + 1), true);
+    }
+  }
+  return mesh;
+}
+
+TEST(CoupledWorld, ReadsTheWorldsStaticTriangleMeshesInWorldCoordinates) {
+  UserWorld user;
+  EXPECT_TRUE(static_triangle_meshes(user.world).empty()) << "a dynamic sphere is no static mesh";
+  const std::unique_ptr<btTriangleMesh> storage = square_mesh(4, 0.2);
+  btBvhTriangleMeshShape shape(storage.get(), true);
+  shape.setLocalScaling(btVector3(2.0, 1.0, 0.5));
+  const btTransform placed(btQuaternion(btVector3(0, 1, 0), btScalar(0.5)), btVector3(0.1, 0.65, -0.3));
+  btDefaultMotionState motion(placed);
+  btRigidBody ground(0.0, &motion, &shape);
+  user.world.addRigidBody(&ground);
+  const std::vector<TriangleMesh> meshes = static_triangle_meshes(user.world);
+  user.world.removeRigidBody(&ground);
+  ASSERT_EQ(meshes.size(), 1u);
+  EXPECT_EQ(meshes[0].triangles.size(), 32u);
+  // btTriangleMesh shares a vertex among the faces that use it (removeDuplicateVertices = true).
+  EXPECT_EQ(meshes[0].positions.size(), 25u);
+  const double tolerance = bullet_tolerance(1e-15, 1.0, 16);
+  for (const Vec3& x : meshes[0].positions) {
+    // Undo the transform and the scaling: the point lies on the square's plane and inside it.
+    const btVector3 back = placed.inverse() * to_bt(x);
+    EXPECT_NEAR(back.y(), 0.0, tolerance);
+    EXPECT_GE(back.x() / 2.0, -tolerance);
+    EXPECT_LE(back.x() / 2.0, 0.2 + tolerance);
+    EXPECT_GE(back.z() / 0.5, -tolerance);
+    EXPECT_LE(back.z() / 0.5, 0.2 + tolerance);
+  }
+}
+
+TEST(CoupledWorld, StaticTriangleMeshesOfTheWorldHoldTheFluid) {
+  UserWorld user;
+  // Level geometry between the nozzle (y = 0.8) and the cloth (y = 0.5): the jet lands on it first.
+  const std::unique_ptr<btTriangleMesh> storage = square_mesh(10, 0.2);
+  btBvhTriangleMeshShape shape(storage.get(), true);
+  btDefaultMotionState motion(btTransform(btQuaternion::getIdentity(), btVector3(0.0, 0.65, -0.3)));
+  btRigidBody ground(0.0, &motion, &shape);
+  user.world.addRigidBody(&ground);
+  {
+    CoupledWorld coupled(user.world, *user.cloth, jet_scene(0.8));
+    ASSERT_EQ(coupled.simulation().obstacles().size(), 1u);
+    std::uint64_t leaks = 0, contacts = 0;
+    for (int n = 0; n < 200; ++n) {
+      const CoupledStepReport report = coupled.step();
+      ASSERT_TRUE(report.ok()) << "step " << n;
+      leaks += report.leak_stats.leaks;
+      contacts += report.coupling_stats.contacts;
+    }
+    EXPECT_EQ(leaks, 0u);
+    EXPECT_GT(contacts, 0u) << "the jet reached the static mesh";
+    std::size_t on_top = 0;
+    for (const Vec3& x : coupled.particles().positions) {
+      if (x.x() > 0.0 && x.x() < 0.2 && x.z() > -0.3 && x.z() < -0.1) {
+        EXPECT_GT(x.y(), 0.65 - coupled.scene().coupling.cloth_thickness);
+        ++on_top;
+      }
+    }
+    EXPECT_GT(on_top, 50u) << "the static mesh holds water";
+  }
+  user.world.removeRigidBody(&ground);
+}
+
 TEST(CoupledWorld, FluidIsBuiltAsTheSceneRunnerBuildsIt) {
   UserWorld user;
   const SceneConfig scene = jet_scene(0.8);

@@ -11,6 +11,7 @@
 #include <string>
 
 #include <drench/common/error.hpp>
+#include <drench/scene/simulation.hpp>
 
 namespace drench {
 namespace {
@@ -275,7 +276,7 @@ TEST(SceneLoader, RejectsNonObjectTopLevel) {
 TEST(SceneLoader, RejectsUnknownTopLevelKeyListingKnownKeys) {
   EXPECT_TRUE(scene_error(R"({"gravty": [0, 0, 0]})",
                           "gravty is not a known key (x.json); known: gravity, fluid, emitters, boundaries, "
-                          "kill_regions, time, cloth, coupling, surface, effects"));
+                          "kill_regions, time, cloth, obstacles, coupling, surface, effects"));
 }
 
 TEST(SceneLoader, RejectsMisspeltFluidKeyListingKnownKeys) {
@@ -622,6 +623,43 @@ TEST(SceneLoader, RejectsUnknownTimeKey) {
 // ---------------------------------------------------------------------------------------------------------
 // effects
 
+TEST(SceneLoader, ReadsObstacles) {
+  const SceneConfig c = parse(R"({"obstacles": [
+      {"mesh": "v_plane", "center": [0, 0.1, 0], "angle_deg": 60, "size": 0.3, "width": 0.2, "triangle_size": 0.01},
+      {"mesh": "/data/rock.obj", "center": [1, 2, 3], "scale": 0.5}],
+      "effects": ["coupling"]})");
+  ASSERT_EQ(c.obstacles.size(), 2u);
+  EXPECT_EQ(c.obstacles[0].mesh, "v_plane");
+  EXPECT_EQ(c.obstacles[0].center, Vec3(0, 0.1, 0));
+  EXPECT_EQ(c.obstacles[0].angle_deg, 60.0);
+  EXPECT_EQ(c.obstacles[0].size, 0.3);
+  EXPECT_EQ(c.obstacles[0].width, 0.2);
+  EXPECT_EQ(c.obstacles[0].triangle_size, 0.01);
+  EXPECT_EQ(c.obstacles[1].mesh, "/data/rock.obj");
+  EXPECT_EQ(c.obstacles[1].scale, 0.5);
+  EXPECT_FALSE(c.cloth) << "obstacles alone may be coupled";
+}
+
+TEST(SceneLoader, RejectsObstacleKeysOfTheOtherKind) {
+  EXPECT_TRUE(scene_error(R"({"obstacles": [{"mesh": "v_plane", "scale": 2}]})",
+                          "obstacles[0].scale applies to an OBJ mesh only, got 2 (x.json)"));
+  EXPECT_TRUE(scene_error(R"({"obstacles": [{"mesh": "a.obj", "angle_deg": 45}]})",
+                          "obstacles[0].angle_deg applies to \"mesh\": \"v_plane\" only, got 45 (x.json)"));
+  EXPECT_TRUE(scene_error(R"({"obstacles": [{"center": [0, 0, 0]}]})", "obstacles[0].mesh is missing"));
+  EXPECT_TRUE(scene_error(R"({"obstacles": [{"mesh": "v_plane", "angle_deg": 180}]})",
+                          "obstacles[0].angle_deg must be in (0, 180), got 180 (x.json)"));
+}
+
+TEST(SceneFile, ObstacleObjIsFoundBesideTheSceneAndAMissingOneIsNamed) {
+  const TempFile file(R"({"obstacles": [{"mesh": "no_such_rock.obj"}], "effects": ["coupling"]})");
+  const SceneConfig c = load_scene_file(file.path());
+  const std::string expected =
+      (std::filesystem::path(file.path()).parent_path() / "no_such_rock.obj").string();
+  EXPECT_EQ(c.obstacles[0].mesh, expected);
+  EXPECT_TRUE(throws_containing<SceneError>(
+      [&] { Simulation sim(c); }, "obstacles[0].mesh: OBJ file \"" + expected + "\" cannot be read"));
+}
+
 TEST(SceneLoader, ReadsTheSurfaceSection) {
   const SceneConfig c = parse(
       R"({"effects": ["surface"], "surface": {"cell_size": 0.004, "contact_aware": false, "contact_offset": 0}})");
@@ -959,7 +997,8 @@ TEST(SceneLoader, RejectsUnknownCouplingScheme) {
 
 TEST(SceneLoader, RejectsCouplingWithoutCloth) {
   EXPECT_TRUE(scene_error(R"({"effects": ["coupling"]})",
-                          "effects[0] needs a cloth; the scene has no \"cloth\", got \"coupling\" (x.json)"));
+                          "effects[0] needs a cloth or obstacles; the scene has no \"cloth\" and no "
+                          "\"obstacles\", got \"coupling\" (x.json)"));
 }
 
 TEST(SceneLoader, RejectsFrictionSettingsWithoutTheFrictionEffect) {

@@ -1,11 +1,14 @@
 #include <drench/bullet/coupled_world.hpp>
 
+#include <BulletCollision/CollisionShapes/btBvhTriangleMeshShape.h>
+#include <BulletCollision/CollisionShapes/btStridingMeshInterface.h>
 #include <BulletSoftBody/btSoftBody.h>
 #include <BulletSoftBody/btSoftRigidDynamicsWorld.h>
 
 #include <algorithm>
 #include <cassert>
 #include <cmath>
+#include <cstring>
 
 #include <drench/common/error.hpp>
 #include <drench/common/stopwatch.hpp>
@@ -88,16 +91,95 @@ LeakAuditStats difference(const LeakAuditStats& a, const LeakAuditStats& b) {
   return d;
 }
 
+/// Coordinate k of vertex v of a striding mesh's vertex base, stored as float or double.
+double vertex_coordinate(const unsigned char* base, int stride, PHY_ScalarType type, int v, int k) {
+  const unsigned char* at = base + static_cast<std::ptrdiff_t>(v) * stride;
+  if (type == PHY_DOUBLE) {
+    double x;
+    std::memcpy(&x, at + k * sizeof(double), sizeof x);
+    return x;
+  }
+  float x;
+  std::memcpy(&x, at + k * sizeof(float), sizeof x);
+  return x;
+}
+
+/// Index k of face f of a striding mesh's index base (32-, 16- or 8-bit).
+Index face_index(const unsigned char* base, int stride, PHY_ScalarType type, int f, int k) {
+  const unsigned char* at = base + static_cast<std::ptrdiff_t>(f) * stride;
+  if (type == PHY_SHORT) {
+    unsigned short i;
+    std::memcpy(&i, at + k * sizeof i, sizeof i);
+    return i;
+  }
+  if (type == PHY_UCHAR) return at[k];
+  unsigned int i;
+  std::memcpy(&i, at + k * sizeof i, sizeof i);
+  return i;
+}
+
+/// One static body's triangle mesh in world coordinates: every subpart, its vertices shared by index as the
+/// game stored them (a face that repeats a vertex or has no area, which Bullet tolerates, is dropped).
+TriangleMesh world_mesh(const btCollisionObject& body, const btBvhTriangleMeshShape& shape) {
+  const btStridingMeshInterface& striding = *shape.getMeshInterface();
+  const btVector3 scaling = striding.getScaling();
+  const btTransform& transform = body.getWorldTransform();
+  TriangleMesh mesh;
+  for (int part = 0; part < striding.getNumSubParts(); ++part) {
+    const unsigned char* vertices = nullptr;
+    const unsigned char* indices = nullptr;
+    int vertex_count = 0, vertex_stride = 0, index_stride = 0, face_count = 0;
+    PHY_ScalarType vertex_type = PHY_FLOAT, index_type = PHY_INTEGER;
+    striding.getLockedReadOnlyVertexIndexBase(&vertices, vertex_count, vertex_type, vertex_stride, &indices,
+                                              index_stride, face_count, index_type, part);
+    const auto first = static_cast<Index>(mesh.positions.size());
+    for (int v = 0; v < vertex_count; ++v) {
+      const btVector3 local(
+          static_cast<btScalar>(vertex_coordinate(vertices, vertex_stride, vertex_type, v, 0)),
+          static_cast<btScalar>(vertex_coordinate(vertices, vertex_stride, vertex_type, v, 1)),
+          static_cast<btScalar>(vertex_coordinate(vertices, vertex_stride, vertex_type, v, 2)));
+      mesh.positions.push_back(to_vec3(transform * (local * scaling)));
+    }
+    for (int f = 0; f < face_count; ++f) {
+      Triangle t;
+      for (int k = 0; k < 3; ++k)
+        t[k] = first + face_index(indices, index_stride, index_type, f, k);
+      const Vec3& a = mesh.positions[t[0]];
+      const bool degenerate =
+          t[0] == t[1] || t[1] == t[2] || t[0] == t[2] ||
+          !((mesh.positions[t[1]] - a).cross(mesh.positions[t[2]] - a).squaredNorm() > 0.0);
+      if (!degenerate) mesh.triangles.push_back(t);
+    }
+    striding.unLockReadOnlyVertexBase(part);
+  }
+  return mesh;
+}
+
 }  // namespace
 
+std::vector<TriangleMesh> static_triangle_meshes(const btCollisionWorld& world) {
+  std::vector<TriangleMesh> meshes;
+  const btCollisionObjectArray& objects = world.getCollisionObjectArray();
+  for (int i = 0; i < objects.size(); ++i) {
+    const btCollisionObject& body = *objects[i];
+    if (!body.isStaticObject() || body.isKinematicObject()) continue;
+    const btCollisionShape* shape = body.getCollisionShape();
+    if (!shape || shape->getShapeType() != TRIANGLE_MESH_SHAPE_PROXYTYPE) continue;
+    TriangleMesh mesh = world_mesh(body, *static_cast<const btBvhTriangleMeshShape*>(shape));
+    if (!mesh.triangles.empty()) meshes.push_back(std::move(mesh));
+  }
+  return meshes;
+}
+
 CoupledWorld::CoupledWorld(btSoftRigidDynamicsWorld& world, btSoftBody& cloth, const SceneConfig& scene)
-    : CoupledWorld(attach(world, cloth, scene), scene) {}
+    : CoupledWorld(attach(world, cloth, scene), scene, static_triangle_meshes(world)) {}
 
-CoupledWorld::CoupledWorld(const SceneConfig& scene) : CoupledWorld(own(scene), scene) {}
+CoupledWorld::CoupledWorld(const SceneConfig& scene) : CoupledWorld(own(scene), scene, {}) {}
 
-CoupledWorld::CoupledWorld(std::unique_ptr<BulletCloth> cloth, const SceneConfig& scene)
+CoupledWorld::CoupledWorld(std::unique_ptr<BulletCloth> cloth, const SceneConfig& scene,
+                           std::vector<TriangleMesh> static_meshes)
     : m_cloth(cloth.get()) {
-  m_simulation = std::make_unique<Simulation>(scene, std::move(cloth));
+  m_simulation = std::make_unique<Simulation>(scene, std::move(cloth), std::move(static_meshes));
 }
 
 CoupledWorld::~CoupledWorld() = default;

@@ -38,10 +38,18 @@
 #include <drench/sph/emitters.hpp>
 #include <drench/sph/fluid_solver.hpp>
 
+class btCollisionWorld;
 class btSoftBody;
 class btSoftRigidDynamicsWorld;
 
 namespace drench::bullet {
+
+/// The triangle meshes of the world's static rigid bodies (a btBvhTriangleMeshShape on a body of mass 0, not
+/// kinematic), in world coordinates with the shape's scaling, in the world's order; Huber et al. 2013 sec. 5
+/// treats rigid objects as such meshes. Vertices keep the game's indexing (faces sharing an edge share its
+/// nodes, so the coupling sees no crack); faces that repeat a vertex or have no area are dropped. Other
+/// shapes (boxes, spheres, convex hulls) are not read: a scene's `boundaries` describe those for the fluid.
+std::vector<TriangleMesh> static_triangle_meshes(const btCollisionWorld& world);
 
 /// What one coupled step did.
 struct CoupledStepReport {
@@ -67,7 +75,10 @@ struct CoupledStepReport {
 
 class CoupledWorld {
  public:
-  /// Couples a world and a cloth the caller owns (and keeps alive, and no longer steps itself).
+  /// Couples a world and a cloth the caller owns (and keeps alive, and no longer steps itself). The world's
+  /// static triangle meshes (static_triangle_meshes) hold the fluid too, coupled as the scene's `obstacles`
+  /// are: a level's geometry is described once, in Bullet. They are read now; a static body added to the
+  /// world later is not seen.
   /// @param world  the caller's world, holding `cloth`; its soft-body gravity (getWorldInfo().m_gravity)
   ///        must be the scene's gravity
   /// @param cloth  the caller's soft body; its settings (margin, piterations, masses, pins) are left alone
@@ -79,7 +90,8 @@ class CoupledWorld {
   ///        caller's.
   /// @throws SceneError when the world's soft-body gravity differs from the scene's, the cloth is not in the
   ///         world, the scene's dt or gravity is not finite or dt <= 0, or the coupling settings are out of
-  ///         range; drench::Error when the cloth's mesh is invalid (ClothMesh::validate)
+  ///         range; drench::Error when the cloth's mesh is invalid (ClothMesh::validate) or a static mesh has
+  ///         no face of non-zero area
   CoupledWorld(btSoftRigidDynamicsWorld& world, btSoftBody& cloth, const SceneConfig& scene);
 
   /// Owns its Bullet world and the cloth of scene.cloth in it (BulletCloth(*scene.cloth, scene.gravity)).
@@ -119,7 +131,8 @@ class CoupledWorld {
   std::int64_t removed() const { return m_simulation->removed(); }
 
  private:
-  CoupledWorld(std::unique_ptr<BulletCloth> cloth, const SceneConfig& scene);
+  CoupledWorld(std::unique_ptr<BulletCloth> cloth, const SceneConfig& scene,
+               std::vector<TriangleMesh> static_meshes);
 
   BulletCloth* m_cloth;  // owned by m_simulation
   std::unique_ptr<Simulation> m_simulation;

@@ -1,7 +1,6 @@
 #include <drench/bullet/soft_body_builder.hpp>
 
 #include <BulletSoftBody/btSoftBodyHelpers.h>
-#include <tiny_obj_loader.h>
 
 #include <algorithm>
 #include <array>
@@ -39,56 +38,6 @@ std::string format_vec3(const Vec3& v) {
   return "(" + format_number(v.x()) + ", " + format_number(v.y()) + ", " + format_number(v.z()) + ")";
 }
 
-std::string obj_error(const std::string& path, const std::string& problem) {
-  return "cloth.mesh: OBJ file \"" + path + "\" " + problem;
-}
-
-// tinyobjloader's messages end in newlines and may hold several lines.
-std::string one_line(std::string text) {
-  std::replace(text.begin(), text.end(), '\n', ' ');
-  while (!text.empty() && text.back() == ' ')
-    text.pop_back();
-  return text;
-}
-
-/// What tinyobjloader 2.0rc10 lets pass silently, checked on the text first: a coordinate that is not a
-/// number
-/// ("nan" and "abc" both parse as 0) or not finite, and a face of fewer than 3 vertices (dropped with a
-/// warning).
-void check_obj_text(const std::string& path, const std::string& text) {
-  std::istringstream lines(text);
-  std::string line;
-  for (int number = 1; std::getline(lines, line); ++number) {
-    std::istringstream tokens(line);
-    std::string keyword;
-    tokens >> keyword;
-    if (keyword == "v") {
-      for (int k = 0; k < 3; ++k) {
-        std::string token;
-        if (!(tokens >> token)) {
-          throw SceneError(
-              obj_error(path, "line " + std::to_string(number) + ": a vertex needs 3 coordinates"));
-        }
-        char* end = nullptr;
-        const double value = std::strtod(token.c_str(), &end);
-        if (end != token.c_str() + token.size() || !std::isfinite(value)) {
-          throw SceneError(obj_error(path, "line " + std::to_string(number) + ": vertex coordinate \"" +
-                                               token + "\" is not a finite number"));
-        }
-      }
-    } else if (keyword == "f") {
-      int count = 0;
-      for (std::string token; tokens >> token;)
-        ++count;
-      if (count < 3) {
-        throw SceneError(obj_error(path, "line " + std::to_string(number) +
-                                             ": a face needs at least 3 vertices, got " +
-                                             std::to_string(count)));
-      }
-    }
-  }
-}
-
 double triangle_area(const Vec3& a, const Vec3& b, const Vec3& c) {
   return 0.5 * (b - a).cross(c - a).norm();
 }
@@ -122,85 +71,11 @@ void validate_cloth_settings(const ClothSettings& s) {
   check_range("damping", s.damping, 0.0, false, 1.0, false, "in [0, 1]");
 }
 
-TriangleMesh load_obj_mesh(const std::string& path) {
-  std::ifstream file(path, std::ios::binary);
-  if (!file) throw SceneError(obj_error(path, std::string("cannot be read: ") + std::strerror(errno)));
-  const std::string text{std::istreambuf_iterator<char>(file), std::istreambuf_iterator<char>()};
-  if (file.bad()) throw SceneError(obj_error(path, std::string("cannot be read: ") + std::strerror(errno)));
-  check_obj_text(path, text);
-  tinyobj::ObjReaderConfig config;
-  config.triangulate = true;
-  config.vertex_color = false;
-  tinyobj::ObjReader reader;
-  // From the text: materials are not needed (ParseFromString ignores mtllib).
-  if (!reader.ParseFromString(text, "", config)) {
-    throw SceneError(obj_error(path, "cannot be parsed: " + one_line(reader.Error())));
-  }
-  const tinyobj::attrib_t& attrib = reader.GetAttrib();
-  const std::size_t vertex_count = attrib.vertices.size() / 3;
-
-  // Faces first, in file order, with the file's vertex indices.
-  std::vector<Triangle> triangles;
-  for (const tinyobj::shape_t& shape : reader.GetShapes()) {
-    std::size_t offset = 0;
-    for (std::size_t f = 0; f < shape.mesh.num_face_vertices.size(); ++f) {
-      const std::size_t n = shape.mesh.num_face_vertices[f];
-      if (n != 3) {
-        throw SceneError(obj_error(path, "has a face with " + std::to_string(n) +
-                                             " vertices that could not be triangulated (object \"" +
-                                             shape.name + "\", face " + std::to_string(f) + ")"));
-      }
-      Triangle t;
-      for (std::size_t k = 0; k < 3; ++k) {
-        const int v = shape.mesh.indices[offset + k].vertex_index;
-        if (v < 0 || static_cast<std::size_t>(v) >= vertex_count) {
-          throw SceneError(obj_error(path, "has a face with vertex index " + std::to_string(v + 1) +
-                                               " out of range 1.." + std::to_string(vertex_count)));
-        }
-        t[k] = static_cast<Index>(v);
-      }
-      offset += n;
-      triangles.push_back(t);
-    }
-  }
-  if (triangles.empty()) throw SceneError(obj_error(path, "has no faces"));
-
-  // Keep the vertices some face uses, in their order.
-  constexpr Index unused = ~Index{0};
-  std::vector<Index> new_index(vertex_count, unused);
-  for (const Triangle& t : triangles) {
-    for (Index v : t)
-      new_index[v] = 0;
-  }
-  TriangleMesh mesh;
-  for (std::size_t v = 0; v < vertex_count; ++v) {
-    if (new_index[v] == unused) continue;
-    const Vec3 x(attrib.vertices[3 * v], attrib.vertices[3 * v + 1], attrib.vertices[3 * v + 2]);
-    if (!x.allFinite()) {
-      throw SceneError(
-          obj_error(path, "has a non-finite vertex " + std::to_string(v + 1) + " " + format_vec3(x)));
-    }
-    new_index[v] = static_cast<Index>(mesh.positions.size());
-    mesh.positions.push_back(x);
-  }
-  mesh.triangles.reserve(triangles.size());
-  for (std::size_t f = 0; f < triangles.size(); ++f) {
-    const Triangle& t = triangles[f];
-    if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2]) {
-      throw SceneError(obj_error(path, "has face " + std::to_string(f + 1) + " that repeats a vertex (" +
-                                           std::to_string(t[0] + 1) + " " + std::to_string(t[1] + 1) + " " +
-                                           std::to_string(t[2] + 1) + ")"));
-    }
-    const Triangle mapped{new_index[t[0]], new_index[t[1]], new_index[t[2]]};
-    if (!(triangle_area(mesh.positions[mapped[0]], mesh.positions[mapped[1]], mesh.positions[mapped[2]]) >
-          0.0)) {
-      throw SceneError(obj_error(path, "has face " + std::to_string(f + 1) + " of zero area"));
-    }
-    mesh.triangles.push_back(mapped);
-  }
+TriangleMesh load_cloth_obj_mesh(const std::string& path) {
+  TriangleMesh mesh = load_obj_mesh(path, "cloth.mesh");
   if (mesh.positions.size() > static_cast<std::size_t>(INT_MAX / 8)) {
-    throw SceneError(obj_error(path, "has " + std::to_string(mesh.positions.size()) +
-                                         " vertices, more than Bullet's " + std::to_string(INT_MAX / 8)));
+    throw SceneError("cloth.mesh: OBJ file \"" + path + "\" has " + std::to_string(mesh.positions.size()) +
+                     " vertices, more than Bullet's " + std::to_string(INT_MAX / 8));
   }
   return mesh;
 }
@@ -327,7 +202,7 @@ std::unique_ptr<btSoftBody> create_cloth_body(btSoftBodyWorldInfo& world_info,
         btVector3(c.x() - hx, c.y(), c.z() + hz), btVector3(c.x() + hx, c.y(), c.z() + hz), settings.nodes_x,
         settings.nodes_z, 0, true));
   } else {
-    body = create_from_triangles(world_info, load_obj_mesh(settings.mesh));
+    body = create_from_triangles(world_info, load_cloth_obj_mesh(settings.mesh));
   }
 
   // Before anything reads the margin back (node tree volumes are refreshed from it on the first step).

@@ -13,6 +13,7 @@
 #include <drench/bullet/bullet_conversions.hpp>
 #include <drench/coupling/cloth_engine.hpp>
 #include <drench/coupling/cloth_mesh.hpp>
+#include <drench/io/obj_reader.hpp>
 
 namespace drench::bullet {
 
@@ -21,25 +22,16 @@ namespace drench::bullet {
 /// sees this margin; the coupling has its own thickness (CouplingSettings::cloth_thickness).
 inline constexpr double CLOTH_COLLISION_MARGIN = 0.005;
 
-/// A triangle mesh as read from a file.
-struct TriangleMesh {
-  Vec3Array positions;              ///< M vertices (unit: m)
-  std::vector<Triangle> triangles;  ///< F, indices < M
-};
+/// The mesh type and OBJ reader of the core, also under the adapter's name.
+using drench::TriangleMesh;
 
 /// Throws SceneError naming the first field of `settings` out of its range (the ranges are those documented
 /// in coupling/cloth_engine.hpp), as `cloth.<field> must be <range>, got <value>`.
 void validate_cloth_settings(const ClothSettings& settings);
 
-/// Reads an OBJ file with tinyobjloader, polygons triangulated (quads along a diagonal, larger polygons as
-/// fans), every object of the file in one mesh; materials are not read. Vertices that no face uses are
-/// dropped; the others keep their order. Lines and points are ignored. The text is checked first for what
-/// tinyobjloader 2.0rc10 accepts silently: a coordinate such as "nan" (read as 0) and a face of fewer than 3
-/// vertices (dropped).
-/// @throws SceneError naming the file (and the line where there is one): it cannot be read or parsed, a
-///         coordinate is not a finite number, a face has fewer than 3 vertices or is not a triangle after
-///         triangulation, an index is out of range, a face repeats a vertex or has zero area, no faces.
-TriangleMesh load_obj_mesh(const std::string& path);
+/// load_obj_mesh (io/obj_reader.hpp) for a cloth: also throws SceneError when the mesh has more vertices
+/// than Bullet counts in int.
+TriangleMesh load_cloth_obj_mesh(const std::string& path);
 
 /// A soft body with one node per vertex (mass 1 each, to be set), one face per triangle and one link per
 /// edge, built exactly as btSoftBodyHelpers::CreateFromTriMesh(world_info, ..., randomizeConstraints = true)

@@ -29,6 +29,17 @@ void write_cloth_ply(const std::string& path, const ClothMesh& mesh) {
   write_mesh_ply(path, "cloth mesh", mesh.positions_t1, mesh.triangles);
 }
 
+void write_obstacles_ply(const std::string& path, const std::vector<TriangleMesh>& obstacles) {
+  TriangleMesh all;
+  for (const TriangleMesh& obstacle : obstacles) {
+    const auto first = static_cast<Index>(all.positions.size());
+    all.positions.insert(all.positions.end(), obstacle.positions.begin(), obstacle.positions.end());
+    for (const Triangle& t : obstacle.triangles)
+      all.triangles.push_back({t[0] + first, t[1] + first, t[2] + first});
+  }
+  write_mesh_ply(path, "static obstacles", all.positions, all.triangles);
+}
+
 void write_surface_ply(const std::string& path, const SurfaceMesh& mesh) {
   write_mesh_ply(path, "fluid surface", mesh.positions, mesh.triangles);
 }

@@ -1,9 +1,11 @@
 #pragma once
-/// The frame files of a run (docs/output.md): the fluid's particles and the cloth as PLY, written through
-/// io/ply_writer.hpp, which knows arrays only.
+/// The frame files of a run (docs/output.md): the fluid's particles, the cloth, the obstacles and the surface
+/// as PLY, written through io/ply_writer.hpp, which knows arrays only.
 
 #include <string>
+#include <vector>
 
+#include <drench/common/triangle_mesh.hpp>
 #include <drench/coupling/cloth_mesh.hpp>
 #include <drench/sph/particle_set.hpp>
 #include <drench/surface/surface_reconstruction.hpp>
@@ -20,6 +22,8 @@ void write_particles_ply(const std::string& path, const ParticleSet& particles);
 /// The cloth where it is now (`positions_t1`, unit: m) as a PLY triangle surface with vertex normals.
 /// @throws IoError
 void write_cloth_ply(const std::string& path, const ClothMesh& mesh);
+/// The static obstacles, all in one PLY triangle surface with vertex normals (unit: m). @throws IoError
+void write_obstacles_ply(const std::string& path, const std::vector<TriangleMesh>& obstacles);
 /// The fluid's reconstructed surface (surface/surface_reconstruction.hpp) as a PLY triangle surface with
 /// vertex normals (unit: m). @throws IoError
 void write_surface_ply(const std::string& path, const SurfaceMesh& mesh);

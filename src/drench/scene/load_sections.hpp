@@ -22,6 +22,9 @@ KillRegionSettings read_kill_region(const Node& node);
 /// `cloth` (load_cloth.cpp), read only when the scene has one.
 ClothSettings read_cloth(const Node& node);
 
+/// One element of `obstacles` (load_obstacles.cpp), the built-in v_plane or an OBJ file.
+ObstacleSettings read_obstacle(const Node& node);
+
 /// `coupling` (load_coupling.cpp): the coupling of fluid and cloth; absent: every default.
 CouplingSettings read_coupling(const Node& node);
 /// `surface` (load_surface.cpp): the surface reconstruction; absent: every default.

@@ -13,6 +13,7 @@
 #include <drench/common/types.hpp>
 #include <drench/coupling/cloth_engine.hpp>
 #include <drench/coupling/coupling_settings.hpp>
+#include <drench/coupling/static_obstacles.hpp>
 #include <drench/sph/boundary_settings.hpp>
 #include <drench/sph/emitter_settings.hpp>
 #include <drench/sph/fluid_settings.hpp>
@@ -49,6 +50,8 @@ struct SceneConfig {
   TimeSettings time;
   /// The cloth (Bullet soft body through the adapter); absent: a fluid-only scene.
   std::optional<ClothSettings> cloth;
+  /// Static triangle meshes that hold the fluid, coupled as the cloth is with inverse mass 0.
+  std::vector<ObstacleSettings> obstacles;
   /// Coupling of fluid and cloth; used when `effects` lists "coupling" (and "friction" for the tangential
   /// boundary conditions).
   CouplingSettings coupling;

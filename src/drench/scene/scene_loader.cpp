@@ -161,7 +161,7 @@ json parse_override_value(const std::string& text, const std::string& assignment
 SceneConfig parse_scene(const nlohmann::json& document, const std::string& source) {
   const Node root(&document, "", source);
   const ObjectReader r(root, {"gravity", "fluid", "emitters", "boundaries", "kill_regions", "time", "cloth",
-                              "coupling", "surface", "effects"});
+                              "obstacles", "coupling", "surface", "effects"});
   SceneConfig config;
   config.source = source;
   r.read("gravity", config.gravity);
@@ -171,6 +171,7 @@ SceneConfig parse_scene(const nlohmann::json& document, const std::string& sourc
   config.kill_regions = loader::read_list(r["kill_regions"], loader::read_kill_region);
   config.time = read_time(r["time"]);
   if (r["cloth"].present()) config.cloth = loader::read_cloth(r["cloth"]);
+  config.obstacles = loader::read_list(r["obstacles"], loader::read_obstacle);
   config.coupling = loader::read_coupling(r["coupling"]);
   config.surface = loader::read_surface(r["surface"]);
   config.effects = read_effects(r["effects"]);
@@ -181,8 +182,9 @@ SceneConfig parse_scene(const nlohmann::json& document, const std::string& sourc
     return r["effects"].element(static_cast<std::size_t>(it - config.effects.begin()));
   };
   for (const char* needs_cloth : {"coupling", "leak_audit"}) {
-    if (config.has_effect(needs_cloth) && !config.cloth)
-      effect_node(needs_cloth).fail("needs a cloth; the scene has no \"cloth\"");
+    if (config.has_effect(needs_cloth) && !config.cloth && config.obstacles.empty())
+      effect_node(needs_cloth)
+          .fail("needs a cloth or obstacles; the scene has no \"cloth\" and no \"obstacles\"");
   }
   if (r["surface"].present() && !config.has_effect("surface"))
     r["surface"].fail("sets the surface reconstruction, but effects does not list \"surface\"");
@@ -289,10 +291,14 @@ std::string scene_source(const std::string& path, const std::vector<std::string>
 
 SceneConfig load_scene_file(const std::string& path, const std::vector<std::string>& overrides) {
   SceneConfig config = parse_scene(read_scene_document(path, overrides), scene_source(path, overrides));
-  // A cloth OBJ named relative to the scene file lives next to it, wherever drench is run from.
+  // A cloth or obstacle OBJ named relative to the scene file lives next to it, wherever drench is run from.
   if (config.cloth && config.cloth->mesh != "patch" &&
       std::filesystem::path(config.cloth->mesh).is_relative()) {
     config.cloth->mesh = (std::filesystem::path(path).parent_path() / config.cloth->mesh).string();
+  }
+  for (ObstacleSettings& obstacle : config.obstacles) {
+    if (obstacle.mesh != "v_plane" && std::filesystem::path(obstacle.mesh).is_relative())
+      obstacle.mesh = (std::filesystem::path(path).parent_path() / obstacle.mesh).string();
   }
   return config;
 }

@@ -76,10 +76,18 @@ nlohmann::json make_summary(const Simulation& sim, double wall_seconds, const st
       sim.config().fluid.pressure_solver == PressureSolverKind::PCISPH ? "pcisph" : "wcsph";
   s["speed_of_sound_mps"] = sim.speed_of_sound();
   s["status"] = status.describe().empty() ? "ok" : status.describe();
-  if (const ClothEngine* cloth = sim.cloth()) {
+  if (sim.contact_mesh()) {
     const CouplingStepStats& c = sim.coupling_stats();
-    s["cloth_faces"] = cloth->mesh().triangle_count();
-    s["cloth_mass_kg"] = cloth->total_mass();
+    if (const ClothEngine* cloth = sim.cloth()) {
+      s["cloth_faces"] = cloth->mesh().triangle_count();
+      s["cloth_mass_kg"] = cloth->total_mass();
+    }
+    if (!sim.obstacles().empty()) {
+      std::size_t faces = 0;
+      for (const TriangleMesh& obstacle : sim.obstacles())
+        faces += obstacle.triangles.size();
+      s["obstacle_faces"] = faces;
+    }
     s["contacts"] = c.contacts;
     s["ccd_impacts"] = c.ccd_impacts;
     s["ccd_iterations"] = c.ccd_iterations;
@@ -130,6 +138,8 @@ RunResult run_scene(Simulation& sim, const RunOptions& options) {
         std::vector<SurfaceObstacle> obstacles;
         if (const ClothEngine* cloth = sim.cloth())
           obstacles.push_back({&cloth->mesh().positions_t1, &cloth->mesh().triangles});
+        for (const TriangleMesh& obstacle : sim.obstacles())
+          obstacles.push_back({&obstacle.positions, &obstacle.triangles});
         SurfaceStats stats;
         const SurfaceMesh mesh =
             reconstruct_surface(sim.particles().positions, sim.config().fluid.particle_spacing,
@@ -145,6 +155,9 @@ RunResult run_scene(Simulation& sim, const RunOptions& options) {
       ++frame;
     }
   };
+
+  // Static: written once, beside the frames.
+  if (!sim.obstacles().empty()) write_obstacles_ply((out / "obstacles.ply").string(), sim.obstacles());
 
   RunResult result;
   ProgressLine progress(options.progress);

@@ -7,6 +7,7 @@
 #include <drench/common/error.hpp>
 #include <drench/common/stopwatch.hpp>
 #include <drench/coupling/cloth_obstacle.hpp>
+#include <drench/io/obj_reader.hpp>
 #include <drench/sph/boundary_sampling.hpp>
 
 namespace drench {
@@ -71,6 +72,12 @@ Scalar automatic_speed_of_sound(const SceneConfig& config) {
     const Vec3 half(0.5 * cloth.size_x, 0.0, 0.5 * cloth.size_z);
     include_box(cloth.center - half, cloth.center + half);
   }
+  // A built-in obstacle is where water lands too (an OBJ one, like an OBJ cloth, is not known here).
+  for (std::size_t i = 0; i < config.obstacles.size(); ++i) {
+    if (config.obstacles[i].mesh != "v_plane") continue;
+    for (const Vec3& x : v_plane_mesh(config.obstacles[i], "obstacles[" + std::to_string(i) + "]").positions)
+      include(x);
+  }
   const Scalar height = high > low ? high - low : 0.0;
   return std::max(1.0, 10.0 * (std::sqrt(2.0 * g * height) + emit_speed));
 }
@@ -88,10 +95,6 @@ BoundaryParticles sample_boundaries(const SceneConfig& config) {
   return all;
 }
 
-}  // namespace
-
-namespace {
-
 std::unique_ptr<ClothEngine> build_cloth(const SceneConfig& config, const ClothEngineFactory& factory) {
   if (!config.cloth) return nullptr;
   if (!factory) {
@@ -105,13 +108,41 @@ std::unique_ptr<ClothEngine> build_cloth(const SceneConfig& config, const ClothE
 
 }  // namespace
 
+std::vector<TriangleMesh> build_obstacles(const SceneConfig& config) {
+  std::vector<TriangleMesh> meshes;
+  for (std::size_t i = 0; i < config.obstacles.size(); ++i) {
+    const ObstacleSettings& o = config.obstacles[i];
+    const std::string key = "obstacles[" + std::to_string(i) + "]";
+    if (o.mesh == "v_plane") {
+      meshes.push_back(v_plane_mesh(o, key));
+      continue;
+    }
+    if (!(o.scale > 0.0) || !std::isfinite(o.scale))
+      throw SceneError(key + ".scale must be > 0 and finite, got " + format_number(o.scale));
+    if (!o.center.allFinite()) throw SceneError(key + ".center must be finite");
+    TriangleMesh mesh = load_obj_mesh(o.mesh, key + ".mesh");
+    for (Vec3& x : mesh.positions)
+      x = o.center + o.scale * x;
+    meshes.push_back(std::move(mesh));
+  }
+  return meshes;
+}
+
 Simulation::Simulation(const SceneConfig& config, const ClothEngineFactory& cloth_factory)
     : Simulation(config, build_cloth(config, cloth_factory)) {}
 
-Simulation::Simulation(const SceneConfig& config, std::unique_ptr<ClothEngine> cloth)
+Simulation::Simulation(const SceneConfig& config, std::unique_ptr<ClothEngine> cloth,
+                       std::vector<TriangleMesh> more_obstacles)
     : m_config(config),
       m_speed_of_sound(config.fluid.wcsph.speed_of_sound.value_or(automatic_speed_of_sound(config))),
       m_cloth(std::move(cloth)) {
+  std::vector<TriangleMesh> obstacles = build_obstacles(m_config);
+  for (TriangleMesh& mesh : more_obstacles)
+    obstacles.push_back(std::move(mesh));
+  // Without obstacles the engine is the cloth itself: the obstacles cost nothing when a scene has none.
+  if (!obstacles.empty())
+    m_with_obstacles = std::make_unique<ClothWithObstacles>(m_cloth.get(), std::move(obstacles));
+  m_engine = m_with_obstacles ? static_cast<ClothEngine*>(m_with_obstacles.get()) : m_cloth.get();
   m_fluid =
       std::make_unique<FluidSolver>(m_config.fluid, m_config.gravity, sample_boundaries(m_config),
                                     m_config.boundaries, m_config.has_effect("viscosity"), m_speed_of_sound);
@@ -124,16 +155,21 @@ Simulation::Simulation(const SceneConfig& config, std::unique_ptr<ClothEngine> c
       m_nozzles.emplace_back(e.nozzle, m_config.fluid.particle_spacing);
     }
   }
-  if (m_cloth) m_cloth->mesh().validate();
-  if (m_cloth && m_config.has_effect("coupling")) m_coupler = std::make_unique<Coupler>(m_config.coupling);
+  if (m_engine) m_engine->mesh().validate();
+  if (m_engine && m_config.has_effect("coupling")) m_coupler = std::make_unique<Coupler>(m_config.coupling);
   const bool carried_water = m_config.coupling.scheme == CouplingScheme::CARRIED_WATER;
   if (m_coupler && m_config.coupling.continuous && m_config.coupling.substep_obstacle) {
     m_obstacle = std::make_unique<ClothObstacle>(m_config.coupling.cloth_thickness,
                                                  m_config.coupling.broad_phase, carried_water);
   }
   if (m_coupler && carried_water) m_carried = std::make_unique<CarriedWater>();
-  if (m_cloth) m_pending_cloth_impulses.assign(m_cloth->mesh().node_count(), Vec3::Zero());
-  m_leak_audit = m_cloth && m_config.has_effect("leak_audit");
+  if (m_engine) m_pending_cloth_impulses.assign(m_engine->mesh().node_count(), Vec3::Zero());
+  m_leak_audit = m_engine && m_config.has_effect("leak_audit");
+}
+
+const std::vector<TriangleMesh>& Simulation::obstacles() const {
+  static const std::vector<TriangleMesh> none;
+  return m_with_obstacles ? m_with_obstacles->obstacles() : none;
 }
 
 bool Simulation::finished() const {
@@ -147,12 +183,12 @@ StepStatus Simulation::step(Scalar dt) {
       nozzle.emit(time(), dt, m_fluid->particle_mass(), m_fluid->particles(), m_next_id);
     }
   }
-  if (m_cloth) m_cloth->begin_step();
+  if (m_engine) m_engine->begin_step();
   // The cloth at its start positions is an obstacle inside the fluid's sub-steps
   // (coupling/cloth_obstacle.hpp).
-  if (m_obstacle) m_obstacle->begin_step(m_cloth->mesh(), m_cloth->velocities());
+  if (m_obstacle) m_obstacle->begin_step(m_engine->mesh(), m_engine->velocities());
   StepStatus status = m_fluid->step(dt, m_obstacle.get());
-  if (m_cloth) step_cloth_and_couple(dt, status);
+  if (m_engine) step_cloth_and_couple(dt, status);
   ++m_steps;
   m_time += dt;
   if (!m_config.kill_regions.empty()) {
@@ -164,7 +200,7 @@ StepStatus Simulation::step(Scalar dt) {
 
 void Simulation::step_cloth_and_couple(Scalar dt, StepStatus& status) {
   ParticleSet& p = m_fluid->particles();
-  ClothMesh& mesh = m_cloth->mesh();
+  ClothMesh& mesh = m_engine->mesh();
   // CouplingScheme::CARRIED_WATER: the water near the cloth weighs on its nodes through the engine's step.
   const bool carry = m_carried && status.ok();
   Vec3Array before_impulses;
@@ -177,8 +213,8 @@ void Simulation::step_cloth_and_couple(Scalar dt, StepStatus& status) {
       links.insert(links.end(), stops.begin(), stops.end());
     }
     m_carried->attach(mesh, p.masses, p.ids, std::move(links));
-    m_cloth->set_carried_masses(m_carried->carried_masses());
-    before_impulses = m_cloth->velocities();
+    m_engine->set_carried_masses(m_carried->carried_masses());
+    before_impulses = m_engine->velocities();
   }
   // Before the cloth steps, so that its solver spreads the load over the cloth's links in this step: what
   // the previous step owes the cloth, and what the particles gave it inside the fluid's sub-steps.
@@ -200,10 +236,10 @@ void Simulation::step_cloth_and_couple(Scalar dt, StepStatus& status) {
     for (std::size_t i = 0; i < impulses.size(); ++i)
       impulses[i] -= (carried[i] * dt) * m_config.gravity;
   }
-  m_cloth->apply_impulses(impulses);
+  m_engine->apply_impulses(impulses);
   {
     ScopedTimer timer(m_cloth_seconds);
-    m_cloth->step(dt);
+    m_engine->step(dt);
   }
   m_non_finite_node = -1;
   for (std::size_t i = 0; i < mesh.node_count(); ++i) {
@@ -216,7 +252,7 @@ void Simulation::step_cloth_and_couple(Scalar dt, StepStatus& status) {
   }
   if (carry && m_non_finite_node < 0) {
     ScopedTimer timer(m_coupling_seconds);
-    const Vec3 given = m_carried->hand_back(before_impulses, m_cloth->velocities(), mesh, dt, p.positions,
+    const Vec3 given = m_carried->hand_back(before_impulses, m_engine->velocities(), mesh, dt, p.positions,
                                             p.velocities, p.masses);
     m_coupling_stats.vertical_impulse_on_cloth -= given.y();
   }
@@ -245,7 +281,7 @@ void Simulation::step_cloth_and_couple(Scalar dt, StepStatus& status) {
   }
   {
     ScopedTimer timer(m_cloth_seconds);
-    m_cloth->end_step(dt);
+    m_engine->end_step(dt);
   }
   // After end_step, which leaves in the mesh the positions the engine holds (rounded, for a single-precision
   // engine), so that the audit checks the cloth the next step starts from.

@@ -11,6 +11,7 @@
 #include <drench/coupling/cloth_obstacle.hpp>
 #include <drench/coupling/coupler.hpp>
 #include <drench/coupling/leak_audit.hpp>
+#include <drench/coupling/static_obstacles.hpp>
 #include <drench/scene/scene_config.hpp>
 #include <drench/sph/emitters.hpp>
 #include <drench/sph/fluid_solver.hpp>
@@ -29,8 +30,12 @@ class Simulation {
   explicit Simulation(const SceneConfig& config, const ClothEngineFactory& cloth_factory = {});
 
   /// With a cloth engine built by the caller (e.g. attached to a Bullet world the caller owns); config.cloth
-  /// is then not used. `cloth` may be null for a fluid-only simulation.
-  Simulation(const SceneConfig& config, std::unique_ptr<ClothEngine> cloth);
+  /// is then not used. `cloth` may be null for a simulation without cloth. `more_obstacles` are static
+  /// meshes besides the scene's `obstacles` (e.g. a Bullet world's static triangle meshes), coupled the same
+  /// way.
+  /// @throws SceneError as the other constructor; drench::Error when an obstacle is not a valid mesh
+  Simulation(const SceneConfig& config, std::unique_ptr<ClothEngine> cloth,
+             std::vector<TriangleMesh> more_obstacles = {});
 
   /// One step of the scene's dt, in the paper's pipeline order (sec. 5): the cloth records its start
   /// positions; nozzles emit; the fluid advances alone (sub-stepping as it must); the cloth advances alone
@@ -66,9 +71,14 @@ class Simulation {
 
   /// The coupler, or nullptr when the scene does not list "coupling" (or has no cloth).
   Coupler* coupler() { return m_coupler.get(); }
-  /// The cloth, or nullptr for a fluid-only scene.
+  /// The cloth, or nullptr for a scene without one.
   ClothEngine* cloth() { return m_cloth.get(); }
   const ClothEngine* cloth() const { return m_cloth.get(); }
+  /// The static obstacles (the scene's, then the constructor's `more_obstacles`); empty without.
+  const std::vector<TriangleMesh>& obstacles() const;
+  /// The cloth and the obstacles as the coupling and the leak audit see them: the cloth's nodes first, then
+  /// the obstacles' of inverse mass 0; nullptr when the scene has neither.
+  const ClothMesh* contact_mesh() const { return m_engine ? &m_engine->mesh() : nullptr; }
   /// Coupling figures summed over all steps (zero without the "coupling" effect).
   const CouplingStepStats& coupling_stats() const { return m_coupling_stats; }
   /// Leak audit figures summed over all steps (zero without the "leak_audit" effect).
@@ -103,6 +113,8 @@ class Simulation {
   std::int64_t m_removed = 0;
   double m_emit_seconds = 0;
   std::unique_ptr<ClothEngine> m_cloth;
+  std::unique_ptr<ClothWithObstacles> m_with_obstacles;  // only when the scene has obstacles
+  ClothEngine* m_engine = nullptr;  // what the coupled step drives: m_with_obstacles, else m_cloth
   std::unique_ptr<Coupler> m_coupler;
   std::unique_ptr<ClothObstacle> m_obstacle;  // the cloth inside fluid sub-steps, kept across steps
   std::unique_ptr<CarriedWater> m_carried;    // CouplingScheme::CARRIED_WATER only
@@ -119,9 +131,14 @@ class Simulation {
   double m_coupling_seconds = 0;
 };
 
+/// The meshes of the scene's `obstacles`, in order: the built-in v_plane, or an OBJ file scaled and moved.
+/// @throws SceneError naming `obstacles[i]` and the setting or file at fault (io/obj_reader.hpp)
+std::vector<TriangleMesh> build_obstacles(const SceneConfig& config);
+
 /// Speed of sound a scene gets when fluid.wcsph.speed_of_sound is unset: 10 (sqrt(2 |g| H) + v_emit) (unit:
-/// m/s), H the scene's extent along gravity over its emitters, boundaries and patch cloth (not an OBJ cloth:
-/// its extent is unknown before the engine loads it), v_emit the fastest nozzle; at least 1 m/s.
+/// m/s), H the scene's extent along gravity over its emitters, boundaries, patch cloth and v_plane obstacles
+/// (not an OBJ cloth: its extent is unknown before the engine loads it), v_emit the fastest nozzle; at least
+/// 1 m/s.
 Scalar automatic_speed_of_sound(const SceneConfig& config);
 
 }  // namespace drench

@@ -1,0 +1,164 @@
+#include <drench/io/obj_reader.hpp>
+
+#include <tiny_obj_loader.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cmath>
+#include <cstdlib>
+#include <cstring>
+#include <fstream>
+#include <iterator>
+#include <sstream>
+
+#include <drench/common/error.hpp>
+
+namespace drench {
+
+namespace {
+
+std::string format_vec3(const Vec3& v) {
+  return "(" + format_number(v.x()) + ", " + format_number(v.y()) + ", " + format_number(v.z()) + ")";
+}
+
+std::string obj_error(const std::string& key, const std::string& path, const std::string& problem) {
+  return key + ": OBJ file \"" + path + "\" " + problem;
+}
+
+// tinyobjloader's messages end in newlines and may hold several lines.
+std::string one_line(std::string text) {
+  std::replace(text.begin(), text.end(), '\n', ' ');
+  while (!text.empty() && text.back() == ' ')
+    text.pop_back();
+  return text;
+}
+
+/// What tinyobjloader 2.0rc10 lets pass silently, checked on the text first: a coordinate that is not a
+/// number
+/// ("nan" and "abc" both parse as 0) or not finite, and a face of fewer than 3 vertices (dropped with a
+/// warning).
+void check_obj_text(const std::string& key, const std::string& path, const std::string& text) {
+  std::istringstream lines(text);
+  std::string line;
+  for (int number = 1; std::getline(lines, line); ++number) {
+    std::istringstream tokens(line);
+    std::string keyword;
+    tokens >> keyword;
+    if (keyword == "v") {
+      for (int k = 0; k < 3; ++k) {
+        std::string token;
+        if (!(tokens >> token)) {
+          throw SceneError(
+              obj_error(key, path, "line " + std::to_string(number) + ": a vertex needs 3 coordinates"));
+        }
+        char* end = nullptr;
+        const double value = std::strtod(token.c_str(), &end);
+        if (end != token.c_str() + token.size() || !std::isfinite(value)) {
+          throw SceneError(obj_error(key, path,
+                                     "line " + std::to_string(number) + ": vertex coordinate \"" + token +
+                                         "\" is not a finite number"));
+        }
+      }
+    } else if (keyword == "f") {
+      int count = 0;
+      for (std::string token; tokens >> token;)
+        ++count;
+      if (count < 3) {
+        throw SceneError(obj_error(key, path,
+                                   "line " + std::to_string(number) +
+                                       ": a face needs at least 3 vertices, got " + std::to_string(count)));
+      }
+    }
+  }
+}
+
+double triangle_area(const Vec3& a, const Vec3& b, const Vec3& c) {
+  return 0.5 * (b - a).cross(c - a).norm();
+}
+
+}  // namespace
+
+TriangleMesh load_obj_mesh(const std::string& path, const std::string& key) {
+  std::ifstream file(path, std::ios::binary);
+  if (!file) throw SceneError(obj_error(key, path, std::string("cannot be read: ") + std::strerror(errno)));
+  const std::string text{std::istreambuf_iterator<char>(file), std::istreambuf_iterator<char>()};
+  if (file.bad())
+    throw SceneError(obj_error(key, path, std::string("cannot be read: ") + std::strerror(errno)));
+  check_obj_text(key, path, text);
+  tinyobj::ObjReaderConfig config;
+  config.triangulate = true;
+  config.vertex_color = false;
+  tinyobj::ObjReader reader;
+  // From the text: materials are not needed (ParseFromString ignores mtllib).
+  if (!reader.ParseFromString(text, "", config)) {
+    throw SceneError(obj_error(key, path, "cannot be parsed: " + one_line(reader.Error())));
+  }
+  const tinyobj::attrib_t& attrib = reader.GetAttrib();
+  const std::size_t vertex_count = attrib.vertices.size() / 3;
+
+  // Faces first, in file order, with the file's vertex indices.
+  std::vector<Triangle> triangles;
+  for (const tinyobj::shape_t& shape : reader.GetShapes()) {
+    std::size_t offset = 0;
+    for (std::size_t f = 0; f < shape.mesh.num_face_vertices.size(); ++f) {
+      const std::size_t n = shape.mesh.num_face_vertices[f];
+      if (n != 3) {
+        throw SceneError(obj_error(key, path,
+                                   "has a face with " + std::to_string(n) +
+                                       " vertices that could not be triangulated (object \"" + shape.name +
+                                       "\", face " + std::to_string(f) + ")"));
+      }
+      Triangle t;
+      for (std::size_t k = 0; k < 3; ++k) {
+        const int v = shape.mesh.indices[offset + k].vertex_index;
+        if (v < 0 || static_cast<std::size_t>(v) >= vertex_count) {
+          throw SceneError(obj_error(key, path,
+                                     "has a face with vertex index " + std::to_string(v + 1) +
+                                         " out of range 1.." + std::to_string(vertex_count)));
+        }
+        t[k] = static_cast<Index>(v);
+      }
+      offset += n;
+      triangles.push_back(t);
+    }
+  }
+  if (triangles.empty()) throw SceneError(obj_error(key, path, "has no faces"));
+
+  // Keep the vertices some face uses, in their order.
+  constexpr Index unused = ~Index{0};
+  std::vector<Index> new_index(vertex_count, unused);
+  for (const Triangle& t : triangles) {
+    for (Index v : t)
+      new_index[v] = 0;
+  }
+  TriangleMesh mesh;
+  for (std::size_t v = 0; v < vertex_count; ++v) {
+    if (new_index[v] == unused) continue;
+    const Vec3 x(attrib.vertices[3 * v], attrib.vertices[3 * v + 1], attrib.vertices[3 * v + 2]);
+    if (!x.allFinite()) {
+      throw SceneError(
+          obj_error(key, path, "has a non-finite vertex " + std::to_string(v + 1) + " " + format_vec3(x)));
+    }
+    new_index[v] = static_cast<Index>(mesh.positions.size());
+    mesh.positions.push_back(x);
+  }
+  mesh.triangles.reserve(triangles.size());
+  for (std::size_t f = 0; f < triangles.size(); ++f) {
+    const Triangle& t = triangles[f];
+    if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2]) {
+      throw SceneError(obj_error(key, path,
+                                 "has face " + std::to_string(f + 1) + " that repeats a vertex (" +
+                                     std::to_string(t[0] + 1) + " " + std::to_string(t[1] + 1) + " " +
+                                     std::to_string(t[2] + 1) + ")"));
+    }
+    const Triangle mapped{new_index[t[0]], new_index[t[1]], new_index[t[2]]};
+    if (!(triangle_area(mesh.positions[mapped[0]], mesh.positions[mapped[1]], mesh.positions[mapped[2]]) >
+          0.0)) {
+      throw SceneError(obj_error(key, path, "has face " + std::to_string(f + 1) + " of zero area"));
+    }
+    mesh.triangles.push_back(mapped);
+  }
+  return mesh;
+}
+
+}  // namespace drench
