@@ -666,6 +666,11 @@ TEST(SceneLoader, ReadsTheSurfaceSection) {
   EXPECT_EQ(c.surface.cell_size, 0.004);
   EXPECT_FALSE(c.surface.contact_aware);
   EXPECT_EQ(c.surface.contact_offset, 0.0);
+  EXPECT_EQ(c.surface.field, SurfaceField::ZHU_BRIDSON);
+  EXPECT_EQ(parse(R"({"effects": ["surface"], "surface": {"field": "density"}})").surface.field,
+            SurfaceField::DENSITY);
+  EXPECT_TRUE(scene_error(R"({"effects": ["surface"], "surface": {"field": "splashsurf"}})",
+                          "surface.field must be one of \"zhu_bridson\", \"density\""));
 }
 
 TEST(SceneLoader, RejectsANonPositiveSurfaceCellSize) {

@@ -94,11 +94,14 @@ TEST(TriangleGeometry, TriangleOverlapsCubeBySeparatingAxes) {
   EXPECT_FALSE(triangle_overlaps_cube(Vec3(3.5, -1, 0), Vec3(-1, 3.5, 0), Vec3(4, 4, 0), centre, 1.0));
 }
 
-TEST(Surface, SphereOfParticlesGivesAClosedOutwardMesh) {
+class SurfaceOfABall : public testing::TestWithParam<SurfaceField> {};
+
+TEST_P(SurfaceOfABall, IsAClosedOutwardMeshOfTheBallsVolume) {
   Vec3Array ball;
   for (const Vec3& p : block(Vec3::Constant(-0.1), Vec3::Constant(0.1)))
     if (p.norm() <= 0.1) ball.push_back(p);
   SurfaceSettings settings;
+  settings.field = GetParam();
   SurfaceStats stats;
   const SurfaceMesh mesh = reconstruct_surface(ball, kSpacing, settings, {}, &stats);
   ASSERT_FALSE(mesh.triangles.empty());
@@ -122,6 +125,12 @@ TEST(Surface, SphereOfParticlesGivesAClosedOutwardMesh) {
   }
   EXPECT_EQ(stats.nodes > 0, true);
 }
+
+INSTANTIATE_TEST_SUITE_P(Fields, SurfaceOfABall,
+                         testing::Values(SurfaceField::ZHU_BRIDSON, SurfaceField::DENSITY),
+                         [](const testing::TestParamInfo<SurfaceField>& param) {
+                           return param.param == SurfaceField::ZHU_BRIDSON ? "ZhuBridson" : "Density";
+                         });
 
 TEST(Surface, ContactAwareSurfaceDoesNotCrossTheClothTheWaterRestsOn) {
   const Sheet cloth(0.0, 0.15, 31);

@@ -130,6 +130,31 @@ inline double zb_kernel(double s2) {
   return t > 0.0 ? t * t * t : 0.0;
 }
 
+/// The colour field's level of the surface. Müller et al. 2003 leave it to the user; 0.6 is where the field
+/// of a flat lattice (kernel radius 2 spacings, the default) crosses its physical surface, half a spacing
+/// beyond its last layer, so that a ball keeps its volume (tests/surface: Fields/SurfaceOfABall).
+constexpr double kColourLevel = 0.6;
+
+/// 1 / sum_j k(|x_i - x_j| / radius) for every particle i (itself included, so >= 1 and finite): the
+/// inverse of its number density in kernel units. Onderik et al. 2011 divide each particle's Zhu-Bridson
+/// weight by it; as SPH's m / rho it is also the particle's volume in the colour field (an interior particle
+/// of a regular lattice sums to about 1 there).
+std::vector<double> inverse_number_densities(const Vec3Array& particles, const ParticleCells& cells,
+                                             Scalar radius) {
+  std::vector<double> inverse(particles.size());
+  const double radius2 = radius * radius;
+#pragma omp parallel for schedule(static)
+  for (std::size_t i = 0; i < particles.size(); ++i) {
+    double sum = 0.0;
+    cells.for_each_near(particles[i], [&](Index j) {
+      const double d2 = (particles[j] - particles[i]).squaredNorm();
+      if (d2 < radius2) sum += zb_kernel(d2 / radius2);
+    });
+    inverse[i] = 1.0 / sum;
+  }
+  return inverse;
+}
+
 }  // namespace
 
 SurfaceMesh reconstruct_surface(const Vec3Array& particles, Scalar particle_spacing,
@@ -157,6 +182,8 @@ SurfaceMesh reconstruct_surface(const Vec3Array& particles, Scalar particle_spac
   local.nodes = nodes.size();
 
   const ParticleCells cells(particles, radius);
+  const std::vector<double> inverse_density = inverse_number_densities(particles, cells, radius);
+  const bool density_field = settings.field == SurfaceField::DENSITY;
   const bool aware = settings.contact_aware && !obstacles.empty();
   const TriangleBins bins = aware ? TriangleBins(obstacles, radius) : TriangleBins();
   std::vector<float> values(nodes.size(), outside);
@@ -204,11 +231,15 @@ SurfaceMesh reconstruct_surface(const Vec3Array& particles, Scalar particle_spac
             return;
           }
         }
-        const double w = zb_kernel(d2 / radius2);
+        const double w = zb_kernel(d2 / radius2) * inverse_density[i];
         weight += w;
         mean += w * p;
       });
-      if (weight > 0.0) {
+      if (weight > 0.0 && density_field) {
+        // The colour field is about 1 inside and 0 far outside; scaled by the spacing, its values near the
+        // surface are lengths like the Zhu-Bridson field's, which the mesher's interpolation expects.
+        values[n] = static_cast<float>(std::min<double>((kColourLevel - weight) * particle_spacing, outside));
+      } else if (weight > 0.0) {
         mean /= weight;
         values[n] = static_cast<float>(std::min<double>((x - mean).norm() - particle_radius, outside));
       }

@@ -5,8 +5,19 @@
 
 namespace drench {
 
+/// The scalar field whose zero level is the surface (docs/scenes.md, `surface.field`).
+enum class SurfaceField {
+  /// Zhu & Bridson 2005: distance to the weighted mean of the particles near a node, less the particle
+  /// radius; weights divided by each particle's density, as Onderik et al. 2011 do against uneven particle
+  /// distributions (a dense cluster no longer pulls the mean towards itself).
+  ZHU_BRIDSON,
+  /// Müller et al. 2003's colour field: the SPH sum of the particles' volumes, its surface where it is 1/2.
+  DENSITY,
+};
+
 /// How the fluid's surface is reconstructed from its particles (docs/scenes.md, `surface`).
 struct SurfaceSettings {
+  SurfaceField field = SurfaceField::ZHU_BRIDSON;
   /// Grid spacing of the marching-cubes grid (unit: m), > 0; 0 means half the particle spacing. The paper
   /// used 0.004 m for 5 mm particles (sec. 5).
   Scalar cell_size = 0.0;
