@@ -7,6 +7,7 @@
 #include <unordered_map>
 #include <utility>
 
+#include <drench/ccd/exact_predicates.hpp>
 #include <drench/common/error.hpp>
 #include <drench/common/triangle_geometry.hpp>
 #include <drench/surface/triangle_bins.hpp>
@@ -277,12 +278,7 @@ std::uint64_t count_surface_intersections(const SurfaceMesh& surface,
       for (const auto& [o, t] : near) {
         const Triangle& ot = (*obstacles[o].triangles)[t];
         const Vec3Array& q = *obstacles[o].positions;
-        const Vec3 &d = q[ot[0]], &e = q[ot[1]], &f = q[ot[2]];
-        const bool meet =
-            segment_crosses_triangle(a, b, d, e, f) || segment_crosses_triangle(b, c, d, e, f) ||
-            segment_crosses_triangle(c, a, d, e, f) || segment_crosses_triangle(d, e, a, b, c) ||
-            segment_crosses_triangle(e, f, a, b, c) || segment_crosses_triangle(f, d, a, b, c);
-        if (meet) ++count;
+        if (ccd::triangles_meet_exact(a, b, c, q[ot[0]], q[ot[1]], q[ot[2]])) ++count;
       }
     }
   }

@@ -46,10 +46,10 @@ SurfaceMesh reconstruct_surface(const Vec3Array& particles, Scalar particle_spac
                                 const SurfaceSettings& settings,
                                 const std::vector<SurfaceObstacle>& obstacles, SurfaceStats* stats = nullptr);
 
-/// Number of (surface triangle, obstacle triangle) pairs that intersect: an edge of one crosses the other's
-/// interior or boundary. Independent of how the surface was made, so it measures the claim of sec. 4 (0 for
-/// a contact-aware surface). Segment-triangle tests in double precision with a relative tolerance of 1e-12
-/// counted as crossing (conservative); candidates from a grid of triangle boxes.
+/// Number of (surface triangle, obstacle triangle) pairs that share a point (closed triangles: touching
+/// counts). Independent of how the surface was made, so it measures the claim of sec. 4 (0 for a
+/// contact-aware surface). Decided exactly (ccd/exact_predicates.hpp); candidates from a grid of triangle
+/// boxes.
 std::uint64_t count_surface_intersections(const SurfaceMesh& surface,
                                           const std::vector<SurfaceObstacle>& obstacles);
 
