@@ -39,6 +39,7 @@ int run_command(const std::string& scene_path, const std::string& out_dir,
   options.out_dir = out_dir;
   if (steps >= 0) options.max_steps = steps;
   options.scene_sha256 = drench::sha256_hex(drench::canonical_scene_text(document));
+  options.scene_document = document;
   options.progress = !quiet;
   if (!quiet) {
     std::fprintf(stderr, "drench %s: %s, %zu particles, %lld steps of %g s, %d threads\n", DRENCH_VERSION,

@@ -114,6 +114,9 @@ RunResult run_scene(Simulation& sim, const RunOptions& options) {
   std::error_code ec;
   fs::create_directories(frames, ec);
   if (ec) throw IoError("cannot create " + frames.string() + ": " + ec.message());
+  // First, so that even a run stopped early leaves what `drench reconstruct` needs beside its frames.
+  if (!options.scene_document.is_null())
+    write_file_atomic((out / "scene.json").string(), options.scene_document.dump(2) + "\n");
 
   const auto start = std::chrono::steady_clock::now();
   auto wall = [&] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(); };

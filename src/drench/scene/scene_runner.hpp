@@ -16,6 +16,9 @@ struct RunOptions {
   std::optional<std::int64_t> max_steps;  ///< stop after this many steps (the `--steps` flag)
   std::string scene_sha256;               ///< reported as `scene_sha256`
   bool progress = true;                   ///< print a progress line when stderr is a terminal
+  /// The effective scene (the file after `--set`), written as `scene.json` before the first frame so that
+  /// `drench reconstruct` can redo the surface later; not written when null.
+  nlohmann::json scene_document;
 };
 
 struct RunResult {
@@ -23,9 +26,10 @@ struct RunResult {
   StepStatus status;       ///< all flags raised during the run
 };
 
-/// Steps `simulation` until it finishes (or max_steps), writing `frames/fluid_NNNN.ply` at the scene's frame
-/// rate (frame 0 is the initial state) and `summary.json` at the end, each through a temporary name. A step
-/// with a non-finite state ends the run early; the summary is still written and says so in `status`.
+/// Steps `simulation` until it finishes (or max_steps), writing `scene.json` first (when options has a
+/// scene_document), then `frames/fluid_NNNN.ply` at the scene's frame rate (frame 0 is the initial state)
+/// and `summary.json` at the end, each through a temporary name. A step with a non-finite state ends the run
+/// early; the summary is still written and says so in `status`.
 /// @throws IoError when out_dir or a file cannot be written.
 RunResult run_scene(Simulation& simulation, const RunOptions& options);
 
