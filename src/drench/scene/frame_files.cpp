@@ -17,6 +17,13 @@ std::vector<PlyProperty> particle_properties(const ParticleSet& particles) {
 
 }  // namespace
 
+Vec3Array positions_as_saved(const Vec3Array& positions) {
+  Vec3Array saved(positions.size());
+  for (std::size_t i = 0; i < positions.size(); ++i)
+    saved[i] = positions[i].cast<float>().cast<Scalar>();
+  return saved;
+}
+
 std::string particles_to_ply(const ParticleSet& particles) {
   return points_to_ply("fluid particles", particles.positions, particle_properties(particles));
 }

@@ -12,6 +12,11 @@
 
 namespace drench {
 
+/// `positions` as the frame files hold them, every coordinate rounded to float32 (the writer's precision):
+/// exactly what io/ply_reader.hpp reads back. The run's surface is made from these, so that `drench
+/// reconstruct` on the saved frames gives the same surface.
+Vec3Array positions_as_saved(const Vec3Array& positions);
+
 /// The particles as a PLY point cloud: one `vertex` per particle with float properties x y z (unit: m),
 /// vx vy vz (unit: m/s), density (unit: kg/m^3), pressure (unit: Pa) and uint id.
 std::string particles_to_ply(const ParticleSet& particles);

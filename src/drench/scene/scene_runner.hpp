@@ -28,8 +28,9 @@ struct RunResult {
 
 /// Steps `simulation` until it finishes (or max_steps), writing `scene.json` first (when options has a
 /// scene_document), then `frames/fluid_NNNN.ply` at the scene's frame rate (frame 0 is the initial state)
-/// and `summary.json` at the end, each through a temporary name. A step with a non-finite state ends the run
-/// early; the summary is still written and says so in `status`.
+/// and `summary.json` at the end, each through a temporary name. The `surface` effect reconstructs each
+/// frame from the positions as the frame files hold them (frame_files.hpp, positions_as_saved). A step with
+/// a non-finite state ends the run early; the summary is still written and says so in `status`.
 /// @throws IoError when out_dir or a file cannot be written.
 RunResult run_scene(Simulation& simulation, const RunOptions& options);
 
