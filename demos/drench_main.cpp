@@ -1,5 +1,6 @@
 // The drench command:
 //   drench run SCENE.json --out DIR [--set json.path=value ...] [--steps N]
+//   drench reconstruct DIR [--set json.path=value ...]   the surface again from a run's saved frames
 //   drench ccd FILE_OR_DIR... [--list]      point-triangle CCD against labelled queries (*.vf.txt)
 // Exit status: 0 success; 1 bad input (scene, file, arguments) or, for `ccd`, a missed collision; 2 the
 // simulation became non-finite.
@@ -21,6 +22,7 @@
 #include <drench/ccd/ccd_query_file.hpp>
 #include <drench/ccd/point_triangle_ccd.hpp>
 #include <drench/common/error.hpp>
+#include <drench/scene/reconstruct_run.hpp>
 #include <drench/scene/scene_loader.hpp>
 #include <drench/scene/scene_runner.hpp>
 #include <drench/scene/simulation.hpp>
@@ -67,6 +69,21 @@ int run_command(const std::string& scene_path, const std::string& out_dir,
     std::fprintf(stderr, "drench: simulation stopped: %s\n", result.status.describe().c_str());
     return 2;
   }
+  return 0;
+}
+
+int reconstruct_command(const std::string& run_dir, const std::vector<std::string>& overrides, bool quiet) {
+  drench::ReconstructOptions options;
+  options.run_dir = run_dir;
+  options.overrides = overrides;
+  options.progress = !quiet;
+  const drench::ReconstructResult result = drench::reconstruct_run(options);
+  std::printf(
+      "%lld frames reconstructed in %.2f s: %llu surface triangles, %llu crossings of the cloth and "
+      "obstacles; surface_NNNN.ply and reconstruct.json in %s\n",
+      static_cast<long long>(result.frames), result.wall_seconds,
+      static_cast<unsigned long long>(result.surface_triangles),
+      static_cast<unsigned long long>(result.surface_intersections), run_dir.c_str());
   return 0;
 }
 
@@ -180,6 +197,19 @@ int main(int argc, char** argv) {
   run->add_option("--threads", threads, "OpenMP threads (default: all cores)")->check(CLI::PositiveNumber);
   run->add_flag("--quiet", quiet, "no banner and no progress line");
 
+  std::string reconstruct_dir;
+  CLI::App* reconstruct = app.add_subcommand(
+      "reconstruct",
+      "reconstruct the fluid's surface again from a run's saved frames (frames/surface_NNNN.ply)");
+  reconstruct->add_option("dir", reconstruct_dir, "the --out folder of a drench run (scene.json, frames/)")
+      ->required();
+  reconstruct->add_option(
+      "--set", overrides,
+      "override a value of the run's scene, e.g. --set surface.cell_size=0.004 (repeatable)");
+  reconstruct->add_option("--threads", threads, "OpenMP threads (default: all cores)")
+      ->check(CLI::PositiveNumber);
+  reconstruct->add_flag("--quiet", quiet, "no progress line");
+
   std::vector<std::string> ccd_paths;
   bool ccd_list = false;
   CLI::App* ccd = app.add_subcommand(
@@ -193,6 +223,7 @@ int main(int argc, char** argv) {
   if (threads > 0) omp_set_num_threads(threads);
   try {
     if (run->parsed()) return run_command(scene_path, out_dir, overrides, steps, quiet);
+    if (reconstruct->parsed()) return reconstruct_command(reconstruct_dir, overrides, quiet);
     if (ccd->parsed()) return ccd_command(ccd_paths, ccd_list);
   } catch (const drench::Error& e) {
     std::fprintf(stderr, "drench: %s\n", e.what());

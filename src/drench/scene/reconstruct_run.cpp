@@ -1,0 +1,216 @@
+#include <drench/scene/reconstruct_run.hpp>
+
+#include <omp.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <system_error>
+#include <utility>
+
+#include <drench/common/error.hpp>
+#include <drench/common/stopwatch.hpp>
+#include <drench/io/atomic_file.hpp>
+#include <drench/io/ply_reader.hpp>
+#include <drench/scene/frame_files.hpp>
+#include <drench/scene/scene_loader.hpp>
+#include <drench/surface/surface_reconstruction.hpp>
+
+namespace drench {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+/// One saved frame's files; `cloth` is empty when the run had no cloth.
+struct FrameFiles {
+  std::int64_t number = 0;
+  fs::path fluid, cloth, surface;
+};
+
+/// The NNNN of `<prefix>NNNN.ply`, or false when `name` is not such a name (temporary files included).
+bool frame_number(const std::string& name, const std::string& prefix, std::string& digits) {
+  const std::string suffix = ".ply";
+  if (name.size() <= prefix.size() + suffix.size() || name.compare(0, prefix.size(), prefix) != 0 ||
+      name.compare(name.size() - suffix.size(), suffix.size(), suffix) != 0)
+    return false;
+  digits = name.substr(prefix.size(), name.size() - prefix.size() - suffix.size());
+  // 18 digits cannot overflow an int64; the writer's %04lld never makes more.
+  return digits.size() <= 18 && digits.find_first_not_of("0123456789") == std::string::npos;
+}
+
+/// The fluid frames in `frames_dir` in frame order, each with the names of its cloth and surface files.
+std::vector<FrameFiles> list_frames(const fs::path& frames_dir) {
+  std::error_code ec;
+  if (!fs::is_directory(frames_dir, ec)) {
+    throw IoError(frames_dir.string() +
+                  ": missing; drench reconstruct reads the frames/ folder of a `drench run --out` folder");
+  }
+  std::vector<FrameFiles> frames;
+  bool cloth = false;
+  for (const fs::directory_entry& entry : fs::directory_iterator(frames_dir, ec)) {
+    const std::string name = entry.path().filename().string();
+    std::string digits;
+    if (frame_number(name, "cloth_", digits)) cloth = true;
+    if (!frame_number(name, "fluid_", digits)) continue;
+    FrameFiles frame;
+    frame.number = std::stoll(digits);
+    frame.fluid = entry.path();
+    frame.cloth = frames_dir / ("cloth_" + digits + ".ply");
+    frame.surface = frames_dir / ("surface_" + digits + ".ply");
+    frames.push_back(std::move(frame));
+  }
+  if (ec) throw IoError(frames_dir.string() + ": cannot list: " + ec.message());
+  if (frames.empty()) throw IoError(frames_dir.string() + ": no fluid_NNNN.ply frames");
+  std::sort(frames.begin(), frames.end(), [](const FrameFiles& a, const FrameFiles& b) {
+    return a.number != b.number ? a.number < b.number : a.fluid < b.fluid;
+  });
+  for (FrameFiles& frame : frames) {
+    if (!cloth) {
+      frame.cloth.clear();
+    } else if (!fs::exists(frame.cloth, ec)) {
+      // Without its cloth the frame's surface would cross the cloth where the run's did not.
+      throw IoError(frame.cloth.string() + ": missing, while the run saved the cloth of other frames");
+    }
+  }
+  return frames;
+}
+
+/// A PLY file that must be a triangle mesh (a cloth frame, the obstacles).
+PlyData read_mesh_ply(const fs::path& path) {
+  PlyData data = read_ply(path.string());
+  if (!data.has_faces) throw IoError(path.string() + ": has no face element; expected a triangle mesh");
+  return data;
+}
+
+/// Adds "surface" to the document's `effects` (creating the list) unless it is there; leaves a document of
+/// the wrong shape to parse_scene, which says what is wrong with it.
+void add_surface_effect(nlohmann::json& document) {
+  if (!document.is_object()) return;
+  if (!document.contains("effects")) document["effects"] = nlohmann::json::array();
+  nlohmann::json& effects = document["effects"];
+  if (!effects.is_array()) return;
+  if (std::find(effects.begin(), effects.end(), nlohmann::json("surface")) == effects.end())
+    effects.push_back("surface");
+}
+
+/// A single self-overwriting line on a terminal, at most five times a second; silent elsewhere.
+class ProgressLine {
+ public:
+  ProgressLine(bool wanted, std::size_t frames)
+      : m_enabled(wanted && ::isatty(STDERR_FILENO)), m_frames(frames) {}
+  void update(std::size_t done, double wall) {
+    if (!m_enabled || wall - m_last < 0.2) return;
+    m_last = wall;
+    const double rate = done / std::max(wall, 1e-9);
+    std::fprintf(stderr, "\r  frame %zu / %zu   %.2f frames/s   ETA %.0f s   ", done, m_frames, rate,
+                 (m_frames - done) / std::max(rate, 1e-9));
+    std::fflush(stderr);
+  }
+  ~ProgressLine() {
+    if (m_enabled && m_last > 0) std::fprintf(stderr, "\n");
+  }
+
+ private:
+  bool m_enabled;
+  std::size_t m_frames;
+  double m_last = 0;
+};
+
+}  // namespace
+
+ReconstructResult reconstruct_run(const ReconstructOptions& options) {
+  const auto start = std::chrono::steady_clock::now();
+  auto wall = [&] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(); };
+  const fs::path dir(options.run_dir);
+
+  // The settings: the run's scene with the overrides, validated as `drench run` validates them.
+  const fs::path scene_path = dir / "scene.json";
+  std::error_code ec;
+  if (!fs::exists(scene_path, ec)) {
+    throw IoError(scene_path.string() +
+                  ": missing; drench reconstruct needs the scene.json that drench run writes into its --out "
+                  "folder");
+  }
+  nlohmann::json document = read_scene_document(scene_path.string());
+  add_surface_effect(document);
+  for (const std::string& assignment : options.overrides) {
+    try {
+      apply_override(document, assignment);
+    } catch (const SceneError& e) {
+      throw SceneError(std::string(e.what()) + " (" + scene_path.string() + ")");
+    }
+  }
+  const SceneConfig config = parse_scene(document, scene_source(scene_path.string(), options.overrides));
+  const Scalar spacing = config.fluid.particle_spacing;
+
+  // Every input read and checked once before the first write, so that bad input writes nothing. Reading
+  // twice costs little beside the reconstruction, and holding every frame could take more memory than the
+  // run did.
+  double read_seconds = 0, surface_seconds = 0, audit_seconds = 0, write_seconds = 0;
+  const std::vector<FrameFiles> frames = list_frames(dir / "frames");
+  PlyData obstacles_ply;
+  const fs::path obstacles_path = dir / "obstacles.ply";
+  const bool has_obstacles = fs::exists(obstacles_path, ec);
+  {
+    ScopedTimer timer(read_seconds);
+    if (has_obstacles) obstacles_ply = read_mesh_ply(obstacles_path);
+    for (const FrameFiles& frame : frames) {
+      (void)read_ply(frame.fluid.string());
+      if (!frame.cloth.empty()) (void)read_mesh_ply(frame.cloth);
+    }
+  }
+
+  ReconstructResult result;
+  ProgressLine progress(options.progress, frames.size());
+  for (const FrameFiles& frame : frames) {
+    PlyData fluid, cloth;
+    {
+      ScopedTimer timer(read_seconds);
+      fluid = read_ply(frame.fluid.string());
+      if (!frame.cloth.empty()) cloth = read_mesh_ply(frame.cloth);
+    }
+    // The run's order: the cloth, then the obstacles (all in one mesh here, which changes no result: a node
+    // is reset, or a particle occluded, when any triangle says so).
+    std::vector<SurfaceObstacle> obstacles;
+    if (!frame.cloth.empty()) obstacles.push_back({&cloth.positions, &cloth.triangles});
+    if (has_obstacles) obstacles.push_back({&obstacles_ply.positions, &obstacles_ply.triangles});
+    SurfaceStats stats;
+    const SurfaceMesh mesh = reconstruct_surface(fluid.positions, spacing, config.surface, obstacles, &stats);
+    surface_seconds += stats.seconds;
+    {
+      ScopedTimer timer(audit_seconds);
+      result.surface_intersections += count_surface_intersections(mesh, obstacles);
+    }
+    result.surface_triangles += mesh.triangles.size();
+    {
+      ScopedTimer timer(write_seconds);
+      write_surface_ply(frame.surface.string(), mesh);
+    }
+    ++result.frames;
+    progress.update(static_cast<std::size_t>(result.frames), wall());
+  }
+
+  nlohmann::json& r = result.report;
+  r["frames"] = result.frames;
+  r["surface_triangles"] = result.surface_triangles;
+  r["surface_intersections"] = result.surface_intersections;
+  r["cell_size"] = config.surface.resolved_cell_size(spacing);
+  r["contact_aware"] = config.surface.contact_aware;
+  r["contact_offset"] = config.surface.resolved_contact_offset(spacing);
+  r["timings_s"] = {{"surface", surface_seconds},
+                    {"surface_audit", audit_seconds},
+                    {"read", read_seconds},
+                    {"write", write_seconds}};
+  r["threads"] = omp_get_max_threads();
+  r["version"] = DRENCH_VERSION;
+  r["scene_sha256"] = sha256_hex(canonical_scene_text(document));
+  result.wall_seconds = wall();
+  r["wall_s"] = result.wall_seconds;
+  write_file_atomic((dir / "reconstruct.json").string(), r.dump(2) + "\n");
+  return result;
+}
+
+}  // namespace drench
