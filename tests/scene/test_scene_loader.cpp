@@ -276,7 +276,7 @@ TEST(SceneLoader, RejectsNonObjectTopLevel) {
 TEST(SceneLoader, RejectsUnknownTopLevelKeyListingKnownKeys) {
   EXPECT_TRUE(scene_error(R"({"gravty": [0, 0, 0]})",
                           "gravty is not a known key (x.json); known: gravity, fluid, emitters, boundaries, "
-                          "kill_regions, time, cloth, obstacles, coupling, surface, effects"));
+                          "kill_regions, time, cloth, obstacles, coupling, surface, wetting, effects"));
 }
 
 TEST(SceneLoader, RejectsMisspeltFluidKeyListingKnownKeys) {
@@ -683,11 +683,35 @@ TEST(SceneLoader, RejectsSurfaceSettingsWithoutTheSurfaceEffect) {
   EXPECT_TRUE(scene_error(R"({"surface": {"cell_size": 0.004}})", "effects does not list \"surface\""));
 }
 
+TEST(SceneLoader, ReadsTheWettingSectionAndChecksWhatItNeeds) {
+  const std::string cloth = R"("cloth": {"mesh": "patch"}, )";
+  const SceneConfig c =
+      parse("{" + cloth +
+            R"("effects": ["coupling", "wetting"], "wetting": {"max_saturation": 2, "absorption_rate": 5,
+                "diffusion": 0.001, "gravity_flow": 0}})");
+  EXPECT_EQ(c.wetting.max_saturation, 2.0);
+  EXPECT_EQ(c.wetting.absorption_rate, 5.0);
+  EXPECT_EQ(c.wetting.diffusion, 0.001);
+  EXPECT_EQ(c.wetting.gravity_flow, 0.0);
+  EXPECT_TRUE(
+      scene_error("{" + cloth + R"("effects": ["coupling", "wetting"], "wetting": {"max_saturation": 0}})",
+                  "wetting.max_saturation"));
+  EXPECT_TRUE(
+      scene_error("{" + cloth + R"("effects": ["coupling", "wetting"], "wetting": {"diffusion": -1}})",
+                  "wetting.diffusion"));
+  EXPECT_TRUE(scene_error("{" + cloth + R"("effects": ["coupling", "wetting"], "wetting": {"porosity": 1}})",
+                          "porosity is not a known key"));
+  EXPECT_TRUE(
+      scene_error("{" + cloth + R"("wetting": {"diffusion": 0.001}})", "effects does not list \"wetting\""));
+  EXPECT_TRUE(scene_error(R"({"effects": ["wetting"]})", "effects[0] needs a cloth"));
+  EXPECT_TRUE(scene_error("{" + cloth + R"("effects": ["wetting"]})", "needs the \"coupling\" effect"));
+}
+
 TEST(SceneLoader, RejectsUnknownEffectListingKnownEffects) {
   EXPECT_TRUE(
       scene_error(R"({"effects": ["viscosity", "magic"]})",
                   "effects[1] must be one of \"viscosity\", \"coupling\", \"friction\", \"leak_audit\", "
-                  "\"surface\", got "
+                  "\"surface\", \"wetting\", got "
                   "\"magic\" (x.json)"));
 }
 
@@ -695,7 +719,7 @@ TEST(SceneLoader, RejectsDuplicateEffectListingKnownEffects) {
   EXPECT_TRUE(
       scene_error(R"({"effects": ["viscosity", "viscosity"]})",
                   "effects[1] repeats effects[0]; list each of \"viscosity\", \"coupling\", \"friction\", "
-                  "\"leak_audit\", \"surface\" at most once, got \"viscosity\""));
+                  "\"leak_audit\", \"surface\", \"wetting\" at most once, got \"viscosity\""));
 }
 
 TEST(SceneLoader, RejectsEffectsGivenAsString) {

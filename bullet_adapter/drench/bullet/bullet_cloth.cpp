@@ -6,6 +6,7 @@
 #include <btBulletDynamicsCommon.h>
 
 #include <cassert>
+#include <cmath>
 #include <stdexcept>
 #include <string>
 
@@ -121,6 +122,32 @@ void BulletCloth::set_carried_masses(const ScalarArray& carried) {
     node.m_im = 1.0 / (1.0 / node.m_im + carried[i]);
   }
   if (!m_saved_inverse_masses.empty()) body.updateLinkConstants();
+}
+
+void BulletCloth::set_water_masses(const ScalarArray& water) {
+  btSoftBody& body = *m_body;
+  if (water.size() != static_cast<std::size_t>(body.m_nodes.size())) {
+    throw std::invalid_argument("BulletCloth::set_water_masses: " + std::to_string(water.size()) +
+                                " masses for " + std::to_string(body.m_nodes.size()) + " nodes");
+  }
+  for (std::size_t i = 0; i < water.size(); ++i) {
+    if (!(water[i] >= 0.0) || !std::isfinite(water[i])) {
+      throw std::invalid_argument("BulletCloth::set_water_masses: node " + std::to_string(i) + " water " +
+                                  format_number(water[i]) + ", must be >= 0 and finite");
+    }
+  }
+  restore_masses();
+  if (m_dry_inverse_masses.empty()) {
+    m_dry_inverse_masses.resize(water.size());
+    for (int i = 0; i < body.m_nodes.size(); ++i)
+      m_dry_inverse_masses[i] = body.m_nodes[i].m_im;
+  }
+  for (int i = 0; i < body.m_nodes.size(); ++i) {
+    const double dry = m_dry_inverse_masses[i];
+    if (dry > 0.0) body.m_nodes[i].m_im = 1.0 / (1.0 / dry + water[i]);
+  }
+  body.updateLinkConstants();
+  read_inverse_masses();
 }
 
 void BulletCloth::restore_masses() {

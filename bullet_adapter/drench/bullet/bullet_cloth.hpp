@@ -74,6 +74,12 @@ class BulletCloth final : public ClothEngine {
   /// @throws std::invalid_argument if `carried` does not have one entry per node
   void set_carried_masses(const ScalarArray& carried) override;
 
+  /// node.m_im = 1 / (dry mass + water[i]) for every node with m_im > 0, the dry masses being the nodes' at
+  /// the first call, and updateLinkConstants() (never setMass: see set_carried_masses). Pinning or
+  /// unpinning nodes after the first call is not supported: their dry mass is not re-read.
+  /// @throws std::invalid_argument on a wrong size or a negative or non-finite entry
+  void set_water_masses(const ScalarArray& water) override;
+
   /// With a world (owned, or given at attach): stepSimulation(dt / substeps, 0) `substeps` times (an owned
   /// cloth's ClothSettings::substeps, an attached one 1), which steps every body in
   /// that world, then capture_end(). Without one: capture_end() only; the caller has stepped the world by dt
@@ -128,6 +134,7 @@ class BulletCloth final : public ClothEngine {
   btSoftBody* m_body = nullptr;
   int m_substeps = 1;  // owned cloth: ClothSettings::substeps; attached: 1
   std::vector<std::pair<int, double>> m_saved_inverse_masses;  // node, its own m_im, while carrying water
+  ScalarArray m_dry_inverse_masses;  // m_im of every node before the first set_water_masses
   btSoftRigidDynamicsWorld* m_world = nullptr;
   ClothMesh m_mesh;
   Vec3Array m_predicted;  // M, Bullet's end positions before the coupling

@@ -6,6 +6,7 @@
 
 #include <functional>
 #include <memory>
+#include <stdexcept>
 #include <string>
 
 #include <drench/common/types.hpp>
@@ -55,6 +56,16 @@ class ClothEngine {
   /// ignore it.
   /// @throws std::invalid_argument if `carried` does not have one entry per node
   virtual void set_carried_masses(const ScalarArray& carried) = 0;
+  /// From now on node i weighs its dry mass plus water[i] (unit: kg, M entries, >= 0, finite): the water the
+  /// cloth holds (wetting/cloth_wetting.hpp), so a wet cloth sags more. The dry masses are the node masses
+  /// at the first call; nodes with inverse mass 0 stay pinned. Rest lengths do not change. Call between
+  /// steps (after end_step). An engine that cannot change its node masses keeps this default, which throws.
+  /// @throws std::logic_error from such an engine; std::invalid_argument on a wrong size or a negative or
+  ///         non-finite entry
+  virtual void set_water_masses(const ScalarArray& water) {
+    (void)water;
+    throw std::logic_error("this cloth engine cannot change its node masses: it does not support wetting");
+  }
   /// Advances the cloth alone by dt (unit: s); afterwards mesh().positions_t1 holds the predicted end
   /// positions.
   virtual void step(double dt) = 0;

@@ -36,6 +36,11 @@ void write_cloth_ply(const std::string& path, const ClothMesh& mesh) {
   write_mesh_ply(path, "cloth mesh", mesh.positions_t1, mesh.triangles);
 }
 
+void write_cloth_ply(const std::string& path, const ClothMesh& mesh, const ScalarArray& wetness) {
+  write_mesh_ply(path, "cloth mesh", mesh.positions_t1, mesh.triangles,
+                 {PlyProperty::scalar("wetness", wetness)});
+}
+
 void write_obstacles_ply(const std::string& path, const std::vector<TriangleMesh>& obstacles) {
   TriangleMesh all;
   for (const TriangleMesh& obstacle : obstacles) {

@@ -27,6 +27,9 @@ void write_particles_ply(const std::string& path, const ParticleSet& particles);
 /// The cloth where it is now (`positions_t1`, unit: m) as a PLY triangle surface with vertex normals.
 /// @throws IoError
 void write_cloth_ply(const std::string& path, const ClothMesh& mesh);
+/// The same with a float vertex property `wetness` (M values in [0, 1]: water held over capacity, the
+/// "wetting" effect).
+void write_cloth_ply(const std::string& path, const ClothMesh& mesh, const ScalarArray& wetness);
 /// The static obstacles, all in one PLY triangle surface with vertex normals (unit: m). @throws IoError
 void write_obstacles_ply(const std::string& path, const std::vector<TriangleMesh>& obstacles);
 /// The fluid's reconstructed surface (surface/surface_reconstruction.hpp) as a PLY triangle surface with

@@ -29,5 +29,7 @@ ObstacleSettings read_obstacle(const Node& node);
 CouplingSettings read_coupling(const Node& node);
 /// `surface` (load_surface.cpp): the surface reconstruction; absent: every default.
 SurfaceSettings read_surface(const Node& node);
+/// `wetting` (load_wetting.cpp): absorption, diffusion and dripping; absent: every default.
+WettingSettings read_wetting(const Node& node);
 
 }  // namespace drench::loader

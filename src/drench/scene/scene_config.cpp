@@ -7,8 +7,8 @@ namespace drench {
 const std::vector<std::string>& known_effects() {
   // The single list the loader validates `effects` against and docs/scenes.md mirrors; new effects are added
   // here.
-  static const std::vector<std::string> names = {"viscosity", "coupling", "friction", "leak_audit",
-                                                 "surface"};
+  static const std::vector<std::string> names = {"viscosity",  "coupling", "friction",
+                                                 "leak_audit", "surface",  "wetting"};
   return names;
 }
 

@@ -18,6 +18,7 @@
 #include <drench/sph/emitter_settings.hpp>
 #include <drench/sph/fluid_settings.hpp>
 #include <drench/surface/surface_settings.hpp>
+#include <drench/wetting/wetting_settings.hpp>
 
 namespace drench {
 
@@ -57,6 +58,8 @@ struct SceneConfig {
   CouplingSettings coupling;
   /// Reconstruction of the fluid's surface at every frame (sec. 4); used when `effects` lists "surface".
   SurfaceSettings surface;
+  /// Water absorbed, spread and dripped by the cloth (Fig. 9); used when `effects` lists "wetting".
+  WettingSettings wetting;
   std::vector<std::string> effects;  ///< names from known_effects(), each at most once
 
   /// True when `effects` lists `name`, i.e. that optional physics is to be constructed.
@@ -65,8 +68,8 @@ struct SceneConfig {
 
 /// The effect names a scene may list in `effects`: "viscosity", "coupling" (repulsion and continuous
 /// handling, sec. 3.1-3.3), "friction" (tangential boundary conditions, sec. 3.4), "leak_audit" (counts
-/// particles crossing the cloth), "surface" (the fluid's surface mesh at every frame, sec. 4): the one list
-/// the loader checks.
+/// particles crossing the cloth), "surface" (the fluid's surface mesh at every frame, sec. 4), "wetting" (the
+/// cloth absorbs, spreads and drips water, Fig. 9): the one list the loader checks.
 const std::vector<std::string>& known_effects();
 
 }  // namespace drench

@@ -161,7 +161,7 @@ json parse_override_value(const std::string& text, const std::string& assignment
 SceneConfig parse_scene(const nlohmann::json& document, const std::string& source) {
   const Node root(&document, "", source);
   const ObjectReader r(root, {"gravity", "fluid", "emitters", "boundaries", "kill_regions", "time", "cloth",
-                              "obstacles", "coupling", "surface", "effects"});
+                              "obstacles", "coupling", "surface", "wetting", "effects"});
   SceneConfig config;
   config.source = source;
   r.read("gravity", config.gravity);
@@ -174,6 +174,7 @@ SceneConfig parse_scene(const nlohmann::json& document, const std::string& sourc
   config.obstacles = loader::read_list(r["obstacles"], loader::read_obstacle);
   config.coupling = loader::read_coupling(r["coupling"]);
   config.surface = loader::read_surface(r["surface"]);
+  config.wetting = loader::read_wetting(r["wetting"]);
   config.effects = read_effects(r["effects"]);
   // An effect that needs something the scene lacks, or settings of an effect the scene does not run, would be
   // silently ignored: both are errors.
@@ -188,6 +189,12 @@ SceneConfig parse_scene(const nlohmann::json& document, const std::string& sourc
   }
   if (r["surface"].present() && !config.has_effect("surface"))
     r["surface"].fail("sets the surface reconstruction, but effects does not list \"surface\"");
+  if (r["wetting"].present() && !config.has_effect("wetting"))
+    r["wetting"].fail("sets the wetting, but effects does not list \"wetting\"");
+  if (config.has_effect("wetting") && !config.cloth)
+    effect_node("wetting").fail("needs a cloth; the scene has no \"cloth\"");
+  if (config.has_effect("wetting") && !config.has_effect("coupling"))
+    effect_node("wetting").fail("needs the \"coupling\" effect, whose contacts give the cloth its water");
   if (config.has_effect("friction") && !config.has_effect("coupling"))
     effect_node("friction").fail("needs the \"coupling\" effect");
   const bool tangential =

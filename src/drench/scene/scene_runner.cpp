@@ -103,6 +103,25 @@ nlohmann::json make_summary(const Simulation& sim, double wall_seconds, const st
       s["leaks"] = sim.leak_stats().leaks;
       s["timings_s"]["leak_audit"] = sim.leak_stats().seconds;
     }
+    if (const ClothWetting* wetting = sim.wetting()) {
+      // Every kilogram accounted for: what entered (initial particles, nozzles) is in the fluid, in the
+      // cloth, or was removed by a kill region.
+      double fluid = 0.0;
+      for (const Scalar m : sim.particles().masses)
+        fluid += m;
+      const WettingStepStats& w = sim.wetting_stats();
+      s["mass_kg"] = {{"fluid", fluid},
+                      {"held_by_cloth", wetting->held()},
+                      {"absorbed", w.absorbed_kg},
+                      {"dripped", w.dripped_kg},
+                      {"killed", sim.killed_mass()},
+                      {"initial_total", sim.emitted_mass()},
+                      {"final_total", fluid + wetting->held() + sim.killed_mass()}};
+      s["particles_absorbed"] = w.particles_absorbed;
+      s["particles_dripped"] = w.particles_dripped;
+      s["wet_area_fraction"] = wetting->wet_area_fraction();
+      s["timings_s"]["wetting"] = w.seconds;
+    }
   }
   return s;
 }
@@ -143,7 +162,11 @@ RunResult run_scene(Simulation& sim, const RunOptions& options) {
       write_particles_ply((frames / frame_name("fluid", frame)).string(), sim.particles());
       if (const ClothEngine* cloth = sim.cloth()) {
         // Between steps positions_t1 is where the cloth is now (end_step wrote it back to the engine).
-        write_cloth_ply((frames / frame_name("cloth", frame)).string(), cloth->mesh());
+        if (const ClothWetting* wetting = sim.wetting()) {
+          write_cloth_ply((frames / frame_name("cloth", frame)).string(), cloth->mesh(), wetting->wetness());
+        } else {
+          write_cloth_ply((frames / frame_name("cloth", frame)).string(), cloth->mesh());
+        }
       }
       if (surface) {
         std::vector<SurfaceObstacle> obstacles;

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <unordered_map>
 
 #include <drench/common/error.hpp>
 #include <drench/common/stopwatch.hpp>
@@ -155,6 +156,8 @@ Simulation::Simulation(const SceneConfig& config, std::unique_ptr<ClothEngine> c
       m_nozzles.emplace_back(e.nozzle, m_config.fluid.particle_spacing);
     }
   }
+  for (const Scalar m : m_fluid->particles().masses)
+    m_emitted_mass += m;
   if (m_engine) m_engine->mesh().validate();
   if (m_engine && m_config.has_effect("coupling")) m_coupler = std::make_unique<Coupler>(m_config.coupling);
   const bool carried_water = m_config.coupling.scheme == CouplingScheme::CARRIED_WATER;
@@ -165,6 +168,20 @@ Simulation::Simulation(const SceneConfig& config, std::unique_ptr<ClothEngine> c
   if (m_coupler && carried_water) m_carried = std::make_unique<CarriedWater>();
   if (m_engine) m_pending_cloth_impulses.assign(m_engine->mesh().node_count(), Vec3::Zero());
   m_leak_audit = m_engine && m_config.has_effect("leak_audit");
+  if (m_cloth && m_coupler && m_config.has_effect("wetting")) {
+    // The dry node masses from the cloth's area, pinned nodes included (they hold water too); a cloth made
+    // in code without scene settings has the default area density.
+    const ClothMesh& nodes = m_cloth->mesh();
+    const double area_density = (m_config.cloth ? *m_config.cloth : ClothSettings{}).area_density;
+    ScalarArray dry(nodes.node_count(), 0.0);
+    for (const Triangle& t : nodes.triangles) {
+      const Vec3& a = nodes.positions_t0[t[0]];
+      const double area = 0.5 * (nodes.positions_t0[t[1]] - a).cross(nodes.positions_t0[t[2]] - a).norm();
+      for (const Index i : t)
+        dry[i] += area_density * area / 3.0;
+    }
+    m_wetting = std::make_unique<ClothWetting>(m_config.wetting, nodes.triangles, nodes.positions_t0, dry);
+  }
 }
 
 const std::vector<TriangleMesh>& Simulation::obstacles() const {
@@ -179,9 +196,11 @@ bool Simulation::finished() const {
 StepStatus Simulation::step(Scalar dt) {
   {
     ScopedTimer timer(m_emit_seconds);
+    const std::size_t before = m_fluid->particles().size();
     for (auto& nozzle : m_nozzles) {
       nozzle.emit(time(), dt, m_fluid->particle_mass(), m_fluid->particles(), m_next_id);
     }
+    m_emitted_mass += static_cast<double>(m_fluid->particles().size() - before) * m_fluid->particle_mass();
   }
   if (m_engine) m_engine->begin_step();
   // The cloth at its start positions is an obstacle inside the fluid's sub-steps
@@ -262,7 +281,7 @@ void Simulation::step_cloth_and_couple(Scalar dt, StepStatus& status) {
   if (coupled) {
     ScopedTimer timer(m_coupling_seconds);
     const FluidView view{&p.positions_t0, &p.positions, &p.velocities, &p.masses,
-                         m_carried ? &p.ids : nullptr};
+                         m_carried || m_wetting ? &p.ids : nullptr};
     if (m_carried) {
       // The particles are corrected against the cloth where its engine put it; the cloth's share of every
       // impulse reaches it at its next step (moving a light node with heavy water here is what the links
@@ -288,6 +307,46 @@ void Simulation::step_cloth_and_couple(Scalar dt, StepStatus& status) {
   if (m_leak_audit && m_non_finite_node < 0 && status.ok()) {
     audit_leaks(p.positions_t0, p.positions, mesh, m_leak_stats);
   }
+  if (m_wetting && coupled) wet_cloth(dt);
+}
+
+void Simulation::wet_cloth(Scalar dt) {
+  ScopedTimer timer(m_wetting_stats.seconds);
+  ParticleSet& p = m_fluid->particles();
+  const ClothMesh& cloth = m_cloth->mesh();
+  // The particles the coupling touched in this step: the coupler's and, inside the fluid's sub-steps, the
+  // obstacle's; a particle's largest impulse names its triangle. Obstacle triangles (after the cloth's)
+  // absorb nothing.
+  std::unordered_map<std::uint32_t, const ImpulseLink*> touched;
+  auto collect = [&](const ImpulseLinks& links) {
+    for (const ImpulseLink& link : links) {
+      if (link.triangle >= cloth.triangle_count()) continue;
+      auto [it, fresh] = touched.try_emplace(link.particle_id, &link);
+      if (!fresh && link.impulse > it->second->impulse) it->second = &link;
+    }
+  };
+  collect(m_coupler->impulse_links());
+  if (m_obstacle) collect(m_obstacle->impulse_links());
+  std::vector<WettingContact> contacts;
+  contacts.reserve(touched.size());
+  for (std::size_t i = 0; i < p.size() && !touched.empty(); ++i) {
+    const auto it = touched.find(p.ids[i]);
+    if (it != touched.end()) contacts.push_back({i, it->second->triangle, it->second->weights});
+  }
+  std::vector<std::uint8_t> remove(p.size(), 0);
+  const Scalar particle_mass = m_fluid->particle_mass();
+  m_wetting->absorb(contacts, p.masses, remove, 0.01 * particle_mass, dt, m_wetting_stats);
+  if (std::find(remove.begin(), remove.end(), std::uint8_t{1}) != remove.end()) p.remove_flagged(remove);
+  m_wetting->spread(cloth.positions_t1, m_config.gravity, dt, m_wetting_stats);
+  // A drop starts clear of the cloth's thickness and of the other particles, on the cloth's lower side.
+  const Scalar spacing = m_config.fluid.particle_spacing;
+  const double offset = std::max(2.0 * m_config.coupling.cloth_thickness, 0.5 * spacing);
+  for (const WettingDrop& drop :
+       m_wetting->drip(cloth.positions_t1, m_cloth->velocities(), m_config.gravity, particle_mass, offset,
+                       p.positions, 0.75 * spacing, m_wetting_stats)) {
+    p.add(drop.position, drop.velocity, particle_mass, m_next_id++);
+  }
+  m_cloth->set_water_masses(m_wetting->water());
 }
 
 void Simulation::remove_killed() {
@@ -309,7 +368,10 @@ void Simulation::remove_killed() {
       }
     }
   }
-  if (flagged > 0) m_removed += static_cast<std::int64_t>(particles.remove_flagged(remove));
+  if (flagged == 0) return;
+  for (std::size_t i = 0; i < n; ++i)  // in order, so that the sum is the same whatever the threads
+    if (remove[i]) m_killed_mass += particles.masses[i];
+  m_removed += static_cast<std::int64_t>(particles.remove_flagged(remove));
 }
 
 }  // namespace drench

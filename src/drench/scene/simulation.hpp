@@ -15,6 +15,7 @@
 #include <drench/scene/scene_config.hpp>
 #include <drench/sph/emitters.hpp>
 #include <drench/sph/fluid_solver.hpp>
+#include <drench/wetting/cloth_wetting.hpp>
 
 namespace drench {
 
@@ -97,11 +98,23 @@ class Simulation {
   /// (CouplingScheme::CARRIED_WATER; zero otherwise). Part of the total momentum between steps.
   const Vec3Array& pending_cloth_impulses() const { return m_pending_cloth_impulses; }
 
+  /// The water in the cloth, or nullptr when the scene does not list "wetting".
+  const ClothWetting* wetting() const { return m_wetting.get(); }
+  /// Wetting figures summed over all steps (zero without the "wetting" effect).
+  const WettingStepStats& wetting_stats() const { return m_wetting_stats; }
+  /// Mass that entered the scene so far: the initial particles and every nozzle's (unit: kg).
+  double emitted_mass() const { return m_emitted_mass; }
+  /// Mass that kill regions removed so far (unit: kg).
+  double killed_mass() const { return m_killed_mass; }
+
  private:
   /// The cloth's side of a step, after the fluid's: impulses, the engine's step, the coupling (sec. 3,
   /// 5), the leak audit, the corrections back into the engine.
   void step_cloth_and_couple(Scalar dt, StepStatus& status);
   void remove_killed();
+  /// The cloth takes water from the particles touching it, spreads it and drips it (Fig. 9), then weighs
+  /// its nodes with it for the next step.
+  void wet_cloth(Scalar dt);
 
   SceneConfig m_config;
   Scalar m_speed_of_sound;
@@ -129,6 +142,10 @@ class Simulation {
   Scalar m_time = 0;
   double m_cloth_seconds = 0;
   double m_coupling_seconds = 0;
+  std::unique_ptr<ClothWetting> m_wetting;  // "wetting" only
+  WettingStepStats m_wetting_stats;
+  double m_emitted_mass = 0;
+  double m_killed_mass = 0;
 };
 
 /// The meshes of the scene's `obstacles`, in order: the built-in v_plane, or an OBJ file scaled and moved.
