@@ -64,6 +64,16 @@ TEST(PlyReader, ParticlesRoundTripThroughTheWriterAsFloat32) {
       EXPECT_EQ(data.positions[i][a], static_cast<double>(static_cast<float>(particles.positions[i][a])));
   }
   EXPECT_NE(data.positions[1].z(), 4.0 / 3.0);  // rounded: the file holds float32
+  // The velocities come along (drench render colours particles by speed).
+  ASSERT_EQ(data.velocities.size(), 2u);
+  for (std::size_t i = 0; i < 2; ++i) {
+    for (int a = 0; a < 3; ++a)
+      EXPECT_EQ(data.velocities[i][a], static_cast<double>(static_cast<float>(particles.velocities[i][a])));
+  }
+}
+
+TEST(PlyReader, AMeshHasNoVelocities) {
+  EXPECT_TRUE(parse_ply(two_triangles(), "cloth.ply").velocities.empty());
 }
 
 TEST(PlyReader, MeshRoundTripsThroughTheWriterToAFile) {

@@ -193,7 +193,7 @@ int find_property(const PlyElement& element, const char* property_name) {
 }
 
 /// What a property means to the reader.
-enum class Role { SKIP, X, Y, Z, INDICES };
+enum class Role { SKIP, X, Y, Z, VX, VY, VZ, INDICES };
 
 }  // namespace
 
@@ -203,6 +203,7 @@ PlyData parse_ply(const std::string& bytes, const std::string& name) {
 
   // Which element holds the vertices and the faces, and which of their properties matter.
   int vertex_element = -1, face_element = -1;
+  bool has_velocities = false;
   std::vector<std::vector<Role>> roles(header.elements.size());
   for (std::size_t e = 0; e < header.elements.size(); ++e) {
     const PlyElement& element = header.elements[e];
@@ -220,6 +221,20 @@ PlyData parse_ply(const std::string& bytes, const std::string& name) {
           throw fail("vertex property " + property.name +
                      " must be a float or double, not a list or integer");
         roles[e][k] = static_cast<Role>(static_cast<int>(Role::X) + a);
+      }
+      // Velocities only as a complete real triple: a file with some other `vx` keeps it skipped.
+      const char* velocity[] = {"vx", "vy", "vz"};
+      int velocity_k[3];
+      bool all_real = true;
+      for (int a = 0; a < 3; ++a) {
+        velocity_k[a] = find_property(element, velocity[a]);
+        all_real = all_real && velocity_k[a] >= 0 && !element.properties[velocity_k[a]].list &&
+                   is_real(element.properties[velocity_k[a]].type);
+      }
+      if (all_real) {
+        has_velocities = true;
+        for (int a = 0; a < 3; ++a)
+          roles[e][velocity_k[a]] = static_cast<Role>(static_cast<int>(Role::VX) + a);
       }
     } else if (element.name == "face") {
       if (face_element >= 0)
@@ -254,11 +269,14 @@ PlyData parse_ply(const std::string& bytes, const std::string& name) {
                  " x " + std::to_string(min_item) + " bytes, " + std::to_string(remaining) +
                  " remain after the header and the elements before it");
     }
-    if (static_cast<int>(e) == vertex_element) data.positions.reserve(element.count);
+    if (static_cast<int>(e) == vertex_element) {
+      data.positions.reserve(element.count);
+      if (has_velocities) data.velocities.reserve(element.count);
+    }
     if (static_cast<int>(e) == face_element) data.triangles.reserve(element.count);
 
     for (std::uint64_t i = 0; i < element.count; ++i) {
-      Vec3 x = Vec3::Zero();
+      Vec3 x = Vec3::Zero(), velocity = Vec3::Zero();
       for (std::size_t k = 0; k < element.properties.size(); ++k) {
         const PlyProperty& property = element.properties[k];
         const auto cut_off = [&]() {
@@ -271,6 +289,9 @@ PlyData parse_ply(const std::string& bytes, const std::string& name) {
           const Role role = roles[e][k];
           if (role == Role::X || role == Role::Y || role == Role::Z)
             x[static_cast<int>(role) - static_cast<int>(Role::X)] = load_real(property.type, begin + at);
+          else if (role == Role::VX || role == Role::VY || role == Role::VZ)
+            velocity[static_cast<int>(role) - static_cast<int>(Role::VX)] =
+                load_real(property.type, begin + at);
           at += size;
           continue;
         }
@@ -308,6 +329,14 @@ PlyData parse_ply(const std::string& bytes, const std::string& name) {
                      ", " + format_number(x.y()) + ", " + format_number(x.z()) + ")");
         }
         data.positions.push_back(x);
+        if (has_velocities) {
+          if (!velocity.allFinite()) {
+            throw fail("vertex " + std::to_string(i) + " has a non-finite velocity (" +
+                       format_number(velocity.x()) + ", " + format_number(velocity.y()) + ", " +
+                       format_number(velocity.z()) + ")");
+          }
+          data.velocities.push_back(velocity);
+        }
       }
     }
   }
