@@ -4,6 +4,16 @@
 
 namespace drench {
 
+bool frame_number(const std::string& name, const std::string& prefix, std::string& digits) {
+  const std::string suffix = ".ply";
+  if (name.size() <= prefix.size() + suffix.size() || name.compare(0, prefix.size(), prefix) != 0 ||
+      name.compare(name.size() - suffix.size(), suffix.size(), suffix) != 0)
+    return false;
+  digits = name.substr(prefix.size(), name.size() - prefix.size() - suffix.size());
+  // 18 digits cannot overflow an int64; the writer's %04lld never makes more.
+  return digits.size() <= 18 && digits.find_first_not_of("0123456789") == std::string::npos;
+}
+
 namespace {
 
 std::vector<PlyProperty> particle_properties(const ParticleSet& particles) {

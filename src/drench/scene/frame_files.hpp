@@ -12,6 +12,10 @@
 
 namespace drench {
 
+/// The NNNN of a frame file's name `<prefix>NNNN.ply` (e.g. prefix "fluid_"), in `digits`; false when `name`
+/// is not such a name (a temporary file's included). At most 18 digits, so that std::stoll cannot overflow.
+bool frame_number(const std::string& name, const std::string& prefix, std::string& digits);
+
 /// `positions` as the frame files hold them, every coordinate rounded to float32 (the writer's precision):
 /// exactly what io/ply_reader.hpp reads back. The run's surface is made from these, so that `drench
 /// reconstruct` on the saved frames gives the same surface.

@@ -1,7 +1,6 @@
 #include <drench/scene/reconstruct_run.hpp>
 
 #include <omp.h>
-#include <unistd.h>
 
 #include <algorithm>
 #include <chrono>
@@ -11,6 +10,7 @@
 #include <utility>
 
 #include <drench/common/error.hpp>
+#include <drench/common/progress_line.hpp>
 #include <drench/common/stopwatch.hpp>
 #include <drench/io/atomic_file.hpp>
 #include <drench/io/ply_reader.hpp>
@@ -29,17 +29,6 @@ struct FrameFiles {
   std::int64_t number = 0;
   fs::path fluid, cloth, surface;
 };
-
-/// The NNNN of `<prefix>NNNN.ply`, or false when `name` is not such a name (temporary files included).
-bool frame_number(const std::string& name, const std::string& prefix, std::string& digits) {
-  const std::string suffix = ".ply";
-  if (name.size() <= prefix.size() + suffix.size() || name.compare(0, prefix.size(), prefix) != 0 ||
-      name.compare(name.size() - suffix.size(), suffix.size(), suffix) != 0)
-    return false;
-  digits = name.substr(prefix.size(), name.size() - prefix.size() - suffix.size());
-  // 18 digits cannot overflow an int64; the writer's %04lld never makes more.
-  return digits.size() <= 18 && digits.find_first_not_of("0123456789") == std::string::npos;
-}
 
 /// The fluid frames in `frames_dir` in frame order, each with the names of its cloth and surface files.
 std::vector<FrameFiles> list_frames(const fs::path& frames_dir) {
@@ -95,29 +84,6 @@ void add_surface_effect(nlohmann::json& document) {
   if (std::find(effects.begin(), effects.end(), nlohmann::json("surface")) == effects.end())
     effects.push_back("surface");
 }
-
-/// A single self-overwriting line on a terminal, at most five times a second; silent elsewhere.
-class ProgressLine {
- public:
-  ProgressLine(bool wanted, std::size_t frames)
-      : m_enabled(wanted && ::isatty(STDERR_FILENO)), m_frames(frames) {}
-  void update(std::size_t done, double wall) {
-    if (!m_enabled || wall - m_last < 0.2) return;
-    m_last = wall;
-    const double rate = done / std::max(wall, 1e-9);
-    std::fprintf(stderr, "\r  frame %zu / %zu   %.2f frames/s   ETA %.0f s   ", done, m_frames, rate,
-                 (m_frames - done) / std::max(rate, 1e-9));
-    std::fflush(stderr);
-  }
-  ~ProgressLine() {
-    if (m_enabled && m_last > 0) std::fprintf(stderr, "\n");
-  }
-
- private:
-  bool m_enabled;
-  std::size_t m_frames;
-  double m_last = 0;
-};
 
 }  // namespace
 
