@@ -1047,5 +1047,45 @@ TEST(SceneLoader, RejectsUnknownPinning) {
                   "cloth.pinned must be one of \"corners\", \"corner\", \"none\", got \"edges\" (x.json)"));
 }
 
+// --- camera (drench render) ---
+
+TEST(SceneLoader, ReadsTheCameraAndDefaultsItsFieldOfView) {
+  const SceneConfig config = parse(R"({"camera": {"position": [0, 1, 2], "target": [0, 0, 0.5]}})");
+  ASSERT_TRUE(config.camera);
+  EXPECT_EQ(*config.camera->position, Vec3(0, 1, 2));
+  EXPECT_EQ(*config.camera->target, Vec3(0, 0, 0.5));
+  EXPECT_EQ(config.camera->fov_deg, 45.0);
+  EXPECT_FALSE(parse("{}").camera);
+  // A field of view alone keeps the framing automatic.
+  const SceneConfig fov_only = parse(R"({"camera": {"fov_deg": 30}})");
+  EXPECT_FALSE(fov_only.camera->position);
+  EXPECT_EQ(fov_only.camera->fov_deg, 30.0);
+}
+
+TEST(SceneLoader, RejectsAnUnknownCameraKeyNamingThePath) {
+  EXPECT_TRUE(scene_error(R"({"camera": {"positon": [0, 1, 2]}})",
+                          "camera.positon is not a known key (x.json); known: position, target, fov_deg"));
+}
+
+TEST(SceneLoader, RejectsHalfACameraAndAFieldOfViewOutOfRange) {
+  EXPECT_TRUE(scene_error(R"({"camera": {"position": [0, 1, 2]}})", "camera.target is missing"));
+  EXPECT_TRUE(scene_error(R"({"camera": {"target": [0, 1, 2]}})", "camera.position is missing"));
+  EXPECT_TRUE(scene_error(R"({"camera": {"position": [0, 1, 2], "target": [0, 1, 2]}})",
+                          "camera.target must differ from camera.position"));
+  EXPECT_TRUE(scene_error(R"({"camera": {"fov_deg": 180}})", "camera.fov_deg must be in (0, 180), got 180"));
+  EXPECT_TRUE(scene_error(R"({"camera": {"position": [0, 1]}})", "camera.position"));
+}
+
+TEST(SceneLoader, ParsesACameraGivenApartFromTheScene) {
+  const CameraSettings camera = parse_camera(json::parse(R"({"position": [1, 2, 3], "target": [0, 0, 0],
+                                                            "fov_deg": 60})"),
+                                             "--camera");
+  EXPECT_EQ(*camera.position, Vec3(1, 2, 3));
+  EXPECT_EQ(camera.fov_deg, 60.0);
+  EXPECT_TRUE(
+      throws_containing<SceneError>([] { parse_camera(json::parse(R"({"up": [0, 1, 0]})"), "--camera"); },
+                                    "camera.up is not a known key (--camera)"));
+}
+
 }  // namespace
 }  // namespace drench

@@ -32,4 +32,7 @@ SurfaceSettings read_surface(const Node& node);
 /// `wetting` (load_wetting.cpp): absorption, diffusion and dripping; absent: every default.
 WettingSettings read_wetting(const Node& node);
 
+/// `camera` (load_camera.cpp): where renders look from; `position` and `target` both or neither.
+CameraSettings read_camera(const Node& node);
+
 }  // namespace drench::loader

@@ -40,6 +40,14 @@ struct TimeSettings {
   Scalar frame_rate = 30.0;  ///< frames written per simulated second (unit: 1/s), >= 0; 0 writes no frames
 };
 
+/// Where `drench render` (and the viewer) looks from, so that renders of a scene are repeatable. The
+/// simulation ignores it. Without a position and target the renderer frames the scene's bounds itself.
+struct CameraSettings {
+  std::optional<Vec3> position;  ///< eye (unit: m); given together with `target`, and apart from it
+  std::optional<Vec3> target;    ///< the point looked at, drawn at the image's centre (unit: m)
+  Scalar fov_deg = 45.0;         ///< vertical field of view (unit: degree), in (0, 180)
+};
+
 /// A complete scene. The effects named in `effects` are the only optional physics that get constructed.
 struct SceneConfig {
   std::string source = "<code>";         ///< file the scene came from, used in error messages
@@ -61,6 +69,8 @@ struct SceneConfig {
   /// Water absorbed, spread and dripped by the cloth (Fig. 9); used when `effects` lists "wetting".
   WettingSettings wetting;
   std::vector<std::string> effects;  ///< names from known_effects(), each at most once
+  /// The camera of renders (`drench render`); absent: framed to the scene's bounds.
+  std::optional<CameraSettings> camera;
 
   /// True when `effects` lists `name`, i.e. that optional physics is to be constructed.
   bool has_effect(const std::string& name) const;

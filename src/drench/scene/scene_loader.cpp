@@ -161,7 +161,7 @@ json parse_override_value(const std::string& text, const std::string& assignment
 SceneConfig parse_scene(const nlohmann::json& document, const std::string& source) {
   const Node root(&document, "", source);
   const ObjectReader r(root, {"gravity", "fluid", "emitters", "boundaries", "kill_regions", "time", "cloth",
-                              "obstacles", "coupling", "surface", "wetting", "effects"});
+                              "obstacles", "coupling", "surface", "wetting", "effects", "camera"});
   SceneConfig config;
   config.source = source;
   r.read("gravity", config.gravity);
@@ -176,6 +176,7 @@ SceneConfig parse_scene(const nlohmann::json& document, const std::string& sourc
   config.surface = loader::read_surface(r["surface"]);
   config.wetting = loader::read_wetting(r["wetting"]);
   config.effects = read_effects(r["effects"]);
+  if (r["camera"].present()) config.camera = loader::read_camera(r["camera"]);
   // An effect that needs something the scene lacks, or settings of an effect the scene does not run, would be
   // silently ignored: both are errors.
   const auto effect_node = [&](const std::string& name) {
@@ -206,6 +207,10 @@ SceneConfig parse_scene(const nlohmann::json& document, const std::string& sourc
     key.fail("asks for tangential boundary conditions, but effects does not list \"friction\"");
   }
   return config;
+}
+
+CameraSettings parse_camera(const nlohmann::json& camera, const std::string& source) {
+  return loader::read_camera(Node(&camera, "camera", source));
 }
 
 void apply_override(nlohmann::json& document, const std::string& assignment) {

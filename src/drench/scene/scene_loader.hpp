@@ -27,6 +27,13 @@ std::string scene_source(const std::string& path, const std::vector<std::string>
 /// @throws SceneError as load_scene_file.
 SceneConfig parse_scene(const nlohmann::json& document, const std::string& source);
 
+/// Validates a `camera` object given apart from a scene (`drench render --camera`), as parse_scene validates
+/// a scene's `camera` key; errors name it `camera.<key>` and `source`.
+/// @throws SceneError for a value that is not an object, an unknown key, a malformed vector, a field of view
+///         outside (0, 180) degrees, a position without a target (or the reverse), or a target at the
+///         position.
+CameraSettings parse_camera(const nlohmann::json& camera, const std::string& source);
+
 /// Applies one `json.path=value` assignment to `document` in place.
 /// @throws SceneError when the assignment has no `=`, the path is empty or malformed, an intermediate element
 ///         is missing or not an object/array, or an array index is out of range.
