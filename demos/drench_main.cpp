@@ -1,6 +1,7 @@
 // The drench command:
 //   drench run SCENE.json --out DIR [--set json.path=value ...] [--steps N]
 //   drench reconstruct DIR [--set json.path=value ...]   the surface again from a run's saved frames
+//   drench render DIR [--camera JSON] [--size WxH] [--out DIR] [--video]   a run's frames as PNG (and MP4)
 //   drench ccd FILE_OR_DIR... [--list]      point-triangle CCD against labelled queries (*.vf.txt)
 // Exit status: 0 success; 1 bad input (scene, file, arguments) or, for `ccd`, a missed collision; 2 the
 // simulation became non-finite.
@@ -22,6 +23,7 @@
 #include <drench/ccd/ccd_query_file.hpp>
 #include <drench/ccd/point_triangle_ccd.hpp>
 #include <drench/common/error.hpp>
+#include <drench/render/render_run.hpp>
 #include <drench/scene/reconstruct_run.hpp>
 #include <drench/scene/scene_loader.hpp>
 #include <drench/scene/scene_runner.hpp>
@@ -84,6 +86,35 @@ int reconstruct_command(const std::string& run_dir, const std::vector<std::strin
       static_cast<long long>(result.frames), result.wall_seconds,
       static_cast<unsigned long long>(result.surface_triangles),
       static_cast<unsigned long long>(result.surface_intersections), run_dir.c_str());
+  return 0;
+}
+
+int render_command(drench::render::RenderOptions options, const std::string& size, bool quiet) {
+  drench::render::parse_image_size(size, options.width, options.height);
+  options.progress = !quiet;
+  // Said before the frames are drawn, so that nobody waits minutes for a video that will not come.
+  if (options.video && drench::render::find_program("ffmpeg").empty())
+    std::fprintf(
+        stderr,
+        "drench: --video: ffmpeg is not installed (Debian: sudo apt-get install ffmpeg); drawing the "
+        "PNGs only\n");
+  const drench::render::RenderResult r = drench::render::render_run(options);
+  const double frames = static_cast<double>(std::max<std::int64_t>(r.frames, 1));
+  std::printf(
+      "%lld frames rendered at %dx%d in %.2f s: %.3f s a frame (draw %.3f, PNG %.3f, read %.3f); "
+      "frame_NNNN.png in %s\n",
+      static_cast<long long>(r.frames), options.width, options.height, r.wall_seconds,
+      r.wall_seconds / frames, r.draw_seconds / frames, r.write_seconds / frames, r.read_seconds / frames,
+      r.out_dir.c_str());
+  if (!quiet) {
+    const auto& c = r.camera;
+    std::printf(
+        "camera: {\"position\": [%.4g, %.4g, %.4g], \"target\": [%.4g, %.4g, %.4g], \"fov_deg\": %g}; %s\n",
+        c.position.x(), c.position.y(), c.position.z(), c.target.x(), c.target.y(), c.target.z(), c.fov_deg,
+        r.gl.c_str());
+  }
+  if (!r.video_path.empty()) std::printf("video: %s (%.2f s)\n", r.video_path.c_str(), r.video_seconds);
+  if (!r.video_note.empty()) std::fprintf(stderr, "drench: --video: %s\n", r.video_note.c_str());
   return 0;
 }
 
@@ -210,6 +241,21 @@ int main(int argc, char** argv) {
       ->check(CLI::PositiveNumber);
   reconstruct->add_flag("--quiet", quiet, "no progress line");
 
+  drench::render::RenderOptions render_options;
+  std::string render_size = "1280x720";
+  CLI::App* render = app.add_subcommand(
+      "render", "draw a run's frames as PNG images, headless (render/frame_NNNN.png), and optionally an MP4");
+  render->add_option("dir", render_options.run_dir, "the --out folder of a drench run (scene.json, frames/)")
+      ->required();
+  render->add_option("--camera", render_options.camera_json,
+                     "camera as JSON, replacing the scene's `camera` key, e.g. "
+                     "'{\"position\": [0, 0.4, 1.2], \"target\": [0, 0, 0], \"fov_deg\": 45}'");
+  render->add_option("--size", render_size, "image size WIDTHxHEIGHT in pixels")->capture_default_str();
+  render->add_option("--out", render_options.out_dir, "folder of the images (default: DIR/render)");
+  render->add_flag("--video", render_options.video,
+                   "also write video.mp4 through ffmpeg, when it is installed");
+  render->add_flag("--quiet", quiet, "no progress line and no camera line");
+
   std::vector<std::string> ccd_paths;
   bool ccd_list = false;
   CLI::App* ccd = app.add_subcommand(
@@ -224,6 +270,7 @@ int main(int argc, char** argv) {
   try {
     if (run->parsed()) return run_command(scene_path, out_dir, overrides, steps, quiet);
     if (reconstruct->parsed()) return reconstruct_command(reconstruct_dir, overrides, quiet);
+    if (render->parsed()) return render_command(render_options, render_size, quiet);
     if (ccd->parsed()) return ccd_command(ccd_paths, ccd_list);
   } catch (const drench::Error& e) {
     std::fprintf(stderr, "drench: %s\n", e.what());

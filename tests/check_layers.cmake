@@ -1,5 +1,6 @@
 # Layers only look down (docs/architecture.md): common <- {sph, ccd, io} <- coupling <- {surface, wetting}
-# <- scene, and only bullet_adapter/ (with its tests, the consumer test and the embedding demo, its users) includes
+# <- scene; the renderer (render/, drench_render) sits above the core, which never includes it; and only
+# bullet_adapter/ (with its tests, the consumer test and the embedding demo, its users) includes
 # Bullet. Run by ctest as `cmake -DSOURCE_DIR=<repo> -P check_layers.cmake`; fails naming each file and
 # include that breaks a rule.
 
@@ -40,6 +41,9 @@ foreach(file IN LISTS core_files)
     if(line MATCHES "#[ \t]*include[ \t]*<drench/bullet/")
       list(APPEND violations "${file}: includes the Bullet adapter (${line}), which the core may not")
     endif()
+    if(line MATCHES "#[ \t]*include[ \t]*<drench/render/")
+      list(APPEND violations "${file}: includes the renderer (${line}), which the core may not: it links OpenGL")
+    endif()
     if(line MATCHES "#[ \t]*include[ \t]*<drench/([a-z_]+)/")
       set(target "${CMAKE_MATCH_1}")
       if(target IN_LIST layers AND NOT target IN_LIST allowed_${layer})
@@ -51,7 +55,8 @@ foreach(file IN LISTS core_files)
 endforeach()
 
 # Outside src/: only the adapter, its tests and the embedding demo include Bullet.
-file(GLOB_RECURSE other_files RELATIVE "${SOURCE_DIR}" "${SOURCE_DIR}/demos/*.cpp" "${SOURCE_DIR}/demos/*.hpp"
+file(GLOB_RECURSE other_files RELATIVE "${SOURCE_DIR}" "${SOURCE_DIR}/render/*.cpp" "${SOURCE_DIR}/render/*.hpp"
+     "${SOURCE_DIR}/demos/*.cpp" "${SOURCE_DIR}/demos/*.hpp"
      "${SOURCE_DIR}/tests/*.cpp" "${SOURCE_DIR}/tests/*.hpp" "${SOURCE_DIR}/bench/*.cpp" "${SOURCE_DIR}/bench/*.hpp"
      "${SOURCE_DIR}/fuzz/*.cpp" "${SOURCE_DIR}/fuzz/*.hpp")
 foreach(file IN LISTS other_files)

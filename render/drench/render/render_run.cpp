@@ -1,0 +1,348 @@
+#include <drench/render/render_run.hpp>
+
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <map>
+#include <optional>
+#include <system_error>
+#include <vector>
+
+#include <drench/common/error.hpp>
+#include <drench/common/progress_line.hpp>
+#include <drench/common/stopwatch.hpp>
+#include <drench/io/atomic_file.hpp>
+#include <drench/io/ply_reader.hpp>
+#include <drench/render/offscreen_context.hpp>
+#include <drench/render/png_image.hpp>
+#include <drench/render/renderer.hpp>
+#include <drench/scene/frame_files.hpp>
+#include <drench/scene/scene_loader.hpp>
+
+extern char** environ;
+
+namespace drench::render {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+/// One saved frame's files; a path is empty when the run did not save that part.
+struct FrameFiles {
+  std::int64_t number = 0;
+  std::string digits;  ///< NNNN as the run wrote it, reused in frame_NNNN.png
+  fs::path fluid, cloth, surface;
+};
+
+/// The frames in `frames_dir` in frame order: every NNNN of a fluid_, cloth_ or surface_ file.
+std::vector<FrameFiles> list_frames(const fs::path& frames_dir) {
+  std::error_code ec;
+  if (!fs::is_directory(frames_dir, ec)) {
+    throw IoError(frames_dir.string() +
+                  ": missing; drench render reads the frames/ folder of a `drench run --out` folder");
+  }
+  std::map<std::int64_t, FrameFiles> frames;
+  for (const fs::directory_entry& entry : fs::directory_iterator(frames_dir, ec)) {
+    const std::string name = entry.path().filename().string();
+    std::string digits;
+    for (const char* prefix : {"fluid_", "cloth_", "surface_"}) {
+      if (!frame_number(name, prefix, digits)) continue;
+      FrameFiles& frame = frames[std::stoll(digits)];
+      frame.number = std::stoll(digits);
+      frame.digits = digits;
+      (prefix[0] == 'f' ? frame.fluid : prefix[0] == 'c' ? frame.cloth : frame.surface) = entry.path();
+    }
+  }
+  if (ec) throw IoError(frames_dir.string() + ": cannot list: " + ec.message());
+  if (frames.empty())
+    throw IoError(frames_dir.string() + ": no frames (fluid_NNNN.ply, cloth_NNNN.ply or surface_NNNN.ply)");
+  std::vector<FrameFiles> list;
+  for (auto& [number, frame] : frames)
+    list.push_back(std::move(frame));
+  return list;
+}
+
+/// A PLY file that must be a triangle mesh (a cloth frame, a surface, the obstacles).
+TriangleMesh read_mesh(const fs::path& path) {
+  PlyData data = read_ply(path.string());
+  if (!data.has_faces) throw IoError(path.string() + ": has no face element; expected a triangle mesh");
+  return {std::move(data.positions), std::move(data.triangles)};
+}
+
+/// One frame's geometry as read from its files.
+struct LoadedFrame {
+  TriangleMesh cloth, surface;
+  PlyData fluid;
+};
+
+LoadedFrame load_frame(const FrameFiles& files) {
+  LoadedFrame frame;
+  if (!files.cloth.empty()) frame.cloth = read_mesh(files.cloth);
+  if (!files.surface.empty()) frame.surface = read_mesh(files.surface);
+  if (!files.fluid.empty()) frame.fluid = read_ply(files.fluid.string());
+  return frame;
+}
+
+/// The box from the `lo` to the `hi` quantile of `points` on each axis: stray droplets do not shrink the
+/// picture. Empty when there are no points.
+Eigen::AlignedBox3d quantile_box(const Vec3Array& points, double lo, double hi) {
+  Eigen::AlignedBox3d box;
+  if (points.empty()) return box;
+  std::vector<double> values(points.size());
+  Vec3 min, max;
+  for (int a = 0; a < 3; ++a) {
+    for (std::size_t i = 0; i < points.size(); ++i)
+      values[i] = points[i][a];
+    const auto at = [&](double q) {
+      const std::size_t k = static_cast<std::size_t>(q * (values.size() - 1));
+      std::nth_element(values.begin(), values.begin() + k, values.end());
+      return values[k];
+    };
+    min[a] = at(lo);
+    max[a] = at(hi);
+  }
+  return Eigen::AlignedBox3d(min, max);
+}
+
+Eigen::AlignedBox3d points_box(const Vec3Array& points) {
+  Eigen::AlignedBox3d box;
+  for (const Vec3& p : points)
+    box.extend(p);
+  return box;
+}
+
+/// The `q` quantile of the particles' speeds (unit: m/s); 0 without velocities.
+double speed_quantile(const PlyData& fluid, double q) {
+  if (fluid.velocities.empty()) return 0.0;
+  std::vector<double> speeds(fluid.velocities.size());
+  for (std::size_t i = 0; i < speeds.size(); ++i)
+    speeds[i] = fluid.velocities[i].norm();
+  const std::size_t k = static_cast<std::size_t>(q * (speeds.size() - 1));
+  std::nth_element(speeds.begin(), speeds.begin() + k, speeds.end());
+  return speeds[k];
+}
+
+/// Runs `arguments` (the program found on $PATH) and waits; the exit status, or -1 when it could not start.
+int run_program(const std::vector<std::string>& arguments) {
+  std::vector<char*> argv;
+  for (const std::string& argument : arguments)
+    argv.push_back(const_cast<char*>(argument.c_str()));
+  argv.push_back(nullptr);
+  pid_t pid = 0;
+  if (posix_spawnp(&pid, argv[0], nullptr, nullptr, argv.data(), environ) != 0) return -1;
+  int status = 0;
+  while (waitpid(pid, &status, 0) < 0) {
+    if (errno != EINTR) return -1;
+  }
+  return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+}
+
+}  // namespace
+
+void parse_image_size(const std::string& text, int& width, int& height) {
+  const auto fail = [&]() {
+    return Error(
+        "--size must be WIDTHxHEIGHT with each side an integer in [1, 16384], e.g. 1280x720, got \"" + text +
+        "\"");
+  };
+  const std::size_t x = text.find('x');
+  if (x == std::string::npos) throw fail();
+  const std::string w = text.substr(0, x), h = text.substr(x + 1);
+  for (const std::string* side : {&w, &h}) {
+    if (side->empty() || side->size() > 5 || side->find_first_not_of("0123456789") != std::string::npos)
+      throw fail();
+  }
+  width = std::stoi(w);
+  height = std::stoi(h);
+  if (width < 1 || height < 1 || width > 16384 || height > 16384) throw fail();
+}
+
+std::string find_program(const std::string& name) {
+  const char* path = std::getenv("PATH");
+  if (path == nullptr) return "";
+  std::string directories = path;
+  std::size_t start = 0;
+  while (start <= directories.size()) {
+    std::size_t end = directories.find(':', start);
+    if (end == std::string::npos) end = directories.size();
+    const std::string directory = directories.substr(start, end - start);
+    const fs::path candidate = fs::path(directory.empty() ? "." : directory) / name;
+    if (::access(candidate.c_str(), X_OK) == 0 && !fs::is_directory(candidate)) return candidate.string();
+    start = end + 1;
+  }
+  return "";
+}
+
+RenderResult render_run(const RenderOptions& options) {
+  const auto start = std::chrono::steady_clock::now();
+  auto wall = [&] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(); };
+  if (options.width < 1 || options.height < 1) {
+    throw Error("the image size must be at least 1x1 pixels, got " + std::to_string(options.width) + "x" +
+                std::to_string(options.height));
+  }
+  const fs::path dir(options.run_dir);
+  RenderResult result;
+
+  // The scene: its camera, the particle size and the frame rate.
+  const fs::path scene_path = dir / "scene.json";
+  std::error_code ec;
+  if (!fs::exists(scene_path, ec)) {
+    throw IoError(
+        scene_path.string() +
+        ": missing; drench render needs the scene.json that drench run writes into its --out folder");
+  }
+  const SceneConfig config = parse_scene(read_scene_document(scene_path.string()), scene_path.string());
+  std::optional<CameraSettings> camera_settings = config.camera;
+  if (!options.camera_json.empty()) {
+    nlohmann::json camera;
+    try {
+      camera = nlohmann::json::parse(options.camera_json);
+    } catch (const nlohmann::json::exception& e) {
+      throw SceneError(
+          "--camera is not valid JSON (" + std::string(e.what()) +
+          "); expected e.g. {\"position\": [0, 0.4, 1.2], \"target\": [0, 0, 0], \"fov_deg\": 45}");
+    }
+    camera_settings = parse_camera(camera, "--camera");
+  }
+
+  // Every input read and checked before the first write, as drench reconstruct does; the same pass finds the
+  // bounds the default camera frames and the speed drawn in the fastest colour.
+  const std::vector<FrameFiles> frames = list_frames(dir / "frames");
+  TriangleMesh obstacles;
+  const fs::path obstacles_path = dir / "obstacles.ply";
+  const bool has_obstacles = fs::exists(obstacles_path, ec);
+  // The stage is what holds the water: the cloth over all frames, the obstacles and the emitters. Only a
+  // scene without cloth and obstacles is framed on the fluid itself, on its middle 98 % (spray that flies
+  // off and falls away would shrink the picture).
+  Eigen::AlignedBox3d stage, fluid_box;
+  double speed_scale = 0.0;
+  {
+    ScopedTimer timer(result.read_seconds);
+    if (has_obstacles) {
+      obstacles = read_mesh(obstacles_path);
+      stage.extend(points_box(obstacles.positions));
+    }
+    for (const FrameFiles& files : frames) {
+      const LoadedFrame frame = load_frame(files);
+      stage.extend(points_box(frame.cloth.positions));
+      fluid_box.extend(quantile_box(frame.fluid.positions, 0.01, 0.99));
+      if (frame.fluid.positions.empty()) fluid_box.extend(quantile_box(frame.surface.positions, 0.01, 0.99));
+      speed_scale = std::max(speed_scale, speed_quantile(frame.fluid, 0.99));
+    }
+  }
+  Eigen::AlignedBox3d bounds = stage;
+  if (!stage.isEmpty()) {
+    for (const EmitterSettings& emitter : config.emitters) {
+      if (emitter.kind == EmitterSettings::Kind::NOZZLE) {
+        bounds.extend(emitter.nozzle.center);
+      } else {
+        bounds.extend(emitter.box.min);
+        bounds.extend(emitter.box.max);
+      }
+    }
+  } else {
+    bounds = fluid_box;
+  }
+  if (bounds.isEmpty()) bounds = Eigen::AlignedBox3d(Vec3::Constant(-0.5), Vec3::Constant(0.5));
+  const Scalar aspect = static_cast<Scalar>(options.width) / options.height;
+  result.camera = resolve_camera(camera_settings, bounds, aspect);
+  // The bounds set the depth range, so they must hold all that is drawn, spray and the camera's target too.
+  Eigen::AlignedBox3d depth_bounds = bounds;
+  depth_bounds.extend(fluid_box);
+  depth_bounds.extend(result.camera.target);
+
+  ParticleStyle style;
+  style.radius = 0.5 * config.fluid.particle_spacing;
+  style.speed_scale = std::max(speed_scale, 0.1);
+
+  OffscreenContext context(options.width, options.height);
+  Renderer renderer;
+  result.gl = context.description();
+
+  const fs::path out_dir = options.out_dir.empty() ? dir / "render" : fs::path(options.out_dir);
+  result.out_dir = out_dir.string();
+  fs::create_directories(out_dir, ec);
+  if (ec) throw IoError(out_dir.string() + ": cannot create: " + ec.message());
+
+  ProgressLine progress(options.progress, frames.size());
+  for (const FrameFiles& files : frames) {
+    LoadedFrame frame;
+    {
+      ScopedTimer timer(result.read_seconds);
+      frame = load_frame(files);
+    }
+    FrameGeometry geometry;
+    geometry.bounds = depth_bounds;
+    if (!files.cloth.empty()) geometry.cloth = &frame.cloth;
+    if (has_obstacles) geometry.obstacles = &obstacles;
+    if (!files.surface.empty()) geometry.surface = &frame.surface;
+    geometry.particles = &frame.fluid.positions;
+    if (!frame.fluid.velocities.empty()) geometry.velocities = &frame.fluid.velocities;
+    Image image;
+    {
+      ScopedTimer timer(result.draw_seconds);
+      context.bind();
+      renderer.draw(geometry, result.camera, style, options.width, options.height);
+      image = context.read_image();
+    }
+    {
+      ScopedTimer timer(result.write_seconds);
+      write_file_atomic((out_dir / ("frame_" + files.digits + ".png")).string(), encode_png(image));
+    }
+    ++result.frames;
+    progress.update(static_cast<std::size_t>(result.frames), wall());
+  }
+
+  if (options.video) {
+    const std::string ffmpeg = find_program("ffmpeg");
+    if (ffmpeg.empty()) {
+      result.video_note = "no MP4 written: ffmpeg is not installed (Debian: sudo apt-get install ffmpeg)";
+    } else {
+      ScopedTimer timer(result.video_seconds);
+      const fs::path video = out_dir / "video.mp4";
+      const std::string temporary = video.string() + ".tmp-" + std::to_string(::getpid());
+      const double rate = config.time.frame_rate > 0 ? config.time.frame_rate : 30.0;
+      // Even sides for yuv420p, which every player takes; frames numbered on from the first one saved.
+      const int status = run_program({ffmpeg,
+                                      "-hide_banner",
+                                      "-loglevel",
+                                      "error",
+                                      "-y",
+                                      "-framerate",
+                                      format_number(rate),
+                                      "-start_number",
+                                      std::to_string(frames.front().number),
+                                      "-i",
+                                      (out_dir / "frame_%04d.png").string(),
+                                      "-vf",
+                                      "pad=ceil(iw/2)*2:ceil(ih/2)*2",
+                                      "-c:v",
+                                      "libx264",
+                                      "-pix_fmt",
+                                      "yuv420p",
+                                      "-f",
+                                      "mp4",
+                                      temporary});
+      if (status != 0) {
+        std::remove(temporary.c_str());
+        throw IoError(
+            ffmpeg +
+            (status < 0 ? " could not be started" : " failed with exit status " + std::to_string(status)) +
+            " while writing " + video.string() + "; the PNG frames are in " + out_dir.string());
+      }
+      fs::rename(temporary, video, ec);
+      if (ec) throw IoError("cannot rename " + temporary + " to " + video.string() + ": " + ec.message());
+      result.video_path = video.string();
+    }
+  }
+  result.wall_seconds = wall();
+  return result;
+}
+
+}  // namespace drench::render

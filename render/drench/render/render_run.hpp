@@ -1,0 +1,60 @@
+#pragma once
+/// `drench render`: the frames of a finished run (`drench run --out DIR`) as PNG images, drawn headless
+/// (offscreen_context.hpp) by the renderer the viewer shares (renderer.hpp), and optionally an MP4.
+
+#include <cstdint>
+#include <string>
+
+#include <drench/render/camera.hpp>
+
+namespace drench::render {
+
+struct RenderOptions {
+  std::string run_dir;      ///< a `drench run --out` folder: scene.json, frames/, obstacles.ply
+  std::string out_dir;      ///< where the PNGs go; "" is `run_dir`/render
+  std::string camera_json;  ///< `--camera`: a JSON object as the scene's `camera` key; "" keeps the scene's
+  int width = 1280;         ///< image width (unit: pixel), >= 1
+  int height = 720;         ///< image height (unit: pixel), >= 1
+  bool video = false;       ///< also write `video.mp4` through ffmpeg, when it is installed
+  bool progress = true;     ///< print a progress line when stderr is a terminal
+};
+
+struct RenderResult {
+  std::int64_t frames = 0;
+  std::string out_dir;         ///< where the PNGs went
+  Camera camera;               ///< the camera every frame was drawn with
+  std::string gl;              ///< the OpenGL that drew them (OffscreenContext::description)
+  std::string video_path;      ///< the MP4 written, or "" when none was
+  std::string video_note;      ///< with `video`, why no MP4 was written (ffmpeg missing), else ""
+  double read_seconds = 0.0;   ///< reading and checking the frames, both passes (unit: s)
+  double draw_seconds = 0.0;   ///< drawing and reading the pixels back, all frames (unit: s)
+  double write_seconds = 0.0;  ///< PNG encoding and writing, all frames (unit: s)
+  double video_seconds = 0.0;  ///< ffmpeg (unit: s)
+  double wall_seconds = 0.0;   ///< the whole command (unit: s)
+};
+
+/// Parses `--size`: `WIDTHxHEIGHT`, e.g. "1280x720", each an integer in [1, 16384].
+/// @throws drench::Error quoting the text when it is malformed or a side is out of range (a size of 0).
+void parse_image_size(const std::string& text, int& width, int& height);
+
+/// The full path of the program `name` on $PATH, or "" when it is not there (how `--video` finds ffmpeg).
+std::string find_program(const std::string& name);
+
+/// Draws every frame a run saved into `out_dir`/frame_NNNN.png (NNNN as in frames/): the cloth
+/// (cloth_NNNN.ply), the fluid as its surface when surface_NNNN.ply exists, else as particles
+/// (fluid_NNNN.ply) coloured by speed, and obstacles.ply. Every frame is drawn with one camera: the
+/// `camera_json` or else the scene's `camera` key when they give a position, else one framing the run's
+/// stage (camera.hpp): the cloth over all frames, the obstacles and the emitters, or in a scene without cloth
+/// and obstacles the middle 98 % of the fluid over all frames. With
+/// `video`, then writes `out_dir`/video.mp4 at the scene's frame rate through ffmpeg when it is on $PATH;
+/// without ffmpeg, `video_note` says so and the PNGs stand.
+///
+/// Everything is read and checked, and the OpenGL context made, before anything is written: bad input
+/// writes nothing. Each PNG (and the MP4) is written under a temporary name and renamed.
+/// @throws drench::Error for a size < 1; SceneError for a bad scene.json, a malformed `camera_json` or an
+///         unknown camera key (naming camera.<key>); IoError naming the file when scene.json or the frames
+///         are missing, a frame is malformed, a file cannot be written, or ffmpeg fails; RenderError when no
+///         headless OpenGL context can be made.
+RenderResult render_run(const RenderOptions& options);
+
+}  // namespace drench::render

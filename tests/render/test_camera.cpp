@@ -1,0 +1,111 @@
+// The renderer's camera (render/camera.hpp): projection onto pixels, the automatic framing, and PNG files
+// that round-trip through libpng.
+
+#include <drench/render/camera.hpp>
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <filesystem>
+
+#include <drench/common/error.hpp>
+#include <drench/io/atomic_file.hpp>
+#include <drench/render/png_image.hpp>
+#include <drench/render/render_run.hpp>
+
+namespace drench::render {
+namespace {
+
+TEST(Camera, ProjectsTheTargetToTheImageCentreAndUpToTheTop) {
+  Camera camera;
+  camera.position = Vec3(0, 0.5, 2);
+  camera.target = Vec3(0, 0.5, 0);
+  const auto centre = project_to_pixel(camera, 640, 360, camera.target);
+  ASSERT_TRUE(centre);
+  EXPECT_NEAR(centre->x(), 320.0, 1e-9);
+  EXPECT_NEAR(centre->y(), 180.0, 1e-9);
+  // 45 degrees of vertical field: a point tan(22.5 deg) * 2 m above the target is at the top edge.
+  const auto top = project_to_pixel(camera, 640, 360, Vec3(0, 0.5 + 2 * std::tan(M_PI / 8), 0));
+  EXPECT_NEAR(top->y(), 0.0, 1e-9);
+  // +x is to the right when looking down -z.
+  EXPECT_GT(project_to_pixel(camera, 640, 360, Vec3(0.1, 0.5, 0))->x(), 320.0);
+  EXPECT_FALSE(project_to_pixel(camera, 640, 360, Vec3(0, 0.5, 3)));  // behind the eye
+}
+
+TEST(Camera, LooksStraightDownWithoutDegenerating) {
+  Camera camera;
+  camera.position = Vec3(0, 2, 0);
+  camera.target = Vec3::Zero();
+  const auto far_side = project_to_pixel(camera, 100, 100, Vec3(0, 0, -0.5));
+  ASSERT_TRUE(far_side);
+  EXPECT_TRUE(far_side->allFinite());
+  EXPECT_LT(far_side->y(), 50.0);  // -z is the image's up
+}
+
+TEST(Camera, TheDefaultFramingShowsEveryCornerOfTheBounds) {
+  const Eigen::AlignedBox3d box(Vec3(-0.3, -0.5, -0.3), Vec3(0.3, 0.3, 0.3));
+  for (const auto& [width, height] : {std::pair{1280, 720}, std::pair{300, 600}}) {
+    const Camera camera = frame_bounds(box, static_cast<double>(width) / height);
+    double widest = 0.0;
+    for (int corner = 0; corner < 8; ++corner) {
+      const auto pixel = project_to_pixel(camera, width, height,
+                                          box.corner(static_cast<Eigen::AlignedBox3d::CornerType>(corner)));
+      ASSERT_TRUE(pixel);
+      EXPECT_GE(pixel->x(), 0.0);
+      EXPECT_LE(pixel->x(), width);
+      EXPECT_GE(pixel->y(), 0.0);
+      EXPECT_LE(pixel->y(), height);
+      widest = std::max({widest, std::abs(pixel->x() - 0.5 * width) / (0.5 * width),
+                         std::abs(pixel->y() - 0.5 * height) / (0.5 * height)});
+    }
+    EXPECT_GT(widest, 0.85);  // framed, not lost in the middle
+  }
+}
+
+TEST(Camera, SceneSettingsWithoutAPositionKeepTheFramingAndTheirFieldOfView) {
+  const Eigen::AlignedBox3d box(Vec3(-1, -1, -1), Vec3(1, 1, 1));
+  CameraSettings settings;
+  settings.fov_deg = 30;
+  EXPECT_EQ(resolve_camera(settings, box, 1.5).position, frame_bounds(box, 1.5, 30).position);
+  settings.position = Vec3(1, 2, 3);
+  settings.target = Vec3(0, 1, 0);
+  const Camera camera = resolve_camera(settings, box, 1.5);
+  EXPECT_EQ(camera.position, Vec3(1, 2, 3));
+  EXPECT_EQ(camera.target, Vec3(0, 1, 0));
+  EXPECT_EQ(camera.fov_deg, 30.0);
+}
+
+TEST(PngImage, RoundTripsThroughLibpng) {
+  Image image;
+  image.width = 3;
+  image.height = 2;
+  image.rgb = {255, 0, 0, 0, 255, 0, 0, 0, 255, 10, 20, 30, 40, 50, 60, 70, 80, 90};
+  const std::string path = testing::TempDir() + "drench_png_" + std::to_string(::getpid()) + ".png";
+  write_file_atomic(path, encode_png(image));
+  const Image back = read_png(path);
+  std::filesystem::remove(path);
+  EXPECT_EQ(back.width, 3);
+  EXPECT_EQ(back.height, 2);
+  EXPECT_EQ(back.rgb, image.rgb);
+  EXPECT_EQ(back.at(0, 1), (std::array<std::uint8_t, 3>{10, 20, 30}));
+}
+
+TEST(ImageSize, ParsesWidthByHeightAndRejectsZeroAndJunk) {
+  int width = 0, height = 0;
+  parse_image_size("1280x720", width, height);
+  EXPECT_EQ(width, 1280);
+  EXPECT_EQ(height, 720);
+  for (const char* bad : {"0x720", "1280x0", "1280", "x720", "12a0x720", "-1x5", "20000x10", "1280x720x3"}) {
+    try {
+      parse_image_size(bad, width, height);
+      ADD_FAILURE() << bad << " was accepted";
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find(std::string("--size must be WIDTHxHEIGHT")), std::string::npos)
+          << e.what();
+      EXPECT_NE(std::string(e.what()).find(bad), std::string::npos) << e.what();
+    }
+  }
+}
+
+}  // namespace
+}  // namespace drench::render

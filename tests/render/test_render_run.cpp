@@ -1,0 +1,377 @@
+// `drench render` (render/render_run.hpp), headless: the cloth's and the water's pixels are where the camera
+// puts them (a known point projected, the pixel's colour class checked), on frames written by hand and on a
+// short run of the jet scene; the surface replaces the particles; the cloth is shaded on both sides; bad
+// input is named and writes nothing; --video says plainly when ffmpeg is missing.
+
+#include <drench/render/render_run.hpp>
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <set>
+#include <string>
+
+#include <drench/bullet/bullet_cloth.hpp>
+#include <drench/common/error.hpp>
+#include <drench/io/atomic_file.hpp>
+#include <drench/io/ply_reader.hpp>
+#include <drench/io/ply_writer.hpp>
+#include <drench/render/png_image.hpp>
+#include <drench/scene/frame_files.hpp>
+#include <drench/scene/scene_loader.hpp>
+#include <drench/scene/scene_runner.hpp>
+#include <drench/scene/simulation.hpp>
+
+namespace drench::render {
+namespace {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+/// What a pixel shows, by the palette's families (renderer.hpp): the cloth is red over blue, the water blue
+/// over red, the backdrop a light grey. Ratios, not differences, so that a side in shadow classifies too.
+enum class ColourClass { BACKDROP, CLOTH, WATER, OTHER };
+
+const char* name(ColourClass c) {
+  switch (c) {
+    case ColourClass::BACKDROP:
+      return "backdrop";
+    case ColourClass::CLOTH:
+      return "cloth";
+    case ColourClass::WATER:
+      return "water";
+    default:
+      return "other";
+  }
+}
+
+ColourClass classify(const std::array<std::uint8_t, 3>& p) {
+  const int r = p[0], g = p[1], b = p[2];
+  if (r > 40 && 10 * r > 16 * b && 10 * r > 13 * g) return ColourClass::CLOTH;
+  if (b > 40 && 10 * b > 16 * r) return ColourClass::WATER;
+  if (std::max({r, g, b}) - std::min({r, g, b}) < 12 && std::min({r, g, b}) > 150)
+    return ColourClass::BACKDROP;
+  return ColourClass::OTHER;
+}
+
+/// The colour class of the pixel `point` projects to; fails the test when it is outside the image.
+testing::AssertionResult shows(const Image& image, const Camera& camera, const Vec3& point,
+                               ColourClass expected) {
+  const auto pixel = project_to_pixel(camera, image.width, image.height, point);
+  if (!pixel) return testing::AssertionFailure() << "point is behind the camera";
+  const int x = static_cast<int>(std::floor(pixel->x())), y = static_cast<int>(std::floor(pixel->y()));
+  if (x < 0 || y < 0 || x >= image.width || y >= image.height)
+    return testing::AssertionFailure() << "point projects outside the image, to (" << x << ", " << y << ")";
+  const auto rgb = image.at(x, y);
+  const ColourClass actual = classify(rgb);
+  if (actual == expected) return testing::AssertionSuccess();
+  return testing::AssertionFailure() << "pixel (" << x << ", " << y << ") is " << name(actual) << " (rgb "
+                                     << int(rgb[0]) << " " << int(rgb[1]) << " " << int(rgb[2])
+                                     << "), expected " << name(expected);
+}
+
+/// A folder in the temp directory named after the running test and this process, removed at the end.
+class TempDir {
+ public:
+  TempDir() {
+    m_path = fs::path(testing::TempDir()) /
+             ("drench_" + std::string(testing::UnitTest::GetInstance()->current_test_info()->name()) + "_" +
+              std::to_string(::getpid()));
+    fs::remove_all(m_path);
+    fs::create_directories(m_path);
+  }
+  ~TempDir() { fs::remove_all(m_path); }
+  TempDir(const TempDir&) = delete;
+  TempDir& operator=(const TempDir&) = delete;
+  const fs::path& path() const { return m_path; }
+
+ private:
+  fs::path m_path;
+};
+
+// The hand-made run: a flat cloth of 0.6 m at y = 0, a ball of water resting on it off-centre, and the
+// camera in front and above.
+const Vec3 kWaterCentre(0.15, 0.08, 0.0);
+const Vec3 kClothPoint(-0.15, 0.0, 0.15);  // clear of the water as the camera sees it
+const Vec3 kEmptyPoint(-0.15, 0.25, 0.0);  // nothing there
+const Vec3 kStrayParticles(-0.15, 0.1, 0.1);
+const char* kCamera = R"({"position": [0, 0.6, 1.2], "target": [0, 0, 0], "fov_deg": 40})";
+
+/// Writes scene.json and two frames: frame 0 the cloth and particles; frame 1 the cloth, the surface (an
+/// octahedron around the ball) and particles elsewhere, which must not be drawn since a surface exists.
+void write_hand_made_run(const fs::path& dir, const json& scene) {
+  fs::create_directories(dir / "frames");
+  write_file_atomic((dir / "scene.json").string(), scene.dump(2));
+  const int n = 13;
+  Vec3Array nodes;
+  std::vector<Triangle> triangles;
+  for (int j = 0; j < n; ++j) {
+    for (int i = 0; i < n; ++i)
+      nodes.emplace_back(-0.3 + 0.05 * i, 0.0, -0.3 + 0.05 * j);
+  }
+  for (int j = 0; j + 1 < n; ++j) {
+    for (int i = 0; i + 1 < n; ++i) {
+      const Index v = static_cast<Index>(j * n + i);
+      triangles.push_back({v, v + n, v + 1});
+      triangles.push_back({v + 1, v + n, v + n + 1});
+    }
+  }
+  ParticleSet ball, stray;
+  std::uint32_t id = 0;
+  for (int i = -5; i <= 5; ++i) {
+    for (int j = -5; j <= 5; ++j) {
+      for (int k = -5; k <= 5; ++k) {
+        const Vec3 offset = 0.01 * Vec3(i, j, k);
+        if (offset.norm() > 0.05) continue;
+        ball.add(kWaterCentre + offset, Vec3(0, -1, 0), 0.001, id);
+        stray.add(kStrayParticles + 0.4 * offset, Vec3(0, -1, 0), 0.001, id++);
+      }
+    }
+  }
+  const Scalar r = 0.05;
+  Vec3Array octahedron;
+  for (const Vec3& axis :
+       {Vec3(r, 0, 0), Vec3(-r, 0, 0), Vec3(0, r, 0), Vec3(0, -r, 0), Vec3(0, 0, r), Vec3(0, 0, -r)})
+    octahedron.push_back(kWaterCentre + axis);
+  const std::vector<Triangle> faces = {{0, 2, 4}, {4, 2, 1}, {1, 2, 5}, {5, 2, 0},
+                                       {4, 3, 0}, {1, 3, 4}, {5, 3, 1}, {0, 3, 5}};
+  write_mesh_ply((dir / "frames/cloth_0000.ply").string(), "cloth", nodes, triangles);
+  write_particles_ply((dir / "frames/fluid_0000.ply").string(), ball);
+  write_mesh_ply((dir / "frames/cloth_0001.ply").string(), "cloth", nodes, triangles);
+  write_particles_ply((dir / "frames/fluid_0001.ply").string(), stray);
+  write_mesh_ply((dir / "frames/surface_0001.ply").string(), "surface", octahedron, faces);
+}
+
+json hand_made_scene(bool with_camera) {
+  json scene = json::parse(R"({"fluid": {"particle_spacing": 0.01}, "time": {"frame_rate": 30}})");
+  if (with_camera) scene["camera"] = json::parse(kCamera);
+  return scene;
+}
+
+std::set<std::string> files_in(const fs::path& dir) {
+  std::set<std::string> names;
+  for (const auto& entry : fs::directory_iterator(dir))
+    names.insert(entry.path().filename().string());
+  return names;
+}
+
+RenderOptions small_render(const fs::path& run) {
+  RenderOptions options;
+  options.run_dir = run.string();
+  options.width = 320;
+  options.height = 180;
+  options.progress = false;
+  return options;
+}
+
+TEST(RenderRun, DrawsClothAndParticlesWhereTheCameraPutsThem) {
+  TempDir dir;
+  write_hand_made_run(dir.path(), hand_made_scene(true));
+  const RenderResult result = render_run(small_render(dir.path()));
+  EXPECT_EQ(result.frames, 2);
+  EXPECT_EQ(result.camera.position, Vec3(0, 0.6, 1.2));  // the scene's camera
+  EXPECT_EQ(files_in(dir.path() / "render"), (std::set<std::string>{"frame_0000.png", "frame_0001.png"}));
+
+  const Image image = read_png((dir.path() / "render/frame_0000.png").string());
+  EXPECT_EQ(image.width, 320);
+  EXPECT_EQ(image.height, 180);
+  EXPECT_TRUE(shows(image, result.camera, kWaterCentre, ColourClass::WATER));
+  EXPECT_TRUE(shows(image, result.camera, kClothPoint, ColourClass::CLOTH));
+  EXPECT_TRUE(shows(image, result.camera, Vec3(0.25, 0.0, -0.25), ColourClass::CLOTH));
+  EXPECT_TRUE(shows(image, result.camera, kEmptyPoint, ColourClass::BACKDROP));
+  EXPECT_EQ(classify(image.at(0, 0)), ColourClass::BACKDROP);
+}
+
+TEST(RenderRun, DrawsTheSurfaceInsteadOfTheParticlesWhereOneExists) {
+  TempDir dir;
+  write_hand_made_run(dir.path(), hand_made_scene(true));
+  const RenderResult result = render_run(small_render(dir.path()));
+  const Image image = read_png((dir.path() / "render/frame_0001.png").string());
+  EXPECT_TRUE(shows(image, result.camera, kWaterCentre, ColourClass::WATER));
+  // Frame 1's particles sit above kClothPoint's side of the cloth; the surface replaces them, so there the
+  // cloth shows.
+  EXPECT_TRUE(shows(image, result.camera, kStrayParticles, ColourClass::CLOTH));
+}
+
+TEST(RenderRun, ShadesTheClothOnBothSides) {
+  TempDir dir;
+  write_hand_made_run(dir.path(), hand_made_scene(true));
+  RenderOptions options = small_render(dir.path());
+  options.camera_json = R"({"position": [0.2, -0.8, 0.9], "target": [0, 0, 0]})";
+  const RenderResult result = render_run(options);
+  const Image image = read_png((dir.path() / "render/frame_0000.png").string());
+  EXPECT_TRUE(shows(image, result.camera, kClothPoint, ColourClass::CLOTH));
+  EXPECT_TRUE(shows(image, result.camera, kWaterCentre, ColourClass::CLOTH));  // the water is behind it
+}
+
+TEST(RenderRun, FramesTheRunWhenTheSceneHasNoCamera) {
+  TempDir dir;
+  write_hand_made_run(dir.path(), hand_made_scene(false));
+  RenderOptions options = small_render(dir.path());
+  options.out_dir = (dir.path() / "elsewhere").string();
+  const RenderResult result = render_run(options);
+  const Image image = read_png((dir.path() / "elsewhere/frame_0000.png").string());
+  EXPECT_TRUE(shows(image, result.camera, kWaterCentre, ColourClass::WATER));
+  EXPECT_TRUE(shows(image, result.camera, kClothPoint, ColourClass::CLOTH));
+  for (const Vec3& corner :
+       {Vec3(-0.3, 0, -0.3), Vec3(0.3, 0, -0.3), Vec3(-0.3, 0, 0.3), Vec3(0.3, 0, 0.3)}) {
+    const auto pixel = project_to_pixel(result.camera, 320, 180, corner);
+    ASSERT_TRUE(pixel);
+    EXPECT_TRUE(pixel->x() > 0 && pixel->x() < 320 && pixel->y() > 0 && pixel->y() < 180)
+        << corner.transpose();
+  }
+}
+
+/// Passes when render_run throws an `Exception` containing `expected` and has written nothing.
+template <class Exception>
+testing::AssertionResult fails_writing_nothing(const RenderOptions& options, const std::string& expected) {
+  const fs::path out = fs::path(options.run_dir) / "render";
+  try {
+    render_run(options);
+  } catch (const Exception& e) {
+    const std::string message = e.what();
+    if (message.find(expected) == std::string::npos)
+      return testing::AssertionFailure()
+             << "message \"" << message << "\" does not contain \"" << expected << "\"";
+    if (fs::exists(out)) return testing::AssertionFailure() << out << " was created";
+    return testing::AssertionSuccess();
+  } catch (const std::exception& e) {
+    return testing::AssertionFailure() << "threw another exception type: " << e.what();
+  }
+  return testing::AssertionFailure() << "did not throw";
+}
+
+TEST(RenderRun, BadInputIsNamedAndWritesNothing) {
+  TempDir dir;
+  write_hand_made_run(dir.path(), hand_made_scene(true));
+  RenderOptions options = small_render(dir.path());
+
+  options.camera_json = R"({"positon": [0, 1, 2], "target": [0, 0, 0]})";
+  EXPECT_TRUE(fails_writing_nothing<SceneError>(
+      options, "camera.positon is not a known key (--camera); known: position, target, fov_deg"));
+  options.camera_json = "{position: 1";
+  EXPECT_TRUE(fails_writing_nothing<SceneError>(options, "--camera is not valid JSON"));
+  options.camera_json.clear();
+
+  options.width = 0;
+  EXPECT_TRUE(fails_writing_nothing<Error>(options, "the image size must be at least 1x1 pixels, got 0x180"));
+  options.width = 320;
+
+  json scene = hand_made_scene(false);
+  scene["camera"] = {{"fov", 30}};
+  write_file_atomic((dir.path() / "scene.json").string(), scene.dump());
+  EXPECT_TRUE(fails_writing_nothing<SceneError>(
+      options, "camera.fov is not a known key (" + (dir.path() / "scene.json").string() + ")"));
+  write_file_atomic((dir.path() / "scene.json").string(), hand_made_scene(true).dump());
+
+  write_file_atomic((dir.path() / "frames/fluid_0002.ply").string(), "ply\nformat ascii 1.0\nend_header\n");
+  EXPECT_TRUE(fails_writing_nothing<IoError>(options, "fluid_0002.ply: header line 2"));
+
+  fs::remove_all(dir.path() / "frames");
+  fs::create_directories(dir.path() / "frames");
+  EXPECT_TRUE(fails_writing_nothing<IoError>(options, "frames: no frames (fluid_NNNN.ply"));
+  fs::remove_all(dir.path() / "frames");
+  EXPECT_TRUE(fails_writing_nothing<IoError>(options, "frames: missing; drench render reads the frames/"));
+  fs::remove(dir.path() / "scene.json");
+  EXPECT_TRUE(fails_writing_nothing<IoError>(options, "scene.json: missing"));
+}
+
+/// Sets $PATH for the test's lifetime.
+class ScopedPath {
+ public:
+  explicit ScopedPath(const std::string& path) : m_old(std::getenv("PATH") ? std::getenv("PATH") : "") {
+    ::setenv("PATH", path.c_str(), 1);
+  }
+  ~ScopedPath() { ::setenv("PATH", m_old.c_str(), 1); }
+  ScopedPath(const ScopedPath&) = delete;
+  ScopedPath& operator=(const ScopedPath&) = delete;
+
+ private:
+  std::string m_old;
+};
+
+TEST(RenderRun, VideoSaysPlainlyThatFfmpegIsMissingAndKeepsThePngs) {
+  TempDir dir;
+  write_hand_made_run(dir.path(), hand_made_scene(true));
+  fs::create_directories(dir.path() / "empty_bin");
+  RenderOptions options = small_render(dir.path());
+  options.video = true;
+  const ScopedPath path((dir.path() / "empty_bin").string());
+  const RenderResult result = render_run(options);
+  EXPECT_EQ(result.video_note,
+            "no MP4 written: ffmpeg is not installed (Debian: sudo apt-get install ffmpeg)");
+  EXPECT_TRUE(result.video_path.empty());
+  EXPECT_EQ(files_in(dir.path() / "render"), (std::set<std::string>{"frame_0000.png", "frame_0001.png"}));
+}
+
+TEST(RenderRun, VideoGoesThroughFfmpegAtTheScenesFrameRate) {
+  TempDir dir;
+  write_hand_made_run(dir.path(), hand_made_scene(true));
+  // A stand-in ffmpeg that records its arguments and writes its output file.
+  const fs::path bin = dir.path() / "bin";
+  fs::create_directories(bin);
+  {
+    std::ofstream script(bin / "ffmpeg");
+    script << "#!/bin/sh\nfor a; do last=$a; done\necho \"$@\" > \"$last.args\"\nprintf mp4 > \"$last\"\n";
+  }
+  fs::permissions(bin / "ffmpeg", fs::perms::owner_all);
+  RenderOptions options = small_render(dir.path());
+  options.video = true;
+  const ScopedPath path(bin.string() + ":/usr/bin:/bin");
+  const RenderResult result = render_run(options);
+  EXPECT_TRUE(result.video_note.empty());
+  EXPECT_EQ(result.video_path, (dir.path() / "render/video.mp4").string());
+  EXPECT_TRUE(fs::exists(dir.path() / "render/video.mp4"));
+  // The arguments went to the temporary name, which was renamed.
+  std::string args;
+  for (const auto& entry : fs::directory_iterator(dir.path() / "render")) {
+    if (entry.path().extension() == ".args") std::getline(std::ifstream(entry.path()), args);
+  }
+  EXPECT_NE(args.find("-framerate 30 -start_number 0 -i " + (dir.path() / "render/frame_%04d.png").string()),
+            std::string::npos)
+      << args;
+  EXPECT_NE(args.find("-c:v libx264 -pix_fmt yuv420p"), std::string::npos) << args;
+}
+
+// A real run: the jet scene shortened to 80 steps (the jet has not reached the cloth yet) with a coarser
+// cloth, rendered with its default camera. Nodes next to pinned corners are cloth; a point on the jet's axis
+// below the nozzle is water.
+TEST(RenderRun, AShortJetOnClothRunShowsClothAndWaterWhereTheyAre) {
+  TempDir dir;
+  const std::string scene_path = DRENCH_SOURCE_DIR "/demos/scenes/jet_on_cloth.json";
+  const std::vector<std::string> overrides = {"cloth.nodes=[15,15]", "time.duration=0.08",
+                                              "time.frame_rate=25"};
+  const SceneConfig config = load_scene_file(scene_path, overrides);
+  Simulation simulation(config, bullet::cloth_engine_factory());
+  RunOptions run;
+  run.out_dir = (dir.path() / "run").string();
+  run.progress = false;
+  run.scene_document = read_scene_document(scene_path, overrides);
+  ASSERT_TRUE(run_scene(simulation, run).status.ok());
+
+  RenderOptions options = small_render(dir.path() / "run");
+  options.width = 480;
+  options.height = 270;
+  const RenderResult result = render_run(options);
+  ASSERT_EQ(result.frames, 3);
+  const Image image = read_png((dir.path() / "run/render/frame_0002.png").string());
+  const PlyData cloth = read_ply((dir.path() / "run/frames/cloth_0002.ply").string());
+  const PlyData fluid = read_ply((dir.path() / "run/frames/fluid_0002.ply").string());
+  ASSERT_EQ(cloth.positions.size(), 15u * 15u);
+  EXPECT_TRUE(shows(image, result.camera, cloth.positions[15 + 1], ColourClass::CLOTH));
+  EXPECT_TRUE(shows(image, result.camera, cloth.positions[15 * 15 - 15 - 2], ColourClass::CLOTH));
+  // The nozzle (0, 0.3, 0) points down at 3 m/s: after 80 ms the jet fills the axis 5 cm below it.
+  const Vec3 on_jet(0.0, 0.25, 0.0);
+  const bool particle_there = std::any_of(fluid.positions.begin(), fluid.positions.end(),
+                                          [&](const Vec3& p) { return (p - on_jet).norm() < 0.005; });
+  ASSERT_TRUE(particle_there);
+  EXPECT_TRUE(shows(image, result.camera, on_jet, ColourClass::WATER));
+  EXPECT_TRUE(shows(image, result.camera, Vec3(0.0, 0.25, 0.3), ColourClass::BACKDROP));
+}
+
+}  // namespace
+}  // namespace drench::render
