@@ -162,6 +162,25 @@ double seconds_since(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
+/// reconstruct_surface's stage times summed over calls (unit: s).
+struct StageSeconds {
+  double grid = 0.0, densities = 0.0, field = 0.0, mesh = 0.0;
+  void add(const drench::SurfaceStats& s) {
+    grid += s.seconds_grid;
+    densities += s.seconds_densities;
+    field += s.seconds_field;
+    mesh += s.seconds_mesh;
+  }
+  /// Counters `<stage>_s`: seconds per iteration.
+  void report(benchmark::State& state) const {
+    const double n = static_cast<double>(state.iterations());
+    state.counters["grid_s"] = grid / n;
+    state.counters["densities_s"] = densities / n;
+    state.counters["field_s"] = field / n;
+    state.counters["mesh_s"] = mesh / n;
+  }
+};
+
 /// Reports what every row shares: particles and triangles per iteration, particles per second of wall time.
 void report(benchmark::State& state, double particles, double triangles, double wall) {
   state.counters["threads"] = omp_get_max_threads();
@@ -176,6 +195,7 @@ void dam_break_plain(benchmark::State& state, int size) {
   drench::SurfaceSettings settings;
   settings.contact_aware = false;
   drench::SurfaceStats stats;
+  StageSeconds stages;
   std::size_t triangles = 0;
   double wall = 0.0;
   for (auto _ : state) {
@@ -186,8 +206,10 @@ void dam_break_plain(benchmark::State& state, int size) {
     state.SetIterationTime(seconds);
     wall += seconds;
     triangles = mesh.triangles.size();
+    stages.add(stats);
   }
   report(state, particles.size(), triangles, wall);
+  stages.report(state);
   state.counters["nodes"] = stats.nodes;
 }
 
@@ -215,6 +237,7 @@ void jet_on_cloth(benchmark::State& state, bool aware) {
   drench::SurfaceSettings settings;
   settings.contact_aware = aware;
   double particles = 0.0, triangles = 0.0, occluded = 0.0, reset = 0.0, wall = 0.0;
+  StageSeconds stages;
   for (auto _ : state) {
     particles = triangles = occluded = reset = 0.0;
     const auto start = std::chrono::steady_clock::now();
@@ -226,12 +249,14 @@ void jet_on_cloth(benchmark::State& state, bool aware) {
       triangles += mesh.triangles.size();
       occluded += stats.occluded;
       reset += stats.reset_nodes;
+      stages.add(stats);
     }
     const double seconds = seconds_since(start);
     state.SetIterationTime(seconds);
     wall += seconds;
   }
   report(state, particles, triangles, wall);
+  stages.report(state);
   state.counters["frames"] = frames.size();
   state.counters["occluded_pairs"] = occluded;
   state.counters["reset_nodes"] = reset;

@@ -177,16 +177,25 @@ SurfaceMesh reconstruct_surface(const Vec3Array& particles, Scalar particle_spac
   // them and an inside node, near enough that marching cubes puts it close to the inside node.
   const float outside = static_cast<float>(cell);
 
+  // Each stage's end is the next one's start: their times add up to the whole but for the input check.
+  auto stage_start = std::chrono::steady_clock::now();
+  const auto lap = [&stage_start](double& seconds) {
+    const auto now = std::chrono::steady_clock::now();
+    seconds = std::chrono::duration<double>(now - stage_start).count();
+    stage_start = now;
+  };
   VdbNodeGrid grid(cell, outside);
   grid.activate_around(particles, static_cast<int>(std::ceil(radius / cell)));
   const std::vector<Vec3i> nodes = grid.active_nodes();
   local.nodes = nodes.size();
+  lap(local.seconds_grid);
 
   const ParticleCells cells(particles, radius);
   const std::vector<double> inverse_density = inverse_number_densities(particles, cells, radius);
   const bool density_field = settings.field == SurfaceField::DENSITY;
   const bool aware = settings.contact_aware && !obstacles.empty();
   const TriangleBins bins = aware ? TriangleBins(obstacles, radius) : TriangleBins();
+  lap(local.seconds_densities);
   std::vector<float> values(nodes.size(), outside);
   std::uint64_t occluded = 0, reset = 0;
   const double radius2 = radius * radius;
@@ -246,11 +255,13 @@ SurfaceMesh reconstruct_surface(const Vec3Array& particles, Scalar particle_spac
       }
     }
   }
+  lap(local.seconds_field);
   local.occluded = occluded;
   local.reset_nodes = reset;
   grid.set_values(nodes, values);
   grid.mesh(mesh.positions, mesh.triangles);
   compute_vertex_normals(mesh);
+  lap(local.seconds_mesh);
   local.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   if (stats) *stats = local;
   return mesh;
