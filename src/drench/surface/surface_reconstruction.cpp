@@ -68,33 +68,84 @@ void check_input(const Vec3Array& particles, Scalar spacing, const SurfaceSettin
 }
 
 /// Particles sorted into cubic cells of the kernel radius, so that a node finds every particle within the
-/// radius in the 27 cells around its own.
+/// radius in the 27 cells around its own. The particles are copied in cell order (z, then y, then x, then
+/// index), so that a node's candidates lie together in memory: for_each_near passes slots of positions().
+/// Where the cells' bounding box is small (it is for any fluid that holds together), a dense table of each
+/// cell's first slot replaces the hash map; the three cells along x of a row are then one run of slots,
+/// visited in the same order, so both give the same sums to the bit.
 class ParticleCells {
  public:
   ParticleCells(const Vec3Array& particles, Scalar cell) : m_cell(cell) {
-    std::vector<std::pair<std::uint64_t, Index>> keyed(particles.size());
-    for (std::size_t i = 0; i < particles.size(); ++i)
-      keyed[i] = {key(cell_of(particles[i])), static_cast<Index>(i)};
-    std::sort(keyed.begin(), keyed.end());
-    m_order.resize(keyed.size());
-    for (std::size_t i = 0; i < keyed.size(); ++i) {
-      m_order[i] = keyed[i].second;
-      if (i == 0 || keyed[i].first != keyed[i - 1].first) m_runs[keyed[i].first] = {i, i};
-      m_runs[keyed[i].first].second = i + 1;
+    const std::size_t n = particles.size();
+    std::vector<Vec3i> cells(n);
+    for (std::size_t i = 0; i < n; ++i)
+      cells[i] = cell_of(particles[i]);
+    m_min = m_max = cells.empty() ? Vec3i::Zero() : cells[0];
+    for (const Vec3i& c : cells) {
+      m_min = m_min.cwiseMin(c);
+      m_max = m_max.cwiseMax(c);
     }
+    const Eigen::Vector3d extent = (m_max - m_min).cast<double>() + Eigen::Vector3d::Ones();
+    // Up to 8 table entries per particle (or 16 MB): a splash spread far needs the hash map instead.
+    m_dense = !cells.empty() && extent.prod() <= std::max(8.0 * static_cast<double>(n), double(1 << 21));
+    IndexArray order(n);  // slot -> particle
+    if (m_dense) {
+      m_dims = (m_max - m_min) + Vec3i::Ones();
+      // A counting sort: within a cell the particles stay in index order, as sorting (key, index) leaves
+      // them.
+      m_first.assign(static_cast<std::size_t>(m_dims.prod()) + 1, 0);
+      for (const Vec3i& c : cells)
+        ++m_first[slot_of(c) + 1];
+      for (std::size_t k = 1; k < m_first.size(); ++k)
+        m_first[k] += m_first[k - 1];
+      std::vector<std::size_t> next(m_first.begin(), m_first.end() - 1);
+      for (std::size_t i = 0; i < n; ++i)
+        order[next[slot_of(cells[i])]++] = static_cast<Index>(i);
+    } else {
+      std::vector<std::pair<std::uint64_t, Index>> keyed(n);
+      for (std::size_t i = 0; i < n; ++i)
+        keyed[i] = {key(cells[i]), static_cast<Index>(i)};
+      std::sort(keyed.begin(), keyed.end());
+      for (std::size_t i = 0; i < n; ++i) {
+        order[i] = keyed[i].second;
+        if (i == 0 || keyed[i].first != keyed[i - 1].first) m_runs[keyed[i].first] = {i, i};
+        m_runs[keyed[i].first].second = i + 1;
+      }
+    }
+    m_positions.resize(n);
+    for (std::size_t k = 0; k < n; ++k)
+      m_positions[k] = particles[order[k]];
   }
   Vec3i cell_of(const Vec3& x) const { return (x / m_cell).array().floor().cast<int>(); }
-  /// Calls f(particle index) for every particle in the 27 cells around x's, in a fixed order.
+  /// The particles' positions in cell order, by slot.
+  const Vec3Array& positions() const { return m_positions; }
+  /// Calls f(slot) for every particle in the 27 cells around x's, in a fixed order: cells by z, y, x, each
+  /// cell's particles by index.
   template <class F>
   void for_each_near(const Vec3& x, F&& f) const {
     const Vec3i c = cell_of(x);
+    if (m_dense) {
+      const Vec3i local = c - m_min;
+      const int x0 = std::max(local.x() - 1, 0), x1 = std::min(local.x() + 1, m_dims.x() - 1);
+      if (x0 > x1) return;
+      for (int z = local.z() - 1; z <= local.z() + 1; ++z) {
+        if (z < 0 || z >= m_dims.z()) continue;
+        for (int y = local.y() - 1; y <= local.y() + 1; ++y) {
+          if (y < 0 || y >= m_dims.y()) continue;
+          const std::size_t row = (static_cast<std::size_t>(z) * m_dims.y() + y) * m_dims.x();
+          for (std::size_t k = m_first[row + x0], end = m_first[row + x1 + 1]; k < end; ++k)
+            f(static_cast<Index>(k));
+        }
+      }
+      return;
+    }
     for (int dz = -1; dz <= 1; ++dz)
       for (int dy = -1; dy <= 1; ++dy)
         for (int dx = -1; dx <= 1; ++dx) {
           const auto it = m_runs.find(key(c + Vec3i(dx, dy, dz)));
           if (it == m_runs.end()) continue;
           for (std::size_t k = it->second.first; k < it->second.second; ++k)
-            f(m_order[k]);
+            f(static_cast<Index>(k));
         }
   }
 
@@ -105,9 +156,16 @@ class ParticleCells {
     };
     return part(c.x()) | (part(c.y()) << 21) | (part(c.z()) << 42);
   }
+  std::size_t slot_of(const Vec3i& c) const {
+    const Vec3i l = c - m_min;
+    return (static_cast<std::size_t>(l.z()) * m_dims.y() + l.y()) * m_dims.x() + l.x();
+  }
   Scalar m_cell;
-  IndexArray m_order;
-  std::unordered_map<std::uint64_t, std::pair<std::size_t, std::size_t>> m_runs;
+  Vec3Array m_positions;
+  bool m_dense = false;
+  Vec3i m_min, m_max, m_dims;
+  std::vector<std::size_t> m_first;  // dense: slot of each cell's first particle, then the total
+  std::unordered_map<std::uint64_t, std::pair<std::size_t, std::size_t>> m_runs;  // sparse: key -> slots
 };
 
 /// Area-weighted mean of the faces' normals at each vertex; a vertex of no face keeps +y.
@@ -137,11 +195,11 @@ inline double zb_kernel(double s2) {
 constexpr double kColourLevel = 0.6;
 
 /// 1 / sum_j k(|x_i - x_j| / radius) for every particle i (itself included, so >= 1 and finite): the
-/// inverse of its number density in kernel units. Onderik et al. 2011 divide each particle's Zhu-Bridson
-/// weight by it; as SPH's m / rho it is also the particle's volume in the colour field (an interior particle
-/// of a regular lattice sums to about 1 there).
-std::vector<double> inverse_number_densities(const Vec3Array& particles, const ParticleCells& cells,
-                                             Scalar radius) {
+/// inverse of its number density in kernel units, by slot of `cells` (ParticleCells::positions()). Onderik et
+/// al. 2011 divide each particle's Zhu-Bridson weight by it; as SPH's m / rho it is also the particle's
+/// volume in the colour field (an interior particle of a regular lattice sums to about 1 there).
+std::vector<double> inverse_number_densities(const ParticleCells& cells, Scalar radius) {
+  const Vec3Array& particles = cells.positions();
   std::vector<double> inverse(particles.size());
   const double radius2 = radius * radius;
 #pragma omp parallel for schedule(static)
@@ -191,7 +249,8 @@ SurfaceMesh reconstruct_surface(const Vec3Array& particles, Scalar particle_spac
   lap(local.seconds_grid);
 
   const ParticleCells cells(particles, radius);
-  const std::vector<double> inverse_density = inverse_number_densities(particles, cells, radius);
+  const std::vector<double> inverse_density = inverse_number_densities(cells, radius);
+  const Vec3Array& sorted = cells.positions();
   const bool density_field = settings.field == SurfaceField::DENSITY;
   const bool aware = settings.contact_aware && !obstacles.empty();
   const TriangleBins bins = aware ? TriangleBins(obstacles, radius) : TriangleBins();
@@ -229,22 +288,36 @@ SurfaceMesh reconstruct_surface(const Vec3Array& particles, Scalar particle_spac
       }
       double weight = 0.0;
       Vec3 mean = Vec3::Zero();
-      cells.for_each_near(x, [&](Index i) {
-        const Vec3& p = particles[i];
-        const double d2 = (p - x).squaredNorm();
-        if (d2 >= radius2) return;
-        for (const auto& [o, t] : near) {  // Fig. 2a: only particles the node sees
-          const Triangle& tri = (*obstacles[o].triangles)[t];
-          const Vec3Array& q = *obstacles[o].positions;
-          if (segment_crosses_triangle(x, p, q[tri[0]], q[tri[1]], q[tri[2]])) {
-            ++occluded;
-            return;
+      if (near.empty()) {
+        // No face in reach, so no visibility test: a lambda this small is inlined into for_each_near's loop,
+        // where the one below, with the segment tests, was a call per candidate (perf: the field's lambda
+        // out of line, 56% of a reconstruction). Same sums in the same order: the same bits.
+        cells.for_each_near(x, [&](Index i) {
+          const Vec3& p = sorted[i];
+          const double d2 = (p - x).squaredNorm();
+          if (d2 >= radius2) return;
+          const double w = zb_kernel(d2 / radius2) * inverse_density[i];
+          weight += w;
+          mean += w * p;
+        });
+      } else {
+        cells.for_each_near(x, [&](Index i) {
+          const Vec3& p = sorted[i];
+          const double d2 = (p - x).squaredNorm();
+          if (d2 >= radius2) return;
+          for (const auto& [o, t] : near) {  // Fig. 2a: only particles the node sees
+            const Triangle& tri = (*obstacles[o].triangles)[t];
+            const Vec3Array& q = *obstacles[o].positions;
+            if (segment_crosses_triangle(x, p, q[tri[0]], q[tri[1]], q[tri[2]])) {
+              ++occluded;
+              return;
+            }
           }
-        }
-        const double w = zb_kernel(d2 / radius2) * inverse_density[i];
-        weight += w;
-        mean += w * p;
-      });
+          const double w = zb_kernel(d2 / radius2) * inverse_density[i];
+          weight += w;
+          mean += w * p;
+        });
+      }
       if (weight > 0.0 && density_field) {
         // The colour field is about 1 inside and 0 far outside; scaled by the spacing, its values near the
         // surface are lengths like the Zhu-Bridson field's, which the mesher's interpolation expects.
