@@ -124,40 +124,6 @@ const std::vector<JetFrame>& jet_frames() {
   return frames;
 }
 
-/// The particles as OpenVDB's ParticlesToLevelSet reads them: every sphere of the same radius.
-struct VdbParticleList {
-  using PosType = openvdb::Vec3R;
-  const Vec3Array* positions;
-  double radius;  // unit: m
-  std::size_t size() const { return positions->size(); }
-  void getPos(std::size_t n, openvdb::Vec3R& xyz) const {
-    const Vec3& p = (*positions)[n];
-    xyz = openvdb::Vec3R(p.x(), p.y(), p.z());
-  }
-  void getPosRad(std::size_t n, openvdb::Vec3R& xyz, openvdb::Real& r) const {
-    getPos(n, xyz);
-    r = radius;
-  }
-};
-
-/// OpenVDB's particle surface: spheres of one particle spacing rasterized into a narrow-band level set (half
-/// width 3 voxels, the default) of voxel `cell`, meshed by volumeToMesh at level 0 as drench's grid is.
-/// The radius is a spacing, not the Zhu-Bridson field's half spacing: spheres of half a spacing leave a void
-/// at the centre of every lattice cube (0.87 spacings from its corners), which the mesher would surface; a
-/// spacing closes them and stays above ParticlesToLevelSet's minimum of 1.5 voxels (below it the particle is
-/// dropped). Returns the triangle count (quads count as two).
-std::size_t openvdb_surface(const Vec3Array& particles, double spacing, double cell) {
-  openvdb::FloatGrid::Ptr grid = openvdb::createLevelSet<openvdb::FloatGrid>(cell);
-  openvdb::tools::ParticlesToLevelSet<openvdb::FloatGrid> raster(*grid);
-  raster.rasterizeSpheres(VdbParticleList{&particles, spacing});
-  raster.finalize();
-  std::vector<openvdb::Vec3s> points;
-  std::vector<openvdb::Vec3I> triangles;
-  std::vector<openvdb::Vec4I> quads;
-  openvdb::tools::volumeToMesh(*grid, points, triangles, quads, 0.0, 0.0);
-  return triangles.size() + 2 * quads.size();
-}
-
 double seconds_since(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
@@ -181,8 +147,52 @@ struct StageSeconds {
   }
 };
 
-/// Reports what every row shares: particles and triangles per iteration, particles per second of wall time.
+/// The particles as OpenVDB's ParticlesToLevelSet reads them: every sphere of the same radius.
+struct VdbParticleList {
+  using PosType = openvdb::Vec3R;
+  const Vec3Array* positions;
+  double radius;  // unit: m
+  std::size_t size() const { return positions->size(); }
+  void getPos(std::size_t n, openvdb::Vec3R& xyz) const {
+    const Vec3& p = (*positions)[n];
+    xyz = openvdb::Vec3R(p.x(), p.y(), p.z());
+  }
+  void getPosRad(std::size_t n, openvdb::Vec3R& xyz, openvdb::Real& r) const {
+    getPos(n, xyz);
+    r = radius;
+  }
+};
+
+/// OpenVDB's particle surface: spheres of one particle spacing rasterized into a narrow-band level set (half
+/// width 3 voxels, the default) of voxel `cell`, meshed by volumeToMesh at level 0 as drench's grid is.
+/// The radius is a spacing, not the Zhu-Bridson field's half spacing: spheres of half a spacing leave a void
+/// at the centre of every lattice cube (0.87 spacings from its corners), which the mesher would surface; a
+/// spacing closes them and stays above ParticlesToLevelSet's minimum of 1.5 voxels (below it the particle is
+/// dropped). Returns the triangle count (quads count as two); adds the rasterization's and the meshing's wall
+/// times to `field` and `mesh` (unit: s).
+std::size_t openvdb_surface(const Vec3Array& particles, double spacing, double cell, double& field,
+                            double& mesh) {
+  const auto start = std::chrono::steady_clock::now();
+  openvdb::FloatGrid::Ptr grid = openvdb::createLevelSet<openvdb::FloatGrid>(cell);
+  openvdb::tools::ParticlesToLevelSet<openvdb::FloatGrid> raster(*grid);
+  raster.rasterizeSpheres(VdbParticleList{&particles, spacing});
+  raster.finalize();
+  field += seconds_since(start);
+  const auto meshing = std::chrono::steady_clock::now();
+  std::vector<openvdb::Vec3s> points;
+  std::vector<openvdb::Vec3I> triangles;
+  std::vector<openvdb::Vec4I> quads;
+  openvdb::tools::volumeToMesh(*grid, points, triangles, quads, 0.0, 0.0);
+  mesh += seconds_since(meshing);
+  return triangles.size() + 2 * quads.size();
+}
+
+/// Reports what every row shares: particles and triangles per iteration, particles per second of wall time;
+/// zeros for the counters the row's path has not (Google Benchmark's CSV wants the same columns in every
+/// row).
 void report(benchmark::State& state, double particles, double triangles, double wall) {
+  for (const char* name : {"nodes", "frames", "occluded_pairs", "reset_nodes"})
+    state.counters[name] = 0.0;
   state.counters["threads"] = omp_get_max_threads();
   state.counters["particles"] = particles;
   state.counters["triangles"] = triangles;
@@ -220,14 +230,16 @@ void dam_break_openvdb(benchmark::State& state, int size) {
   const double cell = drench::SurfaceSettings().resolved_cell_size(spacing);
   std::size_t triangles = 0;
   double wall = 0.0;
+  StageSeconds stages;  // field: ParticlesToLevelSet; mesh: volumeToMesh
   for (auto _ : state) {
     const auto start = std::chrono::steady_clock::now();
-    triangles = openvdb_surface(particles, spacing, cell);
+    triangles = openvdb_surface(particles, spacing, cell, stages.field, stages.mesh);
     const double seconds = seconds_since(start);
     state.SetIterationTime(seconds);
     wall += seconds;
   }
   report(state, particles.size(), triangles, wall);
+  stages.report(state);
 }
 
 /// All jet frames reconstructed per iteration, the cloth passed as obstacle; `aware` sets contact_aware.
