@@ -11,7 +11,7 @@
 //   OMP_NUM_THREADS=2 build/bench/bench_surface --benchmark_repetitions=3
 //       --benchmark_enable_random_interleaving=true --benchmark_report_aggregates_only=true
 //       --benchmark_out=bench/results/<machine>/surface.csv --benchmark_out_format=csv
-// (scripts/bench_surface runs this and notes the CPU model and load in the CSV.)
+// (bench/bench_surface.py runs this and notes the CPU model and load above the CSV.)
 // Thread count: OMP_NUM_THREADS; TBB, which OpenVDB's dilation, rasterization and meshing run on in both
 // paths, is held to the same count by a tbb::global_control in main().
 
