@@ -55,4 +55,13 @@ void TriangleBins::collect_box(const Vec3& lo, const Vec3& hi,
   out.erase(std::unique(out.begin(), out.end()), out.end());
 }
 
+void TriangleBins::filter_box(const std::vector<std::pair<Index, Index>>& candidates, const Vec3& lo,
+                              const Vec3& hi, std::vector<std::pair<Index, Index>>& out) const {
+  out.clear();
+  for (const auto& ot : candidates) {
+    const Box& box = m_boxes[ot.first][ot.second];
+    if ((box.lo.array() <= hi.array()).all() && (lo.array() <= box.hi.array()).all()) out.push_back(ot);
+  }
+}
+
 }  // namespace drench

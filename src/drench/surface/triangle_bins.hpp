@@ -24,6 +24,11 @@ class TriangleBins {
   void collect_near(const Vec3& x, Scalar reach, std::vector<std::pair<Index, Index>>& out) const {
     collect_box(x - Vec3::Constant(reach), x + Vec3::Constant(reach), out);
   }
+  /// The pairs of `candidates` (a collect_box answer for a box containing [lo, hi]) whose bounding box
+  /// overlaps [lo, hi], in their order: the same list collect_box(lo, hi) gives, without the hash lookups
+  /// and the sort. `out` is replaced.
+  void filter_box(const std::vector<std::pair<Index, Index>>& candidates, const Vec3& lo, const Vec3& hi,
+                  std::vector<std::pair<Index, Index>>& out) const;
   bool empty() const { return m_bins.empty(); }
 
  private:
