@@ -76,6 +76,14 @@ nlohmann::json make_summary(const Simulation& sim, double wall_seconds, const st
       sim.config().fluid.pressure_solver == PressureSolverKind::PCISPH ? "pcisph" : "wcsph";
   s["speed_of_sound_mps"] = sim.speed_of_sound();
   s["status"] = status.describe().empty() ? "ok" : status.describe();
+  s["max_speed_mps"] = {{"particle", sim.max_particle_speed()}};
+  if (sim.cloth()) s["max_speed_mps"]["node"] = sim.max_node_speed();
+  if (sim.closed()) {
+    const double initial = sim.initial_fluid_energy(), final = sim.fluid_energy();
+    s["fluid_energy_J"] = {{"initial", initial}, {"final", final}};
+    // Relative to the energy the fluid started with; null for a fluid that started with none to lose.
+    s["energy_drift"] = initial > 0.0 ? nlohmann::json((final - initial) / initial) : nlohmann::json();
+  }
   if (sim.contact_mesh()) {
     const CouplingStepStats& c = sim.coupling_stats();
     if (const ClothEngine* cloth = sim.cloth()) {

@@ -158,6 +158,13 @@ Simulation::Simulation(const SceneConfig& config, std::unique_ptr<ClothEngine> c
   }
   for (const Scalar m : m_fluid->particles().masses)
     m_emitted_mass += m;
+  const ParticleSet& initial = m_fluid->particles();
+  if (!initial.empty()) {
+    m_energy_floor = std::numeric_limits<double>::infinity();
+    for (const Vec3& x : initial.positions)
+      m_energy_floor = std::min(m_energy_floor, -m_config.gravity.dot(x));
+  }
+  m_initial_energy = fluid_energy();
   if (m_engine) m_engine->mesh().validate();
   if (m_engine && m_config.has_effect("coupling")) m_coupler = std::make_unique<Coupler>(m_config.coupling);
   const bool carried_water = m_config.coupling.scheme == CouplingScheme::CARRIED_WATER;
@@ -189,6 +196,21 @@ const std::vector<TriangleMesh>& Simulation::obstacles() const {
   return m_with_obstacles ? m_with_obstacles->obstacles() : none;
 }
 
+double Simulation::fluid_energy() const {
+  const ParticleSet& p = m_fluid->particles();
+  double energy = 0.0;
+  // In order, not reduced over threads: the figure is the same whatever the thread count.
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    energy += p.masses[i] *
+              (0.5 * p.velocities[i].squaredNorm() - m_config.gravity.dot(p.positions[i]) - m_energy_floor);
+  }
+  return energy;
+}
+
+bool Simulation::closed() const {
+  return m_nozzles.empty() && m_config.kill_regions.empty() && !m_wetting;
+}
+
 bool Simulation::finished() const {
   return m_steps >= m_total_steps;
 }
@@ -208,6 +230,15 @@ StepStatus Simulation::step(Scalar dt) {
   if (m_obstacle) m_obstacle->begin_step(m_engine->mesh(), m_engine->velocities());
   StepStatus status = m_fluid->step(dt, m_obstacle.get());
   if (m_engine) step_cloth_and_couple(dt, status);
+  // `!(a <= b)` rather than std::max, so that a NaN speed stays NaN in the summary.
+  const Scalar particle_speed = m_fluid->max_speed();
+  if (!(particle_speed <= m_max_particle_speed)) m_max_particle_speed = particle_speed;
+  if (m_cloth) {
+    for (const Vec3& v : m_cloth->velocities()) {
+      const Scalar node_speed = v.norm();
+      if (!(node_speed <= m_max_node_speed)) m_max_node_speed = node_speed;
+    }
+  }
   ++m_steps;
   m_time += dt;
   if (!m_config.kill_regions.empty()) {

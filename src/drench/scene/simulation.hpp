@@ -107,6 +107,19 @@ class Simulation {
   /// Mass that kill regions removed so far (unit: kg).
   double killed_mass() const { return m_killed_mass; }
 
+  /// The fastest particle and cloth node at the end of any step so far (unit: m/s), 0 before the first
+  /// step: a run that stays finite but flings particles or nodes away is unstable all the same.
+  Scalar max_particle_speed() const { return m_max_particle_speed; }
+  Scalar max_node_speed() const { return m_max_node_speed; }
+  /// The fluid's mechanical energy now (unit: J): kinetic plus potential in gravity, the potential measured
+  /// from the lowest particle at construction, so that a still column has energy > 0.
+  double fluid_energy() const;
+  /// fluid_energy() at construction (unit: J).
+  double initial_fluid_energy() const { return m_initial_energy; }
+  /// True when no fluid enters or leaves the scene (no nozzle, kill region or wetting): only then is a
+  /// change of fluid_energy() the solver's drift and dissipation rather than mass coming and going.
+  bool closed() const;
+
  private:
   /// The cloth's side of a step, after the fluid's: impulses, the engine's step, the coupling (sec. 3,
   /// 5), the leak audit, the corrections back into the engine.
@@ -146,6 +159,10 @@ class Simulation {
   WettingStepStats m_wetting_stats;
   double m_emitted_mass = 0;
   double m_killed_mass = 0;
+  Scalar m_max_particle_speed = 0;
+  Scalar m_max_node_speed = 0;
+  double m_energy_floor = 0;  // -g.x of the lowest particle at construction, per kg (unit: J/kg)
+  double m_initial_energy = 0;
 };
 
 /// The meshes of the scene's `obstacles`, in order: the built-in v_plane, or an OBJ file scaled and moved.

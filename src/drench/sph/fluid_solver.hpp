@@ -94,13 +94,14 @@ class FluidSolver {
   /// @param constraint  optional, applied after every sub-step (must outlive the call)
   StepStatus step(Scalar dt, SubstepConstraint* constraint = nullptr);
 
+  /// Fastest particle speed (unit: m/s); NaN when a velocity is NaN.
+  Scalar max_speed() const;
+
  private:
   /// @param max_displacement  how far the fastest particle may move in the coming sub-step (unit: m): decides
   ///        the skin of a new grid search
   void update_neighbors(Scalar max_displacement);
   StepStatus substep(Scalar dt, Scalar max_speed, SubstepConstraint* constraint);
-  /// Fastest particle speed (unit: m/s); NaN when a velocity is NaN.
-  Scalar max_speed() const;
   /// The CFL sub-step for the fastest particle moving at `max_speed` (unit: s); infinite when nothing moves.
   Scalar cfl_limit(Scalar max_speed) const;
 
