@@ -3,8 +3,9 @@
 //   drench reconstruct DIR [--set json.path=value ...]   the surface again from a run's saved frames
 //   drench render DIR [--camera JSON] [--size WxH] [--out DIR] [--video]   a run's frames as PNG (and MP4)
 //   drench ccd FILE_OR_DIR... [--list]      point-triangle CCD against labelled queries (*.vf.txt)
+//   drench sweep SCENE.json --vary key=v1,v2 ... --out DIR   the scene over settings: sweep.csv, report.md
 // Exit status: 0 success; 1 bad input (scene, file, arguments) or, for `ccd`, a missed collision; 2 the
-// simulation became non-finite.
+// simulation became non-finite, or, for `sweep`, a run did not end "ok".
 
 #include <omp.h>
 
@@ -28,6 +29,8 @@
 #include <drench/scene/scene_loader.hpp>
 #include <drench/scene/scene_runner.hpp>
 #include <drench/scene/simulation.hpp>
+
+#include "sweep_command.hpp"
 
 namespace {
 
@@ -265,6 +268,37 @@ int main(int argc, char** argv) {
       ->required();
   ccd->add_flag("--list", ccd_list, "also print the ids of missed collisions and false positives");
 
+  drench::SweepOptions sweep_options;
+  std::vector<std::string> vary, cases;
+  CLI::App* sweep = app.add_subcommand(
+      "sweep", "run a scene over settings (each a drench run): sweep.csv, report.md and pareto.png in --out");
+  sweep->add_option("scene", sweep_options.scene_path, "scene file (JSON)")->required();
+  sweep->add_option("--out", sweep_options.out_dir, "output folder (runs/NNN/, sweep.csv, report.md)")
+      ->required();
+  sweep->add_option(
+      "--vary", vary,
+      "a setting and its values, e.g. --vary time.dt=0.001,0.002,0.004 (repeatable; values split at "
+      "commas outside JSON brackets and quotes)");
+  sweep->add_option("--case", cases,
+                    "settings that go together as one, e.g. --case 'no-slip:coupling.slip=\"no_slip\";"
+                    "effects=[...]' (repeatable)");
+  sweep->add_flag("--one-at-a-time", sweep_options.one_at_a_time,
+                  "vary each setting alone around the scene's values instead of running the grid");
+  sweep->add_option("--repeat", sweep_options.repeats, "runs of each setting")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  sweep->add_option("--jobs", sweep_options.jobs, "runs side by side (their times then share the cores)")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  sweep->add_option("--threads", sweep_options.threads, "OpenMP threads per run (default: cores / jobs)")
+      ->check(CLI::PositiveNumber);
+  sweep
+      ->add_option("--error", sweep_options.error_key,
+                   "the summary figure pareto.png plots against wall time")
+      ->capture_default_str();
+  sweep->add_option("--set", sweep_options.overrides, "override a scene value in every run (repeatable)");
+  sweep->add_flag("--quiet", sweep_options.quiet, "no line per finished run");
+
   CLI11_PARSE(app, argc, argv);
   if (threads > 0) omp_set_num_threads(threads);
   try {
@@ -272,6 +306,21 @@ int main(int argc, char** argv) {
     if (reconstruct->parsed()) return reconstruct_command(reconstruct_dir, overrides, quiet);
     if (render->parsed()) return render_command(render_options, render_size, quiet);
     if (ccd->parsed()) return ccd_command(ccd_paths, ccd_list);
+    if (sweep->parsed()) {
+      for (const std::string& argument : vary)
+        sweep_options.axes.push_back(drench::parse_sweep_axis(argument));
+      for (const std::string& argument : cases)
+        sweep_options.cases.push_back(drench::parse_sweep_case(argument));
+      std::error_code error;
+      sweep_options.program = std::filesystem::read_symlink("/proc/self/exe", error).string();
+      if (error) sweep_options.program = argv[0];
+      for (int i = 0; i < argc; ++i)
+        sweep_options.command_line += (i ? " " : "drench") + (i ? std::string(argv[i]) : std::string());
+      const int failed = drench::run_sweep(sweep_options);
+      std::printf("sweep: %s/sweep.csv, report.md and pareto.png; %d run(s) not ok\n",
+                  sweep_options.out_dir.c_str(), failed);
+      return failed > 0 ? 2 : 0;
+    }
   } catch (const drench::Error& e) {
     std::fprintf(stderr, "drench: %s\n", e.what());
     return 1;

@@ -1,0 +1,411 @@
+#include "sweep_command.hpp"
+
+#include <fcntl.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <ctime>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <sstream>
+#include <thread>
+
+#include <drench/common/error.hpp>
+#include <drench/io/atomic_file.hpp>
+#include <drench/render/render_run.hpp>
+#include <drench/scene/scene_loader.hpp>
+
+extern char** environ;
+
+namespace drench {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+std::string csv_field(const std::string& text) {
+  if (text.find_first_of(",\"\n") == std::string::npos) return text;
+  std::string quoted = "\"";
+  for (const char c : text)
+    quoted += c == '"' ? std::string("\"\"") : std::string(1, c);
+  return quoted + "\"";
+}
+
+/// A run's setting, for the report's tables and the plot's labels.
+const std::string& setting_of(const SweepRun& run) {
+  return run.label;
+}
+
+std::string cpu_model() {
+  std::ifstream cpuinfo("/proc/cpuinfo");
+  std::string line;
+  while (std::getline(cpuinfo, line)) {
+    if (line.rfind("model name", 0) == 0) {
+      const std::size_t colon = line.find(':');
+      if (colon != std::string::npos) return line.substr(colon + 2);
+    }
+  }
+  return "unknown CPU";
+}
+
+std::string last_line(const fs::path& file) {
+  std::ifstream in(file);
+  std::string line, last;
+  while (std::getline(in, line)) {
+    // The progress line's carriage returns leave only its last state on a line.
+    const std::size_t cr = line.find_last_of('\r');
+    if (cr != std::string::npos) line = line.substr(cr + 1);
+    if (!line.empty()) last = line;
+  }
+  return last;
+}
+
+struct Child {
+  pid_t pid = 0;
+  std::size_t run = 0;
+  std::chrono::steady_clock::time_point start;
+};
+
+/// Starts `arguments` with stdout and stderr into `log`. @throws IoError when it cannot start.
+pid_t spawn_logged(const std::vector<std::string>& arguments, const fs::path& log) {
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  posix_spawn_file_actions_addopen(&actions, STDOUT_FILENO, log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  posix_spawn_file_actions_adddup2(&actions, STDOUT_FILENO, STDERR_FILENO);
+  std::vector<char*> argv;
+  for (const std::string& argument : arguments)
+    argv.push_back(const_cast<char*>(argument.c_str()));
+  argv.push_back(nullptr);
+  pid_t pid = 0;
+  const int error = posix_spawn(&pid, argv[0], &actions, nullptr, argv.data(), environ);
+  posix_spawn_file_actions_destroy(&actions);
+  if (error != 0) throw IoError("sweep: cannot start " + arguments[0] + ": " + std::strerror(error));
+  return pid;
+}
+
+/// The median of the finite values, NaN when there is none.
+double median(std::vector<double> values) {
+  values.erase(std::remove_if(values.begin(), values.end(), [](double v) { return !std::isfinite(v); }),
+               values.end());
+  if (values.empty()) return std::nan("");
+  std::sort(values.begin(), values.end());
+  const std::size_t n = values.size();
+  return n % 2 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
+}
+
+std::string format(double value, const char* spec = "%.4g") {
+  if (!std::isfinite(value)) return "-";
+  char text[32];
+  std::snprintf(text, sizeof text, spec, value);
+  return text;
+}
+
+/// One point of the plot: a setting's medians over its repeats.
+struct SettingPoint {
+  std::string setting;
+  double time = 0, error = 0;
+  int runs = 0, failed = 0;
+};
+
+std::string gnuplot_label(std::string text) {
+  std::replace(text.begin(), text.end(), '"', '\'');
+  return "\"" + text + "\"";
+}
+
+/// pareto.png through gnuplot; an empty string, or why there is no plot.
+std::string plot_pareto(const fs::path& dir, const std::vector<SettingPoint>& points,
+                        const std::vector<std::size_t>& front, const std::string& error_key) {
+  const std::string gnuplot = render::find_program("gnuplot");
+  if (gnuplot.empty())
+    return "no pareto.png: gnuplot is not installed (Debian: sudo apt-get install gnuplot-nox)";
+  std::ostringstream all, best;
+  bool positive = true;
+  double low = INFINITY, high = 0;
+  for (const SettingPoint& p : points) {
+    if (!std::isfinite(p.time) || !std::isfinite(p.error)) continue;
+    all << format(p.time, "%.9g") << ' ' << format(p.error, "%.9g") << ' ' << gnuplot_label(p.setting)
+        << '\n';
+    positive = positive && p.error > 0;
+    low = std::min(low, p.error);
+    high = std::max(high, p.error);
+  }
+  for (const std::size_t i : front)
+    best << format(points[i].time, "%.9g") << ' ' << format(points[i].error, "%.9g") << ' '
+         << gnuplot_label(points[i].setting) << '\n';
+  write_file_atomic((dir / "pareto_all.dat").string(), all.str());
+  write_file_atomic((dir / "pareto_front.dat").string(), best.str());
+  const std::string temporary = (dir / ("pareto.png.tmp-" + std::to_string(::getpid()))).string();
+  std::ostringstream script;
+  script << "set terminal pngcairo size 1100,700 font ',10' noenhanced\n"
+         << "set output '" << temporary << "'\n"
+         << "set xlabel 'wall time of the run (s)'\n"
+         << "set ylabel '" << error_key << "'\n"
+         << "set grid\nset key top right\n"
+         << "set title 'Each setting (median of its runs); the Pareto front: no other setting is both faster "
+            "and more accurate'\n"
+         << (positive && high > 20 * low ? "set logscale y\n" : "") << "plot '"
+         << (dir / "pareto_all.dat").string()
+         << "' using 1:2 with points pt 7 ps 1.1 lc rgb '#999999' title 'settings', \\\n"
+         << "  '" << (dir / "pareto_front.dat").string()
+         << "' using 1:2 with linespoints pt 7 ps 1.4 lw 2 lc rgb '#1f5fa8' title 'Pareto front', \\\n"
+         << "  '' using 1:2:3 with labels left offset 0.8,0.6 font ',9' notitle\n";
+  write_file_atomic((dir / "pareto.gp").string(), script.str());
+  std::string script_path = (dir / "pareto.gp").string();
+  std::vector<char*> argv = {const_cast<char*>(gnuplot.c_str()), script_path.data(), nullptr};
+  int status = -1;
+  pid_t pid = 0;
+  if (posix_spawn(&pid, gnuplot.c_str(), nullptr, nullptr, argv.data(), environ) == 0) {
+    while (waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+    }
+    status = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  }
+  if (status != 0 || !fs::exists(temporary)) {
+    std::error_code ignored;
+    fs::remove(temporary, ignored);
+    return "no pareto.png: gnuplot failed on " + (dir / "pareto.gp").string();
+  }
+  fs::rename(temporary, dir / "pareto.png");
+  return "";
+}
+
+}  // namespace
+
+int run_sweep(const SweepOptions& options) {
+  const std::vector<std::string>& columns = sweep_columns();
+  const auto error_column = std::find(columns.begin(), columns.end(), options.error_key);
+  if (error_column == columns.end() || options.error_key == "status") {
+    std::string known;
+    for (std::size_t c = 1; c < columns.size(); ++c)
+      known += (c > 1 ? ", " : "") + columns[c];
+    throw SceneError("--error " + options.error_key + ": not a column; one of " + known);
+  }
+  if (options.jobs < 1) throw SceneError("--jobs must be >= 1");
+
+  // Every setting is validated as `drench run` would before anything is written or started.
+  const nlohmann::json scene = read_scene_document(options.scene_path, options.overrides);
+  parse_scene(scene, scene_source(options.scene_path, options.overrides));
+  const std::vector<SweepRun> runs =
+      plan_sweep(scene, options.axes, options.cases, options.one_at_a_time, options.repeats);
+  for (const SweepRun& run : runs) {
+    std::vector<std::string> all = options.overrides;
+    all.insert(all.end(), run.assignments.begin(), run.assignments.end());
+    nlohmann::json document = scene;
+    for (const std::string& assignment : run.assignments)
+      apply_override(document, assignment);
+    parse_scene(document, scene_source(options.scene_path, all));
+  }
+
+  const fs::path dir = options.out_dir;
+  std::error_code error;
+  fs::create_directories(dir / "runs", error);
+  if (error) throw IoError("sweep: cannot create " + (dir / "runs").string() + ": " + error.message());
+
+  const unsigned cores = std::max(1u, std::thread::hardware_concurrency());
+  const int threads =
+      options.threads > 0 ? options.threads : std::max(1, static_cast<int>(cores) / options.jobs);
+  const std::size_t width = std::to_string(runs.size()).size() < 3 ? 3 : std::to_string(runs.size()).size();
+  auto run_dir = [&](std::size_t i) {
+    std::string number = std::to_string(i + 1);
+    return dir / "runs" / (std::string(width - number.size(), '0') + number);
+  };
+
+  // The axes' values as each run had them: its own, else the scene's.
+  std::vector<std::string> axis_keys;
+  for (const SweepAxis& axis : options.axes)
+    if (std::find(axis_keys.begin(), axis_keys.end(), axis.key) == axis_keys.end())
+      axis_keys.push_back(axis.key);
+  for (const SweepCase& c : options.cases)
+    for (const std::string& assignment : c.assignments) {
+      const std::string key = assignment.substr(0, assignment.find('='));
+      if (std::find(axis_keys.begin(), axis_keys.end(), key) == axis_keys.end()) axis_keys.push_back(key);
+    }
+  auto value_of = [&](const SweepRun& run, const std::string& key) -> std::string {
+    for (auto it = run.assignments.rbegin(); it != run.assignments.rend(); ++it)
+      if (it->compare(0, key.size() + 1, key + "=") == 0) return it->substr(key.size() + 1);
+    return "";  // the scene's own value
+  };
+
+  std::vector<std::vector<std::string>> rows(runs.size());
+  std::vector<bool> done(runs.size(), false);
+  auto write_csv = [&]() {
+    std::ostringstream csv;
+    csv << "run,setting,repeat";
+    for (const std::string& key : axis_keys)
+      csv << ',' << csv_field(key);
+    for (const std::string& column : columns)
+      csv << ',' << column;
+    csv << '\n';
+    for (std::size_t i = 0; i < runs.size(); ++i) {
+      if (!done[i]) continue;
+      csv << i + 1 << ',' << csv_field(setting_of(runs[i])) << ',' << runs[i].repeat;
+      for (const std::string& key : axis_keys)
+        csv << ',' << csv_field(value_of(runs[i], key));
+      for (const std::string& field : rows[i])
+        csv << ',' << csv_field(field);
+      csv << '\n';
+    }
+    write_file_atomic((dir / "sweep.csv").string(), csv.str());
+  };
+
+  const auto sweep_start = std::chrono::steady_clock::now();
+  std::vector<Child> running;
+  std::size_t next = 0, finished = 0;
+  int failures = 0;
+  while (finished < runs.size()) {
+    while (next < runs.size() && static_cast<int>(running.size()) < options.jobs) {
+      const fs::path out = run_dir(next);
+      std::vector<std::string> arguments = {options.program, "run",       options.scene_path,      "--out",
+                                            out.string(),    "--threads", std::to_string(threads), "--quiet"};
+      std::vector<std::string> all = options.overrides;
+      all.insert(all.end(), runs[next].assignments.begin(), runs[next].assignments.end());
+      for (const std::string& assignment : all) {
+        arguments.push_back("--set");
+        arguments.push_back(assignment);
+      }
+      fs::remove_all(out, error);
+      fs::create_directories(out, error);
+      if (error) throw IoError("sweep: cannot create " + out.string() + ": " + error.message());
+      running.push_back({spawn_logged(arguments, out / "log.txt"), next, std::chrono::steady_clock::now()});
+      ++next;
+    }
+    int status = 0;
+    const pid_t pid = ::waitpid(-1, &status, 0);
+    if (pid < 0) {
+      if (errno == EINTR) continue;
+      throw IoError(std::string("sweep: waitpid: ") + std::strerror(errno));
+    }
+    const auto child =
+        std::find_if(running.begin(), running.end(), [&](const Child& c) { return c.pid == pid; });
+    if (child == running.end()) continue;
+    const std::size_t i = child->run;
+    const double seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - child->start).count();
+    running.erase(child);
+
+    const fs::path out = run_dir(i);
+    std::string failure;
+    if (WIFSIGNALED(status)) {
+      failure = "killed by signal " + std::to_string(WTERMSIG(status));
+    } else if (WIFEXITED(status) && WEXITSTATUS(status) == 1) {
+      failure = "error: " + last_line(out / "log.txt");
+    } else if (WIFEXITED(status) && WEXITSTATUS(status) > 2) {
+      failure = "exit " + std::to_string(WEXITSTATUS(status)) + ": " + last_line(out / "log.txt");
+    }
+    nlohmann::json summary;
+    bool have_summary = false;
+    if (std::ifstream in(out / "summary.json"); in) {
+      try {
+        in >> summary;
+        have_summary = true;
+      } catch (const nlohmann::json::exception&) {
+        failure += failure.empty() ? "unreadable summary.json" : "; unreadable summary.json";
+      }
+    }
+    rows[i] = sweep_row(have_summary ? &summary : nullptr, failure);
+    done[i] = true;
+    ++finished;
+    if (rows[i][0] != "ok") ++failures;
+    write_csv();
+    if (!options.quiet) {
+      const double elapsed =
+          std::chrono::duration<double>(std::chrono::steady_clock::now() - sweep_start).count();
+      const double eta = elapsed / finished * static_cast<double>(runs.size() - finished);
+      std::fprintf(stderr, "sweep [%zu/%zu] %s: %s in %.1f s, %s %s; ETA %.0f s\n", finished, runs.size(),
+                   setting_of(runs[i]).c_str(), rows[i][0].c_str(), seconds, options.error_key.c_str(),
+                   rows[i][error_column - columns.begin()].empty()
+                       ? "-"
+                       : rows[i][error_column - columns.begin()].c_str(),
+                   eta);
+    }
+  }
+
+  // One point per setting: the medians over its repeats; a setting whose every run failed has no point.
+  const std::size_t error_index = static_cast<std::size_t>(error_column - columns.begin());
+  const std::size_t wall_index =
+      static_cast<std::size_t>(std::find(columns.begin(), columns.end(), "wall_s") - columns.begin());
+  std::vector<SettingPoint> points;
+  std::map<std::string, std::size_t> point_of;
+  std::map<std::string, std::vector<double>> times, errors;
+  for (std::size_t i = 0; i < runs.size(); ++i) {
+    const std::string setting = setting_of(runs[i]);
+    if (!point_of.count(setting)) {
+      point_of[setting] = points.size();
+      points.push_back({setting, 0, 0, 0, 0});
+    }
+    SettingPoint& p = points[point_of[setting]];
+    ++p.runs;
+    if (rows[i][0] != "ok") {
+      ++p.failed;
+      continue;
+    }
+    double e = sweep_number(rows[i][error_index]);
+    if (options.error_key == "energy_drift") e = std::abs(e);
+    times[setting].push_back(sweep_number(rows[i][wall_index]));
+    errors[setting].push_back(e);
+  }
+  std::vector<std::pair<double, double>> xy;
+  for (SettingPoint& p : points) {
+    p.time = median(times[p.setting]);
+    p.error = median(errors[p.setting]);
+    xy.emplace_back(p.time, p.error);
+  }
+  const std::vector<std::size_t> front = pareto_front(xy);
+  const std::string plot_note = plot_pareto(dir, points, front, options.error_key);
+  if (!plot_note.empty()) std::fprintf(stderr, "drench: %s\n", plot_note.c_str());
+
+  // The report: what ran, where, and what it cost.
+  std::ostringstream md;
+  const std::time_t now = std::time(nullptr);
+  char date[32];
+  std::strftime(date, sizeof date, "%Y-%m-%d %H:%M UTC", std::gmtime(&now));
+  md << "# Sweep of `" << options.scene_path << "`\n\n"
+     << "`" << options.command_line << "`\n\n"
+     << runs.size() << " runs (" << points.size() << " settings x " << options.repeats << "), "
+     << options.jobs << " at a time with " << threads << " threads each, on " << cpu_model() << " (" << cores
+     << " cores), " << date << ", drench " << DRENCH_VERSION << ". " << failures
+     << " runs did not end \"ok\". One row per run in "
+     << "[sweep.csv](sweep.csv); each run's files in `runs/NNN/`.\n\n"
+     << "| setting | runs | wall s | fluid s | cloth s | coupling s | surface s | " << options.error_key
+     << " | leaks | max particle m/s | status |\n|---|---|---|---|---|---|---|---|---|---|---|\n";
+  auto column_median = [&](const std::string& setting, const char* column) {
+    const std::size_t c =
+        static_cast<std::size_t>(std::find(columns.begin(), columns.end(), column) - columns.begin());
+    std::vector<double> values;
+    for (std::size_t i = 0; i < runs.size(); ++i)
+      if (setting_of(runs[i]) == setting && rows[i][0] == "ok") values.push_back(sweep_number(rows[i][c]));
+    return median(values);
+  };
+  for (const SettingPoint& p : points) {
+    std::string statuses;
+    for (std::size_t i = 0; i < runs.size(); ++i)
+      if (setting_of(runs[i]) == p.setting && rows[i][0] != "ok")
+        statuses += (statuses.empty() ? "" : "; ") + rows[i][0];
+    std::string setting = p.setting;
+    std::replace(setting.begin(), setting.end(), '|', '/');
+    md << "| `" << setting << "` | " << p.runs << " | " << format(p.time, "%.2f") << " | "
+       << format(column_median(p.setting, "fluid_s"), "%.2f") << " | "
+       << format(column_median(p.setting, "cloth_s"), "%.2f") << " | "
+       << format(column_median(p.setting, "coupling_s"), "%.2f") << " | "
+       << format(column_median(p.setting, "surface_s"), "%.2f") << " | " << format(p.error) << " | "
+       << format(column_median(p.setting, "leaks"), "%.0f") << " | "
+       << format(column_median(p.setting, "max_particle_speed_mps"), "%.3g") << " | "
+       << (statuses.empty() ? "ok" : statuses) << " |\n";
+  }
+  md << "\nThe Pareto front of wall time against " << options.error_key
+     << " (no other setting is both faster and more accurate), fastest first:";
+  for (std::size_t k = 0; k < front.size(); ++k)
+    md << (k ? ", " : " ") << "`" << points[front[k]].setting << "`";
+  md << ".\n\n" << (plot_note.empty() ? "![wall time against the error](pareto.png)\n" : plot_note + "\n");
+  write_file_atomic((dir / "report.md").string(), md.str());
+  return failures;
+}
+
+}  // namespace drench

@@ -1,0 +1,34 @@
+#pragma once
+/// `drench sweep`: a scene run over a grid of settings, or each setting varied alone, one `drench run`
+/// process per run, into DIR/sweep.csv, DIR/report.md and DIR/pareto.png (issue 28).
+#include <string>
+#include <vector>
+
+#include <drench/scene/sweep.hpp>
+
+namespace drench {
+
+struct SweepOptions {
+  std::string program;                 ///< the drench executable the runs start (this one)
+  std::string scene_path;              ///< the scene file
+  std::string out_dir;                 ///< DIR: runs/NNN/, sweep.csv, report.md, pareto.png
+  std::vector<std::string> overrides;  ///< `--set`s applied to every run, before its own settings
+  std::vector<SweepAxis> axes;         ///< `--vary`s
+  std::vector<SweepCase> cases;        ///< `--case`s
+  bool one_at_a_time = false;          ///< each axis varied alone around the scene, not the grid
+  int repeats = 1;                     ///< runs per setting, >= 1
+  int jobs = 1;                        ///< runs side by side, >= 1
+  int threads = 0;                     ///< OpenMP threads per run; 0: the cores shared among the jobs
+  std::string error_key = "density_error_mean";  ///< the sweep_columns() entry the Pareto plot uses
+  std::string command_line;                      ///< as the user typed it, for the report
+  bool quiet = false;                            ///< no line per finished run
+};
+
+/// Runs the sweep and writes its files; sweep.csv is rewritten (atomically) after every finished run, so an
+/// interrupted sweep keeps the rows it has. A run that fails or blows up is a row with its status.
+/// @return the number of runs whose status is not "ok"
+/// @throws SceneError when the scene, an override or a setting is invalid (before anything is written), or
+///         `error_key` is not a column; IoError when DIR cannot be written or a run cannot be started.
+int run_sweep(const SweepOptions& options);
+
+}  // namespace drench

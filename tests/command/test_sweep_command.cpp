@@ -1,0 +1,123 @@
+// `drench sweep` as a user runs it: one `drench run` per setting, a row per run (failures included), the
+// report and the plot. The scene is the hydrostatic tank made small (864 particles of 4 cm, 0.1 s).
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <string>
+#include <vector>
+
+namespace {
+
+namespace fs = std::filesystem;
+
+struct TempDir {
+  fs::path path = fs::temp_directory_path() / ("drench_sweep_" + std::to_string(::getpid()));
+  TempDir() { fs::create_directories(path); }
+  ~TempDir() { fs::remove_all(path); }
+};
+
+int run(const std::string& arguments, const fs::path& log) {
+  const std::string command =
+      std::string(DRENCH_EXECUTABLE) + " " + arguments + " > " + log.string() + " 2>&1";
+  const int status = std::system(command.c_str());
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+std::string read(const fs::path& file) {
+  std::ifstream in(file);
+  std::ostringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+/// sweep.csv as rows of named fields (no field of this test's sweeps holds a comma or a quote).
+std::vector<std::map<std::string, std::string>> read_csv(const fs::path& file) {
+  std::ifstream in(file);
+  std::string line;
+  std::vector<std::string> header;
+  std::vector<std::map<std::string, std::string>> rows;
+  auto split = [](const std::string& text) {
+    std::vector<std::string> fields;
+    std::stringstream stream(text);
+    std::string field;
+    while (std::getline(stream, field, ','))
+      fields.push_back(field);
+    if (!text.empty() && text.back() == ',') fields.emplace_back();
+    return fields;
+  };
+  while (std::getline(in, line)) {
+    if (header.empty()) {
+      header = split(line);
+      continue;
+    }
+    const std::vector<std::string> fields = split(line);
+    EXPECT_EQ(fields.size(), header.size()) << line;
+    std::map<std::string, std::string> row;
+    for (std::size_t i = 0; i < header.size() && i < fields.size(); ++i)
+      row[header[i]] = fields[i];
+    rows.push_back(row);
+  }
+  return rows;
+}
+
+const std::string kTank =
+    std::string(DRENCH_SOURCE_DIR) + "/demos/scenes/hydrostatic_tank.json" +
+    " --set fluid.particle_spacing=0.04 --set time.duration=0.1 --set time.frame_rate=0";
+
+// Each row is its run's summary.json, the run that cannot start (a cloth mesh file that is not there) is a
+// row with its error, and the closed tank neither gains energy nor loses more than the settling costs.
+TEST(SweepCommand, EveryRunIsARowWithItsSummarysFiguresFailuresIncluded) {
+  TempDir dir;
+  const int status =
+      run("sweep " + kTank + " --vary time.dt=0.0025,0.01 --case 'no cloth file:cloth.mesh=\"absent.obj\"'" +
+              " --out " + (dir.path / "sweep").string(),
+          dir.path / "log.txt");
+  EXPECT_EQ(status, 2) << "a sweep with a failed run exits 2\n" << read(dir.path / "log.txt");
+  const auto rows = read_csv(dir.path / "sweep/sweep.csv");
+  ASSERT_EQ(rows.size(), 3u) << read(dir.path / "log.txt");
+  for (int i = 0; i < 2; ++i) {
+    const auto& row = rows[i];
+    EXPECT_EQ(row.at("status"), "ok");
+    const nlohmann::json summary = nlohmann::json::parse(
+        read(dir.path / "sweep/runs" / ("00" + std::to_string(i + 1)) / "summary.json"));
+    EXPECT_NEAR(std::stod(row.at("density_error_mean")), summary["density_error"]["mean"].get<double>(),
+                1e-5 * summary["density_error"]["mean"].get<double>());
+    EXPECT_EQ(std::stod(row.at("steps")), summary["steps"].get<double>());
+    EXPECT_EQ(std::stod(row.at("time.dt")), i == 0 ? 0.0025 : 0.01);
+    // A tank of water at rest only settles: it must not gain energy, and settling by a few tenths of a
+    // spacing costs a few percent of its potential energy at most.
+    const double drift = std::stod(row.at("energy_drift"));
+    EXPECT_LT(drift, 1e-3) << row.at("setting");
+    EXPECT_GT(drift, -0.05) << row.at("setting");
+    EXPECT_TRUE(row.at("leaks").empty()) << "the tank has no cloth and no leak audit";
+  }
+  EXPECT_EQ(rows[2].at("setting"), "no cloth file");
+  EXPECT_NE(rows[2].at("status").find("absent.obj"), std::string::npos) << rows[2].at("status");
+  EXPECT_TRUE(rows[2].at("wall_s").empty());
+  const std::string report = read(dir.path / "sweep/report.md");
+  EXPECT_NE(report.find("1 runs did not end \"ok\""), std::string::npos) << report;
+  EXPECT_TRUE(fs::exists(dir.path / "sweep/pareto.png")) << "gnuplot is in scripts/setup";
+}
+
+TEST(SweepCommand, ABadSettingFailsBeforeAnyRunAndWritesNothing) {
+  TempDir dir;
+  const fs::path out = dir.path / "sweep";
+  EXPECT_EQ(run("sweep " + kTank + " --vary time.dt=0.001,-1 --out " + out.string(), dir.path / "log.txt"),
+            1);
+  EXPECT_NE(read(dir.path / "log.txt").find("time.dt"), std::string::npos) << read(dir.path / "log.txt");
+  EXPECT_FALSE(fs::exists(out));
+  EXPECT_EQ(run("sweep " + kTank + " --vary time.dt=0.001 --error speed --out " + out.string(),
+                dir.path / "log.txt"),
+            1);
+  EXPECT_NE(read(dir.path / "log.txt").find("density_error_mean"), std::string::npos)
+      << "the error lists the columns: " << read(dir.path / "log.txt");
+  EXPECT_FALSE(fs::exists(out));
+}
+
+}  // namespace

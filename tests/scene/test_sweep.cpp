@@ -1,0 +1,128 @@
+// drench sweep's plan, rows and Pareto front (src/drench/scene/sweep.hpp); the command itself is run in
+// tests/command/test_sweep_command.cpp.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+
+#include <drench/common/error.hpp>
+#include <drench/scene/sweep.hpp>
+
+namespace drench {
+namespace {
+
+const nlohmann::json kScene = nlohmann::json::parse(R"({
+  "fluid": {"pressure_solver": "pcisph", "pcisph": {"eta": 0.001}},
+  "time": {"dt": 0.001, "duration": 0.5},
+  "effects": ["viscosity", "coupling"]
+})");
+
+TEST(Sweep, AxisValuesSplitAtCommasOutsideJson) {
+  const SweepAxis axis = parse_sweep_axis(R"(effects=["a","b"],[],["c,d"])");
+  EXPECT_EQ(axis.key, "effects");
+  ASSERT_EQ(axis.values.size(), 3u);
+  EXPECT_EQ(axis.values[0], R"(["a","b"])");
+  EXPECT_EQ(axis.values[1], "[]");
+  EXPECT_EQ(axis.values[2], R"(["c,d"])");
+  EXPECT_EQ(parse_sweep_axis("time.dt=0.001,0.002").values, (std::vector<std::string>{"0.001", "0.002"}));
+}
+
+TEST(Sweep, MalformedAxesAndCasesNameTheArgument) {
+  for (const char* bad : {"time.dt", "=1,2", "time.dt=1,,2", "effects=[\"a\"", "effects=\"a"}) {
+    try {
+      parse_sweep_axis(bad);
+      ADD_FAILURE() << bad << " was accepted";
+    } catch (const SceneError& e) {
+      EXPECT_NE(std::string(e.what()).find(std::string("--vary ") + bad), std::string::npos) << e.what();
+    }
+  }
+  EXPECT_THROW(parse_sweep_case("no label"), SceneError);
+  EXPECT_THROW(parse_sweep_case(":time.dt=1"), SceneError);
+  EXPECT_THROW(parse_sweep_case("x:time.dt"), SceneError);
+  const SweepCase c = parse_sweep_case(R"(no-slip:coupling.slip="no_slip";effects=["a";"b"])");
+  EXPECT_EQ(c.label, "no-slip");
+  EXPECT_EQ(c.assignments, (std::vector<std::string>{R"(coupling.slip="no_slip")", R"(effects=["a";"b"])"}));
+}
+
+TEST(Sweep, TheGridHasEveryCombinationOnceAndTheCasesAfter) {
+  const std::vector<SweepAxis> axes = {parse_sweep_axis("time.dt=0.001,0.002,0.004"),
+                                       parse_sweep_axis(R"(fluid.pressure_solver="wcsph","pcisph")")};
+  const std::vector<SweepRun> runs =
+      plan_sweep(kScene, axes, {parse_sweep_case("thick:coupling.cloth_thickness=0.005")}, false, 2);
+  ASSERT_EQ(runs.size(), 2u * (3 * 2 + 1));
+  std::set<std::string> labels;
+  for (std::size_t i = 0; i < runs.size(); i += 2) {
+    EXPECT_EQ(runs[i].label, runs[i + 1].label);
+    EXPECT_EQ(runs[i].repeat, 0);
+    EXPECT_EQ(runs[i + 1].repeat, 1);
+    labels.insert(runs[i].label);
+  }
+  EXPECT_EQ(labels.size(), 7u);
+  EXPECT_EQ(runs[0].assignments,
+            (std::vector<std::string>{"time.dt=0.001", R"(fluid.pressure_solver="wcsph")"}));
+  EXPECT_EQ(runs.back().label, "thick");
+}
+
+TEST(Sweep, OneAtATimeVariesEachKeyAloneAndSkipsTheScenesOwnValue) {
+  const std::vector<SweepAxis> axes = {parse_sweep_axis("time.dt=0.001,0.002,0.004"),
+                                       parse_sweep_axis("fluid.pcisph.eta=0.01,0.001,0.03")};
+  const std::vector<SweepRun> runs = plan_sweep(kScene, axes, {}, true, 1);
+  std::vector<std::string> labels;
+  for (const SweepRun& r : runs)
+    labels.push_back(r.label);
+  EXPECT_EQ(labels, (std::vector<std::string>{"scene", "time.dt=0.002", "time.dt=0.004",
+                                              "fluid.pcisph.eta=0.01", "fluid.pcisph.eta=0.03"}));
+  for (const SweepRun& r : runs)
+    EXPECT_LE(r.assignments.size(), 1u);
+}
+
+TEST(Sweep, AnAssignmentThatCannotApplyFailsThePlan) {
+  EXPECT_THROW(plan_sweep(kScene, {parse_sweep_axis("effects[5]=1")}, {}, true, 1), SceneError);
+  EXPECT_THROW(plan_sweep(kScene, {}, {}, false, 0), SceneError);
+}
+
+TEST(Sweep, RowsTakeTheSummarysFiguresAndKeepFailures) {
+  const nlohmann::json summary = nlohmann::json::parse(R"({
+    "status": "ok", "wall_s": 2.5, "timings_s": {"fluid": 1.25, "coupling": 0.5},
+    "leaks": 0, "density_error": {"mean": 0.0001, "max": 0.002}, "max_speed_mps": {"particle": 3.5}
+  })");
+  const std::vector<std::string>& columns = sweep_columns();
+  const std::vector<std::string> row = sweep_row(&summary, "");
+  ASSERT_EQ(row.size(), columns.size());
+  auto at = [&](const std::string& column) {
+    return row[static_cast<std::size_t>(std::find(columns.begin(), columns.end(), column) - columns.begin())];
+  };
+  EXPECT_EQ(at("status"), "ok");
+  EXPECT_DOUBLE_EQ(sweep_number(at("wall_s")), 2.5);
+  EXPECT_DOUBLE_EQ(sweep_number(at("coupling_s")), 0.5);
+  EXPECT_DOUBLE_EQ(sweep_number(at("density_error_max")), 0.002);
+  EXPECT_DOUBLE_EQ(sweep_number(at("max_particle_speed_mps")), 3.5);
+  EXPECT_EQ(at("leaks"), "0");
+  EXPECT_EQ(at("cloth_s"), "") << "a figure the run does not have is empty, not 0";
+  EXPECT_TRUE(std::isnan(sweep_number(at("surface_intersections"))));
+
+  const std::vector<std::string> died = sweep_row(nullptr, "killed by signal 9");
+  ASSERT_EQ(died.size(), columns.size());
+  EXPECT_EQ(died[0], "killed by signal 9");
+  const nlohmann::json blown = {{"status", "NON_FINITE_STATE: particle id 7"}, {"wall_s", 1.0}};
+  EXPECT_EQ(sweep_row(&blown, "")[0], "NON_FINITE_STATE: particle id 7");
+}
+
+TEST(Sweep, TheParetoFrontHoldsExactlyTheUnbeatenPoints) {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  // (time, error): 1 beats 2; 0 is fastest; 3 is the most accurate; 4 ties 0 but is worse; 5 has no error.
+  const std::vector<std::pair<double, double>> points = {{1.0, 0.5}, {2.0, 0.2}, {3.0, 0.3},
+                                                         {5.0, 0.1}, {1.0, 0.7}, {0.5, nan}};
+  EXPECT_EQ(pareto_front(points), (std::vector<std::size_t>{0, 1, 3}));
+  // Every point off the front is beaten by one on it, on both coordinates.
+  const std::vector<std::size_t> front = pareto_front(points);
+  for (std::size_t i = 0; i < 5; ++i) {
+    if (std::find(front.begin(), front.end(), i) != front.end()) continue;
+    EXPECT_TRUE(std::any_of(front.begin(), front.end(), [&](std::size_t f) {
+      return points[f].first <= points[i].first && points[f].second <= points[i].second;
+    })) << i;
+  }
+}
+
+}  // namespace
+}  // namespace drench
