@@ -1,5 +1,5 @@
-// The renderer's camera (render/camera.hpp): projection onto pixels, the automatic framing, and PNG files
-// that round-trip through libpng.
+// The renderer's camera (render/camera.hpp): projection onto pixels, the automatic framing, the viewer's
+// orbit, pan and zoom, and PNG files that round-trip through libpng.
 
 #include <drench/render/camera.hpp>
 
@@ -30,6 +30,60 @@ TEST(Camera, ProjectsTheTargetToTheImageCentreAndUpToTheTop) {
   // +x is to the right when looking down -z.
   EXPECT_GT(project_to_pixel(camera, 640, 360, Vec3(0.1, 0.5, 0))->x(), 320.0);
   EXPECT_FALSE(project_to_pixel(camera, 640, 360, Vec3(0, 0.5, 3)));  // behind the eye
+}
+
+TEST(Camera, OrbitTurnsAboutTheTargetAndStopsShortOfThePole) {
+  Camera camera;
+  camera.position = Vec3(1, 0.5, 3);
+  camera.target = Vec3(1, 0.5, 1);
+  orbit(camera, M_PI / 2, 0.0);  // a quarter turn about +y: from +z of the target to its +x
+  EXPECT_TRUE(camera.position.isApprox(Vec3(3, 0.5, 1), 1e-12)) << camera.position.transpose();
+  EXPECT_TRUE(camera.target.isApprox(Vec3(1, 0.5, 1)));
+  orbit(camera, 0.0, M_PI / 6);
+  EXPECT_NEAR((camera.position - camera.target).norm(), 2.0, 1e-12);
+  EXPECT_NEAR(camera.position.y() - camera.target.y(), 2.0 * std::sin(M_PI / 6), 1e-12);
+  orbit(camera, 0.0, M_PI);  // far past straight up: stops at 89 degrees, the image's up still defined
+  EXPECT_NEAR(std::asin((camera.position.y() - camera.target.y()) / 2.0), 89.0 * M_PI / 180.0, 1e-12);
+  EXPECT_NEAR((camera.position - camera.target).norm(), 2.0, 1e-12);
+}
+
+TEST(Camera, PanKeepsAPointAtTheTargetsDepthUnderTheCursor) {
+  Camera camera;
+  camera.position = Vec3(0.3, 0.6, 1.2);
+  camera.target = Vec3(0, 0, 0);
+  const Vec3 point = camera.target;  // at the image's centre before the pan
+  pan(camera, 40.0, -25.0, 360);     // the cursor moved 40 pixels right and 25 up
+  const auto pixel = project_to_pixel(camera, 640, 360, point);
+  ASSERT_TRUE(pixel);
+  EXPECT_NEAR(pixel->x(), 320.0 + 40.0, 1e-6);
+  EXPECT_NEAR(pixel->y(), 180.0 - 25.0, 1e-6);
+  EXPECT_NEAR((camera.position - camera.target).norm(), Vec3(0.3, 0.6, 1.2).norm(), 1e-12);
+}
+
+TEST(Camera, ZoomScalesTheDistanceToTheTargetDownToAMillimetre) {
+  Camera camera;
+  camera.position = Vec3(0, 0, 2);
+  camera.target = Vec3(0, 0, 0.5);
+  zoom(camera, 0.5);
+  EXPECT_TRUE(camera.position.isApprox(Vec3(0, 0, 1.25), 1e-12)) << camera.position.transpose();
+  zoom(camera, 1e-9);
+  EXPECT_NEAR((camera.position - camera.target).norm(), 1e-3, 1e-12);
+  EXPECT_GT(camera.position.z(), camera.target.z());  // still on the same side
+}
+
+TEST(Camera, FramedBoundsTakeTheStageWithTheEmittersElseTheFluid) {
+  SceneConfig config;
+  EmitterSettings nozzle;
+  nozzle.kind = EmitterSettings::Kind::NOZZLE;
+  nozzle.nozzle.center = Vec3(0, 0.3, 0);
+  config.emitters.push_back(nozzle);
+  const Eigen::AlignedBox3d stage(Vec3(-0.3, 0, -0.3), Vec3(0.3, 0, 0.3));
+  const Eigen::AlignedBox3d fluid(Vec3(5, 5, 5), Vec3(6, 6, 6));
+  const Eigen::AlignedBox3d framed = framed_bounds(config, stage, fluid);
+  EXPECT_TRUE(framed.min().isApprox(Vec3(-0.3, 0, -0.3)));
+  EXPECT_TRUE(framed.max().isApprox(Vec3(0.3, 0.3, 0.3)));
+  EXPECT_TRUE(framed_bounds(config, Eigen::AlignedBox3d(), fluid).isApprox(fluid));
+  EXPECT_NEAR(framed_bounds(config, Eigen::AlignedBox3d(), Eigen::AlignedBox3d()).sizes().x(), 1.0, 1e-12);
 }
 
 TEST(Camera, LooksStraightDownWithoutDegenerating) {

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <vector>
 
 namespace drench::render {
 
@@ -43,6 +44,51 @@ Camera frame_bounds(const Eigen::AlignedBox3d& bounds, Scalar aspect, Scalar fov
   return camera;
 }
 
+Eigen::AlignedBox3d points_box(const Vec3Array& points) {
+  Eigen::AlignedBox3d box;
+  for (const Vec3& p : points)
+    box.extend(p);
+  return box;
+}
+
+Eigen::AlignedBox3d quantile_box(const Vec3Array& points, double lo, double hi) {
+  Eigen::AlignedBox3d box;
+  if (points.empty()) return box;
+  std::vector<double> values(points.size());
+  Vec3 min, max;
+  for (int a = 0; a < 3; ++a) {
+    for (std::size_t i = 0; i < points.size(); ++i)
+      values[i] = points[i][a];
+    const auto at = [&](double q) {
+      const std::size_t k = static_cast<std::size_t>(q * (values.size() - 1));
+      std::nth_element(values.begin(), values.begin() + k, values.end());
+      return values[k];
+    };
+    min[a] = at(lo);
+    max[a] = at(hi);
+  }
+  return Eigen::AlignedBox3d(min, max);
+}
+
+Eigen::AlignedBox3d framed_bounds(const SceneConfig& config, const Eigen::AlignedBox3d& stage,
+                                  const Eigen::AlignedBox3d& fluid) {
+  Eigen::AlignedBox3d bounds = stage;
+  if (!stage.isEmpty()) {
+    for (const EmitterSettings& emitter : config.emitters) {
+      if (emitter.kind == EmitterSettings::Kind::NOZZLE) {
+        bounds.extend(emitter.nozzle.center);
+      } else {
+        bounds.extend(emitter.box.min);
+        bounds.extend(emitter.box.max);
+      }
+    }
+  } else {
+    bounds = fluid;
+  }
+  if (bounds.isEmpty()) bounds = Eigen::AlignedBox3d(Vec3::Constant(-0.5), Vec3::Constant(0.5));
+  return bounds;
+}
+
 Camera resolve_camera(const std::optional<CameraSettings>& settings, const Eigen::AlignedBox3d& bounds,
                       Scalar aspect) {
   if (!settings) return frame_bounds(bounds, aspect);
@@ -52,6 +98,35 @@ Camera resolve_camera(const std::optional<CameraSettings>& settings, const Eigen
   camera.target = *settings->target;
   camera.fov_deg = settings->fov_deg;
   return camera;
+}
+
+void orbit(Camera& camera, Scalar azimuth, Scalar elevation) {
+  const Vec3 offset = camera.position - camera.target;
+  const Scalar distance = offset.norm();
+  const Scalar limit = radians(89.0);
+  const Scalar old_elevation = std::asin(std::clamp(offset.y() / distance, -1.0, 1.0));
+  const Scalar new_elevation = std::clamp(old_elevation + elevation, -limit, limit);
+  const Scalar new_azimuth = std::atan2(offset.x(), offset.z()) + azimuth;
+  camera.position = camera.target + distance * Vec3(std::sin(new_azimuth) * std::cos(new_elevation),
+                                                    std::sin(new_elevation),
+                                                    std::cos(new_azimuth) * std::cos(new_elevation));
+}
+
+void pan(Camera& camera, Scalar dx, Scalar dy, int height) {
+  const Eigen::Matrix4d view = view_matrix(camera);
+  const Vec3 right = view.block<1, 3>(0, 0).transpose(), up = view.block<1, 3>(1, 0).transpose();
+  // The height of the image at the target's depth, over its pixels.
+  const Scalar metres_per_pixel = 2.0 * (camera.position - camera.target).norm() *
+                                  std::tan(0.5 * radians(camera.fov_deg)) / std::max(height, 1);
+  const Vec3 shift = metres_per_pixel * (-dx * right + dy * up);
+  camera.position += shift;
+  camera.target += shift;
+}
+
+void zoom(Camera& camera, Scalar factor) {
+  const Vec3 offset = camera.position - camera.target;
+  const Scalar distance = std::max(offset.norm() * factor, 1e-3);
+  camera.position = camera.target + offset.normalized() * distance;
 }
 
 Eigen::Matrix4d view_matrix(const Camera& camera) {

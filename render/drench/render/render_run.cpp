@@ -89,34 +89,6 @@ LoadedFrame load_frame(const FrameFiles& files) {
   return frame;
 }
 
-/// The box from the `lo` to the `hi` quantile of `points` on each axis: stray droplets do not shrink the
-/// picture. Empty when there are no points.
-Eigen::AlignedBox3d quantile_box(const Vec3Array& points, double lo, double hi) {
-  Eigen::AlignedBox3d box;
-  if (points.empty()) return box;
-  std::vector<double> values(points.size());
-  Vec3 min, max;
-  for (int a = 0; a < 3; ++a) {
-    for (std::size_t i = 0; i < points.size(); ++i)
-      values[i] = points[i][a];
-    const auto at = [&](double q) {
-      const std::size_t k = static_cast<std::size_t>(q * (values.size() - 1));
-      std::nth_element(values.begin(), values.begin() + k, values.end());
-      return values[k];
-    };
-    min[a] = at(lo);
-    max[a] = at(hi);
-  }
-  return Eigen::AlignedBox3d(min, max);
-}
-
-Eigen::AlignedBox3d points_box(const Vec3Array& points) {
-  Eigen::AlignedBox3d box;
-  for (const Vec3& p : points)
-    box.extend(p);
-  return box;
-}
-
 /// The `q` quantile of the particles' speeds (unit: m/s); 0 without velocities.
 double speed_quantile(const PlyData& fluid, double q) {
   if (fluid.velocities.empty()) return 0.0;
@@ -236,20 +208,7 @@ RenderResult render_run(const RenderOptions& options) {
       speed_scale = std::max(speed_scale, speed_quantile(frame.fluid, 0.99));
     }
   }
-  Eigen::AlignedBox3d bounds = stage;
-  if (!stage.isEmpty()) {
-    for (const EmitterSettings& emitter : config.emitters) {
-      if (emitter.kind == EmitterSettings::Kind::NOZZLE) {
-        bounds.extend(emitter.nozzle.center);
-      } else {
-        bounds.extend(emitter.box.min);
-        bounds.extend(emitter.box.max);
-      }
-    }
-  } else {
-    bounds = fluid_box;
-  }
-  if (bounds.isEmpty()) bounds = Eigen::AlignedBox3d(Vec3::Constant(-0.5), Vec3::Constant(0.5));
+  const Eigen::AlignedBox3d bounds = framed_bounds(config, stage, fluid_box);
   const Scalar aspect = static_cast<Scalar>(options.width) / options.height;
   result.camera = resolve_camera(camera_settings, bounds, aspect);
   // The bounds set the depth range, so they must hold all that is drawn, spray and the camera's target too.
