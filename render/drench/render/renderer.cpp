@@ -276,7 +276,9 @@ void Renderer::draw(const FrameGeometry& frame, const Camera& camera, const Part
     glDrawElements(GL_TRIANGLES, static_cast<GLsizei>(3 * mesh->triangles.size()), GL_UNSIGNED_INT, nullptr);
   };
   draw_mesh(frame.obstacles, Palette::kObstacle, Palette::kObstacle, 0.05f, 20.0f, 0.0f);
+  if (frame.cloth_wireframe) glPolygonMode(GL_FRONT_AND_BACK, GL_LINE);
   draw_mesh(frame.cloth, Palette::kClothFront, Palette::kClothBack, 0.04f, 12.0f, 0.0f);
+  glPolygonMode(GL_FRONT_AND_BACK, GL_FILL);
   if (frame.surface != nullptr) {
     draw_mesh(frame.surface, Palette::kWater, Palette::kWater, 0.35f, 60.0f, 0.25f);
   } else if (frame.particles != nullptr && !frame.particles->empty()) {

@@ -1,8 +1,8 @@
 #pragma once
 /// Draws one frame of a run with OpenGL 3.3 core: the cloth shaded on both sides, the fluid as its
 /// reconstructed surface or as particles coloured by speed, the static obstacles in grey, over a grey
-/// backdrop. The same code draws `drench render`'s offscreen images (offscreen_context.hpp) and, later, the
-/// viewer's window: it draws into whatever framebuffer is bound in the current context.
+/// backdrop. The same code draws `drench render`'s offscreen images (offscreen_context.hpp) and the viewer's
+/// window (viewer.hpp): it draws into whatever framebuffer is bound in the current context.
 
 #include <memory>
 
@@ -19,6 +19,7 @@ struct FrameGeometry {
   const Vec3Array* particles = nullptr;     ///< N particle centres (unit: m)
   const Vec3Array* velocities = nullptr;    ///< N velocities (unit: m/s) or nullptr: all drawn as at rest
   const TriangleMesh* obstacles = nullptr;  ///< static obstacles (unit: m)
+  bool cloth_wireframe = false;             ///< the cloth's edges only, in its colours (the viewer's `w`)
   Eigen::AlignedBox3d bounds;               ///< the scene's box (unit: m): sets the depth range; not empty
 };
 
