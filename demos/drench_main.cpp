@@ -2,6 +2,7 @@
 //   drench run SCENE.json --out DIR [--set json.path=value ...] [--steps N]
 //   drench reconstruct DIR [--set json.path=value ...]   the surface again from a run's saved frames
 //   drench render DIR [--camera JSON] [--size WxH] [--out DIR] [--video]   a run's frames as PNG (and MP4)
+//   drench view SCENE.json [--set ...] [--size WxH] [--frames N --screenshot FILE] [--keys SEQ]   live window
 //   drench ccd FILE_OR_DIR... [--list]      point-triangle CCD against labelled queries (*.vf.txt)
 //   drench sweep SCENE.json --vary key=v1,v2 ... --out DIR   the scene over settings: sweep.csv, report.md
 // Exit status: 0 success; 1 bad input (scene, file, arguments) or, for `ccd`, a missed collision; 2 the
@@ -25,6 +26,9 @@
 #include <drench/ccd/point_triangle_ccd.hpp>
 #include <drench/common/error.hpp>
 #include <drench/render/render_run.hpp>
+#ifdef DRENCH_HAVE_VIEWER
+#include <drench/render/viewer.hpp>
+#endif
 #include <drench/scene/reconstruct_run.hpp>
 #include <drench/scene/scene_loader.hpp>
 #include <drench/scene/scene_runner.hpp>
@@ -119,6 +123,39 @@ int render_command(drench::render::RenderOptions options, const std::string& siz
   if (!r.video_path.empty()) std::printf("video: %s (%.2f s)\n", r.video_path.c_str(), r.video_seconds);
   if (!r.video_note.empty()) std::fprintf(stderr, "drench: --video: %s\n", r.video_note.c_str());
   return 0;
+}
+
+int view_command(const std::string& scene_path, const std::vector<std::string>& overrides,
+                 const std::string& size, std::int64_t frames, const std::string& screenshot,
+                 const std::string& keys) {
+#ifdef DRENCH_HAVE_VIEWER
+  drench::render::ViewOptions options;
+  drench::render::parse_image_size(size, options.width, options.height);
+  options.frames = frames;
+  options.screenshot = screenshot;
+  options.keys = keys;
+  drench::render::check_view_options(options);
+  const nlohmann::json document = drench::read_scene_document(scene_path, overrides);
+  options.config = drench::parse_scene(document, drench::scene_source(scene_path, overrides));
+  options.has_surface = document.contains("surface") || options.config.has_effect("surface");
+  options.cloth_factory = drench::bullet::cloth_engine_factory();
+  const drench::render::ViewResult r = drench::render::run_viewer(options);
+  const double frames_drawn = static_cast<double>(std::max<std::int64_t>(r.frames, 1));
+  std::printf(
+      "view: %lld frames in %.1f s (%.1f fps; draw %.1f ms a frame); %lld steps in %.1f s of stepping (%.1f "
+      "steps/s); %s\n",
+      static_cast<long long>(r.frames), r.seconds, r.frames / std::max(r.seconds, 1e-9),
+      1e3 * r.draw_seconds / frames_drawn, static_cast<long long>(r.steps), r.stepping_seconds,
+      r.steps / std::max(r.stepping_seconds, 1e-9), r.gl.c_str());
+  if (r.surface_seconds > 0) std::printf("surface: the last reconstruction took %.3f s\n", r.surface_seconds);
+  if (!r.screenshot.empty()) std::printf("screenshot: %s\n", r.screenshot.c_str());
+  return 0;
+#else
+  (void)scene_path, (void)overrides, (void)size, (void)frames, (void)screenshot, (void)keys;
+  throw drench::Error(
+      "drench view was not built: GLFW was not found when drench was configured (Debian: libglfw3-dev; "
+      "scripts/setup installs it); configure again, or use drench render for images");
+#endif
 }
 
 /// One query file of `drench ccd`, with the figures of one pass of the solver over it.
@@ -259,6 +296,20 @@ int main(int argc, char** argv) {
                    "also write video.mp4 through ffmpeg, when it is installed");
   render->add_flag("--quiet", quiet, "no progress line and no camera line");
 
+  std::string view_size = "1280x720", view_screenshot, view_keys;
+  std::int64_t view_frames = 0;
+  CLI::App* view = app.add_subcommand(
+      "view", "run a scene live in a window: orbit, pan and zoom, pause, step, restart (docs/viewer.md)");
+  view->add_option("scene", scene_path, "scene file (JSON, SI units; see docs/scenes.md)")->required();
+  view->add_option("--set", overrides, "override a scene value, e.g. --set time.dt=0.004 (repeatable)");
+  view->add_option("--threads", threads, "OpenMP threads of the simulation (default: all cores)")
+      ->check(CLI::PositiveNumber);
+  view->add_option("--size", view_size, "window size WIDTHxHEIGHT in pixels")->capture_default_str();
+  view->add_option("--frames", view_frames, "quit after N drawn frames")->check(CLI::NonNegativeNumber);
+  view->add_option("--screenshot", view_screenshot, "with --frames: write the last frame as PNG to FILE");
+  view->add_option("--keys", view_keys,
+                   "keys to press, one per frame from the first, e.g. ' . . p p' (space pauses, . steps)");
+
   std::vector<std::string> ccd_paths;
   bool ccd_list = false;
   CLI::App* ccd = app.add_subcommand(
@@ -305,6 +356,8 @@ int main(int argc, char** argv) {
     if (run->parsed()) return run_command(scene_path, out_dir, overrides, steps, quiet);
     if (reconstruct->parsed()) return reconstruct_command(reconstruct_dir, overrides, quiet);
     if (render->parsed()) return render_command(render_options, render_size, quiet);
+    if (view->parsed())
+      return view_command(scene_path, overrides, view_size, view_frames, view_screenshot, view_keys);
     if (ccd->parsed()) return ccd_command(ccd_paths, ccd_list);
     if (sweep->parsed()) {
       for (const std::string& argument : vary)
