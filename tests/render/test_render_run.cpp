@@ -21,58 +21,18 @@
 #include <drench/io/ply_reader.hpp>
 #include <drench/io/ply_writer.hpp>
 #include <drench/render/png_image.hpp>
+
 #include <drench/scene/frame_files.hpp>
 #include <drench/scene/scene_loader.hpp>
 #include <drench/scene/scene_runner.hpp>
 #include <drench/scene/simulation.hpp>
+#include "colour_classes.hpp"
 
 namespace drench::render {
 namespace {
 
 namespace fs = std::filesystem;
 using nlohmann::json;
-
-/// What a pixel shows, by the palette's families (renderer.hpp): the cloth is red over blue, the water blue
-/// over red, the backdrop a light grey. Ratios, not differences, so that a side in shadow classifies too.
-enum class ColourClass { BACKDROP, CLOTH, WATER, OTHER };
-
-const char* name(ColourClass c) {
-  switch (c) {
-    case ColourClass::BACKDROP:
-      return "backdrop";
-    case ColourClass::CLOTH:
-      return "cloth";
-    case ColourClass::WATER:
-      return "water";
-    default:
-      return "other";
-  }
-}
-
-ColourClass classify(const std::array<std::uint8_t, 3>& p) {
-  const int r = p[0], g = p[1], b = p[2];
-  if (r > 40 && 10 * r > 16 * b && 10 * r > 13 * g) return ColourClass::CLOTH;
-  if (b > 40 && 10 * b > 16 * r) return ColourClass::WATER;
-  if (std::max({r, g, b}) - std::min({r, g, b}) < 12 && std::min({r, g, b}) > 150)
-    return ColourClass::BACKDROP;
-  return ColourClass::OTHER;
-}
-
-/// The colour class of the pixel `point` projects to; fails the test when it is outside the image.
-testing::AssertionResult shows(const Image& image, const Camera& camera, const Vec3& point,
-                               ColourClass expected) {
-  const auto pixel = project_to_pixel(camera, image.width, image.height, point);
-  if (!pixel) return testing::AssertionFailure() << "point is behind the camera";
-  const int x = static_cast<int>(std::floor(pixel->x())), y = static_cast<int>(std::floor(pixel->y()));
-  if (x < 0 || y < 0 || x >= image.width || y >= image.height)
-    return testing::AssertionFailure() << "point projects outside the image, to (" << x << ", " << y << ")";
-  const auto rgb = image.at(x, y);
-  const ColourClass actual = classify(rgb);
-  if (actual == expected) return testing::AssertionSuccess();
-  return testing::AssertionFailure() << "pixel (" << x << ", " << y << ") is " << name(actual) << " (rgb "
-                                     << int(rgb[0]) << " " << int(rgb[1]) << " " << int(rgb[2])
-                                     << "), expected " << name(expected);
-}
 
 /// A folder in the temp directory named after the running test and this process, removed at the end.
 class TempDir {
