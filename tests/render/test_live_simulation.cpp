@@ -1,11 +1,14 @@
 // The viewer's simulation side (render/live_simulation.hpp), without a window: paused it steps only when
 // asked, once per request; running it stops at the scene's duration; a restart starts a new generation
-// from step 0; the surface worker refuses a second request while one is under way and hands back a mesh.
+// from step 0; the stepping thread keeps the caller's OpenMP thread count; the surface worker refuses a
+// second request while one is under way and hands back a mesh.
 
 #include <drench/render/live_simulation.hpp>
 
 #include <gtest/gtest.h>
+#include <omp.h>
 
+#include <atomic>
 #include <chrono>
 #include <functional>
 #include <thread>
@@ -77,6 +80,28 @@ TEST(LiveSimulation, RunsToTheScenesDurationThenRestartsFromStepZero) {
   EXPECT_EQ(live.total_steps(), 20);
   EXPECT_GT(live.stepping_seconds(), 0.0);
   EXPECT_TRUE(live.error().empty());
+}
+
+TEST(LiveSimulation, StepsWithTheCallersNumberOfOpenMpThreads) {
+  // `--threads 1` on a machine of more cores: a std::thread would start from OpenMP's default, all of them.
+  const int before = omp_get_max_threads();
+  omp_set_num_threads(1);
+  std::atomic<int> seen{0};
+  const LiveSimulation::Factory jet = jet_on_cloth(0.01);
+  {
+    LiveSimulation live(
+        [&] {
+          seen = omp_get_max_threads();
+          return jet();
+        },
+        true);
+    seen = 0;
+    live.restart();  // the factory now runs on the stepping thread
+    Snapshot snapshot;
+    ASSERT_TRUE(wait_for(live, snapshot, [](const Snapshot& s) { return s.generation == 1; }));
+  }
+  omp_set_num_threads(before);
+  EXPECT_EQ(seen, 1);
 }
 
 TEST(LiveSimulation, DestroyingItWhileRunningJoinsTheThread) {

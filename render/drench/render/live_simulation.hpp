@@ -44,7 +44,8 @@ class LiveSimulation {
   using Factory = std::function<std::unique_ptr<Simulation>()>;
 
   /// Builds the first Simulation on the calling thread (so that a bad scene throws here, before any window
-  /// opens), publishes its initial state and starts the thread, paused or not.
+  /// opens), publishes its initial state and starts the thread, paused or not. The thread steps with the
+  /// caller's number of OpenMP threads (omp_get_max_threads).
   /// @throws whatever `make` throws (SceneError for a scene that cannot be built)
   LiveSimulation(Factory make, bool paused);
   /// Stops the thread after the step it is in, and joins it.
