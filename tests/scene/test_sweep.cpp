@@ -2,8 +2,10 @@
 // tests/command/test_sweep_command.cpp.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
+#include <set>
 
 #include <drench/common/error.hpp>
 #include <drench/scene/sweep.hpp>
