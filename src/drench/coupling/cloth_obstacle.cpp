@@ -11,7 +11,9 @@ namespace drench {
 ClothObstacle::ClothObstacle(double thickness, BroadPhaseKind broad_phase, bool kinematic_cloth)
     : m_thickness(thickness),
       m_kinematic_cloth(kinematic_cloth),
-      m_broad_phase(make_broad_phase(broad_phase)) {}
+      m_broad_phase(make_broad_phase(broad_phase)) {
+  m_counter.constructed = 1;
+}
 
 void ClothObstacle::begin_step(const ClothMesh& cloth, const Vec3Array& velocities) {
   m_static.positions_t0 = cloth.positions_t0;
@@ -30,7 +32,11 @@ void ClothObstacle::begin_step(const ClothMesh& cloth, const Vec3Array& velociti
 }
 
 void ClothObstacle::apply(const Vec3Array& positions_before, ParticleSet& particles, Scalar dt) {
-  if (m_static.triangles.empty() || particles.empty()) return;
+  if (m_static.triangles.empty() || particles.empty()) {
+    ++m_counter.skipped;
+    return;
+  }
+  ++m_counter.passes;
   m_broad_phase->find_pairs(positions_before, particles.positions, m_static, 0.0, nullptr, m_pairs);
   std::vector<ccd::CcdResult> hits(m_pairs.size());
 #pragma omp parallel for schedule(dynamic, 256)

@@ -11,6 +11,7 @@
 #include <cstdint>
 #include <memory>
 
+#include <drench/common/effect_counter.hpp>
 #include <drench/coupling/broad_phase.hpp>
 #include <drench/coupling/cloth_mesh.hpp>
 #include <drench/coupling/impulse_link.hpp>
@@ -48,6 +49,9 @@ class ClothObstacle final : public SubstepConstraint {
   std::uint64_t stops() const { return m_stops; }
   /// Sum of the y components of this step's impulses on the cloth (unit: N s).
   double vertical_impulse() const;
+  /// Counts over its life, part of the "coupling" effect: constructed 1; a pass per fluid sub-step that
+  /// looked for crossings, a skip per sub-step without particles.
+  const EffectCounter& counter() const { return m_counter; }
 
  private:
   ClothMesh m_static;  // the cloth at its start positions, not moving
@@ -58,6 +62,7 @@ class ClothObstacle final : public SubstepConstraint {
   Vec3Array m_node_impulses;
   ImpulseLinks m_impulse_links;
   std::uint64_t m_stops = 0;
+  EffectCounter m_counter;
   std::unique_ptr<TriangleBroadPhase> m_broad_phase;
   std::vector<std::pair<Index, Index>> m_pairs;
 };
