@@ -1,5 +1,7 @@
 // Effects that cost nothing when off (issue 28), proved by counters, not timings: an effect the scene does
-// not list is never built and never runs; the settings of effects that are off change no frame.
+// not list is never built and never runs; the coupling costs one box test while no particle is within reach
+// of the cloth, and until then the fluid is bit for bit that of a scene without the coupling; the settings of
+// effects that are off change no frame.
 
 #include <gtest/gtest.h>
 #include <unistd.h>
@@ -154,6 +156,68 @@ TEST_P(EffectOnOff, IsNeverBuiltNorRunWhenOffAndRunsWhenOn) {
 
 INSTANTIATE_TEST_SUITE_P(Effects, EffectOnOff, testing::ValuesIn(known_effects()),
                          [](const testing::TestParamInfo<std::string>& param) { return param.param; });
+
+// A jet released 20 cm above the cloth falls for about 80 steps before it is within reach. Until then every
+// coupler step, fluid sub-step obstacle and leak audit is skipped after one box test, the wetting takes
+// nothing, and the particles are bit for bit those of the same scene without "coupling", "leak_audit" and
+// "wetting" (standing in for a build where the coupling does not exist). Once the water arrives the coupler
+// runs on every step and finds contacts. Both coupling schemes.
+TEST(Effects, CouplingIsSkippedUntilTheJetIsWithinReachAndChangesNothingBefore) {
+  for (const CouplingScheme scheme : {CouplingScheme::CARRIED_WATER, CouplingScheme::IMPULSES}) {
+    SCOPED_TRACE(scheme == CouplingScheme::CARRIED_WATER ? "carried_water" : "impulses");
+    SceneConfig coupled = small_jet();
+    coupled.emitters[0].nozzle.center.y() = 0.2;
+    coupled.coupling.scheme = scheme;
+    coupled.coupling.friction_coefficient = 0.0;
+    coupled.time.duration = 0.2;
+    coupled.effects = {"viscosity", "coupling", "leak_audit", "wetting"};
+    SceneConfig alone = coupled;
+    alone.effects = {"viscosity"};
+    Simulation a(coupled, bullet::cloth_engine_factory());
+    Simulation b(alone, bullet::cloth_engine_factory());
+
+    std::int64_t arrival = 0;  // the first step whose coupler ran
+    while (!a.finished()) {
+      ASSERT_TRUE(a.step().ok());
+      ASSERT_TRUE(b.step().ok());
+      const EffectCounters counts = a.effect_counters();
+      if (counts.coupling.passes > 0) {
+        arrival = a.steps_done();
+        break;
+      }
+      const auto steps = static_cast<std::uint64_t>(a.steps_done());
+      ASSERT_EQ(counts.coupling.skipped, steps);
+      ASSERT_EQ(counts.leak_audit.skipped, steps);
+      ASSERT_EQ(counts.leak_audit.passes, 0u);
+      ASSERT_EQ(counts.substep_obstacle.passes, 0u);
+      ASSERT_EQ(counts.substep_obstacle.skipped, static_cast<std::uint64_t>(a.fluid().statistics().substeps));
+      ASSERT_EQ(counts.wetting.passes, steps) << "the wetting runs on (on a dry cloth)";
+      ASSERT_EQ(a.wetting_stats().particles_absorbed, 0u);
+      ASSERT_EQ(a.particles().ids, b.particles().ids) << "step " << steps;
+      ASSERT_EQ(a.particles().positions, b.particles().positions) << "step " << steps;
+      ASSERT_EQ(a.particles().velocities, b.particles().velocities) << "step " << steps;
+    }
+    ASSERT_GT(arrival, 60) << "the jet needs about 80 steps to fall 20 cm";
+    // It ended for a reason: the lowest particle is within two spacings of the cloth's highest node.
+    double lowest = 1.0, highest_node = -1.0;
+    for (const Vec3& x : a.particles().positions)
+      lowest = std::min(lowest, x.y());
+    for (const Vec3& x : a.cloth()->mesh().positions_t1)
+      highest_node = std::max(highest_node, x.y());
+    EXPECT_LT(lowest, highest_node + 2.0 * coupled.fluid.particle_spacing);
+
+    for (int k = 0; k < 40 && !a.finished(); ++k)
+      ASSERT_TRUE(a.step().ok());
+    const EffectCounters counts = a.effect_counters();
+    EXPECT_EQ(counts.coupling.skipped, static_cast<std::uint64_t>(arrival - 1))
+        << "no particle within reach skipped once the water is on the cloth";
+    EXPECT_EQ(counts.coupling.passes, static_cast<std::uint64_t>(a.steps_done() - arrival + 1));
+    EXPECT_GT(counts.leak_audit.passes, 0u);
+    EXPECT_GT(counts.substep_obstacle.passes, 0u);
+    EXPECT_GT(a.coupling_stats().contacts, 0u);
+    EXPECT_EQ(a.leak_stats().leaks, 0u);
+  }
+}
 
 /// The default jet-on-cloth scene, its nozzle lowered to 5 cm so that the water lands within the run's 40
 /// steps, a frame every 4 ms.

@@ -20,6 +20,7 @@ void ClothObstacle::begin_step(const ClothMesh& cloth, const Vec3Array& velociti
   m_static.positions_t1 = cloth.positions_t0;  // not moving
   m_static.inverse_masses.assign(cloth.node_count(), 0.0);
   m_static.triangles = cloth.triangles;
+  m_box = mesh_box(m_static);
   if (m_kinematic_cloth) {
     m_inverse_masses.assign(cloth.node_count(), 0.0);
   } else {
@@ -32,7 +33,9 @@ void ClothObstacle::begin_step(const ClothMesh& cloth, const Vec3Array& velociti
 }
 
 void ClothObstacle::apply(const Vec3Array& positions_before, ParticleSet& particles, Scalar dt) {
-  if (m_static.triangles.empty() || particles.empty()) {
+  // The query below has margin 0: a pair needs a particle box meeting a triangle's, inside m_box.
+  if (m_static.triangles.empty() || particles.empty() ||
+      !any_particle_box_overlaps(positions_before, particles.positions, 0.0, m_box)) {
     ++m_counter.skipped;
     return;
   }

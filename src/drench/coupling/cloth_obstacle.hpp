@@ -35,6 +35,9 @@ class ClothObstacle final : public SubstepConstraint {
   /// m/s), M entries. Clears the impulses and the counts of the previous step.
   void begin_step(const ClothMesh& cloth, const Vec3Array& velocities);
 
+  /// Stops the particles whose sub-step motion crosses the cloth. When no particle's box over the sub-step
+  /// meets the cloth's box, that one test is all it costs (counter().skipped): the broad phase would find no
+  /// pair.
   void apply(const Vec3Array& positions_before, ParticleSet& particles, Scalar dt) override;
 
   /// The impulses the particles gave the cloth in this step, one per node (unit: N s), for
@@ -50,11 +53,12 @@ class ClothObstacle final : public SubstepConstraint {
   /// Sum of the y components of this step's impulses on the cloth (unit: N s).
   double vertical_impulse() const;
   /// Counts over its life, part of the "coupling" effect: constructed 1; a pass per fluid sub-step that
-  /// looked for crossings, a skip per sub-step without particles.
+  /// looked for crossings, a skip per sub-step with no particle near the cloth.
   const EffectCounter& counter() const { return m_counter; }
 
  private:
   ClothMesh m_static;  // the cloth at its start positions, not moving
+  Box3 m_box;          // of m_static
   ScalarArray m_inverse_masses;
   double m_thickness;
   bool m_kinematic_cloth;

@@ -59,7 +59,13 @@ Coupler::~Coupler() = default;
 std::uint32_t Coupler::step(const FluidView& fluid, ClothMesh& cloth, double dt, CouplingStepStats& stats) {
   m_node_impulses.assign(cloth.node_count(), Vec3::Zero());
   m_impulse_links.clear();
-  if (fluid.positions_t0->empty() || cloth.triangles.empty()) {
+  // Exact, not a heuristic: every pair a stage acts on comes from the broad phase, asked at x_t0 with margin
+  // thickness / 2 (proximity) and over x_t0 to x_t1 with margin 0 (the first CCD round); both particle boxes
+  // lie inside particle_box(x_t0, x_t1, thickness) and every triangle's box inside the mesh's, so when no
+  // particle box meets the mesh's there is no pair, no impulse, and later CCD rounds only follow a change.
+  if (fluid.positions_t0->empty() || cloth.triangles.empty() ||
+      !any_particle_box_overlaps(*fluid.positions_t0, *fluid.positions_t1, m_settings.cloth_thickness,
+                                 mesh_box(cloth))) {
     ++m_counter.skipped;
     return COUPLING_OK;
   }

@@ -67,6 +67,9 @@ class Coupler {
   /// handling (eq. 5-6) on the corrected motion until no particle crosses a triangle. Impulses go to both
   /// sides, mass-weighted, the triangle's share to its nodes by barycentric weights, so the total linear
   /// momentum is conserved exactly (up to rounding); pinned nodes (inverse mass 0) never move.
+  /// When no particle is within reach of the cloth (no particle's box over the step, grown by the cloth
+  /// thickness, meets the mesh's box over the step), the step is skipped after that one test: it would change
+  /// nothing, and its outputs are those of a step without contacts (counter().skipped).
   /// @param fluid  N particles; positions_t1 and velocities are changed
   /// @param cloth  validated mesh; positions_t1 are changed (the engine adds (change / dt) to its velocities)
   /// @return COUPLING_* flags
@@ -75,7 +78,7 @@ class Coupler {
   const CouplingSettings& settings() const { return m_settings; }
 
   /// The "coupling" effect's counts: constructed 1; a pass per step() that ran its stages, a skip per step()
-  /// with no particle or no triangle.
+  /// with no particle within reach (or no particle or triangle at all).
   const EffectCounter& counter() const { return m_counter; }
   /// The "friction" effect's counts: constructed 1 when built with friction; a pass per step that ran the
   /// tangential boundary conditions on its contacts.

@@ -82,6 +82,10 @@ nlohmann::json make_summary(const Simulation& sim, double wall_seconds, const st
     s["effect_passes"][name] = c.passes;
     if (c.passes > 0) s["effects_ran"].push_back(name);
   }
+  if (counters.coupling.constructed > 0) s["coupling_skipped_steps"] = counters.coupling.skipped;
+  if (counters.substep_obstacle.constructed > 0)
+    s["obstacle_skipped_substeps"] = counters.substep_obstacle.skipped;
+  if (counters.leak_audit.constructed > 0) s["leak_audit_skipped_steps"] = counters.leak_audit.skipped;
   s["pressure_solver"] =
       sim.config().fluid.pressure_solver == PressureSolverKind::PCISPH ? "pcisph" : "wcsph";
   s["speed_of_sound_mps"] = sim.speed_of_sound();
