@@ -144,6 +144,23 @@ Box3 triangle_box(const ClothMesh& cloth, const Triangle& t, double margin) {
   return box;
 }
 
+Box3 mesh_box(const ClothMesh& cloth) {
+  Box3 box;
+  for (const Vec3& x : cloth.positions_t0)
+    box.extend(x);
+  for (const Vec3& x : cloth.positions_t1)
+    box.extend(x);
+  return box;
+}
+
+bool any_particle_box_overlaps(const Vec3Array& particles_t0, const Vec3Array& particles_t1, double margin,
+                               const Box3& box) {
+  for (std::size_t p = 0; p < particles_t0.size(); ++p) {
+    if (particle_box(particles_t0[p], particles_t1[p], margin).overlaps(box)) return true;
+  }
+  return false;
+}
+
 void collect_pairs(const Vec3Array& particles_t0, const Vec3Array& particles_t1, double margin,
                    const std::vector<std::uint8_t>* only, const std::vector<Box3>& triangle_boxes,
                    const std::function<void(const Box3& box, std::vector<Index>& candidates)>& propose,

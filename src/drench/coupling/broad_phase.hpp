@@ -42,6 +42,19 @@ Box3 particle_box(const Vec3& x_t0, const Vec3& x_t1, double margin);
 /// A triangle's box over the step: its nodes at both ends grown by `margin` (unit: m).
 Box3 triangle_box(const ClothMesh& cloth, const Triangle& t, double margin);
 
+/// The whole mesh's box over the step: every node at both ends, not grown (unit: m). It holds every
+/// triangle_box(cloth, t, 0) exactly (min and max do not round).
+Box3 mesh_box(const ClothMesh& cloth);
+
+/// True when some particle's box over the step, particle_box(x_t0, x_t1, margin), overlaps `box`; stops at
+/// the first. A broad phase query of margin m / 2 on the same positions can report a pair only where this is
+/// true for margin m and box mesh_box(cloth): so false proves that such a query finds nothing (a particle
+/// with a NaN coordinate overlaps nothing here, as in the query).
+/// @param particles_t0, particles_t1  N positions (unit: m)
+/// @param margin  growth of every particle box (unit: m), >= 0
+bool any_particle_box_overlaps(const Vec3Array& particles_t0, const Vec3Array& particles_t1, double margin,
+                               const Box3& box);
+
 /// The cloth a broad phase last built its triangle boxes for. Within one step the same cloth is queried many
 /// times (every fluid sub-step's obstacle and the carried water's search, every CCD round of a kinematic
 /// cloth); its boxes are rebuilt (FCL's tree refitted) only when it changed, not for every query.

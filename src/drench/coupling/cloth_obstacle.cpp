@@ -11,13 +11,16 @@ namespace drench {
 ClothObstacle::ClothObstacle(double thickness, BroadPhaseKind broad_phase, bool kinematic_cloth)
     : m_thickness(thickness),
       m_kinematic_cloth(kinematic_cloth),
-      m_broad_phase(make_broad_phase(broad_phase)) {}
+      m_broad_phase(make_broad_phase(broad_phase)) {
+  m_counter.constructed = 1;
+}
 
 void ClothObstacle::begin_step(const ClothMesh& cloth, const Vec3Array& velocities) {
   m_static.positions_t0 = cloth.positions_t0;
   m_static.positions_t1 = cloth.positions_t0;  // not moving
   m_static.inverse_masses.assign(cloth.node_count(), 0.0);
   m_static.triangles = cloth.triangles;
+  m_box = mesh_box(m_static);
   if (m_kinematic_cloth) {
     m_inverse_masses.assign(cloth.node_count(), 0.0);
   } else {
@@ -30,7 +33,13 @@ void ClothObstacle::begin_step(const ClothMesh& cloth, const Vec3Array& velociti
 }
 
 void ClothObstacle::apply(const Vec3Array& positions_before, ParticleSet& particles, Scalar dt) {
-  if (m_static.triangles.empty() || particles.empty()) return;
+  // The query below has margin 0: a pair needs a particle box meeting a triangle's, inside m_box.
+  if (m_static.triangles.empty() || particles.empty() ||
+      !any_particle_box_overlaps(positions_before, particles.positions, 0.0, m_box)) {
+    ++m_counter.skipped;
+    return;
+  }
+  ++m_counter.passes;
   m_broad_phase->find_pairs(positions_before, particles.positions, m_static, 0.0, nullptr, m_pairs);
   std::vector<ccd::CcdResult> hits(m_pairs.size());
 #pragma omp parallel for schedule(dynamic, 256)

@@ -11,6 +11,7 @@
 #include <cstdint>
 #include <memory>
 
+#include <drench/common/effect_counter.hpp>
 #include <drench/coupling/broad_phase.hpp>
 #include <drench/coupling/cloth_mesh.hpp>
 #include <drench/coupling/impulse_link.hpp>
@@ -34,6 +35,9 @@ class ClothObstacle final : public SubstepConstraint {
   /// m/s), M entries. Clears the impulses and the counts of the previous step.
   void begin_step(const ClothMesh& cloth, const Vec3Array& velocities);
 
+  /// Stops the particles whose sub-step motion crosses the cloth. When no particle's box over the sub-step
+  /// meets the cloth's box, that one test is all it costs (counter().skipped): the broad phase would find no
+  /// pair.
   void apply(const Vec3Array& positions_before, ParticleSet& particles, Scalar dt) override;
 
   /// The impulses the particles gave the cloth in this step, one per node (unit: N s), for
@@ -48,9 +52,13 @@ class ClothObstacle final : public SubstepConstraint {
   std::uint64_t stops() const { return m_stops; }
   /// Sum of the y components of this step's impulses on the cloth (unit: N s).
   double vertical_impulse() const;
+  /// Counts over its life, part of the "coupling" effect: constructed 1; a pass per fluid sub-step that
+  /// looked for crossings, a skip per sub-step with no particle near the cloth.
+  const EffectCounter& counter() const { return m_counter; }
 
  private:
   ClothMesh m_static;  // the cloth at its start positions, not moving
+  Box3 m_box;          // of m_static
   ScalarArray m_inverse_masses;
   double m_thickness;
   bool m_kinematic_cloth;
@@ -58,6 +66,7 @@ class ClothObstacle final : public SubstepConstraint {
   Vec3Array m_node_impulses;
   ImpulseLinks m_impulse_links;
   std::uint64_t m_stops = 0;
+  EffectCounter m_counter;
   std::unique_ptr<TriangleBroadPhase> m_broad_phase;
   std::vector<std::pair<Index, Index>> m_pairs;
 };

@@ -34,7 +34,8 @@ double seconds_since(Clock::time_point start) {
 
 }  // namespace
 
-Coupler::Coupler(const CouplingSettings& settings) : m_settings(settings) {
+Coupler::Coupler(const CouplingSettings& settings, bool with_friction)
+    : m_settings(settings), m_with_friction(with_friction) {
   const auto require = [](bool ok, const std::string& what) {
     if (!ok) throw SceneError("coupling." + what);
   };
@@ -49,6 +50,8 @@ Coupler::Coupler(const CouplingSettings& settings) : m_settings(settings) {
   require(settings.friction_coefficient >= 0.0 && std::isfinite(settings.friction_coefficient),
           "friction_coefficient must be >= 0, got " + format_number(settings.friction_coefficient));
   m_broad_phase = make_broad_phase(settings.broad_phase);
+  m_counter.constructed = 1;
+  m_friction_counter.constructed = with_friction ? 1 : 0;
 }
 
 Coupler::~Coupler() = default;
@@ -56,7 +59,17 @@ Coupler::~Coupler() = default;
 std::uint32_t Coupler::step(const FluidView& fluid, ClothMesh& cloth, double dt, CouplingStepStats& stats) {
   m_node_impulses.assign(cloth.node_count(), Vec3::Zero());
   m_impulse_links.clear();
-  if (fluid.positions_t0->empty() || cloth.triangles.empty()) return COUPLING_OK;
+  // Exact, not a heuristic: every pair a stage acts on comes from the broad phase, asked at x_t0 with margin
+  // thickness / 2 (proximity) and over x_t0 to x_t1 with margin 0 (the first CCD round); both particle boxes
+  // lie inside particle_box(x_t0, x_t1, thickness) and every triangle's box inside the mesh's, so when no
+  // particle box meets the mesh's there is no pair, no impulse, and later CCD rounds only follow a change.
+  if (fluid.positions_t0->empty() || cloth.triangles.empty() ||
+      !any_particle_box_overlaps(*fluid.positions_t0, *fluid.positions_t1, m_settings.cloth_thickness,
+                                 mesh_box(cloth))) {
+    ++m_counter.skipped;
+    return COUPLING_OK;
+  }
+  ++m_counter.passes;
   const bool record = fluid.ids != nullptr;
   if (record) m_largest.assign(fluid.positions_t0->size(), ImpulseLink{});
   const std::uint32_t status = correct(fluid, cloth, dt, stats);
@@ -87,8 +100,11 @@ std::uint32_t Coupler::correct(const FluidView& fluid, ClothMesh& cloth, double 
   m_broad_phase->find_pairs(ctx.x0(), ctx.x0(), cloth, 0.5 * thickness, nullptr, pairs);
   std::vector<Contact> contacts = find_contacts(ctx, pairs, thickness);  // sec. 3.1, eq. 1
   stats.contacts += contacts.size();
-  repulse(ctx, contacts, m_settings);         // sec. 3.2, eq. 2-4
-  apply_friction(ctx, contacts, m_settings);  // sec. 3.4, eq. 7-8
+  repulse(ctx, contacts, m_settings);  // sec. 3.2, eq. 2-4
+  if (m_with_friction) {
+    apply_friction(ctx, contacts, m_settings);  // sec. 3.4, eq. 7-8
+    ++m_friction_counter.passes;
+  }
   for (const Contact& c : contacts) {
     const Vec3 v = ctx.relative_velocity(c.particle, c.triangle, c.weights);
     stats.slip_sum_mps += (v - v.dot(c.normal) * c.normal).norm();

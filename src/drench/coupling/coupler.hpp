@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <memory>
 
+#include <drench/common/effect_counter.hpp>
 #include <drench/common/types.hpp>
 #include <drench/coupling/cloth_mesh.hpp>
 #include <drench/coupling/coupling_settings.hpp>
@@ -53,8 +54,11 @@ class TriangleBroadPhase;
 /// Couples one fluid and one cloth mesh, step after step. Not thread-safe; uses OpenMP inside.
 class Coupler {
  public:
+  /// @param with_friction  runs the tangential boundary conditions (eq. 7-8, the "friction" effect); false
+  ///        leaves them out, which changes nothing only when the settings ask for none (slip FRICTION with
+  ///        friction_coefficient 0), as the scene loader makes sure
   /// @throws SceneError for settings out of range (the message names the setting)
-  explicit Coupler(const CouplingSettings& settings);
+  explicit Coupler(const CouplingSettings& settings, bool with_friction = true);
   ~Coupler();
   Coupler(const Coupler&) = delete;
   Coupler& operator=(const Coupler&) = delete;
@@ -63,12 +67,22 @@ class Coupler {
   /// handling (eq. 5-6) on the corrected motion until no particle crosses a triangle. Impulses go to both
   /// sides, mass-weighted, the triangle's share to its nodes by barycentric weights, so the total linear
   /// momentum is conserved exactly (up to rounding); pinned nodes (inverse mass 0) never move.
+  /// When no particle is within reach of the cloth (no particle's box over the step, grown by the cloth
+  /// thickness, meets the mesh's box over the step), the step is skipped after that one test: it would change
+  /// nothing, and its outputs are those of a step without contacts (counter().skipped).
   /// @param fluid  N particles; positions_t1 and velocities are changed
   /// @param cloth  validated mesh; positions_t1 are changed (the engine adds (change / dt) to its velocities)
   /// @return COUPLING_* flags
   std::uint32_t step(const FluidView& fluid, ClothMesh& cloth, double dt, CouplingStepStats& stats);
 
   const CouplingSettings& settings() const { return m_settings; }
+
+  /// The "coupling" effect's counts: constructed 1; a pass per step() that ran its stages, a skip per step()
+  /// with no particle within reach (or no particle or triangle at all).
+  const EffectCounter& counter() const { return m_counter; }
+  /// The "friction" effect's counts: constructed 1 when built with friction; a pass per step that ran the
+  /// tangential boundary conditions on its contacts.
+  const EffectCounter& friction_counter() const { return m_friction_counter; }
 
   /// The impulse each cloth node received in the last step() (unit: N s), M entries, nodes with inverse
   /// mass 0 included: a caller that stepped a moving cloth as kinematic (inverse masses 0) hands these to
@@ -85,6 +99,9 @@ class Coupler {
   std::uint32_t correct(const FluidView& fluid, ClothMesh& cloth, double dt, CouplingStepStats& stats);
 
   CouplingSettings m_settings;
+  bool m_with_friction;
+  EffectCounter m_counter;
+  EffectCounter m_friction_counter;
   Vec3Array m_node_impulses;
   ImpulseLinks m_largest;  // N, scratch of step()
   ImpulseLinks m_impulse_links;

@@ -48,7 +48,7 @@ class ProgressLine {
 }  // namespace
 
 nlohmann::json make_summary(const Simulation& sim, double wall_seconds, const std::string& scene_sha256,
-                            const StepStatus& status) {
+                            const StepStatus& status, const EffectCounter& surface) {
   const FluidStatistics& f = sim.fluid().statistics();
   const double substeps = std::max<std::int64_t>(f.substeps, 1);
   const auto& t = f.timings_s;
@@ -72,6 +72,20 @@ nlohmann::json make_summary(const Simulation& sim, double wall_seconds, const st
   s["version"] = DRENCH_VERSION;
   s["scene_sha256"] = scene_sha256;
   s["effects"] = sim.effects();
+  EffectCounters counters = sim.effect_counters();
+  counters.surface = surface;
+  s["effect_passes"] = nlohmann::json::object();
+  s["effects_ran"] = nlohmann::json::array();
+  for (const std::string& name : known_effects()) {
+    const EffectCounter& c = *counters.find(name);
+    if (c.constructed == 0) continue;
+    s["effect_passes"][name] = c.passes;
+    if (c.passes > 0) s["effects_ran"].push_back(name);
+  }
+  if (counters.coupling.constructed > 0) s["coupling_skipped_steps"] = counters.coupling.skipped;
+  if (counters.substep_obstacle.constructed > 0)
+    s["obstacle_skipped_substeps"] = counters.substep_obstacle.skipped;
+  if (counters.leak_audit.constructed > 0) s["leak_audit_skipped_steps"] = counters.leak_audit.skipped;
   s["pressure_solver"] =
       sim.config().fluid.pressure_solver == PressureSolverKind::PCISPH ? "pcisph" : "wcsph";
   s["speed_of_sound_mps"] = sim.speed_of_sound();
@@ -153,6 +167,8 @@ RunResult run_scene(Simulation& sim, const RunOptions& options) {
   double output_seconds = 0, surface_seconds = 0, surface_audit_seconds = 0;
   std::uint64_t surface_intersections = 0;
   const bool surface = sim.config().has_effect("surface");
+  EffectCounter surface_counter;
+  surface_counter.constructed = surface ? 1 : 0;
   // The surface is made from the positions as the frames save them (float32): then `drench reconstruct`
   // on the saved files gives the same surface files byte for byte (from the doubles, a third to two thirds
   // of the vertices differ by a float ulp). Obstacles are static: rounded once.
@@ -190,6 +206,7 @@ RunResult run_scene(Simulation& sim, const RunOptions& options) {
         const SurfaceMesh mesh = reconstruct_surface(particles, sim.config().fluid.particle_spacing,
                                                      sim.config().surface, obstacles, &stats);
         surface_seconds += stats.seconds;
+        ++surface_counter.passes;
         {
           // The claim of sec. 4, measured on every frame by a count that does not trust the reconstruction.
           ScopedTimer audit(surface_audit_seconds);
@@ -213,7 +230,9 @@ RunResult run_scene(Simulation& sim, const RunOptions& options) {
     write_due_frames();
     progress.update(sim, last_step, wall());
   }
-  result.summary = make_summary(sim, wall(), options.scene_sha256, result.status);
+  result.summary = make_summary(sim, wall(), options.scene_sha256, result.status, surface_counter);
+  result.effects = sim.effect_counters();
+  result.effects.surface = surface_counter;
   result.summary["frames"] = frame;
   // Reconstruction and its audit are their own lines, not output.
   result.summary["timings_s"]["output"] = output_seconds - surface_seconds - surface_audit_seconds;

@@ -24,6 +24,9 @@ struct RunOptions {
 struct RunResult {
   nlohmann::json summary;  ///< what summary.json holds
   StepStatus status;       ///< all flags raised during the run
+  /// The simulation's effect counts with the surface's (constructed 1 with the `surface` effect, a pass per
+  /// frame reconstructed).
+  EffectCounters effects;
 };
 
 /// Steps `simulation` until it finishes (or max_steps), writing `scene.json` first (when options has a
@@ -35,7 +38,9 @@ struct RunResult {
 RunResult run_scene(Simulation& simulation, const RunOptions& options);
 
 /// The summary of a run so far; keys are documented in docs/output.md.
+/// @param surface  the `surface` effect's counts, which the run loop keeps (zero: no surface)
 nlohmann::json make_summary(const Simulation& simulation, double wall_seconds,
-                            const std::string& scene_sha256, const StepStatus& status);
+                            const std::string& scene_sha256, const StepStatus& status,
+                            const EffectCounter& surface = {});
 
 }  // namespace drench

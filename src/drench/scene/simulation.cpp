@@ -7,6 +7,7 @@
 
 #include <drench/common/error.hpp>
 #include <drench/common/stopwatch.hpp>
+#include <drench/coupling/broad_phase.hpp>
 #include <drench/coupling/cloth_obstacle.hpp>
 #include <drench/io/obj_reader.hpp>
 #include <drench/sph/boundary_sampling.hpp>
@@ -166,7 +167,17 @@ Simulation::Simulation(const SceneConfig& config, std::unique_ptr<ClothEngine> c
   }
   m_initial_energy = fluid_energy();
   if (m_engine) m_engine->mesh().validate();
-  if (m_engine && m_config.has_effect("coupling")) m_coupler = std::make_unique<Coupler>(m_config.coupling);
+  const CouplingSettings& coupling = m_config.coupling;
+  if ((coupling.slip == SlipCondition::NO_SLIP || coupling.friction_coefficient > 0.0) &&
+      !m_config.has_effect("friction")) {
+    // The coupler is built without friction then: the settings would be silently ignored.
+    throw SceneError(
+        "coupling asks for tangential boundary conditions (slip or friction_coefficient), but "
+        "effects does not list \"friction\" (" +
+        m_config.source + ")");
+  }
+  if (m_engine && m_config.has_effect("coupling"))
+    m_coupler = std::make_unique<Coupler>(coupling, m_config.has_effect("friction"));
   const bool carried_water = m_config.coupling.scheme == CouplingScheme::CARRIED_WATER;
   if (m_coupler && m_config.coupling.continuous && m_config.coupling.substep_obstacle) {
     m_obstacle = std::make_unique<ClothObstacle>(m_config.coupling.cloth_thickness,
@@ -175,6 +186,7 @@ Simulation::Simulation(const SceneConfig& config, std::unique_ptr<ClothEngine> c
   if (m_coupler && carried_water) m_carried = std::make_unique<CarriedWater>();
   if (m_engine) m_pending_cloth_impulses.assign(m_engine->mesh().node_count(), Vec3::Zero());
   m_leak_audit = m_engine && m_config.has_effect("leak_audit");
+  m_leak_counter.constructed = m_leak_audit ? 1 : 0;
   if (m_cloth && m_coupler && m_config.has_effect("wetting")) {
     // The dry node masses from the cloth's area, pinned nodes included (they hold water too); a cloth made
     // in code without scene settings has the default area density.
@@ -188,7 +200,21 @@ Simulation::Simulation(const SceneConfig& config, std::unique_ptr<ClothEngine> c
         dry[i] += area_density * area / 3.0;
     }
     m_wetting = std::make_unique<ClothWetting>(m_config.wetting, nodes.triangles, nodes.positions_t0, dry);
+    ++m_wetting_counter.constructed;
   }
+}
+
+EffectCounters Simulation::effect_counters() const {
+  EffectCounters c;
+  c.viscosity = m_fluid->viscosity_counter();
+  if (m_coupler) {
+    c.coupling = m_coupler->counter();
+    c.friction = m_coupler->friction_counter();
+  }
+  if (m_obstacle) c.substep_obstacle = m_obstacle->counter();
+  c.leak_audit = m_leak_counter;
+  c.wetting = m_wetting_counter;
+  return c;
 }
 
 const std::vector<TriangleMesh>& Simulation::obstacles() const {
@@ -336,13 +362,26 @@ void Simulation::step_cloth_and_couple(Scalar dt, StepStatus& status) {
   // After end_step, which leaves in the mesh the positions the engine holds (rounded, for a single-precision
   // engine), so that the audit checks the cloth the next step starts from.
   if (m_leak_audit && m_non_finite_node < 0 && status.ok()) {
-    audit_leaks(p.positions_t0, p.positions, mesh, m_leak_stats);
+    // The audit pairs a particle with a triangle only where their bare boxes over the step meet, so a
+    // particle whose box misses the mesh's cannot leak: the one test decides, exactly.
+    bool near = false;
+    {
+      ScopedTimer timer(m_leak_stats.seconds);
+      near = any_particle_box_overlaps(p.positions_t0, p.positions, 0.0, mesh_box(mesh));
+    }
+    if (near) {
+      audit_leaks(p.positions_t0, p.positions, mesh, m_leak_stats);
+      ++m_leak_counter.passes;
+    } else {
+      ++m_leak_counter.skipped;
+    }
   }
   if (m_wetting && coupled) wet_cloth(dt);
 }
 
 void Simulation::wet_cloth(Scalar dt) {
   ScopedTimer timer(m_wetting_stats.seconds);
+  ++m_wetting_counter.passes;
   ParticleSet& p = m_fluid->particles();
   const ClothMesh& cloth = m_cloth->mesh();
   // The particles the coupling touched in this step: the coupler's and, inside the fluid's sub-steps, the

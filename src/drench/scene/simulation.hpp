@@ -12,6 +12,7 @@
 #include <drench/coupling/coupler.hpp>
 #include <drench/coupling/leak_audit.hpp>
 #include <drench/coupling/static_obstacles.hpp>
+#include <drench/scene/effect_counters.hpp>
 #include <drench/scene/scene_config.hpp>
 #include <drench/sph/emitters.hpp>
 #include <drench/sph/fluid_solver.hpp>
@@ -23,9 +24,9 @@ namespace drench {
 class Simulation {
  public:
   /// @throws SceneError when the scene cannot be built: it has a cloth but no cloth_factory, or settings
-  /// built
-  ///         in code fail a check the loader would have made (e.g. the coupler's). A scene whose emitters
-  ///         never create a particle is fine.
+  ///         built in code fail a check the loader would have made (the coupler's; coupling.slip or
+  ///         coupling.friction_coefficient asking for tangential conditions without the "friction" effect).
+  ///         A scene whose emitters never create a particle is fine.
   /// @param cloth_factory  builds the scene's cloth (the Bullet adapter's cloth_engine_factory()); required
   ///        when the scene has a `cloth`, else SceneError
   explicit Simulation(const SceneConfig& config, const ClothEngineFactory& cloth_factory = {});
@@ -65,6 +66,9 @@ class Simulation {
   std::int64_t created() const { return m_next_id; }
   /// The effects that were constructed (the scene's `effects`, in its order).
   const std::vector<std::string>& effects() const { return m_config.effects; }
+  /// How often each optional effect was built and ran so far (the surface's stays zero: the run loop
+  /// reconstructs it, run_scene counts it). An effect the scene does not list has every count 0.
+  EffectCounters effect_counters() const;
   /// The speed of sound in use (unit: m/s): the scene's, or the automatic one.
   Scalar speed_of_sound() const { return m_speed_of_sound; }
   /// Wall time spent emitting and removing particles (unit: s).
@@ -147,6 +151,8 @@ class Simulation {
   Vec3Array m_pending_cloth_impulses;         // M, owed to the cloth at its next step (unit: N s)
   ImpulseLinks m_pending_links;               // the particles that gave them, carried in that step
   bool m_leak_audit = false;
+  EffectCounter m_leak_counter;
+  EffectCounter m_wetting_counter;
   CouplingStepStats m_coupling_stats;
   LeakAuditStats m_leak_stats;
   std::uint32_t m_coupling_status = 0;

@@ -53,7 +53,10 @@ FluidSolver::FluidSolver(const FluidSettings& settings, const Vec3& gravity, Bou
   m_boundary_packed.resize(points.size());
   for (std::size_t b = 0; b < points.size(); ++b)
     m_boundary_packed[b] = packed(points[b], settings.rest_density * boundary.volumes[b]);
-  if (with_viscosity) m_viscosity = make_viscosity(settings.viscosity, speed_of_sound);
+  if (with_viscosity) {
+    m_viscosity = make_viscosity(settings.viscosity, speed_of_sound);
+    ++m_viscosity_counter.constructed;
+  }
 }
 
 Scalar FluidSolver::particle_mass() const {
@@ -140,7 +143,10 @@ StepStatus FluidSolver::substep(Scalar dt, Scalar max_speed, SubstepConstraint* 
   {
     ScopedTimer timer(m_stats.timings_s.forces);
     m_accelerations.assign(n, m_gravity);
-    if (m_viscosity) m_viscosity->add_accelerations(ctx, dt, m_accelerations);
+    if (m_viscosity) {
+      m_viscosity->add_accelerations(ctx, dt, m_accelerations);
+      ++m_viscosity_counter.passes;
+    }
     m_velocities_adv.resize(n);
 #pragma omp parallel for schedule(static)
     for (std::size_t i = 0; i < n; ++i)

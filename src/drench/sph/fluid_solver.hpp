@@ -6,6 +6,7 @@
 #include <memory>
 #include <string>
 
+#include <drench/common/effect_counter.hpp>
 #include <drench/sph/boundary_sampling.hpp>
 #include <drench/sph/boundary_settings.hpp>
 #include <drench/sph/cubic_spline_kernel.hpp>
@@ -87,6 +88,9 @@ class FluidSolver {
   const FluidSettings& settings() const { return m_settings; }
   const CubicSplineKernel& kernel() const { return m_kernel; }
   const FluidStatistics& statistics() const { return m_stats; }
+  /// The "viscosity" effect's counts: constructed 1 when built (with_viscosity), a pass per sub-step's force
+  /// pass.
+  const EffectCounter& viscosity_counter() const { return m_viscosity_counter; }
   /// Mass of one particle, rest_density * spacing^3 (unit: kg).
   Scalar particle_mass() const;
 
@@ -116,6 +120,7 @@ class FluidSolver {
   Vec3Array m_positions_before;       // sub-step start positions, kept only for a SubstepConstraint
   std::unique_ptr<PressureSolver> m_pressure;
   std::unique_ptr<NonPressureForce> m_viscosity;
+  EffectCounter m_viscosity_counter;
   Vec3Array m_accelerations;
   Vec3Array m_velocities_adv;
   Vec3Array m_pressure_accelerations;
