@@ -344,6 +344,10 @@ int main(int argc, char** argv) {
   sweep->add_option("--threads", sweep_options.threads, "OpenMP threads per run (default: cores / jobs)")
       ->check(CLI::PositiveNumber);
   sweep
+      ->add_option("--timeout", sweep_options.timeout_s,
+                   "stop a run after this many seconds of wall time; its row says so (default: no limit)")
+      ->check(CLI::NonNegativeNumber);
+  sweep
       ->add_option("--error", sweep_options.error_key,
                    "the summary figure pareto.png plots against wall time")
       ->capture_default_str();

@@ -9,6 +9,7 @@
 #include <cerrno>
 #include <chrono>
 #include <cmath>
+#include <csignal>
 #include <cstdio>
 #include <cstring>
 #include <ctime>
@@ -72,6 +73,7 @@ struct Child {
   pid_t pid = 0;
   std::size_t run = 0;
   std::chrono::steady_clock::time_point start;
+  bool timed_out = false;  ///< killed for running past --timeout
 };
 
 /// Starts `arguments` with stdout and stderr into `log`. @throws IoError when it cannot start.
@@ -113,6 +115,7 @@ struct SettingPoint {
   std::string setting;
   double time = 0, error = 0;
   int runs = 0, failed = 0;
+  bool leaked = false;  ///< a run of it leaked through the cloth: not a solution, whatever its error
 };
 
 std::string gnuplot_label(std::string text) {
@@ -126,13 +129,13 @@ std::string plot_pareto(const fs::path& dir, const std::vector<SettingPoint>& po
   const std::string gnuplot = render::find_program("gnuplot");
   if (gnuplot.empty())
     return "no pareto.png: gnuplot is not installed (Debian: sudo apt-get install gnuplot-nox)";
-  std::ostringstream all, best;
+  std::ostringstream all, best, leaked;
   bool positive = true;
   double low = INFINITY, high = 0;
   for (const SettingPoint& p : points) {
     if (!std::isfinite(p.time) || !std::isfinite(p.error)) continue;
-    all << format(p.time, "%.9g") << ' ' << format(p.error, "%.9g") << ' ' << gnuplot_label(p.setting)
-        << '\n';
+    (p.leaked ? leaked : all) << format(p.time, "%.9g") << ' ' << format(p.error, "%.9g") << ' '
+                              << gnuplot_label(p.setting) << '\n';
     positive = positive && p.error > 0;
     low = std::min(low, p.error);
     high = std::max(high, p.error);
@@ -141,6 +144,7 @@ std::string plot_pareto(const fs::path& dir, const std::vector<SettingPoint>& po
     best << format(points[i].time, "%.9g") << ' ' << format(points[i].error, "%.9g") << ' '
          << gnuplot_label(points[i].setting) << '\n';
   write_file_atomic((dir / "pareto_all.dat").string(), all.str());
+  write_file_atomic((dir / "pareto_leaked.dat").string(), leaked.str());
   write_file_atomic((dir / "pareto_front.dat").string(), best.str());
   const std::string temporary = (dir / ("pareto.png.tmp-" + std::to_string(::getpid()))).string();
   std::ostringstream script;
@@ -154,6 +158,12 @@ std::string plot_pareto(const fs::path& dir, const std::vector<SettingPoint>& po
          << (positive && high > 20 * low ? "set logscale y\n" : "") << "plot '"
          << (dir / "pareto_all.dat").string()
          << "' using 1:2 with points pt 7 ps 1.1 lc rgb '#999999' title 'settings', \\\n"
+         << (leaked.str().empty()
+                 ? ""
+                 : "  '" + (dir / "pareto_leaked.dat").string() +
+                       "' using 1:2 with points pt 2 ps 1.4 lw 2 lc rgb '#c0392b' title "
+                       "'leaked (never on the front)', \\\n  '' using 1:2:3 with labels left "
+                       "offset 0.8,0.6 font ',9' tc rgb '#c0392b' notitle, \\\n")
          << "  '" << (dir / "pareto_front.dat").string()
          << "' using 1:2 with linespoints pt 7 ps 1.4 lw 2 lc rgb '#1f5fa8' title 'Pareto front', \\\n"
          << "  '' using 1:2:3 with labels left offset 0.8,0.6 font ',9' notitle\n";
@@ -277,10 +287,23 @@ int run_sweep(const SweepOptions& options) {
       ++next;
     }
     int status = 0;
-    const pid_t pid = ::waitpid(-1, &status, 0);
+    // Polled rather than blocking, so that a run past --timeout is stopped: a setting that slows to a crawl
+    // (a blow-up the CFL limit keeps sub-stepping) is a row, not a sweep that never ends.
+    const pid_t pid = ::waitpid(-1, &status, options.timeout_s > 0 ? WNOHANG : 0);
     if (pid < 0) {
       if (errno == EINTR) continue;
       throw IoError(std::string("sweep: waitpid: ") + std::strerror(errno));
+    }
+    if (pid == 0) {
+      const auto now = std::chrono::steady_clock::now();
+      for (Child& c : running) {
+        if (!c.timed_out && std::chrono::duration<double>(now - c.start).count() > options.timeout_s) {
+          ::kill(c.pid, SIGKILL);
+          c.timed_out = true;
+        }
+      }
+      std::this_thread::sleep_for(std::chrono::milliseconds(100));
+      continue;
     }
     const auto child =
         std::find_if(running.begin(), running.end(), [&](const Child& c) { return c.pid == pid; });
@@ -288,11 +311,14 @@ int run_sweep(const SweepOptions& options) {
     const std::size_t i = child->run;
     const double seconds =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - child->start).count();
+    const bool timed_out = child->timed_out;
     running.erase(child);
 
     const fs::path out = run_dir(i);
     std::string failure;
-    if (WIFSIGNALED(status)) {
+    if (timed_out) {
+      failure = "timed out: stopped after " + format(options.timeout_s, "%g") + " s";
+    } else if (WIFSIGNALED(status)) {
       failure = "killed by signal " + std::to_string(WTERMSIG(status));
     } else if (WIFEXITED(status) && WEXITSTATUS(status) == 1) {
       failure = "error: " + last_line(out / "log.txt");
@@ -334,6 +360,8 @@ int run_sweep(const SweepOptions& options) {
   std::vector<SettingPoint> points;
   std::map<std::string, std::size_t> point_of;
   std::map<std::string, std::vector<double>> times, errors;
+  const std::size_t leaks_index =
+      static_cast<std::size_t>(std::find(columns.begin(), columns.end(), "leaks") - columns.begin());
   for (std::size_t i = 0; i < runs.size(); ++i) {
     const std::string setting = setting_of(runs[i]);
     if (!point_of.count(setting)) {
@@ -346,6 +374,7 @@ int run_sweep(const SweepOptions& options) {
       ++p.failed;
       continue;
     }
+    if (sweep_number(rows[i][leaks_index]) > 0) p.leaked = true;
     double e = sweep_number(rows[i][error_index]);
     if (options.error_key == "energy_drift") e = std::abs(e);
     times[setting].push_back(sweep_number(rows[i][wall_index]));
@@ -355,7 +384,8 @@ int run_sweep(const SweepOptions& options) {
   for (SettingPoint& p : points) {
     p.time = median(times[p.setting]);
     p.error = median(errors[p.setting]);
-    xy.emplace_back(p.time, p.error);
+    // Water through the cloth is the failure drench exists to prevent: such a setting is never on the front.
+    xy.emplace_back(p.leaked ? std::nan("") : p.time, p.error);
   }
   const std::vector<std::size_t> front = pareto_front(xy);
   const std::string plot_note = plot_pareto(dir, points, front, options.error_key);
@@ -400,7 +430,8 @@ int run_sweep(const SweepOptions& options) {
        << (statuses.empty() ? "ok" : statuses) << " |\n";
   }
   md << "\nThe Pareto front of wall time against " << options.error_key
-     << " (no other setting is both faster and more accurate), fastest first:";
+     << " (no other setting is both faster and more accurate; settings that leaked are left out), fastest "
+        "first:";
   for (std::size_t k = 0; k < front.size(); ++k)
     md << (k ? ", " : " ") << "`" << points[front[k]].setting << "`";
   md << ".\n\n" << (plot_note.empty() ? "![wall time against the error](pareto.png)\n" : plot_note + "\n");

@@ -19,6 +19,7 @@ struct SweepOptions {
   int repeats = 1;                     ///< runs per setting, >= 1
   int jobs = 1;                        ///< runs side by side, >= 1
   int threads = 0;                     ///< OpenMP threads per run; 0: the cores shared among the jobs
+  double timeout_s = 0;  ///< a run's wall time limit (unit: s), after which it is killed; 0: none
   std::string error_key = "density_error_mean";  ///< the sweep_columns() entry the Pareto plot uses
   std::string command_line;                      ///< as the user typed it, for the report
   bool quiet = false;                            ///< no line per finished run

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <chrono>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -103,6 +104,22 @@ TEST(SweepCommand, EveryRunIsARowWithItsSummarysFiguresFailuresIncluded) {
   const std::string report = read(dir.path / "sweep/report.md");
   EXPECT_NE(report.find("1 runs did not end \"ok\""), std::string::npos) << report;
   EXPECT_TRUE(fs::exists(dir.path / "sweep/pareto.png")) << "gnuplot is in scripts/setup";
+}
+
+// A run that would take minutes is stopped at --timeout and is a row that says so; the sweep goes on.
+TEST(SweepCommand, ARunPastTheTimeoutIsStoppedAndIsARow) {
+  TempDir dir;
+  const auto start = std::chrono::steady_clock::now();
+  const int status = run(
+      "sweep " + kTank + " --vary time.duration=0.02,600 --timeout 2 --out " + (dir.path / "sweep").string(),
+      dir.path / "log.txt");
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  EXPECT_EQ(status, 2) << read(dir.path / "log.txt");
+  EXPECT_LT(seconds, 60.0) << "the 600 s run was not stopped";
+  const auto rows = read_csv(dir.path / "sweep/sweep.csv");
+  ASSERT_EQ(rows.size(), 2u);
+  EXPECT_EQ(rows[0].at("status"), "ok");
+  EXPECT_NE(rows[1].at("status").find("timed out"), std::string::npos) << rows[1].at("status");
 }
 
 TEST(SweepCommand, ABadSettingFailsBeforeAnyRunAndWritesNothing) {
