@@ -1,0 +1,111 @@
+#!/usr/bin/env python3
+"""Runs the accuracy sweeps of docs/accuracy.md (issue 28) with `drench sweep` and keeps their CSVs.
+
+    python3 bench/accuracy_sweep.py --drench build/demos/drench --out bench/results/debian12-2core \
+        [--keep out/accuracy] [--duration 0.5]
+    python3 scripts/result_pages
+
+Two sweeps of the Fig. 3 jet on a cloth (demos/scenes/jet_on_cloth.json), one run at a time on one thread
+(`--threads`): the paper's Tables 1-2 are single-core figures, and a single-threaded run keeps its time when
+another process shares the machine, where two OpenMP threads wait on each other at every barrier:
+- one at a time: each setting varied alone around the scene (dt, cloth thickness, PCISPH eta, continuous
+  handling, no-slip, PCISPH precision, pressure solver, cloth sub-steps, the surface's cell size), which
+  also holds the paper's Table 1 rows -> accuracy_one_at_a_time.csv, and its pareto.png ->
+  docs/images/accuracy_pareto.png;
+- stability: for each pressure solver and cloth thickness, dt halving from 16 ms to 1 ms ->
+  accuracy_stability.csv; scripts/result_pages finds the largest dt that still ends "ok", with no leak and
+  nothing faster than the jet tests' speed bound.
+The lines above each CSV's header are `# key: value` notes: the CPU, the commit, the command and the load
+average before and after (the VM is shared; above about 1.5 the times are not worth keeping).
+"""
+
+import argparse
+import shutil
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from bench_surface import commit, cpu_model, load_average  # noqa: E402
+
+ROOT = Path(__file__).resolve().parent.parent
+SCENE = "demos/scenes/jet_on_cloth.json"
+EFFECTS = '"viscosity","coupling","leak_audit"'
+
+# Only values other than the scene's (defaults included): the scene itself is the sweep's first run.
+ONE_AT_A_TIME = [
+    "--one-at-a-time",
+    "--vary", "time.dt=0.002,0.004,0.008",
+    "--vary", "coupling.cloth_thickness=0.0005,0.005",
+    "--vary", "fluid.pcisph.eta=0.01,0.03",
+    "--vary", "coupling.continuous=false",
+    "--case", f'no-slip:coupling.slip="no_slip";effects=[{EFFECTS},"friction"]',
+    "--vary", 'fluid.pcisph.precision="double"',
+    "--vary", 'fluid.pressure_solver="wcsph"',
+    "--vary", "cloth.substeps=1,2",
+    "--case", f'surface, 4 mm cells:effects=[{EFFECTS},"surface"];surface.cell_size=0.004',
+    "--case", f'surface, 2.5 mm cells:effects=[{EFFECTS},"surface"];surface.cell_size=0.0025',
+]
+
+# A run past 4 minutes (about ten times a sound one on one thread) is a blow-up the CFL limit keeps
+# sub-stepping: stopped, and its row says so.
+STABILITY = [
+    "--timeout", "240",
+    "--vary", 'fluid.pressure_solver={solvers}',
+    "--vary", "coupling.cloth_thickness=0.0005,0.001,0.005",
+    "--vary", "time.dt=0.016,0.008,0.004,0.002,0.001",
+]
+
+
+def sweep(drench, arguments, out_dir, duration, threads, solvers=""):
+    arguments = [a.format(solvers=solvers) if "{solvers}" in a else a for a in arguments]
+    command = [drench, "sweep", SCENE, *arguments, "--threads", str(threads), "--out", str(out_dir)]
+    if duration is not None:
+        command += ["--set", f"time.duration={duration}"]
+    notes = {"cpu": cpu_model(), "commit": commit(), "load_before": load_average()}
+    # Exit status 2 only says that a run did not end "ok": those runs are rows, which is the point.
+    result = subprocess.run(command, cwd=ROOT)
+    if result.returncode not in (0, 2):
+        sys.exit(f"drench sweep failed ({result.returncode}): {' '.join(command)}")
+    notes["load_after"] = load_average()
+    shown = ["drench" if i == 0 else (f"'{a}'" if any(c in a for c in ' "[;') else a) for i, a in enumerate(command)]
+    notes["command"] = " ".join(shown)
+    return notes
+
+
+def keep(csv_path, notes, target):
+    with open(target, "w") as f:
+        for key, value in notes.items():
+            f.write(f"# {key}: {value}\n")
+        f.write(Path(csv_path).read_text())
+    print(f"wrote {target} (load {notes['load_before']} before, {notes['load_after']} after)", file=sys.stderr)
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--drench", default=str(ROOT / "build" / "demos" / "drench"))
+    parser.add_argument("--out", required=True, help="folder of the CSVs, e.g. bench/results/debian12-2core")
+    parser.add_argument("--keep", help="keep the sweeps' folders here (default: a temporary folder)")
+    parser.add_argument("--duration", type=float, help="simulated time of every run (default: the scene's)")
+    parser.add_argument("--stability-solvers", default='"wcsph","pcisph"',
+                        help="pressure solvers of the stability sweep, as --vary values (WCSPH's runs take minutes each)")
+    parser.add_argument("--threads", type=int, default=1, help="OpenMP threads of each run (default: 1)")
+    parser.add_argument("--only", choices=["one_at_a_time", "stability"], help="run one sweep only")
+    args = parser.parse_args()
+    drench = str(Path(args.drench).resolve())
+    out = Path(args.out)
+    with tempfile.TemporaryDirectory() as scratch:
+        base = Path(args.keep).resolve() if args.keep else Path(scratch)
+        if args.only in (None, "one_at_a_time"):
+            notes = sweep(drench, ONE_AT_A_TIME, base / "one_at_a_time", args.duration, args.threads)
+            keep(base / "one_at_a_time" / "sweep.csv", notes, out / "accuracy_one_at_a_time.csv")
+            if (base / "one_at_a_time" / "pareto.png").exists():
+                shutil.copyfile(base / "one_at_a_time" / "pareto.png", ROOT / "docs" / "images" / "accuracy_pareto.png")
+        if args.only in (None, "stability"):
+            notes = sweep(drench, STABILITY, base / "stability", args.duration, args.threads, args.stability_solvers)
+            keep(base / "stability" / "sweep.csv", notes, out / "accuracy_stability.csv")
+
+
+if __name__ == "__main__":
+    main()
