@@ -10,12 +10,13 @@ namespace drench::loader {
 FluidSettings read_fluid(const Node& node) {
   FluidSettings fluid;
   const ObjectReader r(node, {"rest_density", "particle_spacing", "pressure_solver", "wcsph", "pcisph",
-                              "viscosity", "cfl", "sort_interval"});
+                              "dfsph", "viscosity", "cfl", "sort_interval"});
   r.read("rest_density", fluid.rest_density, kPositive);
   r.read("particle_spacing", fluid.particle_spacing, kPositive);
   r.read_choice("pressure_solver", fluid.pressure_solver,
                 Choices<PressureSolverKind>{{"pcisph", PressureSolverKind::PCISPH},
-                                            {"wcsph", PressureSolverKind::WCSPH}});
+                                            {"wcsph", PressureSolverKind::WCSPH},
+                                            {"dfsph", PressureSolverKind::DFSPH}});
   r.read("cfl", fluid.cfl, Range{0.0, true, 1.0, false});
   r.read("sort_interval", fluid.sort_interval, kAtLeastOne);
 
@@ -48,6 +49,16 @@ FluidSettings read_fluid(const Node& node) {
       }
     }
   }
+
+  const ObjectReader dfsph(
+      r["dfsph"], {"eta", "eta_divergence", "min_iterations", "max_iterations", "max_divergence_iterations"});
+  dfsph.read("eta", fluid.dfsph.eta, Range{0.0, true, 1.0, true});
+  dfsph.read("eta_divergence", fluid.dfsph.eta_divergence, kPositive);
+  dfsph.read("min_iterations", fluid.dfsph.min_iterations, kAtLeastOne);
+  dfsph.read("max_iterations", fluid.dfsph.max_iterations, kAtLeastOne);
+  dfsph.read("max_divergence_iterations", fluid.dfsph.max_divergence_iterations, kAtLeastOne);
+  dfsph.require_order("min_iterations", fluid.dfsph.min_iterations, "max_iterations",
+                      fluid.dfsph.max_iterations);
 
   const ObjectReader viscosity(r["viscosity"], {"method", "coefficient"});
   viscosity.read_choice(

@@ -62,6 +62,10 @@ nlohmann::json make_summary(const Simulation& sim, double wall_seconds, const st
                         {"max", f.density_error_max},
                         {"particle_max", f.particle_density_error_max}};
   s["pressure_iterations"] = {{"mean", f.pressure_iterations / substeps}, {"max", f.max_pressure_iterations}};
+  if (sim.config().fluid.pressure_solver == PressureSolverKind::DFSPH) {
+    s["divergence_iterations"] = {{"mean", f.divergence_iterations / substeps},
+                                  {"max", f.max_divergence_iterations}};
+  }
   s["fluid_substeps"] = {{"total", f.substeps}, {"max_per_step", f.max_substeps_per_step}};
   s["boundary_guards"] = f.boundary_guards;
   s["timings_s"] = {{"fluid", t.total},          {"neighbors", t.neighbors}, {"density", t.density},
@@ -72,8 +76,7 @@ nlohmann::json make_summary(const Simulation& sim, double wall_seconds, const st
   s["version"] = DRENCH_VERSION;
   s["scene_sha256"] = scene_sha256;
   s["effects"] = sim.effects();
-  s["pressure_solver"] =
-      sim.config().fluid.pressure_solver == PressureSolverKind::PCISPH ? "pcisph" : "wcsph";
+  s["pressure_solver"] = pressure_solver_name(sim.config().fluid.pressure_solver);
   s["speed_of_sound_mps"] = sim.speed_of_sound();
   s["status"] = status.describe().empty() ? "ok" : status.describe();
   s["max_speed_mps"] = {{"particle", sim.max_particle_speed()}};
