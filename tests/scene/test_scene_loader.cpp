@@ -357,13 +357,16 @@ TEST(SceneLoader, ReadsDfsphWithItsSettings) {
   EXPECT_EQ(c.fluid.dfsph.max_divergence_iterations, 40);
 }
 
-TEST(SceneLoader, DfsphDefaultsAreSplishsplashsDefaults) {
+TEST(SceneLoader, DfsphDefaultsAreSplishsplashsAndNullUnsetsTheReliefLimit) {
   const DfsphSettings d = parse(R"({"fluid": {"pressure_solver": "dfsph"}})").fluid.dfsph;
   EXPECT_DOUBLE_EQ(d.eta, 0.0005);
   EXPECT_DOUBLE_EQ(d.eta_divergence, 0.4);
   EXPECT_EQ(d.min_iterations, 2);
   EXPECT_EQ(d.max_iterations, 100);
   EXPECT_EQ(d.max_divergence_iterations, 100);
+  EXPECT_EQ(d.max_relief_per_substep, 0.05);
+  EXPECT_FALSE(
+      parse(R"({"fluid": {"dfsph": {"max_relief_per_substep": null}}})").fluid.dfsph.max_relief_per_substep);
 }
 
 TEST(SceneLoader, RejectsBadDfsphSettingsNamingTheKey) {
@@ -376,9 +379,12 @@ TEST(SceneLoader, RejectsBadDfsphSettingsNamingTheKey) {
   EXPECT_TRUE(
       scene_error(R"({"fluid": {"dfsph": {"min_iterations": 5, "max_iterations": 4}}})",
                   "fluid.dfsph.max_iterations must be >= fluid.dfsph.min_iterations = 5, got 4 (x.json)"));
-  EXPECT_TRUE(scene_error(R"({"fluid": {"dfsph": {"eta_div": 0.1}}})",
-                          "fluid.dfsph.eta_div is not a known key (x.json); known: eta, eta_divergence, "
-                          "min_iterations, max_iterations, max_divergence_iterations"));
+  EXPECT_TRUE(
+      scene_error(R"({"fluid": {"dfsph": {"eta_div": 0.1}}})",
+                  "fluid.dfsph.eta_div is not a known key (x.json); known: eta, eta_divergence, "
+                  "min_iterations, max_iterations, max_divergence_iterations, max_relief_per_substep"));
+  EXPECT_TRUE(scene_error(R"({"fluid": {"dfsph": {"max_relief_per_substep": 0}}})",
+                          "fluid.dfsph.max_relief_per_substep must be > 0, got 0 (x.json)"));
 }
 
 TEST(SceneLoader, RejectsZeroSpeedOfSound) {

@@ -1,6 +1,7 @@
 #include <drench/sph/pressure/pressure_dfsph.hpp>
 
 #include <algorithm>
+#include <limits>
 
 #include <drench/common/parallel.hpp>
 
@@ -160,13 +161,17 @@ bool PressureDfsph::apply_warm_start(const ScalarArray& warm, Scalar scale, Scal
   return true;
 }
 
-PressureDfsph::ChunkErrors PressureDfsph::measure(const FluidContext& ctx, Scalar dt, bool divergence) {
+PressureDfsph::ChunkErrors PressureDfsph::measure(const FluidContext& ctx, Scalar dt, Measure what) {
   const std::size_t n = ctx.particles.size();
   const NeighborList& fn = ctx.fluid_neighbors;
   const NeighborList& bn = ctx.boundary_neighbors;
   const Scalar rho0 = ctx.rest_density;
-  // Density solve: kappa_i / rho_i = max(rho*_i - rho0, 0) / (dt^2 denominator_i) (eq. 11 with Algorithm 3's
-  // source); divergence solve: max(D rho_i / Dt, 0) / (dt denominator_i) (Algorithm 2).
+  const ScalarArray& densities = ctx.particles.densities;
+  const bool divergence = what == Measure::DIVERGENCE;
+  const Scalar max_relief = m_settings.max_relief_per_substep ? *m_settings.max_relief_per_substep * rho0
+                                                              : std::numeric_limits<Scalar>::infinity();
+  // Density solve: kappa_i / rho_i = max(rho*_i - target_i, 0) / (dt^2 denominator_i) (eq. 11 with Algorithm
+  // 3's source); divergence solve: max(D rho_i / Dt, 0) / (dt denominator_i) (Algorithm 2).
   const Scalar scale = divergence ? 1.0 / dt : 1.0 / (dt * dt);
   m_chunk_errors.resize((n + kParticleChunk - 1) / kParticleChunk);
   for_each_chunk(n, [&](std::size_t begin, std::size_t end) {
@@ -174,16 +179,24 @@ PressureDfsph::ChunkErrors PressureDfsph::measure(const FluidContext& ctx, Scala
     density_change(ctx, m_points, m_velocities, begin, end, change);
     ChunkErrors errors;
     for (std::size_t i = begin; i < end; ++i) {
-      Scalar error;
+      Scalar error, to_target;
       if (divergence) {
         error = fn.count(i) + bn.count(i) < kMinDivergenceNeighbors ? 0.0 : std::max(change[i - begin], 0.0);
+        to_target = error;
       } else {
-        error = std::max(ctx.particles.densities[i] + dt * change[i - begin] - rho0, 0.0);
+        const Scalar predicted = densities[i] + dt * change[i - begin];
+        // Fixed at the first prediction (no pressure yet): what the motion of this sub-step would add is
+        // undone in full, what the particle entered it with only down to (density - max_relief).
+        if (what == Measure::FIRST_DENSITY)
+          m_target[i] = std::max(rho0, std::min(predicted, densities[i] - max_relief));
+        error = std::max(predicted - rho0, 0.0);
+        to_target = std::max(predicted - m_target[i], 0.0);
       }
-      m_error[i] = error;
-      m_kappa_points[i].w = error * scale * m_inv_denominator[i];
+      m_error[i] = to_target;
+      m_kappa_points[i].w = to_target * scale * m_inv_denominator[i];
       errors.sum += error;
       errors.max = std::max(errors.max, error);
+      errors.sum_to_target += to_target;
     }
     m_chunk_errors[begin / kParticleChunk] = errors;
   });
@@ -191,6 +204,7 @@ PressureDfsph::ChunkErrors PressureDfsph::measure(const FluidContext& ctx, Scala
   for (const ChunkErrors& errors : m_chunk_errors) {
     total.sum += errors.sum;
     total.max = std::max(total.max, errors.max);
+    total.sum_to_target += errors.sum_to_target;
   }
   return total;
 }
@@ -209,10 +223,10 @@ DivergenceStats PressureDfsph::correct_divergence(const FluidContext& ctx, Scala
   for (std::size_t i = 0; i < n; ++i)
     m_velocities[i] = packed(particles.velocities[i], 0.0);
   const Scalar scale = 1.0 / (static_cast<Scalar>(n) * ctx.rest_density);
-  ChunkErrors errors = measure(ctx, dt, true);
+  ChunkErrors errors = measure(ctx, dt, Measure::DIVERGENCE);
   if (apply_warm_start(m_warm_divergence, 0.5 / dt, m_kappa_divergence)) {
     update_velocities(ctx, dt, nullptr, nullptr);
-    errors = measure(ctx, dt, true);
+    errors = measure(ctx, dt, Measure::DIVERGENCE);
   }
   // No minimum: a field already below the target is left as it is (SPlisHSPlasH runs one iteration, whose
   // update is then below the target too).
@@ -224,7 +238,7 @@ DivergenceStats PressureDfsph::correct_divergence(const FluidContext& ctx, Scala
     }
     update_velocities(ctx, dt, nullptr, &m_kappa_divergence);
     ++stats.iterations;
-    errors = measure(ctx, dt, true);
+    errors = measure(ctx, dt, Measure::DIVERGENCE);
   }
   stats.average_divergence_error = errors.sum * scale;
 #pragma omp parallel for schedule(static)
@@ -250,18 +264,21 @@ PressureStats PressureDfsph::solve(const FluidContext& ctx, const Vec3Array& vel
   if (n == 0) return stats;
   m_velocities.resize(n);
   m_error.resize(n);
+  m_target.resize(n);
 #pragma omp parallel for schedule(static)
   for (std::size_t i = 0; i < n; ++i)
     m_velocities[i] = packed(velocities_adv[i], 0.0);
   const Scalar rho0 = ctx.rest_density;
   const Scalar scale = 1.0 / (static_cast<Scalar>(n) * rho0);
-  ChunkErrors errors = measure(ctx, dt, false);
+  ChunkErrors errors = measure(ctx, dt, Measure::FIRST_DENSITY);
   if (apply_warm_start(m_warm, 0.5 / (dt * dt), m_kappa)) {
     update_velocities(ctx, dt, &accelerations, nullptr);
-    errors = measure(ctx, dt, false);
+    errors = measure(ctx, dt, Measure::DENSITY);
   }
   while (true) {
-    const bool below = errors.sum * scale <= m_settings.eta;
+    // Measured against each particle's target (the rest density unless max_relief_per_substep is set); the
+    // reported errors are against the rest density.
+    const bool below = errors.sum_to_target * scale <= m_settings.eta;
     if ((below && stats.iterations >= m_settings.min_iterations) ||
         stats.iterations >= m_settings.max_iterations) {
       stats.converged = below;
@@ -269,7 +286,7 @@ PressureStats PressureDfsph::solve(const FluidContext& ctx, const Vec3Array& vel
     }
     update_velocities(ctx, dt, &accelerations, &m_kappa);
     ++stats.iterations;
-    errors = measure(ctx, dt, false);
+    errors = measure(ctx, dt, Measure::DENSITY);
   }
   stats.average_density_error = errors.sum * scale;
   stats.max_density_error = errors.max / rho0;

@@ -19,7 +19,10 @@ namespace drench {
 ///   next sub-step, where SPlisHSPlasH runs it too (the same order of operations).
 /// - solve(): the constant-density solve (Algorithm 3) from the advected velocities: rho*_i = rho_i + dt D
 ///   rho_i / Dt, kappa_i = max(rho*_i - rho0, 0) / dt^2 alpha_i, the same velocity update, until the mean of
-///   max(rho* - rho0, 0) / rho0 is below DfsphSettings::eta after at least min_iterations.
+///   max(rho* - rho0, 0) / rho0 is below DfsphSettings::eta after at least min_iterations. With
+///   DfsphSettings::max_relief_per_substep set (the default, a drench addition as PCISPH's), a particle that
+///   enters a sub-step compressed by more than that is driven to (its density - max_relief), or to its first
+///   prediction if lower, instead of rho0, and the stopping rule measures the error against that target.
 /// Both solves start from half the last sub-step's kappas of the particles that need correcting (the warm
 /// start of SPlisHSPlasH, made independent of the step by storing kappa dt^2 and kappa^v dt), following each
 /// particle by id through re-sorts, emission and removal. The pressure reported per particle is rho_i^2 times
@@ -41,12 +44,19 @@ class PressureDfsph final : public PressureSolver {
   /// Errors of one chunk of particles: the sum and the largest of the per-particle errors.
   struct ChunkErrors {
     Scalar sum = 0.0, max = 0.0;
+    Scalar sum_to_target = 0.0;  ///< density solve: the sum of max(rho*_i - target_i, 0)
   };
-  /// Each particle's error at m_velocities into m_error: max(rho*_i - rho0, 0) (unit: kg/m^3) for the density
-  /// solve, max(D rho_i / Dt, 0) (unit: kg/(m^3 s), 0 for a particle short of neighbors) for the divergence
-  /// solve; the kappa_i / rho_i that corrects it into m_kappa_points' w. Returns the sum over particles,
-  /// summed per chunk and then in chunk order (the same bits for any thread count), and the largest.
-  ChunkErrors measure(const FluidContext& ctx, Scalar dt, bool divergence);
+  enum class Measure {
+    DIVERGENCE,     ///< the divergence solve's errors
+    FIRST_DENSITY,  ///< the density solve's, fixing each particle's target density (max_relief_per_substep)
+    DENSITY         ///< the density solve's, against the targets fixed
+  };
+  /// Each particle's error at m_velocities: max(rho*_i - rho0, 0) (unit: kg/m^3) for the density solve,
+  /// max(D rho_i / Dt, 0) (unit: kg/(m^3 s), 0 for a particle short of neighbors) for the divergence solve.
+  /// Into m_error the error the solve corrects (the density solve's against m_target), and into
+  /// m_kappa_points' w the kappa_i / rho_i that corrects it. Returns the sums over particles, summed per
+  /// chunk and then in chunk order (the same bits for any thread count), and the largest error.
+  ChunkErrors measure(const FluidContext& ctx, Scalar dt, Measure what);
   /// One Jacobi velocity update: m_velocities[i] += dt a_i with a_i the symmetric pressure acceleration of
   /// w = m_kappa_points[i].w (unit: m^5/(kg s^2)); adds a_i to `accelerations` and w to `totals` when given.
   void update_velocities(const FluidContext& ctx, Scalar dt, Vec3Array* accelerations, ScalarArray* totals);
@@ -72,8 +82,9 @@ class PressureDfsph final : public PressureSolver {
   std::vector<std::uint32_t> m_ids;  // the particle ids m_warm and m_warm_divergence follow
   /// True from correct_divergence() to the end of solve(): the factors are those of the current positions.
   bool m_factors_current = false;
-  ScalarArray m_by_id;  // follow_particles(): scratch, two values per id
-  ScalarArray m_error;  // N: measure()'s per-particle errors
+  ScalarArray m_by_id;   // follow_particles(): scratch, two values per id
+  ScalarArray m_error;   // N: measure()'s per-particle errors to correct
+  ScalarArray m_target;  // N: the density each particle is driven to in this sub-step (unit: kg/m^3)
   std::vector<ChunkErrors> m_chunk_errors;
 };
 
