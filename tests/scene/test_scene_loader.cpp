@@ -357,7 +357,7 @@ TEST(SceneLoader, ReadsDfsphWithItsSettings) {
   EXPECT_EQ(c.fluid.dfsph.max_divergence_iterations, 40);
 }
 
-TEST(SceneLoader, DfsphDefaultsAreSplishsplashsAndNullUnsetsTheReliefLimit) {
+TEST(SceneLoader, DfsphDefaultsAndNullUnsetsTheReliefLimit) {
   const DfsphSettings d = parse(R"({"fluid": {"pressure_solver": "dfsph"}})").fluid.dfsph;
   EXPECT_DOUBLE_EQ(d.eta, 0.0005);
   EXPECT_DOUBLE_EQ(d.eta_divergence, 0.4);
@@ -365,6 +365,8 @@ TEST(SceneLoader, DfsphDefaultsAreSplishsplashsAndNullUnsetsTheReliefLimit) {
   EXPECT_EQ(d.max_iterations, 100);
   EXPECT_EQ(d.max_divergence_iterations, 100);
   EXPECT_EQ(d.max_relief_per_substep, 0.05);
+  EXPECT_FALSE(d.warm_start);
+  EXPECT_TRUE(parse(R"({"fluid": {"dfsph": {"warm_start": true}}})").fluid.dfsph.warm_start);
   EXPECT_FALSE(
       parse(R"({"fluid": {"dfsph": {"max_relief_per_substep": null}}})").fluid.dfsph.max_relief_per_substep);
 }
@@ -382,7 +384,8 @@ TEST(SceneLoader, RejectsBadDfsphSettingsNamingTheKey) {
   EXPECT_TRUE(
       scene_error(R"({"fluid": {"dfsph": {"eta_div": 0.1}}})",
                   "fluid.dfsph.eta_div is not a known key (x.json); known: eta, eta_divergence, "
-                  "min_iterations, max_iterations, max_divergence_iterations, max_relief_per_substep"));
+                  "min_iterations, max_iterations, max_divergence_iterations, max_relief_per_substep, "
+                  "warm_start"));
   EXPECT_TRUE(scene_error(R"({"fluid": {"dfsph": {"max_relief_per_substep": 0}}})",
                           "fluid.dfsph.max_relief_per_substep must be > 0, got 0 (x.json)"));
 }

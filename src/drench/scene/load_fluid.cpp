@@ -38,12 +38,13 @@ FluidSettings read_fluid(const Node& node) {
   pcisph.require_order("min_iterations", fluid.pcisph.min_iterations, "max_iterations",
                        fluid.pcisph.max_iterations);
   const ObjectReader dfsph(r["dfsph"], {"eta", "eta_divergence", "min_iterations", "max_iterations",
-                                        "max_divergence_iterations", "max_relief_per_substep"});
+                                        "max_divergence_iterations", "max_relief_per_substep", "warm_start"});
   dfsph.read("eta", fluid.dfsph.eta, Range{0.0, true, 1.0, true});
   dfsph.read("eta_divergence", fluid.dfsph.eta_divergence, kPositive);
   dfsph.read("min_iterations", fluid.dfsph.min_iterations, kAtLeastOne);
   dfsph.read("max_iterations", fluid.dfsph.max_iterations, kAtLeastOne);
   dfsph.read("max_divergence_iterations", fluid.dfsph.max_divergence_iterations, kAtLeastOne);
+  dfsph.read("warm_start", fluid.dfsph.warm_start);
   dfsph.require_order("min_iterations", fluid.dfsph.min_iterations, "max_iterations",
                       fluid.dfsph.max_iterations);
 

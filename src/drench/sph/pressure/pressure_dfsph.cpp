@@ -224,7 +224,7 @@ DivergenceStats PressureDfsph::correct_divergence(const FluidContext& ctx, Scala
     m_velocities[i] = packed(particles.velocities[i], 0.0);
   const Scalar scale = 1.0 / (static_cast<Scalar>(n) * ctx.rest_density);
   ChunkErrors errors = measure(ctx, dt, Measure::DIVERGENCE);
-  if (apply_warm_start(m_warm_divergence, 0.5 / dt, m_kappa_divergence)) {
+  if (m_settings.warm_start && apply_warm_start(m_warm_divergence, 0.5, m_kappa_divergence)) {
     update_velocities(ctx, dt, nullptr, nullptr);
     errors = measure(ctx, dt, Measure::DIVERGENCE);
   }
@@ -245,7 +245,7 @@ DivergenceStats PressureDfsph::correct_divergence(const FluidContext& ctx, Scala
   for (std::size_t i = 0; i < n; ++i) {
     const PackedPoint& v = m_velocities[i];
     particles.velocities[i] = Vec3(v.x, v.y, v.z);
-    m_warm_divergence[i] = m_kappa_divergence[i] * dt;
+    m_warm_divergence[i] = m_kappa_divergence[i];
   }
   return stats;
 }
@@ -271,7 +271,7 @@ PressureStats PressureDfsph::solve(const FluidContext& ctx, const Vec3Array& vel
   const Scalar rho0 = ctx.rest_density;
   const Scalar scale = 1.0 / (static_cast<Scalar>(n) * rho0);
   ChunkErrors errors = measure(ctx, dt, Measure::FIRST_DENSITY);
-  if (apply_warm_start(m_warm, 0.5 / (dt * dt), m_kappa)) {
+  if (m_settings.warm_start && apply_warm_start(m_warm, 0.5, m_kappa)) {
     update_velocities(ctx, dt, &accelerations, nullptr);
     errors = measure(ctx, dt, Measure::DENSITY);
   }
@@ -294,7 +294,7 @@ PressureStats PressureDfsph::solve(const FluidContext& ctx, const Vec3Array& vel
   for (std::size_t i = 0; i < n; ++i) {
     const Scalar rho = particles.densities[i];
     particles.pressures[i] = rho * rho * (m_kappa[i] + m_kappa_divergence[i]);
-    m_warm[i] = m_kappa[i] * dt * dt;
+    m_warm[i] = m_kappa[i];
   }
   return stats;
 }

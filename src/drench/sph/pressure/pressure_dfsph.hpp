@@ -23,11 +23,14 @@ namespace drench {
 ///   DfsphSettings::max_relief_per_substep set (the default, a drench addition as PCISPH's), a particle that
 ///   enters a sub-step compressed by more than that is driven to (its density - max_relief), or to its first
 ///   prediction if lower, instead of rho0, and the stopping rule measures the error against that target.
-/// Both solves start from half the last sub-step's kappas of the particles that need correcting (the warm
-/// start of SPlisHSPlasH, made independent of the step by storing kappa dt^2 and kappa^v dt), following each
-/// particle by id through re-sorts, emission and removal. The pressure reported per particle is rho_i^2 times
-/// the sum of both solves' kappa_i / rho_i: the pressure whose acceleration over the sub-step is the velocity
-/// change both solves made.
+/// With DfsphSettings::warm_start, both solves start from half the last sub-step's kappas of the particles
+/// that need correcting (the warm start of SPlisHSPlasH), following each particle by id through re-sorts,
+/// emission and removal. The kappas are kept as they were, pressures, where SPlisHSPlasH keeps kappa dt^2 and
+/// kappa^v dt and divides by the new step's: a steady pressure (a resting tank) does not change with the
+/// step, and after a step cut short to land on a frame (65 us after 2 ms steps) kappa dt^2 made the warm
+/// start 1,000 times the last step's pressure. The pressure reported per particle is rho_i^2 times the sum of
+/// both solves' kappa_i / rho_i: the pressure whose acceleration over the sub-step is the velocity change
+/// both solves made.
 class PressureDfsph final : public PressureSolver {
  public:
   explicit PressureDfsph(const FluidSettings& settings);
@@ -76,8 +79,8 @@ class PressureDfsph final : public PressureSolver {
   ScalarArray m_inv_denominator;
   ScalarArray m_kappa;             // N: density solve's sum of kappa_i / rho_i (unit: m^5/(kg s^2))
   ScalarArray m_kappa_divergence;  // N: divergence solve's sum of kappa^v_i / rho_i (unit: m^5/(kg s^2))
-  /// N, by particle: m_kappa dt^2 (unit: m^5/kg) and m_kappa_divergence dt (unit: m^5/(kg s)) of the last
-  /// sub-step, the warm starts; in the order of m_ids.
+  /// N, by particle: m_kappa and m_kappa_divergence of the last sub-step (unit: m^5/(kg s^2)), the warm
+  /// starts; in the order of m_ids.
   ScalarArray m_warm, m_warm_divergence;
   std::vector<std::uint32_t> m_ids;  // the particle ids m_warm and m_warm_divergence follow
   /// True from correct_divergence() to the end of solve(): the factors are those of the current positions.
