@@ -390,6 +390,19 @@ TEST(SceneLoader, RejectsBadDfsphSettingsNamingTheKey) {
                           "fluid.dfsph.max_relief_per_substep must be > 0, got 0 (x.json)"));
 }
 
+TEST(SceneLoader, ReadsAdaptiveTimeStepAndRejectsBadBounds) {
+  const SceneConfig c = parse(R"({"time": {"dt": 0.01, "adaptive": true, "dt_min": 0.001}})");
+  EXPECT_TRUE(c.time.adaptive);
+  EXPECT_DOUBLE_EQ(c.time.dt_min, 0.001);
+  EXPECT_FALSE(parse("{}").time.adaptive);
+  EXPECT_TRUE(scene_error(R"({"time": {"dt_min": 0}})", "time.dt_min must be > 0, got 0 (x.json)"));
+  EXPECT_TRUE(scene_error(R"({"time": {"dt": 0.001, "dt_min": 0.01}})",
+                          "time.dt must be >= time.dt_min = 0.01, got 0.001 (x.json)"));
+  EXPECT_TRUE(scene_error(R"({"time": {"dt_min": 0.01}})",
+                          "time.dt_min must be <= time.dt = 0.005, got 0.01 (x.json)"));
+  EXPECT_TRUE(scene_error(R"({"time": {"adaptive": 1}})", "time.adaptive"));
+}
+
 TEST(SceneLoader, RejectsZeroSpeedOfSound) {
   EXPECT_TRUE(scene_error(R"({"fluid": {"wcsph": {"speed_of_sound": 0}}})",
                           "fluid.wcsph.speed_of_sound must be > 0, got 0 (x.json)"));

@@ -32,8 +32,12 @@ class ProgressLine {
     m_last = wall;
     const double rate = sim.steps_done() / std::max(wall, 1e-9);
     const double eta = (last_step - sim.steps_done()) / std::max(rate, 1e-9);
+    const TimeSettings& t = sim.config().time;
+    // With adaptive steps the count is a bound: the time simulated measures progress.
+    const double end = t.adaptive ? t.duration : last_step * t.dt;
+    const double left = t.adaptive ? (end - sim.time()) / std::max(sim.time(), 1e-9) * wall : eta;
     std::fprintf(stderr, "\r  t = %.3f / %.3f s   %.1f steps/s   %zu particles   ETA %.0f s   ", sim.time(),
-                 last_step * sim.config().time.dt, rate, sim.particles().size(), eta);
+                 end, rate, sim.particles().size(), left);
     std::fflush(stderr);
   }
   ~ProgressLine() {
@@ -67,6 +71,9 @@ nlohmann::json make_summary(const Simulation& sim, double wall_seconds, const st
                                   {"max", f.max_divergence_iterations}};
   }
   s["fluid_substeps"] = {{"total", f.substeps}, {"max_per_step", f.max_substeps_per_step}};
+  if (sim.steps_done() > 0) {
+    s["dt_s"] = {{"min", sim.min_dt()}, {"mean", sim.sum_dt() / sim.steps_done()}, {"max", sim.max_dt()}};
+  }
   s["boundary_guards"] = f.boundary_guards;
   s["timings_s"] = {{"fluid", t.total},          {"neighbors", t.neighbors}, {"density", t.density},
                     {"forces", t.forces},        {"pressure", t.pressure},   {"integrate", t.integrate},
@@ -210,7 +217,7 @@ RunResult run_scene(Simulation& sim, const RunOptions& options) {
   RunResult result;
   ProgressLine progress(options.progress);
   write_due_frames();
-  while (sim.steps_done() < last_step) {
+  while (sim.steps_done() < last_step && !sim.finished()) {
     result.status |= sim.step();
     if (!result.status.ok()) break;
     write_due_frames();

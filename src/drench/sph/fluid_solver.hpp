@@ -99,6 +99,9 @@ class FluidSolver {
 
   /// Fastest particle speed (unit: m/s); NaN when a velocity is NaN.
   Scalar max_speed() const;
+  /// The longest step the CFL limit allows now, cfl spacing / (max_speed() + signal speed) (unit: s): step()
+  /// takes one sub-step for any dt up to it. Infinite when nothing moves (and WCSPH's signal speed is 0).
+  Scalar cfl_step() const { return cfl_limit(max_speed()); }
 
  private:
   /// @param max_displacement  how far the fastest particle may move in the coming sub-step (unit: m): decides
