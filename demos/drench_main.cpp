@@ -53,10 +53,16 @@ int run_command(const std::string& scene_path, const std::string& out_dir,
   options.scene_document = document;
   options.progress = !quiet;
   if (!quiet) {
-    std::fprintf(stderr, "drench %s: %s, %zu particles, %lld steps of %g s, %d threads\n", DRENCH_VERSION,
-                 scene_path.c_str(), simulation.particles().size(),
-                 static_cast<long long>(options.max_steps.value_or(simulation.total_steps())), config.time.dt,
-                 omp_get_max_threads());
+    if (config.time.adaptive) {
+      std::fprintf(stderr, "drench %s: %s, %zu particles, %g s in steps of %g to %g s, %d threads\n",
+                   DRENCH_VERSION, scene_path.c_str(), simulation.particles().size(), config.time.duration,
+                   config.time.dt_min, config.time.dt, omp_get_max_threads());
+    } else {
+      std::fprintf(stderr, "drench %s: %s, %zu particles, %lld steps of %g s, %d threads\n", DRENCH_VERSION,
+                   scene_path.c_str(), simulation.particles().size(),
+                   static_cast<long long>(options.max_steps.value_or(simulation.total_steps())),
+                   config.time.dt, omp_get_max_threads());
+    }
   }
   const drench::RunResult result = drench::run_scene(simulation, options);
   const auto& s = result.summary;

@@ -283,7 +283,7 @@ TEST(SceneLoader, RejectsMisspeltFluidKeyListingKnownKeys) {
   EXPECT_TRUE(
       scene_error(R"({"fluid": {"visocsity": {}}})",
                   "fluid.visocsity is not a known key (x.json); known: rest_density, particle_spacing, "
-                  "pressure_solver, wcsph, pcisph, viscosity, cfl, sort_interval"));
+                  "pressure_solver, wcsph, pcisph, dfsph, viscosity, cfl, sort_interval"));
 }
 
 TEST(SceneLoader, RejectsNonFiniteNumberInDocumentBuiltInCode) {
@@ -329,9 +329,9 @@ TEST(SceneLoader, RejectsZeroRestDensity) {
 }
 
 TEST(SceneLoader, RejectsUnknownPressureSolverListingChoices) {
-  EXPECT_TRUE(
-      scene_error(R"({"fluid": {"pressure_solver": "iisph"}})",
-                  "fluid.pressure_solver must be one of \"pcisph\", \"wcsph\", got \"iisph\" (x.json)"));
+  EXPECT_TRUE(scene_error(
+      R"({"fluid": {"pressure_solver": "iisph"}})",
+      "fluid.pressure_solver must be one of \"pcisph\", \"wcsph\", \"dfsph\", got \"iisph\" (x.json)"));
 }
 
 TEST(SceneLoader, RejectsUnknownPcisphPrecisionListingChoices) {
@@ -341,8 +341,66 @@ TEST(SceneLoader, RejectsUnknownPcisphPrecisionListingChoices) {
 }
 
 TEST(SceneLoader, RejectsPressureSolverThatIsNotAString) {
-  EXPECT_TRUE(scene_error(R"({"fluid": {"pressure_solver": 1}})",
-                          "fluid.pressure_solver must be one of \"pcisph\", \"wcsph\", got 1 (x.json)"));
+  EXPECT_TRUE(
+      scene_error(R"({"fluid": {"pressure_solver": 1}})",
+                  "fluid.pressure_solver must be one of \"pcisph\", \"wcsph\", \"dfsph\", got 1 (x.json)"));
+}
+
+TEST(SceneLoader, ReadsDfsphWithItsSettings) {
+  const SceneConfig c = parse(R"({"fluid": {"pressure_solver": "dfsph", "dfsph": {"eta": 0.001,
+      "eta_divergence": 0.2, "min_iterations": 3, "max_iterations": 50, "max_divergence_iterations": 40}}})");
+  EXPECT_EQ(c.fluid.pressure_solver, PressureSolverKind::DFSPH);
+  EXPECT_DOUBLE_EQ(c.fluid.dfsph.eta, 0.001);
+  EXPECT_DOUBLE_EQ(c.fluid.dfsph.eta_divergence, 0.2);
+  EXPECT_EQ(c.fluid.dfsph.min_iterations, 3);
+  EXPECT_EQ(c.fluid.dfsph.max_iterations, 50);
+  EXPECT_EQ(c.fluid.dfsph.max_divergence_iterations, 40);
+}
+
+TEST(SceneLoader, DfsphDefaultsAndNullUnsetsTheReliefLimit) {
+  const DfsphSettings d = parse(R"({"fluid": {"pressure_solver": "dfsph"}})").fluid.dfsph;
+  EXPECT_DOUBLE_EQ(d.eta, 0.0005);
+  EXPECT_DOUBLE_EQ(d.eta_divergence, 0.4);
+  EXPECT_EQ(d.min_iterations, 2);
+  EXPECT_EQ(d.max_iterations, 100);
+  EXPECT_EQ(d.max_divergence_iterations, 100);
+  EXPECT_EQ(d.max_relief_per_substep, 0.05);
+  EXPECT_FALSE(d.warm_start);
+  EXPECT_TRUE(parse(R"({"fluid": {"dfsph": {"warm_start": true}}})").fluid.dfsph.warm_start);
+  EXPECT_FALSE(
+      parse(R"({"fluid": {"dfsph": {"max_relief_per_substep": null}}})").fluid.dfsph.max_relief_per_substep);
+}
+
+TEST(SceneLoader, RejectsBadDfsphSettingsNamingTheKey) {
+  EXPECT_TRUE(scene_error(R"({"fluid": {"dfsph": {"eta": 0}}})",
+                          "fluid.dfsph.eta must be in (0, 1), got 0 (x.json)"));
+  EXPECT_TRUE(scene_error(R"({"fluid": {"dfsph": {"eta_divergence": -1}}})",
+                          "fluid.dfsph.eta_divergence must be > 0, got -1 (x.json)"));
+  EXPECT_TRUE(scene_error(R"({"fluid": {"dfsph": {"max_divergence_iterations": 0}}})",
+                          "fluid.dfsph.max_divergence_iterations must be >= 1, got 0 (x.json)"));
+  EXPECT_TRUE(
+      scene_error(R"({"fluid": {"dfsph": {"min_iterations": 5, "max_iterations": 4}}})",
+                  "fluid.dfsph.max_iterations must be >= fluid.dfsph.min_iterations = 5, got 4 (x.json)"));
+  EXPECT_TRUE(
+      scene_error(R"({"fluid": {"dfsph": {"eta_div": 0.1}}})",
+                  "fluid.dfsph.eta_div is not a known key (x.json); known: eta, eta_divergence, "
+                  "min_iterations, max_iterations, max_divergence_iterations, max_relief_per_substep, "
+                  "warm_start"));
+  EXPECT_TRUE(scene_error(R"({"fluid": {"dfsph": {"max_relief_per_substep": 0}}})",
+                          "fluid.dfsph.max_relief_per_substep must be > 0, got 0 (x.json)"));
+}
+
+TEST(SceneLoader, ReadsAdaptiveTimeStepAndRejectsBadBounds) {
+  const SceneConfig c = parse(R"({"time": {"dt": 0.01, "adaptive": true, "dt_min": 0.001}})");
+  EXPECT_TRUE(c.time.adaptive);
+  EXPECT_DOUBLE_EQ(c.time.dt_min, 0.001);
+  EXPECT_FALSE(parse("{}").time.adaptive);
+  EXPECT_TRUE(scene_error(R"({"time": {"dt_min": 0}})", "time.dt_min must be > 0, got 0 (x.json)"));
+  EXPECT_TRUE(scene_error(R"({"time": {"dt": 0.001, "dt_min": 0.01}})",
+                          "time.dt must be >= time.dt_min = 0.01, got 0.001 (x.json)"));
+  EXPECT_TRUE(scene_error(R"({"time": {"dt_min": 0.01}})",
+                          "time.dt_min must be <= time.dt = 0.005, got 0.01 (x.json)"));
+  EXPECT_TRUE(scene_error(R"({"time": {"adaptive": 1}})", "time.adaptive"));
 }
 
 TEST(SceneLoader, RejectsZeroSpeedOfSound) {

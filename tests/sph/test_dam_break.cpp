@@ -3,14 +3,17 @@
 #include <gtest/gtest.h>
 
 #include <cstdio>
+#include <string>
+#include <vector>
 
 #include "physics_helpers.hpp"
 
 namespace drench {
 namespace {
 
-TEST(DamBreakPcisph, StaysFiniteInsideTheBoxConservesParticlesAndLosesEnergy) {
-  const SceneConfig config = testing::demo_scene("dam_break.json", {"time.duration=1.0"});
+void expect_finite_inside_the_box_conserving_particles_and_losing_energy(
+    const std::vector<std::string>& overrides) {
+  const SceneConfig config = testing::demo_scene("dam_break.json", overrides);
   Simulation sim(config);
   const std::size_t count = sim.particles().size();
   ASSERT_EQ(count, 8000u);
@@ -35,6 +38,15 @@ TEST(DamBreakPcisph, StaysFiniteInsideTheBoxConservesParticlesAndLosesEnergy) {
   std::printf("[ measured ] energy: initial %.2f J, final %.2f J, max %.2f J\n", e0, e1, e_max);
   EXPECT_LT(e1, e0);
   EXPECT_LE(e_max, 1.01 * e0) << "energy rose above its initial value by more than 1%";
+}
+
+TEST(DamBreakPcisph, StaysFiniteInsideTheBoxConservesParticlesAndLosesEnergy) {
+  expect_finite_inside_the_box_conserving_particles_and_losing_energy({"time.duration=1.0"});
+}
+
+TEST(DamBreakDfsph, StaysFiniteInsideTheBoxConservesParticlesAndLosesEnergy) {
+  expect_finite_inside_the_box_conserving_particles_and_losing_energy(
+      {"time.duration=1.0", "fluid.pressure_solver=dfsph"});
 }
 
 }  // namespace

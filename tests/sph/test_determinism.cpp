@@ -5,16 +5,18 @@
 #include <omp.h>
 
 #include <cstring>
+#include <string>
 
 #include "physics_helpers.hpp"
 
 namespace drench {
 namespace {
 
-ParticleSet run_dam_break(int threads, int steps) {
+ParticleSet run_dam_break(int threads, int steps, const std::string& solver = "pcisph") {
   const int saved = omp_get_max_threads();
   omp_set_num_threads(threads);
-  Simulation sim(testing::demo_scene("dam_break.json", {"fluid.particle_spacing=0.1"}));
+  Simulation sim(testing::demo_scene("dam_break.json",
+                                     {"fluid.particle_spacing=0.1", "fluid.pressure_solver=" + solver}));
   for (int s = 0; s < steps; ++s)
     sim.step();
   omp_set_num_threads(saved);
@@ -36,6 +38,10 @@ TEST(Determinism, TwoRunsWithTheSameThreadCountAreBitIdentical) {
 
 TEST(Determinism, OneAndTwoThreadsGiveBitIdenticalStates) {
   EXPECT_TRUE(bitwise_equal(run_dam_break(1, 60), run_dam_break(2, 60)));
+}
+
+TEST(Determinism, DfsphGivesBitIdenticalStatesOnOneAndTwoThreads) {
+  EXPECT_TRUE(bitwise_equal(run_dam_break(1, 60, "dfsph"), run_dam_break(2, 60, "dfsph")));
 }
 
 }  // namespace

@@ -60,16 +60,14 @@ const SettledTank& pcisph_tank() {
 
 constexpr Scalar kBase = 0.4 * 0.4;  // inner base area of the tank (unit: m^2)
 
-void expect_settled_below_five_centimetres_per_second() {
-  const SettledTank& tank = pcisph_tank();
+void expect_settled_below_five_centimetres_per_second(const SettledTank& tank) {
   EXPECT_EQ(tank.steps, 800u);
   const Scalar v = testing::max_speed(tank.particles);
   std::printf("[ measured ] max speed after 2 s: %.4f m/s\n", v);
   EXPECT_LT(v, 0.05);
 }
 
-void expect_pressure_gradient_over_depth_is_rho_g_within_five_percent() {
-  const SettledTank& tank = pcisph_tank();
+void expect_pressure_gradient_over_depth_is_rho_g_within_five_percent(const SettledTank& tank) {
   const Scalar s = tank.config.fluid.particle_spacing;
   const Scalar surface = testing::free_surface_height(tank.particles, std::lround(kBase / (s * s)), s);
   // Least-squares line p = a + b y of the settled pressures (averaged over the last 0.1 s, see SettledTank)
@@ -94,8 +92,7 @@ void expect_pressure_gradient_over_depth_is_rho_g_within_five_percent() {
   EXPECT_NEAR(-slope, rho_g, 0.05 * rho_g) << "fitted over " << n << " particles";
 }
 
-void expect_density_near_walls_within_two_percent_of_rest_density() {
-  const SettledTank& tank = pcisph_tank();
+void expect_density_near_walls_within_two_percent_of_rest_density(const SettledTank& tank) {
   const Scalar s = tank.config.fluid.particle_spacing;
   const Scalar surface = testing::free_surface_height(tank.particles, std::lround(kBase / (s * s)), s);
   Scalar sum = 0;
@@ -114,8 +111,7 @@ void expect_density_near_walls_within_two_percent_of_rest_density() {
   EXPECT_NEAR(sum / count, tank.config.fluid.rest_density, 0.02 * tank.config.fluid.rest_density);
 }
 
-void expect_free_surface_within_one_spacing_of_volume_over_base() {
-  const SettledTank& tank = pcisph_tank();
+void expect_free_surface_within_one_spacing_of_volume_over_base(const SettledTank& tank) {
   const Scalar s = tank.config.fluid.particle_spacing;
   const Scalar volume = tank.particles.size() * s * s * s;
   const Scalar surface = testing::free_surface_height(tank.particles, std::lround(kBase / (s * s)), s);
@@ -123,23 +119,32 @@ void expect_free_surface_within_one_spacing_of_volume_over_base() {
   EXPECT_NEAR(surface, volume / kBase, s);
 }
 
-TEST(HydrostaticTankPcisph, SettlesToHydrostaticPressureDensityAndHeight) {
+void expect_hydrostatic(const SettledTank& tank) {
   {
     SCOPED_TRACE("max speed after 2 s below 0.05 m/s");
-    expect_settled_below_five_centimetres_per_second();
+    expect_settled_below_five_centimetres_per_second(tank);
   }
   {
     SCOPED_TRACE("pressure gradient over depth within 5% of rho g");
-    expect_pressure_gradient_over_depth_is_rho_g_within_five_percent();
+    expect_pressure_gradient_over_depth_is_rho_g_within_five_percent(tank);
   }
   {
     SCOPED_TRACE("mean density within two spacings of a wall within 2% of rest density");
-    expect_density_near_walls_within_two_percent_of_rest_density();
+    expect_density_near_walls_within_two_percent_of_rest_density(tank);
   }
   {
     SCOPED_TRACE("free surface within one spacing of volume / base area");
-    expect_free_surface_within_one_spacing_of_volume_over_base();
+    expect_free_surface_within_one_spacing_of_volume_over_base(tank);
   }
+}
+
+TEST(HydrostaticTankPcisph, SettlesToHydrostaticPressureDensityAndHeight) {
+  expect_hydrostatic(pcisph_tank());
+}
+
+TEST(HydrostaticTankDfsph, SettlesToHydrostaticPressureDensityAndHeight) {
+  // DFSPH under PCISPH's tolerances; its pressure is that of both its solves (PressureDfsph).
+  expect_hydrostatic(settle({"fluid.pressure_solver=dfsph"}));
 }
 
 TEST(HydrostaticTank, WcsphAndPcisphAgreeOnSettledHeightWithinOneSpacing) {

@@ -1,7 +1,7 @@
 /// `fluid` of a scene: rest density and spacing, the pressure solver with its settings, viscosity, CFL and
 /// sorting (FluidSettings, scene_config.hpp).
 
-#include <utility>
+#include <tuple>
 
 #include <drench/scene/load_sections.hpp>
 
@@ -10,12 +10,13 @@ namespace drench::loader {
 FluidSettings read_fluid(const Node& node) {
   FluidSettings fluid;
   const ObjectReader r(node, {"rest_density", "particle_spacing", "pressure_solver", "wcsph", "pcisph",
-                              "viscosity", "cfl", "sort_interval"});
+                              "dfsph", "viscosity", "cfl", "sort_interval"});
   r.read("rest_density", fluid.rest_density, kPositive);
   r.read("particle_spacing", fluid.particle_spacing, kPositive);
   r.read_choice("pressure_solver", fluid.pressure_solver,
                 Choices<PressureSolverKind>{{"pcisph", PressureSolverKind::PCISPH},
-                                            {"wcsph", PressureSolverKind::WCSPH}});
+                                            {"wcsph", PressureSolverKind::WCSPH},
+                                            {"dfsph", PressureSolverKind::DFSPH}});
   r.read("cfl", fluid.cfl, Range{0.0, true, 1.0, false});
   r.read("sort_interval", fluid.sort_interval, kAtLeastOne);
 
@@ -36,11 +37,23 @@ FluidSettings read_fluid(const Node& node) {
                                                  {"double", IterationPrecision::DOUBLE}});
   pcisph.require_order("min_iterations", fluid.pcisph.min_iterations, "max_iterations",
                        fluid.pcisph.max_iterations);
-  // null is "no limit" (the published PCISPH), so that --set can undo the default.
-  for (auto [key, limit] :
-       {std::pair{"max_compression_per_iteration", &fluid.pcisph.max_compression_per_iteration},
-        std::pair{"max_relief_per_substep", &fluid.pcisph.max_relief_per_substep}}) {
-    if (const Node c = pcisph[key]; c.present()) {
+  const ObjectReader dfsph(r["dfsph"], {"eta", "eta_divergence", "min_iterations", "max_iterations",
+                                        "max_divergence_iterations", "max_relief_per_substep", "warm_start"});
+  dfsph.read("eta", fluid.dfsph.eta, Range{0.0, true, 1.0, true});
+  dfsph.read("eta_divergence", fluid.dfsph.eta_divergence, kPositive);
+  dfsph.read("min_iterations", fluid.dfsph.min_iterations, kAtLeastOne);
+  dfsph.read("max_iterations", fluid.dfsph.max_iterations, kAtLeastOne);
+  dfsph.read("max_divergence_iterations", fluid.dfsph.max_divergence_iterations, kAtLeastOne);
+  dfsph.read("warm_start", fluid.dfsph.warm_start);
+  dfsph.require_order("min_iterations", fluid.dfsph.min_iterations, "max_iterations",
+                      fluid.dfsph.max_iterations);
+
+  // null is "no limit" (the published PCISPH and DFSPH), so that --set can undo the default.
+  for (auto [reader, key, limit] :
+       {std::tuple{&pcisph, "max_compression_per_iteration", &fluid.pcisph.max_compression_per_iteration},
+        std::tuple{&pcisph, "max_relief_per_substep", &fluid.pcisph.max_relief_per_substep},
+        std::tuple{&dfsph, "max_relief_per_substep", &fluid.dfsph.max_relief_per_substep}}) {
+    if (const Node c = (*reader)[key]; c.present()) {
       if (c.value().is_null()) {
         limit->reset();
       } else {

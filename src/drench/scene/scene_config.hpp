@@ -35,8 +35,15 @@ struct KillRegionSettings {
 };
 
 struct TimeSettings {
-  Scalar dt = 0.005;      ///< step of the whole simulation (unit: s), > 0; the fluid may sub-step inside it
-  Scalar duration = 1.0;  ///< simulated time (unit: s), > 0
+  /// Step of the whole simulation (unit: s), > 0; the fluid may sub-step inside it. With `adaptive`, the
+  /// largest step.
+  Scalar dt = 0.005;
+  /// Each step is the fluid's CFL step, fluid.cfl spacing / (v_max + signal speed), within [dt_min, dt], cut
+  /// to land on every frame's time and on the duration: no fluid sub-steps unless a step is at dt_min. The
+  /// cloth and the coupling take the same steps; the fluid's step stays a sub-step of the scene's.
+  bool adaptive = false;
+  Scalar dt_min = 1e-5;      ///< with `adaptive`: the smallest step (unit: s), > 0, <= dt
+  Scalar duration = 1.0;     ///< simulated time (unit: s), > 0
   Scalar frame_rate = 30.0;  ///< frames written per simulated second (unit: 1/s), >= 0; 0 writes no frames
 };
 

@@ -29,11 +29,14 @@ using loader::show;
 /// `time` (TimeSettings): the step, the duration and the frame rate; the step may not exceed the duration.
 TimeSettings read_time(const Node& node) {
   TimeSettings time;
-  const ObjectReader r(node, {"dt", "duration", "frame_rate"});
+  const ObjectReader r(node, {"dt", "duration", "frame_rate", "adaptive", "dt_min"});
   r.read("dt", time.dt, kPositive);
   r.read("duration", time.duration, kPositive);
   r.read("frame_rate", time.frame_rate, kNonNegative);
+  r.read("adaptive", time.adaptive);
+  r.read("dt_min", time.dt_min, kPositive);
   r.require_order("dt", time.dt, "duration", time.duration);
+  r.require_order("dt_min", time.dt_min, "dt", time.dt);
   return time;
 }
 

@@ -32,8 +32,12 @@ class ProgressLine {
     m_last = wall;
     const double rate = sim.steps_done() / std::max(wall, 1e-9);
     const double eta = (last_step - sim.steps_done()) / std::max(rate, 1e-9);
+    const TimeSettings& t = sim.config().time;
+    // With adaptive steps the count is a bound: the time simulated measures progress.
+    const double end = t.adaptive ? t.duration : last_step * t.dt;
+    const double left = t.adaptive ? (end - sim.time()) / std::max(sim.time(), 1e-9) * wall : eta;
     std::fprintf(stderr, "\r  t = %.3f / %.3f s   %.1f steps/s   %zu particles   ETA %.0f s   ", sim.time(),
-                 last_step * sim.config().time.dt, rate, sim.particles().size(), eta);
+                 end, rate, sim.particles().size(), left);
     std::fflush(stderr);
   }
   ~ProgressLine() {
@@ -62,7 +66,14 @@ nlohmann::json make_summary(const Simulation& sim, double wall_seconds, const st
                         {"max", f.density_error_max},
                         {"particle_max", f.particle_density_error_max}};
   s["pressure_iterations"] = {{"mean", f.pressure_iterations / substeps}, {"max", f.max_pressure_iterations}};
+  if (sim.config().fluid.pressure_solver == PressureSolverKind::DFSPH) {
+    s["divergence_iterations"] = {{"mean", f.divergence_iterations / substeps},
+                                  {"max", f.max_divergence_iterations}};
+  }
   s["fluid_substeps"] = {{"total", f.substeps}, {"max_per_step", f.max_substeps_per_step}};
+  if (sim.steps_done() > 0) {
+    s["dt_s"] = {{"min", sim.min_dt()}, {"mean", sim.sum_dt() / sim.steps_done()}, {"max", sim.max_dt()}};
+  }
   s["boundary_guards"] = f.boundary_guards;
   s["timings_s"] = {{"fluid", t.total},          {"neighbors", t.neighbors}, {"density", t.density},
                     {"forces", t.forces},        {"pressure", t.pressure},   {"integrate", t.integrate},
@@ -86,8 +97,7 @@ nlohmann::json make_summary(const Simulation& sim, double wall_seconds, const st
   if (counters.substep_obstacle.constructed > 0)
     s["obstacle_skipped_substeps"] = counters.substep_obstacle.skipped;
   if (counters.leak_audit.constructed > 0) s["leak_audit_skipped_steps"] = counters.leak_audit.skipped;
-  s["pressure_solver"] =
-      sim.config().fluid.pressure_solver == PressureSolverKind::PCISPH ? "pcisph" : "wcsph";
+  s["pressure_solver"] = pressure_solver_name(sim.config().fluid.pressure_solver);
   s["speed_of_sound_mps"] = sim.speed_of_sound();
   s["status"] = status.describe().empty() ? "ok" : status.describe();
   s["max_speed_mps"] = {{"particle", sim.max_particle_speed()}};
@@ -224,7 +234,7 @@ RunResult run_scene(Simulation& sim, const RunOptions& options) {
   RunResult result;
   ProgressLine progress(options.progress);
   write_due_frames();
-  while (sim.steps_done() < last_step) {
+  while (sim.steps_done() < last_step && !sim.finished()) {
     result.status |= sim.step();
     if (!result.status.ok()) break;
     write_due_frames();

@@ -149,6 +149,11 @@ Simulation::Simulation(const SceneConfig& config, std::unique_ptr<ClothEngine> c
       std::make_unique<FluidSolver>(m_config.fluid, m_config.gravity, sample_boundaries(m_config),
                                     m_config.boundaries, m_config.has_effect("viscosity"), m_speed_of_sound);
   m_total_steps = std::max<std::int64_t>(1, std::llround(m_config.time.duration / m_config.time.dt));
+  if (m_config.time.adaptive) {
+    const TimeSettings& t = m_config.time;
+    const Scalar frames = std::ceil(t.duration * t.frame_rate);
+    m_total_steps = static_cast<std::int64_t>(std::ceil(t.duration / t.dt_min) + frames) + 1;
+  }
   const Scalar mass = m_fluid->particle_mass();
   for (const auto& e : m_config.emitters) {
     if (e.kind == EmitterSettings::Kind::BOX) {
@@ -238,7 +243,28 @@ bool Simulation::closed() const {
 }
 
 bool Simulation::finished() const {
+  if (m_config.time.adaptive) return m_time >= m_config.time.duration - 1e-3 * m_config.time.dt_min;
   return m_steps >= m_total_steps;
+}
+
+Scalar Simulation::next_dt() const {
+  const TimeSettings& t = m_config.time;
+  if (!t.adaptive) return t.dt;
+  // A NaN CFL step (a NaN velocity) takes the largest step, so that the fluid names the particle.
+  const Scalar cfl = m_fluid->cfl_step();
+  const Scalar longest = std::isnan(cfl) ? t.dt : std::clamp(cfl, t.dt_min, t.dt);
+  // Frames and the end land on a step: the time up to the next one is cut into equal steps no longer than
+  // `longest`. Cutting only the step that would pass it left slivers (65 us after 2 ms steps), in which
+  // DFSPH relieved a compression within the sliver: the dam break's particles reached 32-108 m/s and its
+  // energy rose by 11% or more.
+  Scalar stop = t.duration;
+  if (t.frame_rate > 0) {
+    const Scalar next_frame = (std::floor(m_time * t.frame_rate + 1e-9) + 1.0) / t.frame_rate;
+    stop = std::min(stop, next_frame);
+  }
+  const Scalar left = stop - m_time;
+  const Scalar steps = std::max(1.0, std::ceil(left / longest - 1e-9));
+  return steps == 1.0 ? left : left / steps;
 }
 
 StepStatus Simulation::step(Scalar dt) {
@@ -267,6 +293,9 @@ StepStatus Simulation::step(Scalar dt) {
   }
   ++m_steps;
   m_time += dt;
+  m_min_dt = std::min(m_min_dt, dt);
+  m_sum_dt += dt;
+  m_max_dt = std::max(m_max_dt, dt);
   if (!m_config.kill_regions.empty()) {
     ScopedTimer timer(m_emit_seconds);
     remove_killed();

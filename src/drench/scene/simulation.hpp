@@ -3,6 +3,7 @@
 /// the scene's dt.
 
 #include <cstdint>
+#include <limits>
 #include <memory>
 #include <vector>
 
@@ -45,14 +46,22 @@ class Simulation {
   /// the particles and, per coupling.scheme, the cloth now or at its next step (repulsion, friction,
   /// continuous handling); the leak audit checks the final motion; the cloth takes its corrections; kill
   /// regions remove the particles that left. Stages of effects the scene does not list are never built.
-  StepStatus step() { return step(m_config.time.dt); }
+  StepStatus step() { return step(next_dt()); }
   /// The same with a step other than the scene's (unit: s, > 0).
   StepStatus step(Scalar dt);
 
   /// True once the simulated time has reached the scene's duration (within a thousandth of a step).
   bool finished() const;
-  /// Steps the scene's duration takes, round(duration / dt).
+  /// The step step() takes next (unit: s): time.dt, or with time.adaptive the fluid's CFL step within
+  /// [dt_min, dt], cut to land on the next frame's time and on the duration.
+  Scalar next_dt() const;
+  /// Steps the scene's duration takes, round(duration / dt); with time.adaptive, the most it can take
+  /// (every step at dt_min, or cut short by a frame).
   std::int64_t total_steps() const { return m_total_steps; }
+  /// Smallest, summed and largest step taken (unit: s); min is infinite before the first step.
+  Scalar min_dt() const { return m_min_dt; }
+  Scalar sum_dt() const { return m_sum_dt; }
+  Scalar max_dt() const { return m_max_dt; }
   std::int64_t steps_done() const { return m_steps; }
   Scalar time() const { return m_time; }
 
@@ -140,6 +149,7 @@ class Simulation {
   std::uint32_t m_next_id = 0;
   std::int64_t m_steps = 0;
   std::int64_t m_total_steps = 0;
+  Scalar m_min_dt = std::numeric_limits<Scalar>::infinity(), m_sum_dt = 0.0, m_max_dt = 0.0;
   std::int64_t m_removed = 0;
   double m_emit_seconds = 0;
   std::unique_ptr<ClothEngine> m_cloth;

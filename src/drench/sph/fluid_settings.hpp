@@ -10,7 +10,20 @@
 namespace drench {
 
 /// Which pressure solver runs. Selected by name in the scene (`fluid.pressure_solver`).
-enum class PressureSolverKind { WCSPH, PCISPH };
+enum class PressureSolverKind { WCSPH, PCISPH, DFSPH };
+
+/// The name a scene gives `kind` ("wcsph", "pcisph", "dfsph"), as summary.json reports it.
+inline const char* pressure_solver_name(PressureSolverKind kind) {
+  switch (kind) {
+    case PressureSolverKind::WCSPH:
+      return "wcsph";
+    case PressureSolverKind::PCISPH:
+      return "pcisph";
+    case PressureSolverKind::DFSPH:
+      return "dfsph";
+  }
+  return "";
+}
 
 /// Weakly compressible SPH, Becker & Teschner 2007: Tait equation p = B ((rho / rho0)^gamma - 1).
 struct WcsphSettings {
@@ -57,6 +70,39 @@ struct PcisphSettings {
   IterationPrecision precision = IterationPrecision::SINGLE;
 };
 
+/// Divergence-free SPH, Bender & Koschier 2015 and 2017 ("Divergence-free SPH for incompressible and viscous
+/// fluids", TVCG 2017): a constant-density solve before integration and a divergence-free solve of the
+/// velocity field, both Jacobi iterations with the factor alpha_i (eq. 11), warm-started from the last
+/// sub-step.
+struct DfsphSettings {
+  /// Target average density error of the constant-density solve (fraction of rest density), in (0, 1): the
+  /// mean over particles of max(rho*_i - rho0, 0) / rho0 at the velocities after the solve. 0.0005 is
+  /// SPlisHSPlasH's default (maxError 0.05%); Bender & Koschier 2015 ran their examples below 0.0001.
+  Scalar eta = 0.0005;
+  /// Target average divergence error of the divergence-free solve (unit: 1/s), > 0: the mean over particles
+  /// of max(D rho_i / Dt, 0) / rho0. Bender & Koschier 2017 and SPlisHSPlasH (maxErrorV 0.1%) state it per
+  /// step, 0.001 / dt; drench states it per second so that it does not change with the step: the default 0.4
+  /// is their 0.1% at a step of 2.5 ms, the step bound of the 59K dam break (docs/performance.md).
+  Scalar eta_divergence = 0.4;
+  /// At least this many constant-density iterations per sub-step, >= 1 (SPlisHSPlasH: 2)
+  int min_iterations = 2;
+  int max_iterations = 100;  ///< at most this many, >= min_iterations (SPlisHSPlasH: 100)
+  /// At most this many divergence-free iterations per sub-step, >= 1 (SPlisHSPlasH: 100)
+  int max_divergence_iterations = 100;
+  /// The largest compression (fraction of rest density, > 0) one sub-step relieves for one particle; unset =
+  /// all of it, as published. A drench addition, as PcisphSettings::max_relief_per_substep and for the same
+  /// reason: the coupling stacks particles against a moving cloth between the fluid's steps, and undoing that
+  /// inside one CFL sub-step throws them far faster than the flow (the jet on a cloth at dt 4 ms: 168 m/s
+  /// without it).
+  std::optional<Scalar> max_relief_per_substep = 0.05;
+  /// Start both solves from half the last sub-step's kappas of the particles they correct, as Bender &
+  /// Koschier and SPlisHSPlasH do. Off by default, as PCISPH's warm start was rejected: on the dam break it
+  /// saves a third of the density iterations (2.7 against 4.0 per sub-step), but a correction it carries over
+  /// cannot be taken back (only compression is corrected), and the hydrostatic tank kept a particle moving at
+  /// 0.14 m/s after 2 s (0.034 m/s without; test_hydrostatic_tank asks below 0.05).
+  bool warm_start = false;
+};
+
 /// Viscosity method. Constructed only when the scene's `effects` lists "viscosity".
 enum class ViscosityKind {
   XSPH,       ///< velocity smoothing v_i += c sum_j m_j / rho_j (v_j - v_i) W_ij (Monaghan 1989)
@@ -77,6 +123,7 @@ struct FluidSettings {
   PressureSolverKind pressure_solver = PressureSolverKind::PCISPH;
   WcsphSettings wcsph;
   PcisphSettings pcisph;
+  DfsphSettings dfsph;
   ViscositySettings viscosity;
   /// CFL factor lambda (dimensionless), in (0, 1]: a fluid sub-step never exceeds lambda spacing / v_max,
   /// with v_max the fastest particle (plus the speed of sound for WCSPH).

@@ -31,7 +31,9 @@ std::string StepStatus::describe() const {
   }
   if (flags & PRESSURE_NOT_CONVERGED) {
     if (!text.empty()) text += "; ";
-    text += "PRESSURE_NOT_CONVERGED: PCISPH reached fluid.pcisph.max_iterations above eta";
+    text +=
+        "PRESSURE_NOT_CONVERGED: the pressure solver reached its max_iterations (fluid.pcisph or "
+        "fluid.dfsph) above eta";
   }
   if (flags & NON_FINITE_CLOTH) {
     if (!text.empty()) text += "; ";
@@ -140,6 +142,13 @@ StepStatus FluidSolver::substep(Scalar dt, Scalar max_speed, SubstepConstraint* 
       sph_densities(ctx, m_positions_mass, begin, end, &m_particles.densities[begin]);
     });
   }
+  DivergenceStats divergence;
+  {
+    ScopedTimer timer(m_stats.timings_s.pressure);
+    divergence = m_pressure->correct_divergence(ctx, dt);
+  }
+  m_stats.divergence_iterations += divergence.iterations;
+  m_stats.max_divergence_iterations = std::max(m_stats.max_divergence_iterations, divergence.iterations);
   {
     ScopedTimer timer(m_stats.timings_s.forces);
     m_accelerations.assign(n, m_gravity);
@@ -165,7 +174,7 @@ StepStatus FluidSolver::substep(Scalar dt, Scalar max_speed, SubstepConstraint* 
       std::max(m_stats.particle_density_error_max, pressure.max_density_error);
 
   StepStatus status;
-  if (!pressure.converged) status.flags |= StepStatus::PRESSURE_NOT_CONVERGED;
+  if (!pressure.converged || !divergence.converged) status.flags |= StepStatus::PRESSURE_NOT_CONVERGED;
   ScopedTimer timer(m_stats.timings_s.integrate);
   if (constraint) m_positions_before = m_particles.positions;
   std::size_t first_bad = n;

@@ -24,8 +24,9 @@ struct StepStatus {
     /// A particle's position or velocity became NaN or infinite; `non_finite_particle` names its id. The
     /// state is no longer meaningful: lower dt or the CFL factor, or check the scene's stiffness.
     NON_FINITE_STATE = 1u << 0,
-    /// PCISPH stopped at max_iterations with the density error above eta in some sub-step. The step is still
-    /// usable; raise max_iterations or lower dt if it persists.
+    /// PCISPH or DFSPH stopped at max_iterations with the density error above eta (or DFSPH's divergence
+    /// solve at max_divergence_iterations above eta_divergence) in some sub-step. The step is still usable;
+    /// raise the iteration limit or lower dt if it persists.
     PRESSURE_NOT_CONVERGED = 1u << 1,
     /// A cloth node's position became NaN or infinite after the cloth's own step; `non_finite_node` names it
     /// and the coupling was skipped. Lower dt, raise the cloth's position iterations, check its masses.
@@ -46,17 +47,19 @@ struct FluidStatistics {
   std::int64_t steps = 0;
   std::int64_t substeps = 0;
   int max_substeps_per_step = 0;
-  std::int64_t pressure_iterations = 0;   ///< summed over sub-steps
-  int max_pressure_iterations = 0;        ///< in one sub-step
-  Scalar density_error_sum = 0;           ///< sum over sub-steps of the average density error
-  Scalar density_error_max = 0;           ///< largest average density error of a sub-step
-  Scalar particle_density_error_max = 0;  ///< largest density error of any particle in any sub-step
-  std::int64_t boundary_guards = 0;       ///< particles put back by enforce_boundary, over all sub-steps
-  std::int64_t neighbor_searches = 0;     ///< sub-steps whose neighbor lists came from a grid search (the
-                                          ///< others reused the last search's candidates)
+  std::int64_t pressure_iterations = 0;    ///< summed over sub-steps
+  int max_pressure_iterations = 0;         ///< in one sub-step
+  std::int64_t divergence_iterations = 0;  ///< DFSPH's divergence-free iterations, summed over sub-steps
+  int max_divergence_iterations = 0;       ///< in one sub-step
+  Scalar density_error_sum = 0;            ///< sum over sub-steps of the average density error
+  Scalar density_error_max = 0;            ///< largest average density error of a sub-step
+  Scalar particle_density_error_max = 0;   ///< largest density error of any particle in any sub-step
+  std::int64_t boundary_guards = 0;        ///< particles put back by enforce_boundary, over all sub-steps
+  std::int64_t neighbor_searches = 0;      ///< sub-steps whose neighbor lists came from a grid search (the
+                                           ///< others reused the last search's candidates)
   struct Timings {
     double total = 0, neighbors = 0, density = 0, forces = 0, pressure = 0, integrate = 0;
-  } timings_s;  ///< wall time per stage (unit: s)
+  } timings_s;  ///< wall time per stage (unit: s); pressure includes DFSPH's divergence-free solve
 };
 
 /// An SPH fluid with static boundary particles.
@@ -100,6 +103,9 @@ class FluidSolver {
 
   /// Fastest particle speed (unit: m/s); NaN when a velocity is NaN.
   Scalar max_speed() const;
+  /// The longest step the CFL limit allows now, cfl spacing / (max_speed() + signal speed) (unit: s): step()
+  /// takes one sub-step for any dt up to it. Infinite when nothing moves (and WCSPH's signal speed is 0).
+  Scalar cfl_step() const { return cfl_limit(max_speed()); }
 
  private:
   /// @param max_displacement  how far the fastest particle may move in the coming sub-step (unit: m): decides

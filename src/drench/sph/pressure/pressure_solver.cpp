@@ -2,6 +2,7 @@
 
 #include <algorithm>
 
+#include <drench/sph/pressure/pressure_dfsph.hpp>
 #include <drench/sph/pressure/pressure_pcisph.hpp>
 #include <drench/sph/pressure/pressure_wcsph.hpp>
 
@@ -13,6 +14,8 @@ std::unique_ptr<PressureSolver> make_pressure_solver(const FluidSettings& settin
       return std::make_unique<PressureWcsph>(settings, speed_of_sound);
     case PressureSolverKind::PCISPH:
       return std::make_unique<PressurePcisph>(settings);
+    case PressureSolverKind::DFSPH:
+      return std::make_unique<PressureDfsph>(settings);
   }
   return nullptr;
 }

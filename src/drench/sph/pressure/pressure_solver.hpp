@@ -14,7 +14,15 @@ struct PressureStats {
   int iterations = 0;                ///< correction iterations (1 for WCSPH)
   Scalar average_density_error = 0;  ///< mean over particles of max(rho - rho0, 0) / rho0 after the solve
   Scalar max_density_error = 0;      ///< largest max(rho - rho0, 0) / rho0 of any particle after the solve
-  bool converged = true;             ///< false when PCISPH stopped at max_iterations above eta
+  bool converged = true;             ///< false when the solve stopped at its max_iterations above eta
+};
+
+/// What one divergence solve (PressureSolver::correct_divergence) reports.
+struct DivergenceStats {
+  int iterations = 0;  ///< divergence iterations (0 for solvers without one)
+  /// Mean over particles of max(D rho / Dt, 0) / rho0 after the solve (unit: 1/s)
+  Scalar average_divergence_error = 0;
+  bool converged = true;  ///< false when it stopped at its iteration limit above its target
 };
 
 /// A pressure solver turns densities and advected velocities into pressure accelerations.
@@ -29,6 +37,15 @@ class PressureSolver {
   /// Preconditions: ctx.particles.densities hold the SPH densities at the current positions.
   virtual PressureStats solve(const FluidContext& ctx, const Vec3Array& velocities_adv, Scalar dt,
                               Vec3Array& accelerations) = 0;
+
+  /// Called once per sub-step after the densities at the sub-step's start and before the non-pressure forces;
+  /// may change ctx.particles.velocities. DFSPH makes the velocity field divergence-free here: Bender &
+  /// Koschier 2017 (Algorithm 1) do it at the end of a step, after the positions moved, with fresh neighbors
+  /// and densities; the start of the next sub-step is the same point of the sequence, where those are
+  /// computed anyway (and where SPlisHSPlasH does it). The default does nothing.
+  /// @param dt  the sub-step about to be taken (unit: s), > 0
+  /// Preconditions: as solve(); solve() of the same sub-step follows.
+  virtual DivergenceStats correct_divergence(const FluidContext& /*ctx*/, Scalar /*dt*/) { return {}; }
 
   /// A speed the CFL condition must add to the fastest particle's (unit: m/s): the speed of sound for
   /// weakly compressible solvers, 0 for incompressible ones.
