@@ -367,6 +367,9 @@ TEST(SceneLoader, DfsphDefaultsAndNullUnsetsTheReliefLimit) {
   EXPECT_EQ(d.max_relief_per_substep, 0.05);
   EXPECT_FALSE(d.warm_start);
   EXPECT_TRUE(parse(R"({"fluid": {"dfsph": {"warm_start": true}}})").fluid.dfsph.warm_start);
+  EXPECT_EQ(d.precision, IterationPrecision::SINGLE);
+  EXPECT_EQ(parse(R"({"fluid": {"dfsph": {"precision": "double"}}})").fluid.dfsph.precision,
+            IterationPrecision::DOUBLE);
   EXPECT_FALSE(
       parse(R"({"fluid": {"dfsph": {"max_relief_per_substep": null}}})").fluid.dfsph.max_relief_per_substep);
 }
@@ -385,7 +388,7 @@ TEST(SceneLoader, RejectsBadDfsphSettingsNamingTheKey) {
       scene_error(R"({"fluid": {"dfsph": {"eta_div": 0.1}}})",
                   "fluid.dfsph.eta_div is not a known key (x.json); known: eta, eta_divergence, "
                   "min_iterations, max_iterations, max_divergence_iterations, max_relief_per_substep, "
-                  "warm_start"));
+                  "warm_start, precision"));
   EXPECT_TRUE(scene_error(R"({"fluid": {"dfsph": {"max_relief_per_substep": 0}}})",
                           "fluid.dfsph.max_relief_per_substep must be > 0, got 0 (x.json)"));
 }

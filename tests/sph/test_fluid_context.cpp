@@ -20,6 +20,7 @@
 #include <drench/sph/fluid_context.hpp>
 #include <drench/sph/forces/viscosity.hpp>
 #include <drench/sph/packed_lanes.hpp>
+#include <drench/sph/pressure/pressure_dfsph.hpp>
 #include "neighbor_test_helpers.hpp"
 
 namespace drench {
@@ -269,6 +270,52 @@ TEST(FluidContext, FloatPressureAccelerationsAreTheSymmetricSphSumsWithin1e5) {
   EXPECT_GT(with_boundary, 10u) << "the boundary term must be exercised";
 }
 
+/// DFSPH's rate of density change (Bender & Koschier 2017 eq. 9) pair by pair in double with the stored
+/// gradient factors, against density_change (the same sums in another order: 1e-13) and density_change_float
+/// (1e-5, as the float densities), both relative to the sum of the terms' magnitudes.
+TEST(FluidContext, DensityChangeIsTheSphSumInDoubleAndWithin1e5InFloat) {
+  Scene s(true);
+  expect_every_tail(s.fluid, 16);
+  const FluidContext ctx = s.context();
+  const ParticleSet& p = s.particles;
+  const std::size_t n = p.size();
+  const ScalarArray zeros(n, 0.0);
+  const PackedPointArray x_mass = pack(p.positions, p.masses);
+  const PackedPointArray v = pack(p.velocities, zeros);
+  const PackedPointFArray x_mass_float = pack_float(p.positions, p.masses);
+  const PackedPointFArray v_float = pack_float(p.velocities, zeros);
+  const PackedPointFArray boundary = pack_float(s.boundary_x, s.psi);
+  const ScalarArray in_double =
+      in_two_ranges<Scalar>(n, 123, [&](std::size_t begin, std::size_t end, Scalar* out) {
+        density_change(ctx, x_mass, v, begin, end, out);
+      });
+  const ScalarArray in_float =
+      in_two_ranges<Scalar>(n, 123, [&](std::size_t begin, std::size_t end, Scalar* out) {
+        density_change_float(ctx, x_mass_float, v_float, boundary, begin, end, out);
+      });
+  Scalar largest = 0.0;
+  for (std::size_t i = 0; i < n; ++i) {
+    Scalar expected = 0.0, magnitude = 0.0;
+    for (const Index* j = s.fluid.begin(i); j != s.fluid.end(i); ++j) {
+      const Vec3 x_ij = p.positions[i] - p.positions[*j];
+      const Scalar term =
+          p.masses[*j] * (p.velocities[i] - p.velocities[*j]).dot(stored_gradient(s.kernel, x_ij));
+      expected += term;
+      magnitude += std::abs(term);
+    }
+    for (const Index* b = s.boundary.begin(i); b != s.boundary.end(i); ++b) {
+      const Vec3 x_ib = p.positions[i] - s.boundary_x[*b];
+      const Scalar term = s.psi[*b] * p.velocities[i].dot(stored_gradient(s.kernel, x_ib));
+      expected += term;
+      magnitude += std::abs(term);
+    }
+    EXPECT_LE(std::abs(in_double[i] - expected), 1e-13 * magnitude) << "particle " << i;
+    EXPECT_LE(std::abs(in_float[i] - expected), 1e-5 * magnitude) << "particle " << i;
+    if (magnitude > 0.0) largest = std::max(largest, std::abs(in_float[i] - expected) / magnitude);
+  }
+  EXPECT_GT(largest, 0.0) << "single precision must be in use (else this test checks nothing new)";
+}
+
 TEST(FluidContext, FloatDensitiesAreTheSphSumsWithin1e5) {
   check_float_densities(true);
   check_float_densities(false);
@@ -321,14 +368,16 @@ TEST(PackedLanes, WideAndHalvesGroupsGiveTheSameBits) {
   EXPECT_GT(nonzero, x_mass.size()) << "the sums must not be trivially zero";
 }
 
-/// The single-precision kernel sums (densities) and gradient sums (pressure) of both sixteen-lane group
-/// types, bit for bit, over every tail length modulo sixteen of the fluid list and over the boundary list.
+/// The single-precision kernel sums (densities), gradient sums (pressure) and density changes (DFSPH) of both
+/// sixteen-lane group types, bit for bit, over every tail length modulo sixteen of the fluid list and over
+/// the boundary list.
 TEST(FloatLanes, WideAndHalvesGroupsGiveTheSameBits) {
   Scene s(true);
   expect_every_tail(s.fluid, 16);
   const ParticleSet& p = s.particles;
   const PackedPointFArray x_mass = pack_float(p.positions, p.masses);
   const PackedPointFArray x_pressure = pack_float(p.positions, s.p_over_rho2);
+  const PackedPointFArray v = pack_float(p.velocities, ScalarArray(p.size(), 0.0));
   const PackedPointFArray boundary = pack_float(s.boundary_x, s.psi);
   const FloatKernel kernel(s.kernel);
   std::size_t nonzero = 0;
@@ -355,8 +404,23 @@ TEST(FloatLanes, WideAndHalvesGroupsGiveTheSameBits) {
         EXPECT_EQ(wide[c], halves[c]) << "pressure sum, particle " << i << ", component " << c;
       nonzero += wide[0] != 0.0f;
     }
+    const PackedPointF& xi = x_mass[i];
+    const PackedPointF& vi = v[i];
+    const float* ff = s.fluid_factors.data();
+    const float* bf = s.boundary_factors.data();
+    const float fluid_wide =
+        float_density_change_sum<FloatWideGroup, false>(xi, vi, x_mass.data(), v.data(), s.fluid, i, ff);
+    const float fluid_halves =
+        float_density_change_sum<FloatHalvesGroup, false>(xi, vi, x_mass.data(), v.data(), s.fluid, i, ff);
+    const float walls_wide =
+        float_density_change_sum<FloatWideGroup, true>(xi, vi, boundary.data(), nullptr, s.boundary, i, bf);
+    const float walls_halves =
+        float_density_change_sum<FloatHalvesGroup, true>(xi, vi, boundary.data(), nullptr, s.boundary, i, bf);
+    EXPECT_EQ(fluid_wide, fluid_halves) << "density change, particle " << i;
+    EXPECT_EQ(walls_wide, walls_halves) << "density change at the boundary, particle " << i;
+    nonzero += fluid_wide != 0.0f;
   }
-  EXPECT_GT(nonzero, 2 * x_mass.size()) << "the sums must not be trivially zero";
+  EXPECT_GT(nonzero, 3 * x_mass.size()) << "the sums must not be trivially zero";
 }
 
 }  // namespace

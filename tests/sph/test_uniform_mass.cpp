@@ -1,6 +1,6 @@
 // The pair loops take m_j from FluidContext::uniform_mass when every particle has the same mass, and from
-// the particles' masses otherwise. Both paths must give the same fluid. PCISPH's single-precision iterations
-// (which need one mass) must give the fluid of the double ones within float's rounding.
+// the particles' masses otherwise. Both paths must give the same fluid. PCISPH's and DFSPH's single-precision
+// iterations (which need one mass) must give the fluid of the double ones within float's rounding.
 
 #include <gtest/gtest.h>
 
@@ -22,17 +22,21 @@ namespace {
 
 constexpr double kSpacing = 0.01;  // m
 
-/// An 8 x 8 x 8 PCISPH block without gravity with one particle stacked 0.2 spacing from an interior one, so
-/// that pressures and pressure accelerations are not zero; with `lone_heavy_particle`, one more particle of
-/// twice the mass far away (no neighbor), which makes the masses differ. PCISPH's iterations run in
-/// `precision`. The block's corner is at `offset` (unit: m); with `floor`, it rests on one layer of boundary
-/// points half a spacing below it, 12 x 12 of them (the bottom layer then has boundary neighbors).
+/// An 8 x 8 x 8 block of `solver` (PCISPH unless said) without gravity with one particle stacked 0.2 spacing
+/// from an interior one, so that pressures and pressure accelerations are not zero; with
+/// `lone_heavy_particle`, one more particle of twice the mass far away (no neighbor), which makes the masses
+/// differ. The solver's iterations run in `precision`. The block's corner is at `offset` (unit: m); with
+/// `floor`, it rests on one layer of boundary points half a spacing below it, 12 x 12 of them (the bottom
+/// layer then has boundary neighbors).
 FluidSolver compressed_block(bool lone_heavy_particle,
                              IterationPrecision precision = IterationPrecision::DOUBLE,
-                             const Vec3& offset = Vec3::Zero(), bool floor = false) {
+                             const Vec3& offset = Vec3::Zero(), bool floor = false,
+                             PressureSolverKind solver = PressureSolverKind::PCISPH) {
   FluidSettings settings;
   settings.particle_spacing = kSpacing;
+  settings.pressure_solver = solver;
   settings.pcisph.precision = precision;
+  settings.dfsph.precision = precision;
   BoundaryParticles boundary;
   for (int k = -2; floor && k < 10; ++k) {
     for (int i = -2; i < 10; ++i) {
@@ -127,19 +131,23 @@ Differences after_three_substeps(FluidSolver& a, FluidSolver& b) {
 /// Single precision against double on the compressed block: the same iteration counts, and densities,
 /// pressures and velocities within float's rounding (pressures: PCISPH's pressure is delta times the density
 /// error, an amplifier of density rounding).
-void expect_single_gives_the_fluid_of_double(const Vec3& offset, bool floor) {
-  FluidSolver single = compressed_block(false, IterationPrecision::SINGLE, offset, floor);
-  FluidSolver reference = compressed_block(false, IterationPrecision::DOUBLE, offset, floor);
+/// DFSPH's likewise (its pressure is rho^2 kappa, kappa the density error over the factor's denominator).
+void expect_single_gives_the_fluid_of_double(const Vec3& offset, bool floor,
+                                             PressureSolverKind solver = PressureSolverKind::PCISPH) {
+  FluidSolver single = compressed_block(false, IterationPrecision::SINGLE, offset, floor, solver);
+  FluidSolver reference = compressed_block(false, IterationPrecision::DOUBLE, offset, floor, solver);
   const Differences d = after_three_substeps(single, reference);
   std::printf(
       "[ measured ] single - double: density %.2g (relative), pressure %.2g of %.3g Pa, velocity %.2g "
       "of %.2g m/s\n",
       d.density, d.pressure, d.max_pressure, d.velocity, d.fastest);
   EXPECT_EQ(single.statistics().pressure_iterations, reference.statistics().pressure_iterations);
+  EXPECT_EQ(single.statistics().divergence_iterations, reference.statistics().divergence_iterations);
   EXPECT_LT(d.density, 1e-5);
   EXPECT_LT(d.pressure, 1e-4 * d.max_pressure);
   EXPECT_LT(d.velocity, 1e-4 * d.fastest);
   EXPECT_GT(d.fastest, 1e-3);  // the stacked particle was pushed apart: the loops did work
+  EXPECT_GT(d.velocity, 0.0) << "single precision must be in use (else this test checks nothing)";
 }
 
 /// Near the origin, where floats are finest (the differences are printed as [ measured ]).
@@ -154,10 +162,18 @@ TEST(Pcisph, SinglePrecisionFarFromTheOriginOverAFloorGivesTheFluidOfDouble) {
   expect_single_gives_the_fluid_of_double(Vec3(1000.0, -200.0, 300.0), true);
 }
 
+TEST(Dfsph, SinglePrecisionIterationsGiveTheFluidOfDouble) {
+  expect_single_gives_the_fluid_of_double(Vec3::Zero(), false, PressureSolverKind::DFSPH);
+}
+
+TEST(Dfsph, SinglePrecisionFarFromTheOriginOverAFloorGivesTheFluidOfDouble) {
+  expect_single_gives_the_fluid_of_double(Vec3(1000.0, -200.0, 300.0), true, PressureSolverKind::DFSPH);
+}
+
 /// Particles of differing masses take the double loops whatever the setting: the same bits as double.
-TEST(Pcisph, SinglePrecisionFallsBackToDoubleWhenMassesDiffer) {
-  FluidSolver single = compressed_block(true, IterationPrecision::SINGLE);
-  FluidSolver reference = compressed_block(true, IterationPrecision::DOUBLE);
+void expect_double_when_masses_differ(PressureSolverKind solver) {
+  FluidSolver single = compressed_block(true, IterationPrecision::SINGLE, Vec3::Zero(), false, solver);
+  FluidSolver reference = compressed_block(true, IterationPrecision::DOUBLE, Vec3::Zero(), false, solver);
   const Differences d = after_three_substeps(single, reference);
   EXPECT_EQ(d.position, 0.0);
   EXPECT_EQ(d.velocity, 0.0);
@@ -165,11 +181,19 @@ TEST(Pcisph, SinglePrecisionFallsBackToDoubleWhenMassesDiffer) {
   EXPECT_GT(d.fastest, 1e-3);
 }
 
+TEST(Pcisph, SinglePrecisionFallsBackToDoubleWhenMassesDiffer) {
+  expect_double_when_masses_differ(PressureSolverKind::PCISPH);
+}
+
+TEST(Dfsph, SinglePrecisionFallsBackToDoubleWhenMassesDiffer) {
+  expect_double_when_masses_differ(PressureSolverKind::DFSPH);
+}
+
 /// A particle at infinity is reported by name and harms no other. Single precision centres its float records
 /// on the finite particles and takes double when the fluid reaches too far from that centre; with neither
 /// guard, every record became NaN and the report named another particle (both checked by mutation).
-TEST(Pcisph, SinglePrecisionKeepsAParticleAtInfinityToItself) {
-  FluidSolver fluid = compressed_block(false, IterationPrecision::SINGLE);
+void expect_particle_at_infinity_kept_to_itself(PressureSolverKind solver) {
+  FluidSolver fluid = compressed_block(false, IterationPrecision::SINGLE, Vec3::Zero(), false, solver);
   ParticleSet& p = fluid.particles();
   const std::uint32_t id = 100000;
   p.add(Vec3(std::numeric_limits<Scalar>::infinity(), 0.0, 0.0), Vec3::Zero(), p.masses[0], id);
@@ -180,6 +204,14 @@ TEST(Pcisph, SinglePrecisionKeepsAParticleAtInfinityToItself) {
   for (std::size_t i = 0; i < p.size(); ++i)
     finite += p.positions[i].allFinite() && p.velocities[i].allFinite();
   EXPECT_EQ(finite, p.size() - 1);
+}
+
+TEST(Pcisph, SinglePrecisionKeepsAParticleAtInfinityToItself) {
+  expect_particle_at_infinity_kept_to_itself(PressureSolverKind::PCISPH);
+}
+
+TEST(Dfsph, SinglePrecisionKeepsAParticleAtInfinityToItself) {
+  expect_particle_at_infinity_kept_to_itself(PressureSolverKind::DFSPH);
 }
 
 }  // namespace

@@ -37,14 +37,18 @@ FluidSettings read_fluid(const Node& node) {
                                                  {"double", IterationPrecision::DOUBLE}});
   pcisph.require_order("min_iterations", fluid.pcisph.min_iterations, "max_iterations",
                        fluid.pcisph.max_iterations);
-  const ObjectReader dfsph(r["dfsph"], {"eta", "eta_divergence", "min_iterations", "max_iterations",
-                                        "max_divergence_iterations", "max_relief_per_substep", "warm_start"});
+  const ObjectReader dfsph(
+      r["dfsph"], {"eta", "eta_divergence", "min_iterations", "max_iterations", "max_divergence_iterations",
+                   "max_relief_per_substep", "warm_start", "precision"});
   dfsph.read("eta", fluid.dfsph.eta, Range{0.0, true, 1.0, true});
   dfsph.read("eta_divergence", fluid.dfsph.eta_divergence, kPositive);
   dfsph.read("min_iterations", fluid.dfsph.min_iterations, kAtLeastOne);
   dfsph.read("max_iterations", fluid.dfsph.max_iterations, kAtLeastOne);
   dfsph.read("max_divergence_iterations", fluid.dfsph.max_divergence_iterations, kAtLeastOne);
   dfsph.read("warm_start", fluid.dfsph.warm_start);
+  dfsph.read_choice("precision", fluid.dfsph.precision,
+                    Choices<IterationPrecision>{{"single", IterationPrecision::SINGLE},
+                                                {"double", IterationPrecision::DOUBLE}});
   dfsph.require_order("min_iterations", fluid.dfsph.min_iterations, "max_iterations",
                       fluid.dfsph.max_iterations);
 

@@ -1,6 +1,7 @@
 #pragma once
-/// Sixteen neighbors at a time in single precision: the vector types and loops of PCISPH's iterations
-/// (sph_densities_float and pressure_accelerations_float, sph/fluid_context.cpp), over PackedPointF records.
+/// Sixteen neighbors at a time in single precision: the vector types and loops of PCISPH's and DFSPH's
+/// iterations (sph_densities_float and pressure_accelerations_float, sph/fluid_context.cpp;
+/// density_change_float, sph/pressure/pressure_dfsph.cpp), over PackedPointF records.
 /// Internal to those DRENCH_SIMD_CLONES functions and their tests, as sph/packed_lanes.hpp (whose notes on
 /// always_inline apply here too).
 ///
@@ -246,6 +247,45 @@ template <class Group>
   sx += Group::sum(ax);
   sy += Group::sum(ay);
   sz += Group::sum(az);
+}
+
+/// sum_j f_j (v_i - v_j) . (x_i - x_j) over the fluid neighbors j of i in `list` (kBoundary false), or
+/// sum_b w_b f_b v_i . (x_i - x_b) over its boundary neighbors (kBoundary true: boundary points at rest,
+/// `velocities` not read), in single precision; `factors` are the gradient factors f of the list's entries.
+/// DFSPH's rate of density change (density_change_float) without the fluid's uniform mass.
+template <class Group, bool kBoundary>
+[[gnu::always_inline]] inline float float_density_change_sum(const PackedPointF& xi, const PackedPointF& vi,
+                                                             const PackedPointF* points,
+                                                             const PackedPointF* velocities,
+                                                             const NeighborList& list, std::size_t i,
+                                                             const float* factors) {
+  typename Group::Vec sum = {};
+  for_each_group<Group>(
+      list, i, factors,
+      [&](const Index* group, const float* fs, const typename Group::Mask& active)
+          __attribute__((always_inline)) {
+            typename Group::Points p;
+            Group::load(points, group, p);
+            typename Group::Vec f, dot, term;
+            Group::load_factors(fs, f);
+            if constexpr (kBoundary) {
+              dot = vi.x * (xi.x - p.x);
+              dot += vi.y * (xi.y - p.y);
+              dot += vi.z * (xi.z - p.z);
+              f = p.w * f;
+            } else {
+              typename Group::Points v;
+              Group::load(velocities, group, v);
+              dot = (vi.x - v.x) * (xi.x - p.x);
+              dot += (vi.y - v.y) * (xi.y - p.y);
+              dot += (vi.z - v.z) * (xi.z - p.z);
+            }
+            // Masked after the product, as float_subtract_gradient_sum: a padding lane's NaN must not reach
+            // the sum.
+            Group::select(active, f * dot, term);
+            sum += term;
+          });
+  return Group::sum(sum);
 }
 
 }  // namespace

@@ -34,12 +34,13 @@ struct WcsphSettings {
   Scalar exponent = 7.0;  ///< gamma of the Tait equation (dimensionless), >= 1
 };
 
-/// Floating-point precision of PCISPH's iterations: the density and pressure passes over neighbor pairs that
-/// each iteration runs (fluid.pcisph.precision). Pressures, densities, velocities and positions are double
-/// either way.
+/// Floating-point precision of PCISPH's and DFSPH's iterations: the passes over neighbor pairs that each
+/// iteration runs (fluid.pcisph.precision, fluid.dfsph.precision). Pressures, densities, velocities and
+/// positions are double either way.
 enum class IterationPrecision {
-  SINGLE,  ///< the pair sums in float (sph_densities_float, pressure_accelerations_float)
-  DOUBLE   ///< the pair sums in double (sph_densities, pressure_accelerations)
+  /// the pair sums in float (sph_densities_float, pressure_accelerations_float, density_change_float)
+  SINGLE,
+  DOUBLE  ///< the pair sums in double (sph_densities, pressure_accelerations, density_change)
 };
 
 /// Predictive-corrective incompressible SPH, Solenthaler & Pajarola 2009.
@@ -101,6 +102,10 @@ struct DfsphSettings {
   /// cannot be taken back (only compression is corrected), and the hydrostatic tank kept a particle moving at
   /// 0.14 m/s after 2 s (0.034 m/s without; test_hydrostatic_tank asks below 0.05).
   bool warm_start = false;
+  /// Precision of the iterations' pair sums (the density change and the pressure acceleration), as
+  /// PcisphSettings::precision: single is the default, for the same reason; double is also used, whatever
+  /// this says, when particle masses differ.
+  IterationPrecision precision = IterationPrecision::SINGLE;
 };
 
 /// Viscosity method. Constructed only when the scene's `effects` lists "viscosity".

@@ -1,9 +1,11 @@
 #include <drench/sph/pressure/pressure_dfsph.hpp>
 
 #include <algorithm>
+#include <cassert>
 #include <limits>
 
 #include <drench/common/parallel.hpp>
+#include <drench/sph/float_lanes.hpp>
 
 namespace drench {
 
@@ -68,6 +70,28 @@ DRENCH_SIMD_CLONES void density_change(const FluidContext& ctx, const PackedPoin
   }
 }
 
+DRENCH_SIMD_CLONES void density_change_float(const FluidContext& ctx, const PackedPointFArray& x_mass,
+                                             const PackedPointFArray& velocities,
+                                             const PackedPointFArray& boundary, std::size_t begin,
+                                             std::size_t end, Scalar* out) {
+  assert(ctx.uniform_mass > 0.0);
+  const PackedPointF* xs = x_mass.data();
+  const PackedPointF* vs = velocities.data();
+  const PackedPointF* bs = boundary.data();
+  with_group_of_copy<FloatHalvesGroup, FloatWideGroup>([&](auto lanes) __attribute__((always_inline)) {
+    using Group = decltype(lanes);
+    for (std::size_t i = begin; i < end; ++i) {
+      const PackedPointF& xi = xs[i];
+      const PackedPointF& vi = vs[i];
+      const float fluid = float_density_change_sum<Group, false>(xi, vi, xs, vs, ctx.fluid_neighbors, i,
+                                                                 ctx.fluid_gradient_factors.data());
+      const float walls = float_density_change_sum<Group, true>(xi, vi, bs, nullptr, ctx.boundary_neighbors,
+                                                                i, ctx.boundary_gradient_factors.data());
+      out[i - begin] = ctx.uniform_mass * Scalar{fluid} + Scalar{walls};
+    }
+  });
+}
+
 PressureDfsph::PressureDfsph(const FluidSettings& settings) : m_settings(settings.dfsph) {
   const Scalar s = settings.particle_spacing;
   const Scalar mass = settings.rest_density * s * s * s;
@@ -110,13 +134,31 @@ void PressureDfsph::follow_particles(const ParticleSet& particles) {
 void PressureDfsph::compute_factors(const FluidContext& ctx) {
   const ParticleSet& particles = ctx.particles;
   const std::size_t n = particles.size();
+  Vec3 origin;
+  m_single = single_precision_origin(ctx, m_settings.precision, origin);
   m_points.resize(n);
-  m_kappa_points.resize(n);
+  m_kappa_points.resize(m_single ? 0 : n);
+  m_points_float.resize(m_single ? n : 0);
+  m_kappa_points_float.resize(m_single ? n : 0);
+  m_velocities_float.resize(m_single ? n : 0);
+  m_boundary_float.resize(m_single ? ctx.boundary.size() : 0);
   m_inv_denominator.resize(n);
 #pragma omp parallel for schedule(static)
   for (std::size_t i = 0; i < n; ++i) {
     m_points[i] = packed(particles.positions[i], particles.masses[i]);
-    m_kappa_points[i] = packed(particles.positions[i], 0.0);
+    if (m_single) {
+      m_points_float[i] = packed_float(particles.positions[i] - origin, particles.masses[i]);
+      m_kappa_points_float[i] = packed_float(particles.positions[i] - origin, 0.0);
+    } else {
+      m_kappa_points[i] = packed(particles.positions[i], 0.0);
+    }
+  }
+  if (m_single) {
+#pragma omp parallel for schedule(static)
+    for (std::size_t b = 0; b < ctx.boundary.size(); ++b) {
+      const PackedPoint& p = ctx.boundary[b];
+      m_boundary_float[b] = packed_float(Vec3(p.x, p.y, p.z) - origin, p.w);
+    }
   }
   for_each_chunk(n, [&](std::size_t begin, std::size_t end) {
     dfsph_denominators(ctx, m_points, begin, end, &m_inv_denominator[begin]);
@@ -128,19 +170,34 @@ void PressureDfsph::compute_factors(const FluidContext& ctx) {
   m_factors_current = true;
 }
 
+void PressureDfsph::set_velocities(const Vec3Array& velocities) {
+  const std::size_t n = velocities.size();
+  m_velocities.resize(n);
+#pragma omp parallel for schedule(static)
+  for (std::size_t i = 0; i < n; ++i) {
+    m_velocities[i] = packed(velocities[i], 0.0);
+    if (m_single) m_velocities_float[i] = packed_float(velocities[i], 0.0);
+  }
+}
+
 void PressureDfsph::update_velocities(const FluidContext& ctx, Scalar dt, Vec3Array* accelerations,
                                       ScalarArray* totals) {
   for_each_chunk(ctx.particles.size(), [&](std::size_t begin, std::size_t end) {
     Vec3 a[kParticleChunk];
-    pressure_accelerations(ctx, m_kappa_points, begin, end, a);
+    if (m_single) {
+      pressure_accelerations_float(ctx, m_kappa_points_float, m_boundary_float, begin, end, a);
+    } else {
+      pressure_accelerations(ctx, m_kappa_points, begin, end, a);
+    }
     for (std::size_t i = begin; i < end; ++i) {
       const Vec3& ai = a[i - begin];
       PackedPoint& v = m_velocities[i];
       v.x += dt * ai.x();
       v.y += dt * ai.y();
       v.z += dt * ai.z();
+      if (m_single) m_velocities_float[i] = packed_float(Vec3(v.x, v.y, v.z), 0.0);
       if (accelerations) (*accelerations)[i] += ai;
-      if (totals) (*totals)[i] += m_kappa_points[i].w;
+      if (totals) (*totals)[i] += kappa(i);
     }
   });
 }
@@ -155,7 +212,7 @@ bool PressureDfsph::apply_warm_start(const ScalarArray& warm, Scalar scale, Scal
 #pragma omp parallel for schedule(static)
   for (std::size_t i = 0; i < n; ++i) {
     const Scalar w = m_error[i] > 0.0 ? scale * warm[i] : 0.0;
-    m_kappa_points[i].w = w;
+    set_kappa(i, w);
     totals[i] += w;
   }
   return true;
@@ -176,7 +233,11 @@ PressureDfsph::ChunkErrors PressureDfsph::measure(const FluidContext& ctx, Scala
   m_chunk_errors.resize((n + kParticleChunk - 1) / kParticleChunk);
   for_each_chunk(n, [&](std::size_t begin, std::size_t end) {
     Scalar change[kParticleChunk];
-    density_change(ctx, m_points, m_velocities, begin, end, change);
+    if (m_single) {
+      density_change_float(ctx, m_points_float, m_velocities_float, m_boundary_float, begin, end, change);
+    } else {
+      density_change(ctx, m_points, m_velocities, begin, end, change);
+    }
     ChunkErrors errors;
     for (std::size_t i = begin; i < end; ++i) {
       Scalar error, to_target;
@@ -193,7 +254,7 @@ PressureDfsph::ChunkErrors PressureDfsph::measure(const FluidContext& ctx, Scala
         to_target = std::max(predicted - m_target[i], 0.0);
       }
       m_error[i] = to_target;
-      m_kappa_points[i].w = to_target * scale * m_inv_denominator[i];
+      set_kappa(i, to_target * scale * m_inv_denominator[i]);
       errors.sum += error;
       errors.max = std::max(errors.max, error);
       errors.sum_to_target += to_target;
@@ -217,11 +278,8 @@ DivergenceStats PressureDfsph::correct_divergence(const FluidContext& ctx, Scala
   compute_factors(ctx);
   m_kappa_divergence.assign(n, 0.0);
   if (n == 0) return stats;
-  m_velocities.resize(n);
+  set_velocities(particles.velocities);
   m_error.resize(n);
-#pragma omp parallel for schedule(static)
-  for (std::size_t i = 0; i < n; ++i)
-    m_velocities[i] = packed(particles.velocities[i], 0.0);
   const Scalar scale = 1.0 / (static_cast<Scalar>(n) * ctx.rest_density);
   ChunkErrors errors = measure(ctx, dt, Measure::DIVERGENCE);
   if (m_settings.warm_start && apply_warm_start(m_warm_divergence, 0.5, m_kappa_divergence)) {
@@ -262,12 +320,9 @@ PressureStats PressureDfsph::solve(const FluidContext& ctx, const Vec3Array& vel
   accelerations.assign(n, Vec3::Zero());
   m_kappa.assign(n, 0.0);
   if (n == 0) return stats;
-  m_velocities.resize(n);
+  set_velocities(velocities_adv);
   m_error.resize(n);
   m_target.resize(n);
-#pragma omp parallel for schedule(static)
-  for (std::size_t i = 0; i < n; ++i)
-    m_velocities[i] = packed(velocities_adv[i], 0.0);
   const Scalar rho0 = ctx.rest_density;
   const Scalar scale = 1.0 / (static_cast<Scalar>(n) * rho0);
   ChunkErrors errors = measure(ctx, dt, Measure::FIRST_DENSITY);

@@ -42,8 +42,19 @@ class PressureDfsph final : public PressureSolver {
  private:
   /// Brings the warm-start arrays and the factors into the order of `particles` (by id) when it changed.
   void follow_particles(const ParticleSet& particles);
-  /// m_points and m_inv_denominator for the current positions.
+  /// m_points, m_inv_denominator and the iterations' records for the current positions; decides m_single.
   void compute_factors(const FluidContext& ctx);
+  /// m_velocities (and in single precision m_velocities_float) from N velocities (unit: m/s).
+  void set_velocities(const Vec3Array& velocities);
+  /// This iteration's kappa_i / rho_i of particle i (unit: m^5/(kg s^2)), in the records the iterations read.
+  Scalar kappa(std::size_t i) const { return m_single ? m_kappa_points_float[i].w : m_kappa_points[i].w; }
+  void set_kappa(std::size_t i, Scalar value) {
+    if (m_single) {
+      m_kappa_points_float[i].w = static_cast<float>(value);
+    } else {
+      m_kappa_points[i].w = value;
+    }
+  }
   /// Errors of one chunk of particles: the sum and the largest of the per-particle errors.
   struct ChunkErrors {
     Scalar sum = 0.0, max = 0.0;
@@ -74,6 +85,11 @@ class PressureDfsph final : public PressureSolver {
   PackedPointArray m_points;        // N: positions (unit: m), w = mass (unit: kg)
   PackedPointArray m_velocities;    // N: the velocities the solve corrects (unit: m/s), w unused
   PackedPointArray m_kappa_points;  // N: positions (unit: m), w = this iteration's kappa_i / rho_i
+  /// Single precision (DfsphSettings::precision): the iterations' pair sums read these instead of m_points,
+  /// m_velocities and m_kappa_points, positions relative to single_precision_origin()'s origin; N each, and
+  /// the boundary's points. Empty in double precision.
+  bool m_single = false;
+  PackedPointFArray m_points_float, m_velocities_float, m_kappa_points_float, m_boundary_float;
   /// N: 1 / (|sum_j m_j grad W_ij + sum_b Psi_b grad W_ib|^2 + sum_j |m_j grad W_ij|^2) (unit: m^8/kg^2), so
   /// that kappa_i / rho_i = (density error) / (dt^2 denominator); 0 below m_min_denominator.
   ScalarArray m_inv_denominator;
@@ -108,5 +124,18 @@ void dfsph_denominators(const FluidContext& ctx, const PackedPointArray& x_mass,
 /// Precondition: as dfsph_denominators. Sums run in neighbor-list order.
 void density_change(const FluidContext& ctx, const PackedPointArray& x_mass,
                     const PackedPointArray& velocities, std::size_t begin, std::size_t end, Scalar* out);
+
+/// density_change in single precision, for DFSPH's iterations (fluid.dfsph.precision "single"): the sums over
+/// neighbors in float, sixteen at a time (sph/float_lanes.hpp), converted to double; within 1e-5 of the sum
+/// of the terms' magnitudes of density_change's (tests/sph/test_fluid_context.cpp).
+/// @param x_mass  N particles: positions relative to an origin near the fluid (unit: m); w is not read, the
+///                mass is ctx.uniform_mass
+/// @param velocities  N particles: velocities (unit: m/s) in x, y, z; w is not read
+/// @param boundary  ctx.boundary relative to the same origin (x_b in m, Psi_b in kg)
+/// Precondition: as density_change, and ctx.uniform_mass > 0. Every copy and thread count gives the same
+/// bits.
+void density_change_float(const FluidContext& ctx, const PackedPointFArray& x_mass,
+                          const PackedPointFArray& velocities, const PackedPointFArray& boundary,
+                          std::size_t begin, std::size_t end, Scalar* out);
 
 }  // namespace drench

@@ -7,35 +7,6 @@
 
 namespace drench {
 
-namespace {
-/// The axis-aligned bounding box of the finite points among `points` (unit: m); lo > hi on every axis when
-/// there is none. Non-finite points are left out: one particle at infinity (the solver names it after the
-/// sub-step) would otherwise put every other particle's float record at NaN. Min and max are exact, so any
-/// thread count gives the same bits.
-void finite_bounding_box(const Vec3Array& points, Vec3& lo, Vec3& hi) {
-  constexpr Scalar kInf = std::numeric_limits<Scalar>::infinity();
-  Scalar lo_x = kInf, lo_y = kInf, lo_z = kInf, hi_x = -kInf, hi_y = -kInf, hi_z = -kInf;
-#pragma omp parallel for schedule(static) reduction(min : lo_x, lo_y, lo_z) reduction(max : hi_x, hi_y, hi_z)
-  for (std::size_t i = 0; i < points.size(); ++i) {
-    const Vec3& x = points[i];
-    if (!x.allFinite()) continue;
-    lo_x = std::min(lo_x, x.x());
-    lo_y = std::min(lo_y, x.y());
-    lo_z = std::min(lo_z, x.z());
-    hi_x = std::max(hi_x, x.x());
-    hi_y = std::max(hi_y, x.y());
-    hi_z = std::max(hi_z, x.z());
-  }
-  lo = Vec3(lo_x, lo_y, lo_z);
-  hi = Vec3(hi_x, hi_y, hi_z);
-}
-
-/// Single precision rounds a coordinate by up to 2^-24 of its distance from the fluid's centre; beyond this
-/// many spacings from it (1e-4 x 2^24, about 1,680) the rounding would exceed 1e-4 of a spacing, and the
-/// solve takes double precision instead (a particle flung far from the fluid without a kill region).
-constexpr Scalar kSingleReachInSpacings = 1e-4 * 0x1p24;
-}  // namespace
-
 PressurePcisph::PressurePcisph(const FluidSettings& settings) : m_settings(settings.pcisph) {
   const Scalar s = settings.particle_spacing;
   const CubicSplineKernel kernel(s);
@@ -62,18 +33,8 @@ PressureStats PressurePcisph::solve(const FluidContext& ctx, const Vec3Array& ve
   const Scalar beta = 2.0 * (mass * dt / rho0) * (mass * dt / rho0);
   const Scalar delta = 1.0 / (beta * m_prototype_gradient_term);
 
-  // Single precision: points relative to the centre of the fluid's bounding box, so that their rounding
-  // (2^-24 of the magnitude) depends on the fluid's extent, not on where the scene sits in the world: at
-  // x = 100 m a float is 7.6 um coarse, 3e-4 of a 25 mm spacing. It needs one mass for all (its pressure loop
-  // takes the mass as a constant) and a fluid within kSingleReachInSpacings of that centre.
-  bool single = m_settings.precision == IterationPrecision::SINGLE && ctx.uniform_mass > 0.0 && n > 0;
-  Vec3 origin = Vec3::Zero();
-  if (single) {
-    Vec3 lo, hi;
-    finite_bounding_box(particles.positions, lo, hi);
-    origin = lo.x() <= hi.x() ? Vec3(0.5 * (lo + hi)) : Vec3::Zero();
-    single = lo.x() > hi.x() || 0.5 * (hi - lo).maxCoeff() <= kSingleReachInSpacings * ctx.particle_spacing;
-  }
+  Vec3 origin;
+  const bool single = single_precision_origin(ctx, m_settings.precision, origin);
   m_predicted.resize(single ? 0 : n);
   m_pressure_points.resize(single ? 0 : n);
   m_predicted_float.resize(single ? n : 0);

@@ -1,12 +1,42 @@
 #include <drench/sph/pressure/pressure_solver.hpp>
 
 #include <algorithm>
+#include <limits>
 
 #include <drench/sph/pressure/pressure_dfsph.hpp>
 #include <drench/sph/pressure/pressure_pcisph.hpp>
 #include <drench/sph/pressure/pressure_wcsph.hpp>
 
 namespace drench {
+
+namespace {
+/// The axis-aligned bounding box of the finite points among `points` (unit: m); lo > hi on every axis when
+/// there is none. Non-finite points are left out: one particle at infinity (the solver names it after the
+/// sub-step) would otherwise put every other particle's float record at NaN. Min and max are exact, so any
+/// thread count gives the same bits.
+void finite_bounding_box(const Vec3Array& points, Vec3& lo, Vec3& hi) {
+  constexpr Scalar kInf = std::numeric_limits<Scalar>::infinity();
+  Scalar lo_x = kInf, lo_y = kInf, lo_z = kInf, hi_x = -kInf, hi_y = -kInf, hi_z = -kInf;
+#pragma omp parallel for schedule(static) reduction(min : lo_x, lo_y, lo_z) reduction(max : hi_x, hi_y, hi_z)
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const Vec3& x = points[i];
+    if (!x.allFinite()) continue;
+    lo_x = std::min(lo_x, x.x());
+    lo_y = std::min(lo_y, x.y());
+    lo_z = std::min(lo_z, x.z());
+    hi_x = std::max(hi_x, x.x());
+    hi_y = std::max(hi_y, x.y());
+    hi_z = std::max(hi_z, x.z());
+  }
+  lo = Vec3(lo_x, lo_y, lo_z);
+  hi = Vec3(hi_x, hi_y, hi_z);
+}
+
+/// Single precision rounds a coordinate by up to 2^-24 of its distance from the fluid's centre; beyond this
+/// many spacings from it (1e-4 x 2^24, about 1,680) the rounding would exceed 1e-4 of a spacing, and the
+/// solve takes double precision instead (a particle flung far from the fluid without a kill region).
+constexpr Scalar kSingleReachInSpacings = 1e-4 * 0x1p24;
+}  // namespace
 
 std::unique_ptr<PressureSolver> make_pressure_solver(const FluidSettings& settings, Scalar speed_of_sound) {
   switch (settings.pressure_solver) {
@@ -30,6 +60,17 @@ void density_error_stats(const ScalarArray& densities, Scalar rest_density, Pres
   }
   stats.average_density_error = densities.empty() ? 0.0 : sum / (densities.size() * rest_density);
   stats.max_density_error = max / rest_density;
+}
+
+bool single_precision_origin(const FluidContext& ctx, IterationPrecision precision, Vec3& origin) {
+  origin = Vec3::Zero();
+  const bool wanted = precision == IterationPrecision::SINGLE && ctx.uniform_mass > 0.0;
+  if (!wanted || ctx.particles.empty()) return false;
+  Vec3 lo, hi;
+  finite_bounding_box(ctx.particles.positions, lo, hi);
+  if (lo.x() > hi.x()) return true;  // no finite particle: the sub-step names the first one
+  origin = 0.5 * (lo + hi);
+  return 0.5 * (hi - lo).maxCoeff() <= kSingleReachInSpacings * ctx.particle_spacing;
 }
 
 }  // namespace drench

@@ -60,4 +60,15 @@ std::unique_ptr<PressureSolver> make_pressure_solver(const FluidSettings& settin
 /// result does not depend on the thread count.
 void density_error_stats(const ScalarArray& densities, Scalar rest_density, PressureStats& stats);
 
+/// Whether a solver's iterations run their pair sums in single precision this sub-step, and the origin their
+/// float records are relative to (unit: m): the centre of the finite particles' bounding box, so that the
+/// rounding (2^-24 of a coordinate's magnitude) depends on the fluid's extent, not on where the scene sits in
+/// the world (at x = 100 m a float is 7.6 um coarse, 3e-4 of a 25 mm spacing). True when `precision` asks
+/// for it, every particle has one mass (ctx.uniform_mass > 0: the float pressure loop takes it as a
+/// constant) and the fluid reaches at most about 1,680 spacings from that centre (beyond it a rounding would
+/// exceed 1e-4 of a spacing: a particle flung far without a kill region). Shared by PCISPH and DFSPH;
+/// the result is the same for any thread count.
+/// @param origin  out: the origin, the zero vector when the result is false or no particle is finite
+bool single_precision_origin(const FluidContext& ctx, IterationPrecision precision, Vec3& origin);
+
 }  // namespace drench
