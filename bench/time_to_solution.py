@@ -1,0 +1,140 @@
+#!/usr/bin/env python3
+"""Time to solution of drench's pressure solvers on the 59K dam break (issue 29), beside SPlisHSPlasH's DFSPH.
+
+Each solver simulates 0.5 s (the work of ../shared/notes/peer-sph.md) at an average density error of at most
+0.05% in every sub-step. The step is the solver's own: the benchmark finds, per solver, the largest at which
+it stays within the error, then times those steps side by side in alternating rounds with the yardstick of
+peer-sph.md (drench's PCISPH run as it was there), from which SPlisHSPlasH's DFSPH time follows by its
+measured ratio.
+
+1. Search: every `tts/<solver>/...` benchmark of bench_dam_break once: PCISPH and DFSPH over CFL numbers
+   0.3-0.8 (time.adaptive), WCSPH over speeds of sound at CFL 0.4. A run stops at its first sub-step above
+   the error, so settings past a solver's limit cost little.
+2. Per solver the largest step within the error: the largest CFL number, for WCSPH the lowest speed of sound.
+3. Rounds: the yardstick (`pcisph_59k`) and the PCISPH and DFSPH picks, alternating, `--rounds` times;
+   WCSPH's pick only with `--wcsph-rounds` (its runs take minutes).
+
+    python3 bench/time_to_solution.py --bench build/bench/bench_dam_break \\
+        --out bench/results/debian12-2core/time_to_solution.csv
+    python3 scripts/result_pages
+
+One thread (OMP_NUM_THREADS=1): two threads on a VM shared with other work lose several times their speed
+to each other's barriers, one keeps its time.
+"""
+
+import argparse
+import csv
+import json
+import os
+import re
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+ETA_PCT = 0.05
+COLUMNS = [
+    "phase", "round", "name", "solver", "cfl", "speed_of_sound_mps", "within_error", "wall_s", "sim_s",
+    "wall_s_per_sim_s", "steps", "substeps", "mean_dt_ms", "pressure_iterations_per_substep",
+    "divergence_iterations_per_substep", "density_error_mean_pct", "density_error_max_pct", "max_speed_mps",
+]
+
+
+def run_benchmarks(bench, pattern, env):
+    """The rows of bench_dam_break's benchmarks matching `pattern` (a regex), as dicts of COLUMNS."""
+    with tempfile.TemporaryDirectory() as tmp:
+        out = Path(tmp) / "out.json"
+        command = [str(bench), f"--benchmark_filter={pattern}", f"--benchmark_out={out}",
+                   "--benchmark_out_format=json"]
+        result = subprocess.run(command, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+        if result.returncode != 0 or not out.exists():
+            raise SystemExit(f"{' '.join(command)} failed ({result.returncode}):\n{result.stderr}")
+        data = json.loads(out.read_text())
+    rows = []
+    for b in data["benchmarks"]:
+        name = b["name"].replace("/iterations:1/manual_time", "")
+        if "error_message" in b:
+            raise SystemExit(f"{name}: {b['error_message']}")
+        row = {key: b.get(key, "") for key in COLUMNS}
+        row["name"] = name
+        row["wall_s"] = b["real_time"]  # manual time in seconds (Unit kSecond): the loop, without setup
+        if name.startswith("tts/"):
+            row["solver"] = name.split("/")[1]
+        else:  # the yardstick, pcisph_59k: fixed 2.5 ms steps, 0.5 s, always within the error it iterates to
+            row["solver"] = "pcisph (peer-sph.md yardstick)"
+            row["cfl"] = 0.4
+            row["sim_s"] = 0.5
+            row["steps"] = 200
+            row["substeps"] = round(200 * b["substeps_per_step"])
+            row["mean_dt_ms"] = 2.5
+            row["within_error"] = 1 if b["density_error_max_pct"] <= ETA_PCT * (1 + 1e-9) else 0
+            row["max_speed_mps"] = ""
+        rows.append(row)
+    return rows
+
+
+def pick(rows, solver):
+    """The search row of `solver` with the largest step within the error, or None."""
+    within = [r for r in rows if r["solver"] == solver and r["within_error"] == 1]
+    if not within:
+        return None
+    if solver == "wcsph":
+        return min(within, key=lambda r: r["speed_of_sound_mps"])
+    return max(within, key=lambda r: r["cfl"])
+
+
+def exact(name):
+    return "^" + re.escape(name) + "(/|$)"
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--bench", type=Path, required=True, help="bench_dam_break executable")
+    parser.add_argument("--out", type=Path, required=True, help="CSV to write (written whole at the end)")
+    parser.add_argument("--rounds", type=int, default=3, help="alternating rounds of the picks (default 3)")
+    parser.add_argument("--wcsph-rounds", action="store_true", help="time WCSPH's pick in every round too")
+    args = parser.parse_args()
+    env = dict(os.environ, OMP_NUM_THREADS="1")
+
+    started = time.time()
+    print("search: every tts/ benchmark once", flush=True)
+    rows = []
+    for row in run_benchmarks(args.bench, "^tts/", env):
+        row["phase"], row["round"] = "search", 0
+        rows.append(row)
+        print(f"  {row['name']}: within {row['within_error']}, {row['sim_s']:.3f} s simulated "
+              f"in {row['wall_s']:.1f} s", flush=True)
+    picks = {solver: pick(rows, solver) for solver in ("pcisph", "dfsph", "wcsph")}
+    for solver, row in picks.items():
+        print(f"pick {solver}: {row['name'] if row else 'none within the error'}", flush=True)
+    timed = ["pcisph_59k"] + [picks[s]["name"] for s in ("pcisph", "dfsph") if picks[s]]
+    if args.wcsph_rounds and picks["wcsph"]:
+        timed.append(picks["wcsph"]["name"])
+    for k in range(1, args.rounds + 1):
+        for name in timed:
+            (row,) = run_benchmarks(args.bench, exact(name), env)
+            row["phase"], row["round"] = "round", k
+            rows.append(row)
+            print(f"round {k}/{args.rounds} {name}: {row['wall_s']:.1f} s "
+                  f"({(time.time() - started) / 60:.0f} min so far)", flush=True)
+
+    commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True).stdout.strip()
+    dirty = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no"], capture_output=True,
+                           text=True).stdout.strip()
+    cpu = re.search(r"^Model name:\s*(.*)$", subprocess.run(["lscpu"], capture_output=True, text=True).stdout,
+                    flags=re.M)
+    temporary = args.out.with_name(args.out.name + ".tmp")
+    with temporary.open("w", newline="") as f:
+        f.write(f"# bench/time_to_solution.py --rounds {args.rounds}{' --wcsph-rounds' if args.wcsph_rounds else ''}"
+                f" at {commit}{' with local changes' if dirty else ''}, one thread,"
+                f" {cpu.group(1) if cpu else 'unknown CPU'}, {time.strftime('%Y-%m-%d')}\n")
+        writer = csv.DictWriter(f, fieldnames=COLUMNS)
+        writer.writeheader()
+        writer.writerows(rows)
+    temporary.replace(args.out)
+    print(f"wrote {args.out} in {(time.time() - started) / 60:.0f} min", flush=True)
+
+
+if __name__ == "__main__":
+    sys.exit(main())
