@@ -88,7 +88,7 @@ def main():
     parser.add_argument("--out", required=True, help="folder of the CSVs, e.g. bench/results/debian12-2core")
     parser.add_argument("--keep", help="keep the sweeps' folders here (default: a temporary folder)")
     parser.add_argument("--duration", type=float, help="simulated time of every run (default: the scene's)")
-    parser.add_argument("--stability-solvers", default='"wcsph","pcisph"',
+    parser.add_argument("--stability-solvers", default='"wcsph","pcisph","dfsph"',
                         help="pressure solvers of the stability sweep, as --vary values (WCSPH's runs take minutes each)")
     parser.add_argument("--threads", type=int, default=1, help="OpenMP threads of each run (default: 1)")
     parser.add_argument("--only", choices=["one_at_a_time", "stability"], help="run one sweep only")

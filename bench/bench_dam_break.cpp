@@ -12,6 +12,7 @@
 #include <sys/resource.h>
 
 #include <chrono>
+#include <cstdio>
 #include <string>
 #include <vector>
 
@@ -119,13 +120,15 @@ void pcisph_1m(benchmark::State& s) {
 }
 
 /// Issue 29's time to solution: the 59K dam break for 0.5 s (the work of ../shared/notes/peer-sph.md, whose
-/// SPlisHSPlasH ratios were measured on it) with time.adaptive steps of CFL number `cfl`, at most 10 ms, each
-/// solver held to an average density error of 0.05% in every sub-step: PCISPH and DFSPH iterate to it
-/// (eta 0.0005), WCSPH meets it or not through its speed of sound (`speed_of_sound`, unit: m/s; ignored by
-/// the others). A run stops at the first sub-step above it or the first non-finite state (within_error 0),
-/// so a setting past the solver's limit costs little. bench/time_to_solution.py takes, per solver, the
-/// largest step within the error and times it beside the others and pcisph_59k, the peer's yardstick.
-void time_to_solution(benchmark::State& state, const std::string& solver, double cfl, double speed_of_sound) {
+/// SPlisHSPlasH ratios were measured on it) with time.adaptive steps of at most `dt` (unit: s) under the CFL
+/// number `cfl`, each solver held to an average density error of 0.05% in every sub-step: PCISPH and DFSPH
+/// iterate to it (eta 0.0005), WCSPH meets it or not through its speed of sound (`speed_of_sound`, unit: m/s;
+/// ignored by the others). A run stops at the first sub-step above it or the first non-finite state
+/// (within_error 0), so a setting past the solver's limit costs little. bench/time_to_solution.py takes, per
+/// solver, the setting within the error that reaches the end soonest and times it beside the others and
+/// pcisph_59k, the peer's yardstick.
+void time_to_solution(benchmark::State& state, const std::string& solver, double dt, double cfl,
+                      double speed_of_sound) {
   constexpr double kEta = 0.0005, kSeconds = 0.5;
   std::vector<std::string> overrides = {"fluid.particle_spacing=0.025",
                                         "fluid.pressure_solver=" + solver,
@@ -134,7 +137,7 @@ void time_to_solution(benchmark::State& state, const std::string& solver, double
                                         "fluid.cfl=" + std::to_string(cfl),
                                         "emitters[0].max=[0.975,0.975,0.975]",
                                         "time.adaptive=true",
-                                        "time.dt=0.01",
+                                        "time.dt=" + std::to_string(dt),
                                         "time.duration=" + std::to_string(kSeconds),
                                         "time.frame_rate=0"};
   if (solver == "wcsph") overrides.push_back("fluid.wcsph.speed_of_sound=" + std::to_string(speed_of_sound));
@@ -153,6 +156,7 @@ void time_to_solution(benchmark::State& state, const std::string& solver, double
     const auto& f = sim.fluid().statistics();
     const double substeps = static_cast<double>(std::max<std::int64_t>(f.substeps, 1));
     state.counters["within_error"] = within ? 1 : 0;
+    state.counters["dt_max_ms"] = 1e3 * dt;
     state.counters["cfl"] = cfl;
     state.counters["speed_of_sound_mps"] = sim.speed_of_sound();
     state.counters["sim_s"] = sim.time();
@@ -183,25 +187,28 @@ BENCHMARK(pcisph_1m)->Unit(benchmark::kSecond)->UseManualTime()->Iterations(1);
 
 int main(int argc, char** argv) {
   // Time to solution (time_to_solution above): each solver over the steps the search may pick. Names
-  // tts/<solver>/cfl:<cfl>[/c:<speed of sound>].
-  for (const char* solver : {"pcisph", "dfsph"}) {
-    for (const double cfl : {0.3, 0.4, 0.5, 0.6, 0.8}) {
-      benchmark::RegisterBenchmark(
-          ("tts/" + std::string(solver) + "/cfl:" + std::to_string(cfl).substr(0, 3)).c_str(),
-          time_to_solution, solver, cfl, 0.0)
-          ->Unit(benchmark::kSecond)
-          ->UseManualTime()
-          ->Iterations(1);
-    }
-  }
-  // WCSPH's density error falls as its speed of sound rises (about as (v / c)^2) and its step with it.
-  for (const double c : {50.0, 70.0, 100.0, 140.0}) {
-    benchmark::RegisterBenchmark(("tts/wcsph/cfl:0.4/c:" + std::to_string(static_cast<int>(c))).c_str(),
-                                 time_to_solution, "wcsph", 0.4, c)
+  // tts/<solver>/dt:<ms>/cfl:<cfl>[/c:<speed of sound>]. From rest, a step is the largest dt (the CFL limit
+  // of a still fluid is infinite): the dt grid is what the incompressible solvers' search is about.
+  const auto add = [](const std::string& solver, double dt, double cfl, double c) {
+    char name[96];
+    std::snprintf(name, sizeof name, "tts/%s/dt:%g/cfl:%g", solver.c_str(), 1e3 * dt, cfl);
+    std::string full = name;
+    if (solver == "wcsph") full += "/c:" + std::to_string(static_cast<int>(c));
+    benchmark::RegisterBenchmark(full.c_str(), time_to_solution, solver, dt, cfl, c)
         ->Unit(benchmark::kSecond)
         ->UseManualTime()
         ->Iterations(1);
+  };
+  for (const char* solver : {"pcisph", "dfsph"}) {
+    for (const double dt : {0.0025, 0.005, 0.01}) {
+      for (const double cfl : {0.4, 0.6})
+        add(solver, dt, cfl, 0.0);
+    }
   }
+  // WCSPH's density error falls as its speed of sound rises (about as (v / c)^2), and its step with it: its
+  // CFL limit, 0.4 spacing / (v + c), is far below any dt here.
+  for (const double c : {70.0, 85.0, 100.0})
+    add("wcsph", 0.01, 0.4, c);
   benchmark::Initialize(&argc, argv);
   if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
   benchmark::RunSpecifiedBenchmarks();
