@@ -58,9 +58,11 @@ STABILITY = [
 ]
 
 
-def sweep(drench, arguments, out_dir, duration, threads, solvers=""):
+def sweep(drench, arguments, out_dir, duration, threads, solvers="", jobs=1):
     arguments = [a.format(solvers=solvers) if "{solvers}" in a else a for a in arguments]
     command = [drench, "sweep", SCENE, *arguments, "--threads", str(threads), "--out", str(out_dir)]
+    if jobs > 1:
+        command += ["--jobs", str(jobs)]
     if duration is not None:
         command += ["--set", f"time.duration={duration}"]
     notes = {"cpu": cpu_model(), "commit": commit(), "load_before": load_average()}
@@ -92,6 +94,8 @@ def main():
                         help="pressure solvers of the stability sweep, as --vary values (WCSPH's runs take minutes each)")
     parser.add_argument("--threads", type=int, default=1, help="OpenMP threads of each run (default: 1)")
     parser.add_argument("--only", choices=["one_at_a_time", "stability"], help="run one sweep only")
+    parser.add_argument("--jobs", type=int, default=1,
+                        help="runs side by side (default 1; more changes the times, not which runs hold)")
     args = parser.parse_args()
     drench = str(Path(args.drench).resolve())
     out = Path(args.out)
@@ -103,7 +107,8 @@ def main():
             if (base / "one_at_a_time" / "pareto.png").exists():
                 shutil.copyfile(base / "one_at_a_time" / "pareto.png", ROOT / "docs" / "images" / "accuracy_pareto.png")
         if args.only in (None, "stability"):
-            notes = sweep(drench, STABILITY, base / "stability", args.duration, args.threads, args.stability_solvers)
+            notes = sweep(drench, STABILITY, base / "stability", args.duration, args.threads, args.stability_solvers,
+                          args.jobs)
             keep(base / "stability" / "sweep.csv", notes, out / "accuracy_stability.csv")
 
 
