@@ -1,10 +1,12 @@
 // The effect registry (scene/effect_registry.hpp) is the one list of effects: docs/scenes.md documents
-// exactly its effects in its order, and the loader checks what each entry says it needs.
+// exactly its effects in its order, the loader checks what each entry says it needs, and build_effects builds
+// only the effects a scene lists.
 
 #include <drench/scene/effect_registry.hpp>
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <fstream>
 #include <regex>
 #include <string>
@@ -70,6 +72,19 @@ TEST(EffectRegistry, EveryEntryIsComplete) {
   EXPECT_EQ(find_effect("magic"), nullptr);
 }
 
+// Builds run in the registry's order, so an effect built on another (the wetting on the coupler) must come
+// after it.
+TEST(EffectRegistry, AnEffectNeedsOnlyEffectsBeforeIt) {
+  const std::vector<std::string> names = registry_names();
+  for (std::size_t i = 0; i < names.size(); ++i) {
+    const char* needed = effect_registry()[i].needs.effect;
+    if (!needed) continue;
+    const auto at = std::find(names.begin(), names.end(), needed);
+    ASSERT_NE(at, names.end()) << names[i] << " needs an effect the registry does not have: " << needed;
+    EXPECT_LT(static_cast<std::size_t>(at - names.begin()), i) << names[i] << " needs " << needed;
+  }
+}
+
 // Each entry's needs and settings section, checked by the loader with the effect's place in the list or the
 // section's key; the message is the one docs/scenes.md describes.
 TEST(EffectRegistry, TheLoaderChecksWhatEachEntryNeeds) {
@@ -105,6 +120,44 @@ TEST(EffectRegistry, TheLoaderChecksWhatEachEntryNeeds) {
           << message;
     }
   }
+}
+
+// A 2 x 2 cloth (validated), every effect listed in turn and all at once: only the listed ones are built.
+TEST(EffectRegistry, BuildsOnlyTheListedEffects) {
+  const ClothMesh cloth = ClothMesh::grid(2, 0.1, 0.0, 1.0);
+  SceneConfig config;
+  config.cloth = ClothSettings{};
+  const auto built = [&](const std::vector<std::string>& effects) {
+    config.effects = effects;
+    return build_effects({config, &cloth, &cloth});
+  };
+  const EffectParts none = built({});
+  EXPECT_FALSE(none.viscosity);
+  EXPECT_FALSE(none.coupler || none.obstacle || none.carried || none.wetting);
+  EXPECT_FALSE(none.leak_audit);
+  EXPECT_EQ(none.leak_counter.constructed + none.wetting_counter.constructed, 0u);
+
+  EXPECT_TRUE(built({"viscosity"}).viscosity);
+  EXPECT_TRUE(built({"leak_audit"}).leak_audit);
+  EXPECT_EQ(built({"leak_audit"}).leak_counter.constructed, 1u);
+  const EffectParts coupling = built({"coupling"});
+  ASSERT_TRUE(coupling.coupler);
+  EXPECT_EQ(coupling.coupler->friction_counter().constructed, 0u) << "friction is not listed";
+  EXPECT_TRUE(coupling.obstacle && coupling.carried) << "the default coupling settings use both";
+  EXPECT_FALSE(coupling.wetting);
+  EXPECT_EQ(built({"friction", "coupling"}).coupler->friction_counter().constructed, 1u);
+
+  const EffectParts all = built(registry_names());
+  EXPECT_TRUE(all.viscosity && all.leak_audit);
+  ASSERT_TRUE(all.coupler && all.wetting);
+  EXPECT_EQ(all.coupler->friction_counter().constructed, 1u);
+  EXPECT_EQ(all.wetting_counter.constructed, 1u);
+
+  // Without a mesh there is nothing to couple, audit or wet, whatever the scene lists.
+  config.effects = registry_names();
+  const EffectParts meshless = build_effects({config, nullptr, nullptr});
+  EXPECT_TRUE(meshless.viscosity);
+  EXPECT_FALSE(meshless.coupler || meshless.leak_audit || meshless.wetting);
 }
 
 }  // namespace
