@@ -10,6 +10,7 @@
 #include <filesystem>
 #include <string>
 
+#include <drench/common/program.hpp>
 #include <drench/render/camera.hpp>
 #include <drench/render/png_image.hpp>
 #include <drench/render/render_run.hpp>
