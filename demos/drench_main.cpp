@@ -25,6 +25,7 @@
 #include <drench/ccd/ccd_query_file.hpp>
 #include <drench/ccd/point_triangle_ccd.hpp>
 #include <drench/common/error.hpp>
+#include <drench/common/program.hpp>
 #include <drench/render/render_run.hpp>
 #ifdef DRENCH_HAVE_VIEWER
 #include <drench/render/viewer.hpp>
@@ -106,7 +107,7 @@ int render_command(drench::render::RenderOptions options, const std::string& siz
   drench::render::parse_image_size(size, options.width, options.height);
   options.progress = !quiet;
   // Said before the frames are drawn, so that nobody waits minutes for a video that will not come.
-  if (options.video && drench::render::find_program("ffmpeg").empty())
+  if (options.video && drench::find_program("ffmpeg").empty())
     std::fprintf(
         stderr,
         "drench: --video: ffmpeg is not installed (Debian: sudo apt-get install ffmpeg); drawing the "

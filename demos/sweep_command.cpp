@@ -20,8 +20,8 @@
 #include <thread>
 
 #include <drench/common/error.hpp>
+#include <drench/common/program.hpp>
 #include <drench/io/atomic_file.hpp>
-#include <drench/render/render_run.hpp>
 #include <drench/scene/scene_loader.hpp>
 
 extern char** environ;
@@ -126,7 +126,7 @@ std::string gnuplot_label(std::string text) {
 /// pareto.png through gnuplot; an empty string, or why there is no plot.
 std::string plot_pareto(const fs::path& dir, const std::vector<SettingPoint>& points,
                         const std::vector<std::size_t>& front, const std::string& error_key) {
-  const std::string gnuplot = render::find_program("gnuplot");
+  const std::string gnuplot = find_program("gnuplot");
   if (gnuplot.empty())
     return "no pareto.png: gnuplot is not installed (Debian: sudo apt-get install gnuplot-nox)";
   std::ostringstream all, best, leaked;
@@ -168,16 +168,7 @@ std::string plot_pareto(const fs::path& dir, const std::vector<SettingPoint>& po
          << "' using 1:2 with linespoints pt 7 ps 1.4 lw 2 lc rgb '#1f5fa8' title 'Pareto front', \\\n"
          << "  '' using 1:2:3 with labels left offset 0.8,0.6 font ',9' notitle\n";
   write_file_atomic((dir / "pareto.gp").string(), script.str());
-  std::string script_path = (dir / "pareto.gp").string();
-  std::vector<char*> argv = {const_cast<char*>(gnuplot.c_str()), script_path.data(), nullptr};
-  int status = -1;
-  pid_t pid = 0;
-  if (posix_spawn(&pid, gnuplot.c_str(), nullptr, nullptr, argv.data(), environ) == 0) {
-    while (waitpid(pid, &status, 0) < 0 && errno == EINTR) {
-    }
-    status = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  }
-  if (status != 0 || !fs::exists(temporary)) {
+  if (run_program({gnuplot, (dir / "pareto.gp").string()}) != 0 || !fs::exists(temporary)) {
     std::error_code ignored;
     fs::remove(temporary, ignored);
     return "no pareto.png: gnuplot failed on " + (dir / "pareto.gp").string();

@@ -4,7 +4,6 @@
 // effects that are off change no frame.
 
 #include <gtest/gtest.h>
-#include <unistd.h>
 
 #include <algorithm>
 #include <filesystem>
@@ -17,30 +16,13 @@
 #include <drench/scene/scene_loader.hpp>
 #include <drench/scene/scene_runner.hpp>
 #include <drench/scene/simulation.hpp>
+#include "../temp_dir.hpp"
 
 namespace drench {
 namespace {
 
 namespace fs = std::filesystem;
-
-/// A folder in the temp directory named after the running test and this process, removed at the end.
-class TempDir {
- public:
-  explicit TempDir(const std::string& tag) {
-    const testing::TestInfo* test = testing::UnitTest::GetInstance()->current_test_info();
-    std::string name = std::string(test->test_suite_name()) + "_" + test->name() + "_" + tag;
-    std::replace(name.begin(), name.end(), '/', '_');
-    m_path = fs::path(testing::TempDir()) / ("drench_" + name + "_" + std::to_string(::getpid()));
-    fs::remove_all(m_path);
-  }
-  ~TempDir() { fs::remove_all(m_path); }
-  TempDir(const TempDir&) = delete;
-  TempDir& operator=(const TempDir&) = delete;
-  const fs::path& path() const { return m_path; }
-
- private:
-  fs::path m_path;
-};
+using test::TempDir;
 
 /// Runs `scene` to its end as `drench run` does, into a fresh folder.
 RunResult run(const SceneConfig& scene, const fs::path& dir) {

@@ -6,7 +6,6 @@
 #include <drench/render/render_run.hpp>
 
 #include <gtest/gtest.h>
-#include <unistd.h>
 
 #include <algorithm>
 #include <cstdlib>
@@ -26,6 +25,7 @@
 #include <drench/scene/scene_loader.hpp>
 #include <drench/scene/scene_runner.hpp>
 #include <drench/scene/simulation.hpp>
+#include "../temp_dir.hpp"
 #include "colour_classes.hpp"
 
 namespace drench::render {
@@ -33,25 +33,7 @@ namespace {
 
 namespace fs = std::filesystem;
 using nlohmann::json;
-
-/// A folder in the temp directory named after the running test and this process, removed at the end.
-class TempDir {
- public:
-  TempDir() {
-    m_path = fs::path(testing::TempDir()) /
-             ("drench_" + std::string(testing::UnitTest::GetInstance()->current_test_info()->name()) + "_" +
-              std::to_string(::getpid()));
-    fs::remove_all(m_path);
-    fs::create_directories(m_path);
-  }
-  ~TempDir() { fs::remove_all(m_path); }
-  TempDir(const TempDir&) = delete;
-  TempDir& operator=(const TempDir&) = delete;
-  const fs::path& path() const { return m_path; }
-
- private:
-  fs::path m_path;
-};
+using test::TempDir;
 
 // The hand-made run: a flat cloth of 0.6 m at y = 0, a ball of water resting on it off-centre, and the
 // camera in front and above.

@@ -5,22 +5,24 @@
 
 #include <gtest/gtest.h>
 #include <sys/wait.h>
-#include <unistd.h>
 
 #include <cstdio>
 #include <filesystem>
 #include <string>
 
+#include <drench/common/program.hpp>
 #include <drench/render/camera.hpp>
 #include <drench/render/png_image.hpp>
 #include <drench/render/render_run.hpp>
 
+#include "../temp_dir.hpp"
 #include "colour_classes.hpp"
 
 namespace drench::render {
 namespace {
 
 namespace fs = std::filesystem;
+using test::TempDir;
 
 /// What a command printed (stdout and stderr) and its exit status.
 struct Output {
@@ -40,24 +42,6 @@ Output run(const std::string& command) {
   out.status = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
   return out;
 }
-
-/// A path in the temp directory named after the running test and this process; removed at the end.
-class TempFile {
- public:
-  explicit TempFile(const std::string& suffix) {
-    m_path = fs::path(testing::TempDir()) /
-             ("drench_" + std::string(testing::UnitTest::GetInstance()->current_test_info()->name()) + "_" +
-              std::to_string(::getpid()) + suffix);
-    fs::remove(m_path);
-  }
-  ~TempFile() { fs::remove(m_path); }
-  TempFile(const TempFile&) = delete;
-  TempFile& operator=(const TempFile&) = delete;
-  const fs::path& path() const { return m_path; }
-
- private:
-  fs::path m_path;
-};
 
 // The default demo cut short, seen from a fixed camera in front and above, so that the test knows where
 // every point lands.
@@ -92,13 +76,14 @@ bool have_xvfb() {
 
 TEST(View, ScreenshotShowsClothAndWaterWhereTheCameraPutsThem) {
   if (!have_xvfb()) GTEST_SKIP() << "xvfb-run is not installed (Debian: xvfb xauth; scripts/setup)";
-  TempFile png(".png");
+  const TempDir dir;
+  const fs::path png = dir.path() / "screenshot.png";
   // Pause, step, resume, (a step key ignored while running), pause, particles off, resume, particles on.
   // 60 frames: at most 60 a second, so the simulation has a second for the 7 steps the jet point needs.
-  const Output out = run(view_command("--keys ' . . p p' --frames 60 --screenshot " + png.path().string()));
+  const Output out = run(view_command("--keys ' . . p p' --frames 60 --screenshot " + png.string()));
   ASSERT_EQ(out.status, 0) << out.text;
   EXPECT_NE(out.text.find("view: 60 frames in"), std::string::npos) << out.text;
-  const Image image = read_png(png.path().string());
+  const Image image = read_png(png.string());
   ASSERT_EQ(image.width, kWidth);
   ASSERT_EQ(image.height, kHeight);
   const Camera camera = test_camera();
@@ -109,10 +94,11 @@ TEST(View, ScreenshotShowsClothAndWaterWhereTheCameraPutsThem) {
 
 TEST(View, KeysHideTheClothAndTheParticles) {
   if (!have_xvfb()) GTEST_SKIP() << "xvfb-run is not installed (Debian: xvfb xauth; scripts/setup)";
-  TempFile png(".png");
-  const Output out = run(view_command("--keys pc --frames 60 --screenshot " + png.path().string()));
+  const TempDir dir;
+  const fs::path png = dir.path() / "screenshot.png";
+  const Output out = run(view_command("--keys pc --frames 60 --screenshot " + png.string()));
   ASSERT_EQ(out.status, 0) << out.text;
-  const Image image = read_png(png.path().string());
+  const Image image = read_png(png.string());
   const Camera camera = test_camera();
   EXPECT_TRUE(shows(image, camera, kClothPoint, ColourClass::BACKDROP));
   EXPECT_FALSE(shows_near(image, camera, kJetPoint, ColourClass::WATER, kJetRadius));
@@ -128,9 +114,10 @@ TEST(View, PausedFromTheFirstFrameItStepsOncePerStepKey) {
 }
 
 TEST(View, BadInputIsNamedAndWritesNothing) {
-  TempFile png(".png");
-  const std::string base = std::string(DRENCH_BINARY) + " view " + kScene + " --frames 3 --screenshot " +
-                           png.path().string() + " ";
+  const TempDir dir;
+  const fs::path png = dir.path() / "screenshot.png";
+  const std::string base =
+      std::string(DRENCH_BINARY) + " view " + kScene + " --frames 3 --screenshot " + png.string() + " ";
   Output out = run(base + "--size 0x0");
   EXPECT_NE(out.status, 0);
   EXPECT_NE(out.text.find("--size must be WIDTHxHEIGHT"), std::string::npos) << out.text;
@@ -140,7 +127,7 @@ TEST(View, BadInputIsNamedAndWritesNothing) {
   EXPECT_NE(out.status, 0);
   EXPECT_NE(out.text.find("unknown key 'x' at position 2"), std::string::npos) << out.text;
 
-  out = run(std::string(DRENCH_BINARY) + " view " + kScene + " --screenshot " + png.path().string());
+  out = run(std::string(DRENCH_BINARY) + " view " + kScene + " --screenshot " + png.string());
   EXPECT_NE(out.status, 0);
   EXPECT_NE(out.text.find("needs --frames N"), std::string::npos) << out.text;
 
@@ -154,7 +141,7 @@ TEST(View, BadInputIsNamedAndWritesNothing) {
   EXPECT_NE(out.status, 0);
   EXPECT_NE(out.text.find("fluid.particle_spacing"), std::string::npos) << out.text;
 
-  EXPECT_FALSE(fs::exists(png.path()));
+  EXPECT_FALSE(fs::exists(png));
 }
 
 }  // namespace

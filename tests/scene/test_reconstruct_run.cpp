@@ -5,7 +5,6 @@
 #include <drench/scene/reconstruct_run.hpp>
 
 #include <gtest/gtest.h>
-#include <unistd.h>
 
 #include <filesystem>
 #include <fstream>
@@ -18,12 +17,14 @@
 #include <drench/scene/scene_loader.hpp>
 #include <drench/scene/scene_runner.hpp>
 #include <drench/scene/simulation.hpp>
+#include "../temp_dir.hpp"
 
 namespace drench {
 namespace {
 
 namespace fs = std::filesystem;
 using nlohmann::json;
+using test::TempDir;
 
 /// A block of 8 x 4 x 6 particles (1 cm) dropped into a static V (Fig. 8's obstacle), coupled so that it
 /// stays out of it: by the last frames the fluid lies in the V, where a plain reconstruction crosses it.
@@ -43,24 +44,6 @@ json drop_into_v(bool surface_effect) {
   }
   return scene;
 }
-
-/// A folder in the temp directory named after the running test and this process, removed at the end.
-class TempDir {
- public:
-  TempDir() {
-    m_path = fs::path(testing::TempDir()) /
-             ("drench_" + std::string(testing::UnitTest::GetInstance()->current_test_info()->name()) + "_" +
-              std::to_string(::getpid()));
-    fs::remove_all(m_path);
-  }
-  ~TempDir() { fs::remove_all(m_path); }
-  TempDir(const TempDir&) = delete;
-  TempDir& operator=(const TempDir&) = delete;
-  const fs::path& path() const { return m_path; }
-
- private:
-  fs::path m_path;
-};
 
 /// Simulates `scene` as `drench run` would, writing into `dir`; returns the summary.
 json run(const json& scene, const fs::path& dir) {

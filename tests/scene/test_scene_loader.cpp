@@ -11,6 +11,7 @@
 #include <string>
 
 #include <drench/common/error.hpp>
+#include <drench/scene/effect_registry.hpp>
 #include <drench/scene/simulation.hpp>
 
 namespace drench {
@@ -774,6 +775,9 @@ TEST(SceneLoader, RejectsUnknownEffectListingKnownEffects) {
                   "effects[1] must be one of \"viscosity\", \"coupling\", \"friction\", \"leak_audit\", "
                   "\"surface\", \"wetting\", got "
                   "\"magic\" (x.json)"));
+  // Every effect of the registry, also one added later, is named.
+  for (const EffectEntry& effect : effect_registry())
+    EXPECT_TRUE(scene_error(R"({"effects": ["magic"]})", "\"" + std::string(effect.name) + "\""));
 }
 
 TEST(SceneLoader, RejectsDuplicateEffectListingKnownEffects) {

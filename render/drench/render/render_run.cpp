@@ -1,13 +1,10 @@
 #include <drench/render/render_run.hpp>
 
-#include <spawn.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
-#include <cstdlib>
 #include <filesystem>
 #include <map>
 #include <optional>
@@ -15,6 +12,7 @@
 #include <vector>
 
 #include <drench/common/error.hpp>
+#include <drench/common/program.hpp>
 #include <drench/common/progress_line.hpp>
 #include <drench/common/stopwatch.hpp>
 #include <drench/io/atomic_file.hpp>
@@ -24,8 +22,6 @@
 #include <drench/render/renderer.hpp>
 #include <drench/scene/frame_files.hpp>
 #include <drench/scene/scene_loader.hpp>
-
-extern char** environ;
 
 namespace drench::render {
 
@@ -100,21 +96,6 @@ double speed_quantile(const PlyData& fluid, double q) {
   return speeds[k];
 }
 
-/// Runs `arguments` (the program found on $PATH) and waits; the exit status, or -1 when it could not start.
-int run_program(const std::vector<std::string>& arguments) {
-  std::vector<char*> argv;
-  for (const std::string& argument : arguments)
-    argv.push_back(const_cast<char*>(argument.c_str()));
-  argv.push_back(nullptr);
-  pid_t pid = 0;
-  if (posix_spawnp(&pid, argv[0], nullptr, nullptr, argv.data(), environ) != 0) return -1;
-  int status = 0;
-  while (waitpid(pid, &status, 0) < 0) {
-    if (errno != EINTR) return -1;
-  }
-  return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-}
-
 }  // namespace
 
 void parse_image_size(const std::string& text, int& width, int& height) {
@@ -133,22 +114,6 @@ void parse_image_size(const std::string& text, int& width, int& height) {
   width = std::stoi(w);
   height = std::stoi(h);
   if (width < 1 || height < 1 || width > 16384 || height > 16384) throw fail();
-}
-
-std::string find_program(const std::string& name) {
-  const char* path = std::getenv("PATH");
-  if (path == nullptr) return "";
-  std::string directories = path;
-  std::size_t start = 0;
-  while (start <= directories.size()) {
-    std::size_t end = directories.find(':', start);
-    if (end == std::string::npos) end = directories.size();
-    const std::string directory = directories.substr(start, end - start);
-    const fs::path candidate = fs::path(directory.empty() ? "." : directory) / name;
-    if (::access(candidate.c_str(), X_OK) == 0 && !fs::is_directory(candidate)) return candidate.string();
-    start = end + 1;
-  }
-  return "";
 }
 
 RenderResult render_run(const RenderOptions& options) {

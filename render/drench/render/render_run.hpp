@@ -37,9 +37,6 @@ struct RenderResult {
 /// @throws drench::Error quoting the text when it is malformed or a side is out of range (a size of 0).
 void parse_image_size(const std::string& text, int& width, int& height);
 
-/// The full path of the program `name` on $PATH, or "" when it is not there (how `--video` finds ffmpeg).
-std::string find_program(const std::string& name);
-
 /// Draws every frame a run saved into `out_dir`/frame_NNNN.png (NNNN as in frames/): the cloth
 /// (cloth_NNNN.ply), the fluid as its surface when surface_NNNN.ply exists, else as particles
 /// (fluid_NNNN.ply) coloured by speed, and obstacles.ply. Every frame is drawn with one camera: the

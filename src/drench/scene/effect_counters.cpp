@@ -1,15 +1,12 @@
 #include <drench/scene/effect_counters.hpp>
 
+#include <drench/scene/effect_registry.hpp>
+
 namespace drench {
 
 const EffectCounter* EffectCounters::find(const std::string& name) const {
-  if (name == "viscosity") return &viscosity;
-  if (name == "coupling") return &coupling;
-  if (name == "friction") return &friction;
-  if (name == "leak_audit") return &leak_audit;
-  if (name == "surface") return &surface;
-  if (name == "wetting") return &wetting;
-  return nullptr;
+  const EffectEntry* effect = find_effect(name);
+  return effect ? &(this->*(effect->counter)) : nullptr;
 }
 
 }  // namespace drench

@@ -1,7 +1,8 @@
 #pragma once
-/// The counts of every optional effect of a run, by the names of known_effects(): what proves that an effect
-/// the scene does not list was never built and never ran, and how often the coupling found nothing within
-/// reach. Filled by Simulation::effect_counters() (the surface's by the run loop, scene_runner.hpp).
+/// The counts of every optional effect of a run, by the names of the effect registry (effect_registry.hpp),
+/// whose entries point at their counters here: what proves that an effect the scene does not list was never
+/// built and never ran, and how often the coupling found nothing within reach. Filled by
+/// Simulation::effect_counters() (the surface's by the run loop, scene_runner.hpp).
 
 #include <string>
 
@@ -27,7 +28,7 @@ struct EffectCounters {
   /// A pass per step of absorbing, spreading and dripping.
   EffectCounter wetting;
 
-  /// The counter of an effect named as in known_effects(), or nullptr for any other name.
+  /// The counter of an effect named as in the effect registry, or nullptr for any other name.
   const EffectCounter* find(const std::string& name) const;
 };
 

@@ -2,13 +2,17 @@
 
 #include <algorithm>
 
+#include <drench/scene/effect_registry.hpp>
+
 namespace drench {
 
 const std::vector<std::string>& known_effects() {
-  // The single list the loader validates `effects` against and docs/scenes.md mirrors; new effects are added
-  // here.
-  static const std::vector<std::string> names = {"viscosity",  "coupling", "friction",
-                                                 "leak_audit", "surface",  "wetting"};
+  static const std::vector<std::string> names = [] {
+    std::vector<std::string> all;
+    for (const EffectEntry& effect : effect_registry())
+      all.emplace_back(effect.name);
+    return all;
+  }();
   return names;
 }
 

@@ -83,10 +83,8 @@ struct SceneConfig {
   bool has_effect(const std::string& name) const;
 };
 
-/// The effect names a scene may list in `effects`: "viscosity", "coupling" (repulsion and continuous
-/// handling, sec. 3.1-3.3), "friction" (tangential boundary conditions, sec. 3.4), "leak_audit" (counts
-/// particles crossing the cloth), "surface" (the fluid's surface mesh at every frame, sec. 4), "wetting" (the
-/// cloth absorbs, spreads and drips water, Fig. 9): the one list the loader checks.
+/// The names a scene may list in `effects`, in the order of the effect registry (scene/effect_registry.hpp),
+/// which says what each adds and needs.
 const std::vector<std::string>& known_effects();
 
 }  // namespace drench

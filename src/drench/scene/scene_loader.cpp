@@ -12,6 +12,7 @@
 #include <utility>
 
 #include <drench/common/error.hpp>
+#include <drench/scene/effect_registry.hpp>
 #include <drench/scene/json_reader.hpp>
 #include <drench/scene/load_sections.hpp>
 
@@ -40,8 +41,8 @@ TimeSettings read_time(const Node& node) {
   return time;
 }
 
-/// `effects`: names from known_effects(), each at most once. Whether the scene has what they need is
-/// checked by parse_scene once every section is read.
+/// `effects`: names from the effect registry, each at most once. Whether the scene has what they need is
+/// checked by check_effects once every section is read.
 std::vector<std::string> read_effects(const Node& node) {
   std::vector<std::string> effects;
   if (!node.present()) return effects;
@@ -49,8 +50,7 @@ std::vector<std::string> read_effects(const Node& node) {
   for (std::size_t i = 0; i < node.array().size(); ++i) {
     const Node item = node.element(i);
     const std::string name = item.string();
-    if (std::find(known.begin(), known.end(), name) == known.end())
-      item.fail("must be one of " + join(known, true));
+    if (!find_effect(name)) item.fail("must be one of " + join(known, true));
     const auto previous = std::find(effects.begin(), effects.end(), name);
     if (previous != effects.end())
       item.fail("repeats " + node.path() + "[" + std::to_string(previous - effects.begin()) +
@@ -58,6 +58,30 @@ std::vector<std::string> read_effects(const Node& node) {
     effects.push_back(name);
   }
   return effects;
+}
+
+/// What each effect needs (its registry entry's `needs`), and no settings section without its effect: an
+/// effect that needs something the scene lacks, or settings of an effect the scene does not run, would be
+/// silently ignored. The errors name the effect's place in `effects`, or the section.
+void check_effects(const SceneConfig& config, const ObjectReader& r) {
+  for (const EffectEntry& effect : effect_registry()) {
+    const auto listed = std::find(config.effects.begin(), config.effects.end(), effect.name);
+    if (listed == config.effects.end()) {
+      const EffectSection& section = effect.settings;
+      if (section.key && r[section.key].present())
+        r[section.key].fail("sets " + std::string(section.what) + ", but effects does not list \"" +
+                            effect.name + "\"");
+      continue;
+    }
+    const Node node = r["effects"].element(static_cast<std::size_t>(listed - config.effects.begin()));
+    const EffectNeeds& needs = effect.needs;
+    if (needs.mesh == EffectMesh::CLOTH_OR_OBSTACLES && !config.cloth && config.obstacles.empty())
+      node.fail("needs a cloth or obstacles; the scene has no \"cloth\" and no \"obstacles\"");
+    if (needs.mesh == EffectMesh::CLOTH && !config.cloth)
+      node.fail("needs a cloth; the scene has no \"cloth\"");
+    if (needs.effect && !config.has_effect(needs.effect))
+      node.fail("needs the \"" + std::string(needs.effect) + "\" effect" + needs.why);
+  }
 }
 
 /// 1-based line and column of the character at `offset`, as an editor shows them.
@@ -180,27 +204,7 @@ SceneConfig parse_scene(const nlohmann::json& document, const std::string& sourc
   config.wetting = loader::read_wetting(r["wetting"]);
   config.effects = read_effects(r["effects"]);
   if (r["camera"].present()) config.camera = loader::read_camera(r["camera"]);
-  // An effect that needs something the scene lacks, or settings of an effect the scene does not run, would be
-  // silently ignored: both are errors.
-  const auto effect_node = [&](const std::string& name) {
-    const auto it = std::find(config.effects.begin(), config.effects.end(), name);
-    return r["effects"].element(static_cast<std::size_t>(it - config.effects.begin()));
-  };
-  for (const char* needs_cloth : {"coupling", "leak_audit"}) {
-    if (config.has_effect(needs_cloth) && !config.cloth && config.obstacles.empty())
-      effect_node(needs_cloth)
-          .fail("needs a cloth or obstacles; the scene has no \"cloth\" and no \"obstacles\"");
-  }
-  if (r["surface"].present() && !config.has_effect("surface"))
-    r["surface"].fail("sets the surface reconstruction, but effects does not list \"surface\"");
-  if (r["wetting"].present() && !config.has_effect("wetting"))
-    r["wetting"].fail("sets the wetting, but effects does not list \"wetting\"");
-  if (config.has_effect("wetting") && !config.cloth)
-    effect_node("wetting").fail("needs a cloth; the scene has no \"cloth\"");
-  if (config.has_effect("wetting") && !config.has_effect("coupling"))
-    effect_node("wetting").fail("needs the \"coupling\" effect, whose contacts give the cloth its water");
-  if (config.has_effect("friction") && !config.has_effect("coupling"))
-    effect_node("friction").fail("needs the \"coupling\" effect");
+  check_effects(config, r);
   const bool tangential =
       config.coupling.slip == SlipCondition::NO_SLIP || config.coupling.friction_coefficient > 0;
   if (tangential && !config.has_effect("friction")) {

@@ -11,6 +11,7 @@
 #include <drench/common/error.hpp>
 #include <drench/common/stopwatch.hpp>
 #include <drench/io/atomic_file.hpp>
+#include <drench/scene/effect_registry.hpp>
 #include <drench/scene/frame_files.hpp>
 
 namespace drench {
@@ -87,11 +88,11 @@ nlohmann::json make_summary(const Simulation& sim, double wall_seconds, const st
   counters.surface = surface;
   s["effect_passes"] = nlohmann::json::object();
   s["effects_ran"] = nlohmann::json::array();
-  for (const std::string& name : known_effects()) {
-    const EffectCounter& c = *counters.find(name);
+  for (const EffectEntry& effect : effect_registry()) {
+    const EffectCounter& c = counters.*effect.counter;
     if (c.constructed == 0) continue;
-    s["effect_passes"][name] = c.passes;
-    if (c.passes > 0) s["effects_ran"].push_back(name);
+    s["effect_passes"][effect.name] = c.passes;
+    if (c.passes > 0) s["effects_ran"].push_back(effect.name);
   }
   if (counters.coupling.constructed > 0) s["coupling_skipped_steps"] = counters.coupling.skipped;
   if (counters.substep_obstacle.constructed > 0)

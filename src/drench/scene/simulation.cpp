@@ -145,9 +145,21 @@ Simulation::Simulation(const SceneConfig& config, std::unique_ptr<ClothEngine> c
   if (!obstacles.empty())
     m_with_obstacles = std::make_unique<ClothWithObstacles>(m_cloth.get(), std::move(obstacles));
   m_engine = m_with_obstacles ? static_cast<ClothEngine*>(m_with_obstacles.get()) : m_cloth.get();
-  m_fluid =
-      std::make_unique<FluidSolver>(m_config.fluid, m_config.gravity, sample_boundaries(m_config),
-                                    m_config.boundaries, m_config.has_effect("viscosity"), m_speed_of_sound);
+  if (m_engine) m_engine->mesh().validate();
+  const CouplingSettings& coupling = m_config.coupling;
+  if ((coupling.slip == SlipCondition::NO_SLIP || coupling.friction_coefficient > 0.0) &&
+      !m_config.has_effect("friction")) {
+    // The coupler is built without friction then: the settings would be silently ignored.
+    throw SceneError(
+        "coupling asks for tangential boundary conditions (slip or friction_coefficient), but "
+        "effects does not list \"friction\" (" +
+        m_config.source + ")");
+  }
+  // Before the fluid, which builds the viscosity force itself when the effects say so.
+  m_effects =
+      build_effects({m_config, m_engine ? &m_engine->mesh() : nullptr, m_cloth ? &m_cloth->mesh() : nullptr});
+  m_fluid = std::make_unique<FluidSolver>(m_config.fluid, m_config.gravity, sample_boundaries(m_config),
+                                          m_config.boundaries, m_effects.viscosity, m_speed_of_sound);
   m_total_steps = std::max<std::int64_t>(1, std::llround(m_config.time.duration / m_config.time.dt));
   if (m_config.time.adaptive) {
     const TimeSettings& t = m_config.time;
@@ -171,54 +183,19 @@ Simulation::Simulation(const SceneConfig& config, std::unique_ptr<ClothEngine> c
       m_energy_floor = std::min(m_energy_floor, -m_config.gravity.dot(x));
   }
   m_initial_energy = fluid_energy();
-  if (m_engine) m_engine->mesh().validate();
-  const CouplingSettings& coupling = m_config.coupling;
-  if ((coupling.slip == SlipCondition::NO_SLIP || coupling.friction_coefficient > 0.0) &&
-      !m_config.has_effect("friction")) {
-    // The coupler is built without friction then: the settings would be silently ignored.
-    throw SceneError(
-        "coupling asks for tangential boundary conditions (slip or friction_coefficient), but "
-        "effects does not list \"friction\" (" +
-        m_config.source + ")");
-  }
-  if (m_engine && m_config.has_effect("coupling"))
-    m_coupler = std::make_unique<Coupler>(coupling, m_config.has_effect("friction"));
-  const bool carried_water = m_config.coupling.scheme == CouplingScheme::CARRIED_WATER;
-  if (m_coupler && m_config.coupling.continuous && m_config.coupling.substep_obstacle) {
-    m_obstacle = std::make_unique<ClothObstacle>(m_config.coupling.cloth_thickness,
-                                                 m_config.coupling.broad_phase, carried_water);
-  }
-  if (m_coupler && carried_water) m_carried = std::make_unique<CarriedWater>();
   if (m_engine) m_pending_cloth_impulses.assign(m_engine->mesh().node_count(), Vec3::Zero());
-  m_leak_audit = m_engine && m_config.has_effect("leak_audit");
-  m_leak_counter.constructed = m_leak_audit ? 1 : 0;
-  if (m_cloth && m_coupler && m_config.has_effect("wetting")) {
-    // The dry node masses from the cloth's area, pinned nodes included (they hold water too); a cloth made
-    // in code without scene settings has the default area density.
-    const ClothMesh& nodes = m_cloth->mesh();
-    const double area_density = (m_config.cloth ? *m_config.cloth : ClothSettings{}).area_density;
-    ScalarArray dry(nodes.node_count(), 0.0);
-    for (const Triangle& t : nodes.triangles) {
-      const Vec3& a = nodes.positions_t0[t[0]];
-      const double area = 0.5 * (nodes.positions_t0[t[1]] - a).cross(nodes.positions_t0[t[2]] - a).norm();
-      for (const Index i : t)
-        dry[i] += area_density * area / 3.0;
-    }
-    m_wetting = std::make_unique<ClothWetting>(m_config.wetting, nodes.triangles, nodes.positions_t0, dry);
-    ++m_wetting_counter.constructed;
-  }
 }
 
 EffectCounters Simulation::effect_counters() const {
   EffectCounters c;
   c.viscosity = m_fluid->viscosity_counter();
-  if (m_coupler) {
-    c.coupling = m_coupler->counter();
-    c.friction = m_coupler->friction_counter();
+  if (m_effects.coupler) {
+    c.coupling = m_effects.coupler->counter();
+    c.friction = m_effects.coupler->friction_counter();
   }
-  if (m_obstacle) c.substep_obstacle = m_obstacle->counter();
-  c.leak_audit = m_leak_counter;
-  c.wetting = m_wetting_counter;
+  if (m_effects.obstacle) c.substep_obstacle = m_effects.obstacle->counter();
+  c.leak_audit = m_effects.leak_counter;
+  c.wetting = m_effects.wetting_counter;
   return c;
 }
 
@@ -239,7 +216,7 @@ double Simulation::fluid_energy() const {
 }
 
 bool Simulation::closed() const {
-  return m_nozzles.empty() && m_config.kill_regions.empty() && !m_wetting;
+  return m_nozzles.empty() && m_config.kill_regions.empty() && !m_effects.wetting;
 }
 
 bool Simulation::finished() const {
@@ -279,8 +256,8 @@ StepStatus Simulation::step(Scalar dt) {
   if (m_engine) m_engine->begin_step();
   // The cloth at its start positions is an obstacle inside the fluid's sub-steps
   // (coupling/cloth_obstacle.hpp).
-  if (m_obstacle) m_obstacle->begin_step(m_engine->mesh(), m_engine->velocities());
-  StepStatus status = m_fluid->step(dt, m_obstacle.get());
+  if (m_effects.obstacle) m_effects.obstacle->begin_step(m_engine->mesh(), m_engine->velocities());
+  StepStatus status = m_fluid->step(dt, m_effects.obstacle.get());
   if (m_engine) step_cloth_and_couple(dt, status);
   // `!(a <= b)` rather than std::max, so that a NaN speed stays NaN in the summary.
   const Scalar particle_speed = m_fluid->max_speed();
@@ -307,18 +284,18 @@ void Simulation::step_cloth_and_couple(Scalar dt, StepStatus& status) {
   ParticleSet& p = m_fluid->particles();
   ClothMesh& mesh = m_engine->mesh();
   // CouplingScheme::CARRIED_WATER: the water near the cloth weighs on its nodes through the engine's step.
-  const bool carry = m_carried && status.ok();
+  const bool carry = m_effects.carried && status.ok();
   Vec3Array before_impulses;
   if (carry) {
     ScopedTimer timer(m_coupling_seconds);
     // The particles whose impulses the cloth takes in this step (coupling/carried_water.hpp).
     ImpulseLinks links = m_pending_links;
-    if (m_obstacle) {
-      const ImpulseLinks& stops = m_obstacle->impulse_links();
+    if (m_effects.obstacle) {
+      const ImpulseLinks& stops = m_effects.obstacle->impulse_links();
       links.insert(links.end(), stops.begin(), stops.end());
     }
-    m_carried->attach(mesh, p.masses, p.ids, std::move(links));
-    m_engine->set_carried_masses(m_carried->carried_masses());
+    m_effects.carried->attach(mesh, p.masses, p.ids, std::move(links));
+    m_engine->set_carried_masses(m_effects.carried->carried_masses());
     before_impulses = m_engine->velocities();
   }
   // Before the cloth steps, so that its solver spreads the load over the cloth's links in this step: what
@@ -328,16 +305,16 @@ void Simulation::step_cloth_and_couple(Scalar dt, StepStatus& status) {
   if (m_pending_cloth_impulses.size() == impulses.size()) impulses.swap(m_pending_cloth_impulses);
   m_pending_cloth_impulses.assign(mesh.node_count(), Vec3::Zero());
   m_pending_links.clear();
-  if (m_obstacle) {
-    const Vec3Array& stopped = m_obstacle->impulses();
+  if (m_effects.obstacle) {
+    const Vec3Array& stopped = m_effects.obstacle->impulses();
     for (std::size_t i = 0; i < impulses.size(); ++i)
       impulses[i] += stopped[i];
-    m_coupling_stats.obstacle_stops += m_obstacle->stops();
-    m_coupling_stats.vertical_impulse_on_cloth += m_obstacle->vertical_impulse();
+    m_coupling_stats.obstacle_stops += m_effects.obstacle->stops();
+    m_coupling_stats.vertical_impulse_on_cloth += m_effects.obstacle->vertical_impulse();
   }
   if (carry) {
     // The engine applies gravity to the carried mass too, but the water fell in the fluid's step already.
-    const ScalarArray& carried = m_carried->carried_masses();
+    const ScalarArray& carried = m_effects.carried->carried_masses();
     for (std::size_t i = 0; i < impulses.size(); ++i)
       impulses[i] -= (carried[i] * dt) * m_config.gravity;
   }
@@ -357,30 +334,30 @@ void Simulation::step_cloth_and_couple(Scalar dt, StepStatus& status) {
   }
   if (carry && m_non_finite_node < 0) {
     ScopedTimer timer(m_coupling_seconds);
-    const Vec3 given = m_carried->hand_back(before_impulses, m_engine->velocities(), mesh, dt, p.positions,
-                                            p.velocities, p.masses);
+    const Vec3 given = m_effects.carried->hand_back(before_impulses, m_engine->velocities(), mesh, dt,
+                                                    p.positions, p.velocities, p.masses);
     m_coupling_stats.vertical_impulse_on_cloth -= given.y();
   }
   // A cloth or fluid that went non-finite is not coupled: its state means nothing any more.
-  const bool coupled = m_coupler && m_non_finite_node < 0 && status.ok();
+  const bool coupled = m_effects.coupler && m_non_finite_node < 0 && status.ok();
   m_last_coupling_status = 0;
   if (coupled) {
     ScopedTimer timer(m_coupling_seconds);
     const FluidView view{&p.positions_t0, &p.positions, &p.velocities, &p.masses,
-                         m_carried || m_wetting ? &p.ids : nullptr};
-    if (m_carried) {
+                         m_effects.carried || m_effects.wetting ? &p.ids : nullptr};
+    if (m_effects.carried) {
       // The particles are corrected against the cloth where its engine put it; the cloth's share of every
       // impulse reaches it at its next step (moving a light node with heavy water here is what the links
       // would snap back).
       const KinematicCloth kinematic(mesh);
-      m_last_coupling_status = m_coupler->step(view, mesh, dt, m_coupling_stats);
-      const Vec3Array& given = m_coupler->node_impulses();
+      m_last_coupling_status = m_effects.coupler->step(view, mesh, dt, m_coupling_stats);
+      const Vec3Array& given = m_effects.coupler->node_impulses();
       for (std::size_t i = 0; i < given.size(); ++i) {
         if (kinematic.own_inverse_masses()[i] > 0.0) m_pending_cloth_impulses[i] += given[i];
       }
-      m_pending_links = m_coupler->impulse_links();
+      m_pending_links = m_effects.coupler->impulse_links();
     } else {
-      m_last_coupling_status = m_coupler->step(view, mesh, dt, m_coupling_stats);
+      m_last_coupling_status = m_effects.coupler->step(view, mesh, dt, m_coupling_stats);
     }
     m_coupling_status |= m_last_coupling_status;
   }
@@ -390,7 +367,7 @@ void Simulation::step_cloth_and_couple(Scalar dt, StepStatus& status) {
   }
   // After end_step, which leaves in the mesh the positions the engine holds (rounded, for a single-precision
   // engine), so that the audit checks the cloth the next step starts from.
-  if (m_leak_audit && m_non_finite_node < 0 && status.ok()) {
+  if (m_effects.leak_audit && m_non_finite_node < 0 && status.ok()) {
     // The audit pairs a particle with a triangle only where their bare boxes over the step meet, so a
     // particle whose box misses the mesh's cannot leak: the one test decides, exactly.
     bool near = false;
@@ -400,17 +377,17 @@ void Simulation::step_cloth_and_couple(Scalar dt, StepStatus& status) {
     }
     if (near) {
       audit_leaks(p.positions_t0, p.positions, mesh, m_leak_stats);
-      ++m_leak_counter.passes;
+      ++m_effects.leak_counter.passes;
     } else {
-      ++m_leak_counter.skipped;
+      ++m_effects.leak_counter.skipped;
     }
   }
-  if (m_wetting && coupled) wet_cloth(dt);
+  if (m_effects.wetting && coupled) wet_cloth(dt);
 }
 
 void Simulation::wet_cloth(Scalar dt) {
   ScopedTimer timer(m_wetting_stats.seconds);
-  ++m_wetting_counter.passes;
+  ++m_effects.wetting_counter.passes;
   ParticleSet& p = m_fluid->particles();
   const ClothMesh& cloth = m_cloth->mesh();
   // The particles the coupling touched in this step: the coupler's and, inside the fluid's sub-steps, the
@@ -424,8 +401,8 @@ void Simulation::wet_cloth(Scalar dt) {
       if (!fresh && link.impulse > it->second->impulse) it->second = &link;
     }
   };
-  collect(m_coupler->impulse_links());
-  if (m_obstacle) collect(m_obstacle->impulse_links());
+  collect(m_effects.coupler->impulse_links());
+  if (m_effects.obstacle) collect(m_effects.obstacle->impulse_links());
   std::vector<WettingContact> contacts;
   contacts.reserve(touched.size());
   for (std::size_t i = 0; i < p.size() && !touched.empty(); ++i) {
@@ -434,18 +411,18 @@ void Simulation::wet_cloth(Scalar dt) {
   }
   std::vector<std::uint8_t> remove(p.size(), 0);
   const Scalar particle_mass = m_fluid->particle_mass();
-  m_wetting->absorb(contacts, p.masses, remove, 0.01 * particle_mass, dt, m_wetting_stats);
+  m_effects.wetting->absorb(contacts, p.masses, remove, 0.01 * particle_mass, dt, m_wetting_stats);
   if (std::find(remove.begin(), remove.end(), std::uint8_t{1}) != remove.end()) p.remove_flagged(remove);
-  m_wetting->spread(cloth.positions_t1, m_config.gravity, dt, m_wetting_stats);
+  m_effects.wetting->spread(cloth.positions_t1, m_config.gravity, dt, m_wetting_stats);
   // A drop starts clear of the cloth's thickness and of the other particles, on the cloth's lower side.
   const Scalar spacing = m_config.fluid.particle_spacing;
   const double offset = std::max(2.0 * m_config.coupling.cloth_thickness, 0.5 * spacing);
   for (const WettingDrop& drop :
-       m_wetting->drip(cloth.positions_t1, m_cloth->velocities(), m_config.gravity, particle_mass, offset,
-                       p.positions, 0.75 * spacing, m_wetting_stats)) {
+       m_effects.wetting->drip(cloth.positions_t1, m_cloth->velocities(), m_config.gravity, particle_mass,
+                               offset, p.positions, 0.75 * spacing, m_wetting_stats)) {
     p.add(drop.position, drop.velocity, particle_mass, m_next_id++);
   }
-  m_cloth->set_water_masses(m_wetting->water());
+  m_cloth->set_water_masses(m_effects.wetting->water());
 }
 
 void Simulation::remove_killed() {

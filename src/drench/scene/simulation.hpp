@@ -14,6 +14,7 @@
 #include <drench/coupling/leak_audit.hpp>
 #include <drench/coupling/static_obstacles.hpp>
 #include <drench/scene/effect_counters.hpp>
+#include <drench/scene/effect_registry.hpp>
 #include <drench/scene/scene_config.hpp>
 #include <drench/sph/emitters.hpp>
 #include <drench/sph/fluid_solver.hpp>
@@ -21,7 +22,8 @@
 
 namespace drench {
 
-/// Builds and steps everything a SceneConfig names. Only effects listed in `effects` are constructed.
+/// Builds and steps everything a SceneConfig names. Only effects listed in `effects` are constructed, each
+/// by its entry in the effect registry (effect_registry.hpp).
 class Simulation {
  public:
   /// @throws SceneError when the scene cannot be built: it has a cloth but no cloth_factory, or settings
@@ -84,7 +86,7 @@ class Simulation {
   double emit_seconds() const { return m_emit_seconds; }
 
   /// The coupler, or nullptr when the scene does not list "coupling" (or has no cloth).
-  Coupler* coupler() { return m_coupler.get(); }
+  Coupler* coupler() { return m_effects.coupler.get(); }
   /// The cloth, or nullptr for a scene without one.
   ClothEngine* cloth() { return m_cloth.get(); }
   const ClothEngine* cloth() const { return m_cloth.get(); }
@@ -112,7 +114,7 @@ class Simulation {
   const Vec3Array& pending_cloth_impulses() const { return m_pending_cloth_impulses; }
 
   /// The water in the cloth, or nullptr when the scene does not list "wetting".
-  const ClothWetting* wetting() const { return m_wetting.get(); }
+  const ClothWetting* wetting() const { return m_effects.wetting.get(); }
   /// Wetting figures summed over all steps (zero without the "wetting" effect).
   const WettingStepStats& wetting_stats() const { return m_wetting_stats; }
   /// Mass that entered the scene so far: the initial particles and every nozzle's (unit: kg).
@@ -154,15 +156,10 @@ class Simulation {
   double m_emit_seconds = 0;
   std::unique_ptr<ClothEngine> m_cloth;
   std::unique_ptr<ClothWithObstacles> m_with_obstacles;  // only when the scene has obstacles
-  ClothEngine* m_engine = nullptr;  // what the coupled step drives: m_with_obstacles, else m_cloth
-  std::unique_ptr<Coupler> m_coupler;
-  std::unique_ptr<ClothObstacle> m_obstacle;  // the cloth inside fluid sub-steps, kept across steps
-  std::unique_ptr<CarriedWater> m_carried;    // CouplingScheme::CARRIED_WATER only
-  Vec3Array m_pending_cloth_impulses;         // M, owed to the cloth at its next step (unit: N s)
-  ImpulseLinks m_pending_links;               // the particles that gave them, carried in that step
-  bool m_leak_audit = false;
-  EffectCounter m_leak_counter;
-  EffectCounter m_wetting_counter;
+  ClothEngine* m_engine = nullptr;     // what the coupled step drives: m_with_obstacles, else m_cloth
+  EffectParts m_effects;               // what the scene's `effects` built (effect_registry.hpp)
+  Vec3Array m_pending_cloth_impulses;  // M, owed to the cloth at its next step (unit: N s)
+  ImpulseLinks m_pending_links;        // the particles that gave them, carried in that step
   CouplingStepStats m_coupling_stats;
   LeakAuditStats m_leak_stats;
   std::uint32_t m_coupling_status = 0;
@@ -171,7 +168,6 @@ class Simulation {
   Scalar m_time = 0;
   double m_cloth_seconds = 0;
   double m_coupling_seconds = 0;
-  std::unique_ptr<ClothWetting> m_wetting;  // "wetting" only
   WettingStepStats m_wetting_stats;
   double m_emitted_mass = 0;
   double m_killed_mass = 0;

@@ -1,0 +1,113 @@
+#include <drench/scene/effect_registry.hpp>
+
+#include <algorithm>
+
+namespace drench {
+namespace {
+
+void build_viscosity(const EffectSite&, EffectParts& parts) {
+  parts.viscosity = true;
+}
+
+void build_coupling(const EffectSite& site, EffectParts& parts) {
+  // A scene built in code may list the coupling without a cloth or obstacles: nothing to couple.
+  if (!site.contact_mesh) return;
+  const CouplingSettings& settings = site.config.coupling;
+  // Friction is a stage of the coupler, on the coupler's own contacts (coupler.cpp): built into it here.
+  parts.coupler = std::make_unique<Coupler>(settings, site.config.has_effect("friction"));
+  const bool carried_water = settings.scheme == CouplingScheme::CARRIED_WATER;
+  if (settings.continuous && settings.substep_obstacle)
+    parts.obstacle =
+        std::make_unique<ClothObstacle>(settings.cloth_thickness, settings.broad_phase, carried_water);
+  if (carried_water) parts.carried = std::make_unique<CarriedWater>();
+}
+
+void build_leak_audit(const EffectSite& site, EffectParts& parts) {
+  parts.leak_audit = site.contact_mesh != nullptr;
+  parts.leak_counter.constructed = parts.leak_audit ? 1 : 0;
+}
+
+void build_wetting(const EffectSite& site, EffectParts& parts) {
+  // The water comes from the coupling's contacts: without a coupler there is none to absorb.
+  if (!site.cloth_mesh || !parts.coupler) return;
+  // The dry node masses from the cloth's area, pinned nodes included (they hold water too); a cloth made in
+  // code without scene settings has the default area density.
+  const ClothMesh& nodes = *site.cloth_mesh;
+  const double area_density = (site.config.cloth ? *site.config.cloth : ClothSettings{}).area_density;
+  ScalarArray dry(nodes.node_count(), 0.0);
+  for (const Triangle& t : nodes.triangles) {
+    const Vec3& a = nodes.positions_t0[t[0]];
+    const double area = 0.5 * (nodes.positions_t0[t[1]] - a).cross(nodes.positions_t0[t[2]] - a).norm();
+    for (const Index i : t)
+      dry[i] += area_density * area / 3.0;
+  }
+  parts.wetting =
+      std::make_unique<ClothWetting>(site.config.wetting, nodes.triangles, nodes.positions_t0, dry);
+  ++parts.wetting_counter.constructed;
+}
+
+}  // namespace
+
+const std::vector<EffectEntry>& effect_registry() {
+  // Each entry: name, description, needs {mesh, effect, why}, settings {section, what}, counter, build.
+  static const std::vector<EffectEntry> registry = {
+      {"viscosity",
+       "the viscosity force of fluid.viscosity in every fluid sub-step (XSPH, Monaghan 1989; artificial "
+       "viscosity, Monaghan 1992), built by the FluidSolver",
+       {},
+       {},
+       &EffectCounters::viscosity,
+       build_viscosity},
+      {"coupling",
+       "two-way coupling with the cloth and the obstacles: repulsion (sec. 3.1-3.2, eq. 1-4) and continuous "
+       "handling (sec. 3.3, eq. 5-6)",
+       {EffectMesh::CLOTH_OR_OBSTACLES},
+       {},
+       &EffectCounters::coupling,
+       build_coupling},
+      {"friction",
+       "tangential boundary conditions at contact, no-slip or Coulomb friction (sec. 3.4, eq. 7-8): a stage "
+       "of the coupler, built by \"coupling\"",
+       {EffectMesh::NONE, "coupling"},
+       {},
+       &EffectCounters::friction,
+       nullptr},
+      {"leak_audit",
+       "counts the particles that cross the cloth or an obstacle in a step, by exact predicates (a drench "
+       "addition that checks sec. 3.3's claim)",
+       {EffectMesh::CLOTH_OR_OBSTACLES},
+       {},
+       &EffectCounters::leak_audit,
+       build_leak_audit},
+      {"surface",
+       "the fluid's surface at every frame, kept off the cloth (sec. 4), built by the run loop",
+       {},
+       {"surface", "the surface reconstruction"},
+       &EffectCounters::surface,
+       nullptr},
+      {"wetting",
+       "the cloth absorbs, spreads and drips water (sec. 5, Fig. 9)",
+       {EffectMesh::CLOTH, "coupling", ", whose contacts give the cloth its water"},
+       {"wetting", "the wetting"},
+       &EffectCounters::wetting,
+       build_wetting},
+  };
+  return registry;
+}
+
+const EffectEntry* find_effect(const std::string& name) {
+  const std::vector<EffectEntry>& registry = effect_registry();
+  const auto it = std::find_if(registry.begin(), registry.end(),
+                               [&](const EffectEntry& entry) { return name == entry.name; });
+  return it == registry.end() ? nullptr : &*it;
+}
+
+EffectParts build_effects(const EffectSite& site) {
+  EffectParts parts;
+  for (const EffectEntry& effect : effect_registry()) {
+    if (effect.build && site.config.has_effect(effect.name)) effect.build(site, parts);
+  }
+  return parts;
+}
+
+}  // namespace drench
