@@ -21,30 +21,38 @@
 
 namespace {
 
-/// `precision`: PCISPH's iterations, "single" (the default) or "double". DFSPH runs at the same average
-/// density error (fluid.dfsph.eta 0.0005) and SPlisHSPlasH's divergence error (0.1% per 2.5 ms step, its
-/// default fluid.dfsph.eta_divergence).
-drench::SceneConfig reference_dam_break(double spacing, const std::string& solver,
-                                        const std::string& precision, bool warm_start = false) {
+/// The --set overrides of the reference dam break at `spacing` (unit: m). `precision`: PCISPH's iterations,
+/// "single" (the default) or "double". DFSPH runs at the same average density error (fluid.dfsph.eta 0.0005)
+/// and SPlisHSPlasH's divergence error (0.1% per 2.5 ms step, its default fluid.dfsph.eta_divergence).
+std::vector<std::string> reference_overrides(double spacing, const std::string& solver,
+                                             const std::string& precision = "single",
+                                             bool warm_start = false) {
   const double block = spacing > 0.04 ? 0.95 : spacing > 0.02 ? 0.975 : 1.0;
   // Issue 2's steps, 5 ms at 0.05 m and 2.5 ms at 0.025 m, are 0.1 s per metre of spacing; the 1M block keeps
   // that ratio (1 ms): at 2.5 ms it is unstable, PCISPH hitting its limit of 100 iterations within a few
   // steps and corner particles moving ten times faster than the block.
   const double dt = 0.1 * spacing;  // unit: s
-  return drench::load_scene_file(
-      std::string(DRENCH_SOURCE_DIR) + "/demos/scenes/dam_break.json",
-      {"fluid.particle_spacing=" + std::to_string(spacing), "fluid.pressure_solver=" + solver,
-       "fluid.pcisph.eta=0.0005", "fluid.pcisph.precision=\"" + precision + "\"", "fluid.dfsph.eta=0.0005",
-       std::string("fluid.dfsph.warm_start=") + (warm_start ? "true" : "false"),
-       "emitters[0].max=[" + std::to_string(block) + "," + std::to_string(block) + "," +
-           std::to_string(block) + "]",
-       "time.dt=" + std::to_string(dt), "time.frame_rate=0"});
+  return {"fluid.particle_spacing=" + std::to_string(spacing),
+          "fluid.pressure_solver=" + solver,
+          "fluid.pcisph.eta=0.0005",
+          "fluid.pcisph.precision=\"" + precision + "\"",
+          "fluid.dfsph.eta=0.0005",
+          std::string("fluid.dfsph.warm_start=") + (warm_start ? "true" : "false"),
+          "emitters[0].max=[" + std::to_string(block) + "," + std::to_string(block) + "," +
+              std::to_string(block) + "]",
+          "time.dt=" + std::to_string(dt),
+          "time.frame_rate=0"};
+}
+
+drench::SceneConfig load_dam_break(const std::vector<std::string>& overrides) {
+  return drench::load_scene_file(std::string(DRENCH_SOURCE_DIR) + "/demos/scenes/dam_break.json", overrides);
 }
 
 /// Runs `sim_seconds` of the dam break once and reports per-step figures as counters.
 void run(benchmark::State& state, double spacing, const std::string& solver, double sim_seconds,
          const std::string& precision = "single", bool warm_start = false) {
-  const drench::SceneConfig config = reference_dam_break(spacing, solver, precision, warm_start);
+  const drench::SceneConfig config =
+      load_dam_break(reference_overrides(spacing, solver, precision, warm_start));
   for (auto _ : state) {
     drench::Simulation sim(config);
     const auto start = std::chrono::steady_clock::now();
@@ -130,20 +138,19 @@ void pcisph_1m(benchmark::State& s) {
 /// times it beside the others and pcisph_59k, the peer's yardstick.
 void time_to_solution(benchmark::State& state, const std::string& solver, double dt, double cfl,
                       double speed_of_sound) {
-  constexpr double kEta = 0.0005, kSeconds = 0.5;
-  std::vector<std::string> overrides = {
-      "fluid.particle_spacing=0.025", "fluid.pressure_solver=" + solver,
-      "fluid.pcisph.eta=" + std::to_string(kEta), "fluid.dfsph.eta=" + std::to_string(kEta),
-      "fluid.cfl=" + std::to_string(cfl), "emitters[0].max=[0.975,0.975,0.975]", "time.adaptive=true",
-      "time.dt=" + std::to_string(dt), "time.duration=" + std::to_string(kSeconds), "time.frame_rate=0",
-      // As published (and as SPlisHSPlasH): each solve drives every
-      // particle to the rest density, so the error it stops at is the
-      // error reported. drench's limits are for coupled scenes.
-      "fluid.pcisph.max_relief_per_substep=null", "fluid.pcisph.max_compression_per_iteration=null",
-      "fluid.dfsph.max_relief_per_substep=null"};
+  constexpr double kEta = 0.0005, kSeconds = 0.5;  // the reference's eta
+  std::vector<std::string> overrides = reference_overrides(0.025, solver);
+  overrides.insert(
+      overrides.end(),
+      {"fluid.cfl=" + std::to_string(cfl), "time.adaptive=true", "time.dt=" + std::to_string(dt),
+       "time.duration=" + std::to_string(kSeconds),
+       // As published (and as SPlisHSPlasH): each solve drives every
+       // particle to the rest density, so the error it stops at is the
+       // error reported. drench's limits are for coupled scenes.
+       "fluid.pcisph.max_relief_per_substep=null", "fluid.pcisph.max_compression_per_iteration=null",
+       "fluid.dfsph.max_relief_per_substep=null"});
   if (solver == "wcsph") overrides.push_back("fluid.wcsph.speed_of_sound=" + std::to_string(speed_of_sound));
-  const drench::SceneConfig config =
-      drench::load_scene_file(std::string(DRENCH_SOURCE_DIR) + "/demos/scenes/dam_break.json", overrides);
+  const drench::SceneConfig config = load_dam_break(overrides);
   for (auto _ : state) {
     drench::Simulation sim(config);
     const auto start = std::chrono::steady_clock::now();

@@ -35,6 +35,9 @@ import tempfile
 import time
 from pathlib import Path
 
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from bench_surface import commit, cpu_model  # noqa: E402
+
 ETA_PCT = 0.05
 COLUMNS = [
     "phase", "round", "name", "solver", "dt_max_ms", "cfl", "speed_of_sound_mps", "within_error", "wall_s", "sim_s",
@@ -119,16 +122,10 @@ def main():
             print(f"round {k}/{args.rounds} {name}: {row['wall_s']:.1f} s "
                   f"({(time.time() - started) / 60:.0f} min so far)", flush=True)
 
-    commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True).stdout.strip()
-    dirty = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no"], capture_output=True,
-                           text=True).stdout.strip()
-    cpu = re.search(r"^Model name:\s*(.*)$", subprocess.run(["lscpu"], capture_output=True, text=True).stdout,
-                    flags=re.M)
     temporary = args.out.with_name(args.out.name + ".tmp")
     with temporary.open("w", newline="") as f:
         f.write(f"# bench/time_to_solution.py --rounds {args.rounds}{' --wcsph-rounds' if args.wcsph_rounds else ''}"
-                f" at {commit}{' with local changes' if dirty else ''}, one thread,"
-                f" {cpu.group(1) if cpu else 'unknown CPU'}, {time.strftime('%Y-%m-%d')}\n")
+                f" at {commit()}, one thread, {cpu_model()}, {time.strftime('%Y-%m-%d')}\n")
         writer = csv.DictWriter(f, fieldnames=COLUMNS)
         writer.writeheader()
         writer.writerows(rows)
