@@ -49,8 +49,8 @@ ONE_AT_A_TIME = [
 ]
 
 # A run past --timeout (default 240 s, about ten times a sound PCISPH or DFSPH run on one thread) is a
-# blow-up the CFL limit keeps sub-stepping: stopped, and its row says so. A sound WCSPH run of the jet takes
-# about 400 s on one thread (its sub-steps are bound by the speed of sound): give it --timeout 1200.
+# blow-up the CFL limit keeps sub-stepping: stopped, and its row says so. A sound WCSPH run is far slower
+# (its sub-steps are bound by the speed of sound), so a WCSPH sweep needs a longer one (1200 s).
 STABILITY = [
     "--timeout", "{timeout}",
     "--vary", 'fluid.pressure_solver={solvers}',
