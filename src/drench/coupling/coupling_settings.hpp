@@ -54,6 +54,11 @@ struct CouplingSettings {
   /// mu of eq. 8, >= 0; 0 = free slip. Ignored under NO_SLIP.
   double friction_coefficient = 0.0;
   BroadPhaseKind broad_phase = BroadPhaseKind::FCL;
+
+  /// Whether these settings ask for a tangential boundary condition (sec. 3.4, eq. 7-8): the coupler builds
+  /// one only when the scene lists the "friction" effect, so the loader and Simulation refuse the settings
+  /// without it rather than ignore them.
+  bool asks_tangential() const { return slip == SlipCondition::NO_SLIP || friction_coefficient > 0.0; }
 };
 
 }  // namespace drench

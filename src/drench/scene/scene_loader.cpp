@@ -205,9 +205,7 @@ SceneConfig parse_scene(const nlohmann::json& document, const std::string& sourc
   config.effects = read_effects(r["effects"]);
   if (r["camera"].present()) config.camera = loader::read_camera(r["camera"]);
   check_effects(config, r);
-  const bool tangential =
-      config.coupling.slip == SlipCondition::NO_SLIP || config.coupling.friction_coefficient > 0;
-  if (tangential && !config.has_effect("friction")) {
+  if (config.coupling.asks_tangential() && !config.has_effect("friction")) {
     const Node coupling = r["coupling"];
     const Node key =
         coupling.child("slip").present() ? coupling.child("slip") : coupling.child("friction_coefficient");

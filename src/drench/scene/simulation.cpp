@@ -146,9 +146,7 @@ Simulation::Simulation(const SceneConfig& config, std::unique_ptr<ClothEngine> c
     m_with_obstacles = std::make_unique<ClothWithObstacles>(m_cloth.get(), std::move(obstacles));
   m_engine = m_with_obstacles ? static_cast<ClothEngine*>(m_with_obstacles.get()) : m_cloth.get();
   if (m_engine) m_engine->mesh().validate();
-  const CouplingSettings& coupling = m_config.coupling;
-  if ((coupling.slip == SlipCondition::NO_SLIP || coupling.friction_coefficient > 0.0) &&
-      !m_config.has_effect("friction")) {
+  if (m_config.coupling.asks_tangential() && !m_config.has_effect("friction")) {
     // The coupler is built without friction then: the settings would be silently ignored.
     throw SceneError(
         "coupling asks for tangential boundary conditions (slip or friction_coefficient), but "
