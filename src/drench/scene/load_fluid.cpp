@@ -10,7 +10,7 @@ namespace drench::loader {
 FluidSettings read_fluid(const Node& node) {
   FluidSettings fluid;
   const ObjectReader r(node, {"rest_density", "particle_spacing", "pressure_solver", "wcsph", "pcisph",
-                              "dfsph", "viscosity", "cfl", "sort_interval"});
+                              "dfsph", "viscosity", "cfl", "max_speed", "sort_interval"});
   r.read("rest_density", fluid.rest_density, kPositive);
   r.read("particle_spacing", fluid.particle_spacing, kPositive);
   r.read_choice("pressure_solver", fluid.pressure_solver,
@@ -19,6 +19,9 @@ FluidSettings read_fluid(const Node& node) {
                                             {"dfsph", PressureSolverKind::DFSPH}});
   r.read("cfl", fluid.cfl, Range{0.0, true, 1.0, false});
   r.read("sort_interval", fluid.sort_interval, kAtLeastOne);
+  // null is "no limit", so that --set fluid.max_speed=null can undo the default.
+  if (const Node c = r["max_speed"]; c.present())
+    fluid.max_speed = c.value().is_null() ? std::nullopt : std::optional<Scalar>(c.number(kPositive));
 
   const ObjectReader wcsph(r["wcsph"], {"speed_of_sound", "exponent"});
   // null is accepted as "auto" so that --set fluid.wcsph.speed_of_sound=null can undo a file's value.

@@ -84,6 +84,25 @@ void check_effects(const SceneConfig& config, const ObjectReader& r) {
   }
 }
 
+/// An emitter at or over fluid.max_speed would stop the run at its first particle: said at load time instead,
+/// naming the emitter's key.
+void check_emitter_speeds(const SceneConfig& config, const ObjectReader& r) {
+  if (!config.fluid.max_speed) return;
+  for (std::size_t i = 0; i < config.emitters.size(); ++i) {
+    const EmitterSettings& e = config.emitters[i];
+    const bool nozzle = e.kind == EmitterSettings::Kind::NOZZLE;
+    const Scalar speed = nozzle ? e.nozzle.speed : e.box.velocity.norm();
+    if (speed >= *config.fluid.max_speed) {
+      char limit[32];
+      std::snprintf(limit, sizeof limit, "%g", *config.fluid.max_speed);
+      const std::string problem = "must be slower than fluid.max_speed (" + std::string(limit) + " m/s)";
+      const Node key = r["emitters"].element(i).child(nozzle ? "speed" : "velocity");
+      if (key.present()) key.fail(problem);
+      key.fail_without_value(problem + ", as its default is");
+    }
+  }
+}
+
 /// 1-based line and column of the character at `offset`, as an editor shows them.
 std::pair<std::size_t, std::size_t> line_and_column(const std::string& text, std::size_t offset) {
   offset = std::min(offset, text.size());
@@ -205,6 +224,7 @@ SceneConfig parse_scene(const nlohmann::json& document, const std::string& sourc
   config.effects = read_effects(r["effects"]);
   if (r["camera"].present()) config.camera = loader::read_camera(r["camera"]);
   check_effects(config, r);
+  check_emitter_speeds(config, r);
   if (config.coupling.asks_tangential() && !config.has_effect("friction")) {
     const Node coupling = r["coupling"];
     const Node key =

@@ -133,6 +133,10 @@ struct FluidSettings {
   /// CFL factor lambda (dimensionless), in (0, 1]: a fluid sub-step never exceeds lambda spacing / v_max,
   /// with v_max the fastest particle (plus the speed of sound for WCSPH).
   Scalar cfl = 0.4;
+  /// A particle faster than this stops the run with RUNAWAY_PARTICLE (unit: m/s), > 0; nullopt: no limit.
+  /// Far above any flow of water, so only a blow-up reaches it, which would otherwise crawl: the CFL limit
+  /// cuts each step for that one particle.
+  std::optional<Scalar> max_speed = 1000.0;
   /// Fluid sub-steps between re-sorting particles along a z-order curve for cache locality, >= 1.
   int sort_interval = 10;
 };

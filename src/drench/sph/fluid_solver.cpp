@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 
 #include <drench/common/parallel.hpp>
@@ -20,6 +21,10 @@ StepStatus& StepStatus::operator|=(const StepStatus& other) {
   flags |= other.flags;
   if (non_finite_particle < 0) non_finite_particle = other.non_finite_particle;
   if (non_finite_node < 0) non_finite_node = other.non_finite_node;
+  if (runaway_particle < 0) {
+    runaway_particle = other.runaway_particle;
+    runaway_speed = other.runaway_speed;
+  }
   return *this;
 }
 
@@ -39,6 +44,13 @@ std::string StepStatus::describe() const {
     if (!text.empty()) text += "; ";
     text += "NON_FINITE_CLOTH: cloth node " + std::to_string(non_finite_node) +
             " has a NaN or infinite position (lower time.dt, raise cloth.position_iterations)";
+  }
+  if (flags & RUNAWAY_PARTICLE) {
+    if (!text.empty()) text += "; ";
+    char speed[32];
+    std::snprintf(speed, sizeof speed, "%.4g", runaway_speed);
+    text += "RUNAWAY_PARTICLE: particle id " + std::to_string(runaway_particle) + " moved at " + speed +
+            " m/s, over fluid.max_speed (lower time.dt or fluid.cfl)";
   }
   return text;
 }
@@ -88,6 +100,14 @@ Scalar FluidSolver::max_speed() const {
   return std::sqrt(max_speed_sq);
 }
 
+std::size_t FluidSolver::fastest_particle() const {
+  const auto& v = m_particles.velocities;
+  std::size_t fastest = 0;
+  for (std::size_t i = 1; i < v.size(); ++i)
+    if (v[i].squaredNorm() > v[fastest].squaredNorm()) fastest = i;
+  return fastest;
+}
+
 Scalar FluidSolver::cfl_limit(Scalar max_speed) const {
   const Scalar speed = max_speed + m_pressure->signal_speed();
   if (!(speed > 0.0)) return std::numeric_limits<Scalar>::infinity();
@@ -104,6 +124,14 @@ StepStatus FluidSolver::step(Scalar dt, SubstepConstraint* constraint) {
   int count = 0;
   while (true) {
     const Scalar speed = max_speed();
+    if (m_settings.max_speed && speed > *m_settings.max_speed) {
+      // Past it the CFL limit would cut the step into up to a million sub-steps: a blown-up run would crawl
+      // for hours instead of saying so (the WCSPH rows of bench/accuracy_sweep.py's stability sweep).
+      status.flags |= StepStatus::RUNAWAY_PARTICLE;
+      status.runaway_particle = m_particles.ids[fastest_particle()];
+      status.runaway_speed = speed;
+      break;
+    }
     const Scalar limit = cfl_limit(speed);
     // A NaN limit means a NaN velocity: take one sub-step so that the check below names the particle.
     const Scalar wanted = std::isfinite(limit) ? std::ceil(remaining / limit) : 1.0;

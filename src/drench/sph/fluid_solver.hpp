@@ -31,12 +31,18 @@ struct StepStatus {
     /// A cloth node's position became NaN or infinite after the cloth's own step; `non_finite_node` names it
     /// and the coupling was skipped. Lower dt, raise the cloth's position iterations, check its masses.
     NON_FINITE_CLOTH = 1u << 2,
+    /// A particle moved faster than fluid.max_speed at the start of a sub-step; `runaway_particle` names its
+    /// id and `runaway_speed` its speed. The run has blown up: lower dt or the CFL factor.
+    RUNAWAY_PARTICLE = 1u << 3,
   };
   std::uint32_t flags = 0;
   std::int64_t non_finite_particle = -1;  ///< id of the first non-finite particle, or -1
   std::int64_t non_finite_node = -1;      ///< index of the first non-finite cloth node, or -1
+  std::int64_t runaway_particle = -1;     ///< id of the fastest particle over fluid.max_speed, or -1
+  double runaway_speed = 0.0;             ///< its speed (unit: m/s)
 
-  bool ok() const { return (flags & (NON_FINITE_STATE | NON_FINITE_CLOTH)) == 0; }
+  /// False when the state is no longer worth stepping: non-finite, or a particle over fluid.max_speed.
+  bool ok() const { return (flags & (NON_FINITE_STATE | NON_FINITE_CLOTH | RUNAWAY_PARTICLE)) == 0; }
   StepStatus& operator|=(const StepStatus& other);
   /// One line naming each raised flag (and the particle id), empty when no flag is raised.
   std::string describe() const;
@@ -97,7 +103,8 @@ class FluidSolver {
   /// Mass of one particle, rest_density * spacing^3 (unit: kg).
   Scalar particle_mass() const;
 
-  /// Advances the fluid by dt (unit: s, > 0), in as many equal-ish sub-steps as the CFL limit asks.
+  /// Advances the fluid by dt (unit: s, > 0), in as many equal-ish sub-steps as the CFL limit asks. Stops
+  /// before a sub-step with RUNAWAY_PARTICLE when a particle is faster than settings().max_speed.
   /// @param constraint  optional, applied after every sub-step (must outlive the call)
   StepStatus step(Scalar dt, SubstepConstraint* constraint = nullptr);
 
@@ -112,6 +119,8 @@ class FluidSolver {
   ///        the skin of a new grid search
   void update_neighbors(Scalar max_displacement);
   StepStatus substep(Scalar dt, Scalar max_speed, SubstepConstraint* constraint);
+  /// Index of the fastest particle (the first of equals); 0 when there are none.
+  std::size_t fastest_particle() const;
   /// The CFL sub-step for the fastest particle moving at `max_speed` (unit: s); infinite when nothing moves.
   Scalar cfl_limit(Scalar max_speed) const;
 
