@@ -124,7 +124,8 @@ StepStatus FluidSolver::step(Scalar dt, SubstepConstraint* constraint) {
   int count = 0;
   while (true) {
     const Scalar speed = max_speed();
-    if (m_settings.max_speed && speed > *m_settings.max_speed) {
+    // An infinite speed is left to the non-finite check, which names it as such.
+    if (m_settings.max_speed && std::isfinite(speed) && speed > *m_settings.max_speed) {
       // Past it the CFL limit would cut the step into up to a million sub-steps: a blown-up run would crawl
       // for hours instead of saying so (the WCSPH rows of bench/accuracy_sweep.py's stability sweep).
       status.flags |= StepStatus::RUNAWAY_PARTICLE;
