@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <filesystem>
+#include <fstream>
 #include <string>
 #include <system_error>
 
@@ -37,6 +38,15 @@ class TempDir {
   TempDir& operator=(const TempDir&) = delete;
 
   const std::filesystem::path& path() const { return m_path; }
+
+  /// Writes `contents` to `name` inside the folder, making its subfolders, and returns the file's path.
+  /// @param name  a relative path such as "scene.json" or "a/b.obj"
+  std::string write(const std::string& name, const std::string& contents) const {
+    const std::filesystem::path file = m_path / name;
+    std::filesystem::create_directories(file.parent_path());
+    std::ofstream(file, std::ios::binary) << contents;
+    return file.string();
+  }
 
  private:
   std::filesystem::path m_path;

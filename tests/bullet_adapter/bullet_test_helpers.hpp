@@ -2,10 +2,8 @@
 // Shared by the adapter tests: settings of small patches, OBJ files in a temporary folder, error checks.
 
 #include <gtest/gtest.h>
-#include <unistd.h>
 
 #include <algorithm>
-#include <atomic>
 #include <filesystem>
 #include <fstream>
 #include <functional>
@@ -47,17 +45,6 @@ inline ClothSettings patch_settings(int nodes_x, int nodes_z, const std::string&
   s.area_density = 0.2;
   s.pinned = pinned;
   return s;
-}
-
-/// Writes `text` to a fresh file in the temporary folder and returns its path.
-inline std::string write_temp_file(const std::string& name, const std::string& text) {
-  static std::atomic<int> counter{0};
-  const auto dir = std::filesystem::temp_directory_path() /
-                   ("drench_bullet_tests_" + std::to_string(::getpid()) + "_" + std::to_string(counter++));
-  std::filesystem::create_directories(dir);
-  const auto path = dir / name;
-  std::ofstream(path) << text;
-  return path.string();
 }
 
 /// Expects `f` to throw SceneError whose message contains every one of `parts`.

@@ -5,11 +5,11 @@
 
 #include <BulletSoftBody/btSoftBodyHelpers.h>
 #include <gtest/gtest.h>
-#include <unistd.h>
 
 #include <cmath>
 #include <limits>
 
+#include "../temp_dir.hpp"
 #include "bullet_test_helpers.hpp"
 
 namespace drench::bullet {
@@ -19,7 +19,6 @@ using test::as_bullet;
 using test::bullet_tolerance;
 using test::expect_scene_error;
 using test::patch_settings;
-using test::write_temp_file;
 
 int material_index(const btSoftBody& body, const btSoftBody::Material* m) {
   return body.m_materials.findLinearSearch(const_cast<btSoftBody::Material*>(m));
@@ -248,15 +247,16 @@ TEST(SoftBodyBuilder, FromTrianglesEqualsBulletsCreateFromTriMesh) {
 
 TEST(SoftBodyBuilder, ObjMeshIsTriangulatedAndUnusedVerticesDropped) {
   // A 2 x 1 strip of quads (6 vertices) plus a vertex no face uses, in two objects.
-  const std::string path = write_temp_file("strip.obj",
-                                           "# strip\n"
-                                           "o left\n"
-                                           "v 0 1 0\nv 0.5 1 0\nv 1 1 0\n"
-                                           "v 9 9 9\n"
-                                           "v 0 1 0.5\nv 0.5 1 0.5\nv 1 1 0.5\n"
-                                           "f 1 2 6 5\n"
-                                           "o right\n"
-                                           "f 2 3 7 6\n");
+  const drench::test::TempDir dir;
+  const std::string path = dir.write("strip.obj",
+                                     "# strip\n"
+                                     "o left\n"
+                                     "v 0 1 0\nv 0.5 1 0\nv 1 1 0\n"
+                                     "v 9 9 9\n"
+                                     "v 0 1 0.5\nv 0.5 1 0.5\nv 1 1 0.5\n"
+                                     "f 1 2 6 5\n"
+                                     "o right\n"
+                                     "f 2 3 7 6\n");
   const TriangleMesh mesh = load_obj_mesh(path);
   ASSERT_EQ(mesh.positions.size(), 6u);
   ASSERT_EQ(mesh.triangles.size(), 4u);
@@ -311,8 +311,9 @@ TEST(SoftBodyBuilder, BadSettingsThrowSceneErrorNamingTheSetting) {
 
 TEST(SoftBodyBuilder, BadObjFilesThrowSceneErrorNamingTheFile) {
   btSoftBodyWorldInfo info;
+  const drench::test::TempDir dir;
   auto expect_bad_obj = [&](const std::string& text, const std::string& problem) {
-    const std::string path = write_temp_file("bad.obj", text);
+    const std::string path = dir.write("bad.obj", text);
     ClothSettings s;
     s.mesh = path;
     expect_scene_error([&] { create_cloth_body(info, s); }, {"cloth.mesh", path, problem});

@@ -1,7 +1,6 @@
 #include <drench/ccd/ccd_query_file.hpp>
 
 #include <gtest/gtest.h>
-#include <unistd.h>
 
 #include <array>
 #include <cmath>
@@ -15,6 +14,7 @@
 #include <vector>
 
 #include <drench/common/error.hpp>
+#include "../temp_dir.hpp"
 #include "ccd_test_data.hpp"
 
 namespace drench::ccd {
@@ -42,36 +42,6 @@ testing::AssertionResult throws_containing(Function&& function, const std::vecto
   }
   return testing::AssertionFailure() << "did not throw";
 }
-
-/// A folder in the temp directory, named after the running test and this process so parallel ctest runs do
-/// not collide; removed with its contents at the end of the test.
-class TempDir {
- public:
-  TempDir() {
-    m_path = testing::TempDir() + "drench_ccd_" +
-             testing::UnitTest::GetInstance()->current_test_info()->name() + "_" + std::to_string(::getpid());
-    fs::remove_all(m_path);
-    fs::create_directories(m_path);
-  }
-  ~TempDir() {
-    std::error_code ignored;
-    fs::remove_all(m_path, ignored);
-  }
-  TempDir(const TempDir&) = delete;
-  TempDir& operator=(const TempDir&) = delete;
-
-  /// Writes `contents` to `name` (which may hold subfolders) and returns the file's path.
-  std::string write(const std::string& name, const std::string& contents) const {
-    const fs::path path = fs::path(m_path) / name;
-    fs::create_directories(path.parent_path());
-    std::ofstream(path, std::ios::binary) << contents;
-    return path.string();
-  }
-  const std::string& path() const { return m_path; }
-
- private:
-  std::string m_path;
-};
 
 constexpr const char* kHeader =
     "# source: hand-written for test_ccd_query_file.cpp\n"
@@ -105,7 +75,7 @@ std::vector<std::string> doubles_with(int column, const std::string& text) {
 }
 
 TEST(CcdQueryFile, ReadsQueriesInFileOrderWithCoordinatesInVertexOrder) {
-  TempDir dir;
+  const drench::test::TempDir dir;
   const std::string path = dir.write(
       "two.vf.txt", std::string(kHeader) +
                         query_line("scene/vertex-face/data_0_0.csv#0", "1", distinct_doubles()) +
@@ -136,7 +106,7 @@ TEST(CcdQueryFile, ParsesShortestRoundTripDoublesExactly) {
   std::vector<std::string> doubles = distinct_doubles();
   for (std::size_t i = 0; i < texts.size(); ++i)
     doubles[i] = texts[i];
-  TempDir dir;
+  const drench::test::TempDir dir;
   const std::vector<CcdBenchmarkQuery> queries =
       read_ccd_query_file(dir.write("exact.vf.txt", std::string(kHeader) + query_line("q#0", "0", doubles)));
   ASSERT_EQ(queries.size(), 1u);
@@ -149,7 +119,7 @@ TEST(CcdQueryFile, ParsesShortestRoundTripDoublesExactly) {
 TEST(CcdQueryFile, AcceptsCrlfLineEndsBlankLinesAndNoFinalNewline) {
   std::string line = query_line("q#0", "1", distinct_doubles());
   line.pop_back();  // no final newline
-  TempDir dir;
+  const drench::test::TempDir dir;
   const std::string path = dir.write("crlf.vf.txt", "# one\r\n# two\r\n\r\n" + line);
   const std::vector<CcdBenchmarkQuery> queries = read_ccd_query_file(path);
   ASSERT_EQ(queries.size(), 1u);
@@ -163,24 +133,25 @@ TEST(CcdQueryFile, AcceptsCrlfLineEndsBlankLinesAndNoFinalNewline) {
 }
 
 TEST(CcdQueryFile, ReturnsNoQueriesForAHeaderOnlyFile) {
-  TempDir dir;
+  const drench::test::TempDir dir;
   EXPECT_TRUE(read_ccd_query_file(dir.write("empty.vf.txt", kHeader)).empty());
 }
 
 TEST(CcdQueryFile, ReportsAFileThatCannotBeOpened) {
-  TempDir dir;
-  const std::string missing = dir.path() + "/missing.vf.txt";
+  const drench::test::TempDir dir;
+  const std::string missing = (dir.path() / "missing.vf.txt").string();
   EXPECT_TRUE(throws_containing<IoError>([&] { read_ccd_query_file(missing); },
                                          {missing + ": cannot read CCD query file", "No such file"}));
-  EXPECT_TRUE(throws_containing<IoError>([&] { read_ccd_query_file(dir.path()); },
-                                         {dir.path() + ": cannot read CCD query file", "directory"}));
+  EXPECT_TRUE(
+      throws_containing<IoError>([&] { read_ccd_query_file(dir.path().string()); },
+                                 {dir.path().string() + ": cannot read CCD query file", "directory"}));
 }
 
 /// Writes the header, one good query and then `bad_line`, and checks that reading names line 5 and the
 /// culprit.
 testing::AssertionResult bad_line_error(const std::string& bad_line,
                                         const std::vector<std::string>& expected) {
-  TempDir dir;
+  const drench::test::TempDir dir;
   const std::string path =
       dir.write("bad.vf.txt", std::string(kHeader) + query_line("q#0", "1", distinct_doubles()) + bad_line);
   std::vector<std::string> parts = {path + ":5: "};
@@ -226,7 +197,7 @@ TEST(CcdQueryFile, ReportsANonFiniteDouble) {
 
 TEST(CcdQueryFile, CutsALongBadValueInTheMessage) {
   const std::string long_value(1000, 'x');
-  TempDir dir;
+  const drench::test::TempDir dir;
   const std::string path = dir.write("long.vf.txt", query_line("q#0", "0", doubles_with(3, long_value)));
   try {
     read_ccd_query_file(path);
@@ -240,13 +211,13 @@ TEST(CcdQueryFile, CutsALongBadValueInTheMessage) {
 }
 
 TEST(CcdQueryFile, ListsAFileAsItself) {
-  TempDir dir;
+  const drench::test::TempDir dir;
   const std::string path = dir.write("any-name.txt", kHeader);
   EXPECT_EQ(list_ccd_query_files(path), std::vector<std::string>{path});
 }
 
 TEST(CcdQueryFile, ListsQueryFilesOfADirectoryRecursivelyAndSorted) {
-  TempDir dir;
+  const drench::test::TempDir dir;
   const std::string b = dir.write("b/two.vf.txt", kHeader);
   const std::string a2 = dir.write("a/z.vf.txt", kHeader);
   const std::string a1 = dir.write("a/deeper/y.vf.txt", kHeader);
@@ -254,17 +225,17 @@ TEST(CcdQueryFile, ListsQueryFilesOfADirectoryRecursivelyAndSorted) {
   dir.write("a/readme.txt", "not a query file");
   dir.write("a/counts.tsv", "not a query file");
   dir.write("b/vf.txt", "not a query file either: the name must end in .vf.txt");
-  EXPECT_EQ(list_ccd_query_files(dir.path()), (std::vector<std::string>{a1, a2, b, top}));
+  EXPECT_EQ(list_ccd_query_files(dir.path().string()), (std::vector<std::string>{a1, a2, b, top}));
 }
 
 TEST(CcdQueryFile, ReportsAMissingPathOrADirectoryWithoutQueryFiles) {
-  TempDir dir;
-  const std::string missing = dir.path() + "/missing";
+  const drench::test::TempDir dir;
+  const std::string missing = dir.path().string() + "/missing";
   EXPECT_TRUE(throws_containing<IoError>([&] { list_ccd_query_files(missing); },
                                          {missing + ": cannot read CCD query files", "No such file"}));
   dir.write("sub/readme.txt", "no queries here");
-  EXPECT_TRUE(throws_containing<IoError>([&] { list_ccd_query_files(dir.path()); },
-                                         {dir.path() + ": holds no *.vf.txt file"}));
+  EXPECT_TRUE(throws_containing<IoError>([&] { list_ccd_query_files(dir.path().string()); },
+                                         {dir.path().string() + ": holds no *.vf.txt file"}));
 }
 
 /// One row of the data folder's counts.tsv.

@@ -13,15 +13,11 @@
 #include <string>
 #include <vector>
 
+#include "../temp_dir.hpp"
+
 namespace {
 
 namespace fs = std::filesystem;
-
-struct TempDir {
-  fs::path path = fs::temp_directory_path() / ("drench_sweep_" + std::to_string(::getpid()));
-  TempDir() { fs::create_directories(path); }
-  ~TempDir() { fs::remove_all(path); }
-};
 
 int run(const std::string& arguments, const fs::path& log) {
   const std::string command =
@@ -74,19 +70,19 @@ const std::string kTank =
 // Each row is its run's summary.json, the run that cannot start (a cloth mesh file that is not there) is a
 // row with its error, and the closed tank neither gains energy nor loses more than the settling costs.
 TEST(SweepCommand, EveryRunIsARowWithItsSummarysFiguresFailuresIncluded) {
-  TempDir dir;
+  const drench::test::TempDir dir;
   const int status =
       run("sweep " + kTank + " --vary time.dt=0.0025,0.01 --case 'no cloth file:cloth.mesh=\"absent.obj\"'" +
-              " --out " + (dir.path / "sweep").string(),
-          dir.path / "log.txt");
-  EXPECT_EQ(status, 2) << "a sweep with a failed run exits 2\n" << read(dir.path / "log.txt");
-  const auto rows = read_csv(dir.path / "sweep/sweep.csv");
-  ASSERT_EQ(rows.size(), 3u) << read(dir.path / "log.txt");
+              " --out " + (dir.path() / "sweep").string(),
+          dir.path() / "log.txt");
+  EXPECT_EQ(status, 2) << "a sweep with a failed run exits 2\n" << read(dir.path() / "log.txt");
+  const auto rows = read_csv(dir.path() / "sweep/sweep.csv");
+  ASSERT_EQ(rows.size(), 3u) << read(dir.path() / "log.txt");
   for (int i = 0; i < 2; ++i) {
     const auto& row = rows[i];
     EXPECT_EQ(row.at("status"), "ok");
     const nlohmann::json summary = nlohmann::json::parse(
-        read(dir.path / "sweep/runs" / ("00" + std::to_string(i + 1)) / "summary.json"));
+        read(dir.path() / "sweep/runs" / ("00" + std::to_string(i + 1)) / "summary.json"));
     EXPECT_NEAR(std::stod(row.at("density_error_mean")), summary["density_error"]["mean"].get<double>(),
                 1e-5 * summary["density_error"]["mean"].get<double>());
     EXPECT_EQ(std::stod(row.at("steps")), summary["steps"].get<double>());
@@ -101,39 +97,39 @@ TEST(SweepCommand, EveryRunIsARowWithItsSummarysFiguresFailuresIncluded) {
   EXPECT_EQ(rows[2].at("setting"), "no cloth file");
   EXPECT_NE(rows[2].at("status").find("absent.obj"), std::string::npos) << rows[2].at("status");
   EXPECT_TRUE(rows[2].at("wall_s").empty());
-  const std::string report = read(dir.path / "sweep/report.md");
+  const std::string report = read(dir.path() / "sweep/report.md");
   EXPECT_NE(report.find("1 runs did not end \"ok\""), std::string::npos) << report;
-  EXPECT_TRUE(fs::exists(dir.path / "sweep/pareto.png")) << "gnuplot is in scripts/setup";
+  EXPECT_TRUE(fs::exists(dir.path() / "sweep/pareto.png")) << "gnuplot is in scripts/setup";
 }
 
 // A run that would take minutes is stopped at --timeout and is a row that says so; the sweep goes on.
 TEST(SweepCommand, ARunPastTheTimeoutIsStoppedAndIsARow) {
-  TempDir dir;
+  const drench::test::TempDir dir;
   const auto start = std::chrono::steady_clock::now();
-  const int status = run(
-      "sweep " + kTank + " --vary time.duration=0.02,600 --timeout 2 --out " + (dir.path / "sweep").string(),
-      dir.path / "log.txt");
+  const int status = run("sweep " + kTank + " --vary time.duration=0.02,600 --timeout 2 --out " +
+                             (dir.path() / "sweep").string(),
+                         dir.path() / "log.txt");
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  EXPECT_EQ(status, 2) << read(dir.path / "log.txt");
+  EXPECT_EQ(status, 2) << read(dir.path() / "log.txt");
   EXPECT_LT(seconds, 60.0) << "the 600 s run was not stopped";
-  const auto rows = read_csv(dir.path / "sweep/sweep.csv");
+  const auto rows = read_csv(dir.path() / "sweep/sweep.csv");
   ASSERT_EQ(rows.size(), 2u);
   EXPECT_EQ(rows[0].at("status"), "ok");
   EXPECT_NE(rows[1].at("status").find("timed out"), std::string::npos) << rows[1].at("status");
 }
 
 TEST(SweepCommand, ABadSettingFailsBeforeAnyRunAndWritesNothing) {
-  TempDir dir;
-  const fs::path out = dir.path / "sweep";
-  EXPECT_EQ(run("sweep " + kTank + " --vary time.dt=0.001,-1 --out " + out.string(), dir.path / "log.txt"),
+  const drench::test::TempDir dir;
+  const fs::path out = dir.path() / "sweep";
+  EXPECT_EQ(run("sweep " + kTank + " --vary time.dt=0.001,-1 --out " + out.string(), dir.path() / "log.txt"),
             1);
-  EXPECT_NE(read(dir.path / "log.txt").find("time.dt"), std::string::npos) << read(dir.path / "log.txt");
+  EXPECT_NE(read(dir.path() / "log.txt").find("time.dt"), std::string::npos) << read(dir.path() / "log.txt");
   EXPECT_FALSE(fs::exists(out));
   EXPECT_EQ(run("sweep " + kTank + " --vary time.dt=0.001 --error speed --out " + out.string(),
-                dir.path / "log.txt"),
+                dir.path() / "log.txt"),
             1);
-  EXPECT_NE(read(dir.path / "log.txt").find("density_error_mean"), std::string::npos)
-      << "the error lists the columns: " << read(dir.path / "log.txt");
+  EXPECT_NE(read(dir.path() / "log.txt").find("density_error_mean"), std::string::npos)
+      << "the error lists the columns: " << read(dir.path() / "log.txt");
   EXPECT_FALSE(fs::exists(out));
 }
 

@@ -4,18 +4,17 @@
 #include <drench/io/ply_reader.hpp>
 
 #include <gtest/gtest.h>
-#include <unistd.h>
 
 #include <cmath>
 #include <cstdint>
 #include <cstring>
-#include <filesystem>
 #include <limits>
 #include <string>
 
 #include <drench/common/error.hpp>
 #include <drench/io/ply_writer.hpp>
 #include <drench/scene/frame_files.hpp>
+#include "../temp_dir.hpp"
 
 namespace drench {
 namespace {
@@ -77,14 +76,12 @@ TEST(PlyReader, AMeshHasNoVelocities) {
 }
 
 TEST(PlyReader, MeshRoundTripsThroughTheWriterToAFile) {
-  namespace fs = std::filesystem;
-  const std::string path =
-      (fs::path(testing::TempDir()) / ("drench_ply_reader_" + std::to_string(::getpid()) + ".ply")).string();
+  const test::TempDir dir;
+  const std::string path = (dir.path() / "mesh.ply").string();
   const Vec3Array positions = {Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 0, 1), Vec3(1, 0.5, 1)};
   const std::vector<Triangle> triangles = {{0, 2, 1}, {1, 2, 3}};
   write_mesh_ply(path, "test", positions, triangles);
   const PlyData data = read_ply(path);
-  fs::remove(path);
   EXPECT_TRUE(data.has_faces);
   EXPECT_EQ(data.positions, positions);  // every coordinate is exact in float32
   EXPECT_EQ(data.triangles, triangles);

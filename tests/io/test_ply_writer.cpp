@@ -11,6 +11,7 @@
 #include <drench/io/atomic_file.hpp>
 #include <drench/io/ply_writer.hpp>
 #include <drench/scene/frame_files.hpp>
+#include "../temp_dir.hpp"
 
 namespace drench {
 namespace {
@@ -82,9 +83,8 @@ TEST(PlyWriter, APropertyOfTheWrongLengthIsRejectedByName) {
 
 TEST(AtomicFile, ReplacesWholeFileAndLeavesNoTemporary) {
   namespace fs = std::filesystem;
-  const fs::path dir = fs::temp_directory_path() / "drench_atomic_test";
-  fs::remove_all(dir);
-  fs::create_directories(dir);
+  const test::TempDir temp;
+  const fs::path& dir = temp.path();
   const std::string path = (dir / "summary.json").string();
   write_file_atomic(path, "old");
   write_file_atomic(path, "new contents");
@@ -93,7 +93,6 @@ TEST(AtomicFile, ReplacesWholeFileAndLeavesNoTemporary) {
   text << in.rdbuf();
   EXPECT_EQ(text.str(), "new contents");
   EXPECT_EQ(std::distance(fs::directory_iterator(dir), fs::directory_iterator()), 1);
-  fs::remove_all(dir);
 }
 
 TEST(AtomicFile, MissingFolderRaisesIoErrorNamingThePath) {

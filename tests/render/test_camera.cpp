@@ -4,14 +4,12 @@
 #include <drench/render/camera.hpp>
 
 #include <gtest/gtest.h>
-#include <unistd.h>
-
-#include <filesystem>
 
 #include <drench/common/error.hpp>
 #include <drench/io/atomic_file.hpp>
 #include <drench/render/png_image.hpp>
 #include <drench/render/render_run.hpp>
+#include "../temp_dir.hpp"
 
 namespace drench::render {
 namespace {
@@ -134,10 +132,10 @@ TEST(PngImage, RoundTripsThroughLibpng) {
   image.width = 3;
   image.height = 2;
   image.rgb = {255, 0, 0, 0, 255, 0, 0, 0, 255, 10, 20, 30, 40, 50, 60, 70, 80, 90};
-  const std::string path = testing::TempDir() + "drench_png_" + std::to_string(::getpid()) + ".png";
+  const test::TempDir dir;
+  const std::string path = (dir.path() / "image.png").string();
   write_file_atomic(path, encode_png(image));
   const Image back = read_png(path);
-  std::filesystem::remove(path);
   EXPECT_EQ(back.width, 3);
   EXPECT_EQ(back.height, 2);
   EXPECT_EQ(back.rgb, image.rgb);

@@ -1,7 +1,6 @@
 #include <drench/scene/scene_loader.hpp>
 
 #include <gtest/gtest.h>
-#include <unistd.h>
 
 #include <cmath>
 #include <cstdio>
@@ -13,6 +12,7 @@
 #include <drench/common/error.hpp>
 #include <drench/scene/effect_registry.hpp>
 #include <drench/scene/simulation.hpp>
+#include "../temp_dir.hpp"
 
 namespace drench {
 namespace {
@@ -49,24 +49,6 @@ testing::AssertionResult override_error(const std::string& text, const std::stri
   json document = json::parse(text);
   return throws_containing<SceneError>([&] { apply_override(document, assignment); }, expected);
 }
-
-/// A scene file in the temp directory, named after the running test and this process so parallel ctest runs
-/// do not collide; removed at the end of the test.
-class TempFile {
- public:
-  explicit TempFile(const std::string& contents) {
-    m_path = testing::TempDir() + "drench_" + testing::UnitTest::GetInstance()->current_test_info()->name() +
-             "_" + std::to_string(::getpid()) + ".json";
-    std::ofstream(m_path, std::ios::binary) << contents;
-  }
-  ~TempFile() { std::remove(m_path.c_str()); }
-  TempFile(const TempFile&) = delete;
-  TempFile& operator=(const TempFile&) = delete;
-  const std::string& path() const { return m_path; }
-
- private:
-  std::string m_path;
-};
 
 constexpr const char* kFullScene = R"({
   "gravity": [0, -9.8, 0.5],
@@ -284,7 +266,7 @@ TEST(SceneLoader, RejectsMisspeltFluidKeyListingKnownKeys) {
   EXPECT_TRUE(
       scene_error(R"({"fluid": {"visocsity": {}}})",
                   "fluid.visocsity is not a known key (x.json); known: rest_density, particle_spacing, "
-                  "pressure_solver, wcsph, pcisph, dfsph, viscosity, cfl, sort_interval"));
+                  "pressure_solver, wcsph, pcisph, dfsph, viscosity, cfl, max_speed, sort_interval"));
 }
 
 TEST(SceneLoader, RejectsNonFiniteNumberInDocumentBuiltInCode) {
@@ -471,6 +453,28 @@ TEST(SceneLoader, RejectsZeroCfl) {
 
 TEST(SceneLoader, RejectsCflAboveOne) {
   EXPECT_TRUE(scene_error(R"({"fluid": {"cfl": 1.5}})", "fluid.cfl must be in (0, 1], got 1.5 (x.json)"));
+}
+
+TEST(SceneLoader, MaxSpeedDefaultsTo1000AndNullMeansNoLimit) {
+  EXPECT_EQ(parse("{}").fluid.max_speed, 1000.0);
+  EXPECT_EQ(parse(R"({"fluid": {"max_speed": 50}})").fluid.max_speed, 50.0);
+  EXPECT_FALSE(parse(R"({"fluid": {"max_speed": null}})").fluid.max_speed);
+  EXPECT_TRUE(scene_error(R"({"fluid": {"max_speed": 0}})", "fluid.max_speed must be > 0, got 0 (x.json)"));
+}
+
+// An emitter at the limit would stop the run at its first particle: a load error naming the emitter's key.
+TEST(SceneLoader, RejectsAnEmitterAtOrOverMaxSpeedNamingIt) {
+  EXPECT_TRUE(scene_error(R"({"fluid": {"max_speed": 50}, "emitters": [{"type": "nozzle", "speed": 49},
+                                                               {"type": "nozzle", "speed": 50}]})",
+                          "emitters[1].speed must be slower than fluid.max_speed (50 m/s), got 50 (x.json)"));
+  EXPECT_TRUE(
+      scene_error(R"({"fluid": {"max_speed": 50}, "emitters": [{"type": "box", "velocity": [30, -40, 1]}]})",
+                  "emitters[0].velocity must be slower than fluid.max_speed (50 m/s), got [30,-40,1]"));
+  EXPECT_TRUE(
+      scene_error(R"({"fluid": {"max_speed": 0.5}, "emitters": [{"type": "nozzle"}]})",
+                  "emitters[0].speed must be slower than fluid.max_speed (0.5 m/s), as its default is"));
+  EXPECT_NO_THROW(
+      parse(R"({"fluid": {"max_speed": null}, "emitters": [{"type": "nozzle", "speed": 5000}]})"));
 }
 
 TEST(SceneLoader, RejectsZeroSortInterval) {
@@ -713,10 +717,11 @@ TEST(SceneLoader, RejectsObstacleKeysOfTheOtherKind) {
 }
 
 TEST(SceneFile, ObstacleObjIsFoundBesideTheSceneAndAMissingOneIsNamed) {
-  const TempFile file(R"({"obstacles": [{"mesh": "no_such_rock.obj"}], "effects": ["coupling"]})");
-  const SceneConfig c = load_scene_file(file.path());
-  const std::string expected =
-      (std::filesystem::path(file.path()).parent_path() / "no_such_rock.obj").string();
+  const test::TempDir dir;
+  const std::string file =
+      dir.write("scene.json", R"({"obstacles": [{"mesh": "no_such_rock.obj"}], "effects": ["coupling"]})");
+  const SceneConfig c = load_scene_file(file);
+  const std::string expected = (std::filesystem::path(file).parent_path() / "no_such_rock.obj").string();
   EXPECT_EQ(c.obstacles[0].mesh, expected);
   EXPECT_TRUE(throws_containing<SceneError>(
       [&] { Simulation sim(c); }, "obstacles[0].mesh: OBJ file \"" + expected + "\" cannot be read"));
@@ -946,40 +951,43 @@ TEST(SceneOverride, MisspeltKeyIsReportedAsUnknown) {
 // Files
 
 TEST(SceneFile, LoadsSceneFromFile) {
-  const TempFile file(kFullScene);
-  const SceneConfig c = load_scene_file(file.path());
-  EXPECT_EQ(c.source, file.path());
+  const test::TempDir dir;
+  const std::string file = dir.write("scene.json", kFullScene);
+  const SceneConfig c = load_scene_file(file);
+  EXPECT_EQ(c.source, file);
   EXPECT_EQ(c.emitters.size(), 2u);
 }
 
 TEST(SceneFile, AppliesOverridesAndNamesThemInSource) {
-  const TempFile file(kFullScene);
-  const SceneConfig c = load_scene_file(file.path(), {"time.dt=0.001", "emitters[0].speed=4"});
+  const test::TempDir dir;
+  const std::string file = dir.write("scene.json", kFullScene);
+  const SceneConfig c = load_scene_file(file, {"time.dt=0.001", "emitters[0].speed=4"});
   EXPECT_DOUBLE_EQ(c.time.dt, 0.001);
   EXPECT_DOUBLE_EQ(c.emitters[0].nozzle.speed, 4.0);
-  EXPECT_EQ(c.source, file.path() + " with --set time.dt=0.001 --set emitters[0].speed=4");
+  EXPECT_EQ(c.source, file + " with --set time.dt=0.001 --set emitters[0].speed=4");
 }
 
 TEST(SceneFile, RejectsBadOverrideValueNamingFileAndOverrides) {
-  const TempFile file(kFullScene);
-  EXPECT_TRUE(
-      throws_containing<SceneError>([&] { load_scene_file(file.path(), {"fluid.particle_spacing=-1"}); },
-                                    "fluid.particle_spacing must be > 0, got -1 (" + file.path() +
-                                        " with --set fluid.particle_spacing=-1)"));
+  const test::TempDir dir;
+  const std::string file = dir.write("scene.json", kFullScene);
+  EXPECT_TRUE(throws_containing<SceneError>(
+      [&] { load_scene_file(file, {"fluid.particle_spacing=-1"}); },
+      "fluid.particle_spacing must be > 0, got -1 (" + file + " with --set fluid.particle_spacing=-1)"));
 }
 
 TEST(SceneFile, RejectsOverflowingOverrideAsNonFinite) {
-  const TempFile file(kFullScene);
-  EXPECT_TRUE(
-      throws_containing<SceneError>([&] { load_scene_file(file.path(), {"time.dt=1e999"}); },
-                                    "time.dt must be finite, got inf (" + file.path() + " with --set"));
+  const test::TempDir dir;
+  const std::string file = dir.write("scene.json", kFullScene);
+  EXPECT_TRUE(throws_containing<SceneError>([&] { load_scene_file(file, {"time.dt=1e999"}); },
+                                            "time.dt must be finite, got inf (" + file + " with --set"));
 }
 
 TEST(SceneFile, RejectsOverridePastArrayEndNamingFile) {
-  const TempFile file(R"({"emitters": [{"type": "box"}]})");
-  EXPECT_TRUE(throws_containing<SceneError>(
-      [&] { load_scene_file(file.path(), {"emitters[3].speed=5"}); },
-      "--set emitters[3].speed=5: emitters has 1 element(s) (" + file.path() + ")"));
+  const test::TempDir dir;
+  const std::string file = dir.write("scene.json", R"({"emitters": [{"type": "box"}]})");
+  EXPECT_TRUE(
+      throws_containing<SceneError>([&] { load_scene_file(file, {"emitters[3].speed=5"}); },
+                                    "--set emitters[3].speed=5: emitters has 1 element(s) (" + file + ")"));
 }
 
 TEST(SceneFile, MissingFileThrowsIoErrorNamingPath) {
@@ -995,15 +1003,16 @@ TEST(SceneFile, DirectoryThrowsIoErrorNamingPath) {
 }
 
 TEST(SceneFile, MalformedJsonReportsLineAndColumn) {
-  const TempFile file("{\n  \"time\": {\"dt\": 0.1,}\n}\n");
-  EXPECT_TRUE(
-      throws_containing<SceneError>([&] { load_scene_file(file.path()); },
-                                    file.path() + ": malformed JSON at line 2, column 22: syntax error"));
+  const test::TempDir dir;
+  const std::string file = dir.write("scene.json", "{\n  \"time\": {\"dt\": 0.1,}\n}\n");
+  EXPECT_TRUE(throws_containing<SceneError>([&] { load_scene_file(file); },
+                                            file + ": malformed JSON at line 2, column 22: syntax error"));
 }
 
 TEST(SceneFile, MalformedJsonPositionAgreesWithParser) {
   const std::string text = "{\n\"a\": [1,\n 2,,3]}";
-  const TempFile file(text);
+  const test::TempDir dir;
+  const std::string file = dir.write("scene.json", text);
   std::string parser_position;
   json unused;
   try {
@@ -1014,25 +1023,28 @@ TEST(SceneFile, MalformedJsonPositionAgreesWithParser) {
         what.substr(what.find("line "), what.find(':', what.find("line ")) - what.find("line "));
   }
   EXPECT_EQ(parser_position, "line 3, column 4");
-  EXPECT_TRUE(throws_containing<SceneError>([&] { load_scene_file(file.path()); },
+  EXPECT_TRUE(throws_containing<SceneError>([&] { load_scene_file(file); },
                                             "malformed JSON at " + parser_position + ": "));
 }
 
 TEST(SceneFile, EmptyFileIsMalformedAtLineOneColumnOne) {
-  const TempFile file("");
-  EXPECT_TRUE(throws_containing<SceneError>([&] { load_scene_file(file.path()); },
-                                            file.path() + ": malformed JSON at line 1, column 1: "));
+  const test::TempDir dir;
+  const std::string file = dir.write("scene.json", "");
+  EXPECT_TRUE(throws_containing<SceneError>([&] { load_scene_file(file); },
+                                            file + ": malformed JSON at line 1, column 1: "));
 }
 
 TEST(SceneFile, NumberOverflowInFileIsMalformed) {
-  const TempFile file(R"({"time": {"dt": 1e999}})");
-  EXPECT_TRUE(throws_containing<SceneError>([&] { load_scene_file(file.path()); },
-                                            file.path() + ": malformed JSON: number overflow"));
+  const test::TempDir dir;
+  const std::string file = dir.write("scene.json", R"({"time": {"dt": 1e999}})");
+  EXPECT_TRUE(throws_containing<SceneError>([&] { load_scene_file(file); },
+                                            file + ": malformed JSON: number overflow"));
 }
 
 TEST(SceneFile, ReadDocumentAppliesOverridesWithoutValidating) {
-  const TempFile file(R"({"time": {"dt": 0.01}})");
-  const json document = read_scene_document(file.path(), {"time.dt=-5", "fluid.bogus=1"});
+  const test::TempDir dir;
+  const std::string file = dir.write("scene.json", R"({"time": {"dt": 0.01}})");
+  const json document = read_scene_document(file, {"time.dt=-5", "fluid.bogus=1"});
   EXPECT_EQ(document["time"]["dt"], -5);
   EXPECT_EQ(document["fluid"]["bogus"], 1);
 }
