@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <utility>
 #include <vector>
 
@@ -65,21 +66,41 @@ std::size_t NozzleEmitter::emit(Scalar t, Scalar dt, Scalar mass, ParticleSet& p
                                 std::uint32_t& next_id) {
   const Scalar t_end = t + dt;
   const Scalar layer_period = m_spacing / m_settings.speed;
-  const Vec3 velocity = m_settings.speed * m_settings.direction;
+  const Vec3& direction = m_settings.direction;
+  const Vec3 velocity = m_settings.speed * direction;
   std::size_t added = 0;
+  // Where the last disc's rearmost particle is along the axis (unit: m, downstream positive); found only when
+  // a disc is due, and +infinity when none of it is left.
+  Scalar rear = std::numeric_limits<Scalar>::infinity();
+  bool rear_known = false;
   while (m_emitted < m_settings.max_particles) {
-    const Scalar release = m_settings.start_time + m_layers * layer_period;
+    const Scalar release = m_settings.start_time + m_delay + m_layers * layer_period;
     if (release > t_end) break;
+    if (!rear_known) {
+      for (std::size_t i = 0; i < particles.size(); ++i) {
+        if (particles.ids[i] >= m_last_disc_begin && particles.ids[i] < m_last_disc_end)
+          rear = std::min(rear, (particles.positions[i] - m_settings.center).dot(direction));
+      }
+      rear_known = true;
+    }
     // Placed where it would be at the start of the step had it left the nozzle at `release`, i.e. still
     // upstream inside the nozzle when release > t: the fluid step that follows carries it to its place at
-    // t + dt, so layers end one spacing apart whatever dt is.
-    const Vec3 centre = m_settings.center + (t - release) * velocity;
+    // t + dt. But never closer than a spacing behind the disc before it (see the class comment).
+    const Scalar axial = std::min((t - release) * m_settings.speed, rear - m_spacing);
+    if (axial < -(dt * m_settings.speed + m_spacing)) {
+      m_delay += t_end - release;  // blocked: due again at the end of this step, at the outlet
+      break;
+    }
+    const Vec3 centre = m_settings.center + axial * direction;
+    m_last_disc_begin = next_id;
     for (const Vec3& offset : m_disc) {
       if (m_emitted >= m_settings.max_particles) break;
       particles.add(centre + offset, velocity, mass, next_id++);
       ++m_emitted;
       ++added;
     }
+    m_last_disc_end = next_id;
+    rear = axial;
     ++m_layers;
   }
   return added;
