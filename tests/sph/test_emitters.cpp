@@ -26,25 +26,52 @@ TEST(BoxEmitter, FillsTheBoxWithALatticeWhoseVolumesTileIt) {
   EXPECT_NEAR(particles.positions.front().x(), -0.075, 1e-12);
 }
 
-TEST(NozzleEmitter, ReleasesDiscsOneSpacingApartAtTheJetSpeed) {
+/// Fig. 3's nozzle (radius 2 cm, 3 m/s, spacing 5 mm, no budget to speak of) at `center` along `direction`,
+/// and the particles it released.
+struct Jet {
+  static constexpr Scalar kSpacing = 0.005;  // m
   NozzleEmitterSettings settings;
-  settings.center = Vec3(0.1, 0.3, -0.2);
-  settings.direction = Vec3(0, -1, 0);
-  settings.radius = 0.02;
-  settings.speed = 3.0;
-  settings.max_particles = 1000000;
-  const Scalar spacing = 0.005;
-  NozzleEmitter nozzle(settings, spacing);
+  NozzleEmitter nozzle;
   ParticleSet particles;
   std::uint32_t next_id = 0;
-  // dt is not a multiple of the layer period (spacing / speed = 1/600 s): layers must still end one spacing
-  // apart once each step's motion (here free flight, as the fluid step would do) is applied.
-  const Scalar dt = 0.001;
-  for (int step = 0; step < 11; ++step) {  // 6.6 layer periods: no release falls on a step boundary
-    nozzle.emit(step * dt, dt, 1e-3, particles, next_id);
-    for (std::size_t i = 0; i < particles.size(); ++i)
-      particles.positions[i] += dt * particles.velocities[i];
+
+  Jet(const Vec3& center, const Vec3& direction)
+      : settings(fig3(center, direction)), nozzle(settings, kSpacing) {}
+
+  static NozzleEmitterSettings fig3(const Vec3& center, const Vec3& direction) {
+    NozzleEmitterSettings s;
+    s.center = center;
+    s.direction = direction;
+    s.radius = 0.02;
+    s.speed = 3.0;
+    s.max_particles = 1000000;
+    return s;
   }
+
+  /// Steps `first_step` to `first_step + steps` of `dt` (unit: s): the nozzle emits, then every particle
+  /// moves `flow` times its velocity for dt, as the fluid step would move it (1: free flight at the jet's
+  /// speed; 0: a blocked outlet). Returns the particles each step released.
+  std::vector<std::size_t> run(Scalar dt, int first_step, int steps, Scalar flow) {
+    std::vector<std::size_t> released;
+    for (int step = first_step; step < first_step + steps; ++step) {
+      released.push_back(nozzle.emit(step * dt, dt, 1e-3, particles, next_id));
+      for (std::size_t i = 0; i < particles.size(); ++i)
+        particles.positions[i] += dt * flow * particles.velocities[i];
+    }
+    return released;
+  }
+};
+
+TEST(NozzleEmitter, ReleasesDiscsOneSpacingApartAtTheJetSpeed) {
+  Jet jet(Vec3(0.1, 0.3, -0.2), Vec3(0, -1, 0));
+  const NozzleEmitterSettings& settings = jet.settings;
+  const Scalar spacing = Jet::kSpacing;
+  // dt is not a multiple of the layer period (spacing / speed = 1/600 s): layers must still end one spacing
+  // apart once each step's motion (here free flight, as the fluid step would do) is applied. 11 steps of 1
+  // ms, 6.6 layer periods: no release falls on a step boundary.
+  jet.run(0.001, 0, 11, 1.0);
+  const ParticleSet& particles = jet.particles;
+  const NozzleEmitter& nozzle = jet.nozzle;
   std::set<long long> depths_nm;
   for (std::size_t i = 0; i < particles.size(); ++i) {
     EXPECT_TRUE(particles.velocities[i].isApprox(Vec3(0, -3, 0)));
@@ -107,20 +134,12 @@ std::vector<Scalar> disc_rears(const NozzleEmitter& nozzle, const NozzleEmitterS
 // disc's rearmost particle, not where free flight would have put it: closer, stiff WCSPH threw particles at
 // 65 m/s (the Fig. 3 jet at dt 4 ms, three discs a step). Here the fluid moves at 2/3 of the nozzle's speed.
 TEST(NozzleEmitter, ADiscIsNeverCloserThanASpacingToTheSlowedDiscBeforeIt) {
-  NozzleEmitterSettings settings;
-  settings.direction = Vec3(1, -2, 0.5).normalized();
-  settings.speed = 3.0;
-  settings.max_particles = 1000000;
-  const Scalar spacing = 0.005;
-  NozzleEmitter nozzle(settings, spacing);
-  ParticleSet particles;
-  std::uint32_t next_id = 0;
-  const Scalar dt = 0.004;  // 2.4 layer periods: two or three discs a step
-  for (int step = 0; step < 10; ++step) {
-    nozzle.emit(step * dt, dt, 1e-3, particles, next_id);
-    for (std::size_t i = 0; i < particles.size(); ++i)
-      particles.positions[i] += dt * (2.0 / 3.0) * particles.velocities[i];
-  }
+  Jet jet(Vec3::Zero(), Vec3(1, -2, 0.5).normalized());
+  jet.run(0.004, 0, 10, 2.0 / 3.0);  // 2.4 layer periods a step
+  const NozzleEmitter& nozzle = jet.nozzle;
+  const NozzleEmitterSettings& settings = jet.settings;
+  const ParticleSet& particles = jet.particles;
+  const Scalar spacing = Jet::kSpacing;
   const std::vector<Scalar> rears = disc_rears(nozzle, settings, particles);
   ASSERT_GE(rears.size(), 16u);  // a slowed jet still leaves the nozzle: at least 2/3 of 24 discs
   for (std::size_t k = 1; k < rears.size(); ++k)
@@ -133,28 +152,21 @@ TEST(NozzleEmitter, ADiscIsNeverCloserThanASpacingToTheSlowedDiscBeforeIt) {
 // step and one spacing more stand above the outlet; it stacks nothing further upstream, and when the way is
 // clear it releases discs at its usual rate, not the backlog at once.
 TEST(NozzleEmitter, ABlockedNozzleWaitsAndThenResumesAtItsRate) {
-  NozzleEmitterSettings settings;
-  settings.speed = 3.0;
-  settings.max_particles = 1000000;
-  const Scalar spacing = 0.005;
+  Jet jet(Vec3::Zero(), Vec3(0, -1, 0));
+  const NozzleEmitter& nozzle = jet.nozzle;
+  const NozzleEmitterSettings& settings = jet.settings;
+  const ParticleSet& particles = jet.particles;
+  const Scalar spacing = Jet::kSpacing;
   const Scalar dt = 0.004;
-  NozzleEmitter nozzle(settings, spacing);
-  ParticleSet particles;
-  std::uint32_t next_id = 0;
-  for (int step = 0; step < 20; ++step)  // blocked: nothing moves
-    nozzle.emit(step * dt, dt, 1e-3, particles, next_id);
+  jet.run(dt, 0, 20, 0.0);  // blocked: nothing moves
   const std::size_t blocked = particles.size();
   EXPECT_LE(blocked, 4 * nozzle.disc_size());  // at most dt v / s + 1 = 3.4 discs, then nothing
   for (std::size_t i = 0; i < particles.size(); ++i)
     EXPECT_GE((particles.positions[i] - settings.center).dot(settings.direction),
               -(dt * 3.0 + spacing) - 1e-12);
-  for (int step = 20; step < 30; ++step) {  // clear: the fluid moves at the nozzle's speed
-    const std::size_t before = particles.size();
-    nozzle.emit(step * dt, dt, 1e-3, particles, next_id);
-    EXPECT_LE(particles.size() - before, 3 * nozzle.disc_size()) << "step " << step;  // ceil(2.4) discs
-    for (std::size_t i = 0; i < particles.size(); ++i)
-      particles.positions[i] += dt * particles.velocities[i];
-  }
+  // Clear: the fluid moves at the nozzle's speed, and no step releases more than ceil(2.4) discs.
+  for (std::size_t released : jet.run(dt, 20, 10, 1.0))
+    EXPECT_LE(released, 3 * nozzle.disc_size());
   // The first of those steps still finds the column in place; the nine after it release 2.4 discs each.
   EXPECT_GE(particles.size() - blocked, 21 * nozzle.disc_size());
   const std::vector<Scalar> rears = disc_rears(nozzle, settings, particles);
