@@ -14,7 +14,8 @@ another process shares the machine, where two OpenMP threads wait on each other 
   docs/images/accuracy_pareto.png;
 - stability: for each pressure solver and cloth thickness, dt halving from 16 ms to 1 ms ->
   accuracy_stability.csv; scripts/result_pages finds the largest dt that still ends "ok", with no leak and
-  nothing faster than the jet tests' speed bound.
+  nothing faster than the jet tests' speed bound. Its control, the jet with no cloth in its way, ->
+  accuracy_free_jet.csv.
 The lines above each CSV's header are `# key: value` notes: the CPU, the commit, the command and the load
 average before and after (the VM is shared; above about 1.5 the times are not worth keeping).
 """
@@ -59,6 +60,15 @@ STABILITY = [
     "--vary", "time.dt=0.016,0.008,0.004,0.002,0.001",
 ]
 
+# The stability sweep's control: the same jet and steps with nothing in its way (the cloth is not coupled), so
+# that what the table blames on contact is not the solver's or the nozzle's own doing.
+FREE_JET = [
+    "--timeout", "{timeout}",
+    "--vary", 'fluid.pressure_solver={solvers}',
+    "--vary", "time.dt=0.016,0.008,0.004,0.002,0.001",
+    "--set", 'effects=["viscosity"]',
+]
+
 
 def sweep(drench, arguments, out_dir, duration, threads, solvers="", jobs=1, timeout=240):
     arguments = [a.format(solvers=solvers, timeout=timeout) if "{" in a else a for a in arguments]
@@ -93,9 +103,9 @@ def main():
     parser.add_argument("--keep", help="keep the sweeps' folders here (default: a temporary folder)")
     parser.add_argument("--duration", type=float, help="simulated time of every run (default: the scene's)")
     parser.add_argument("--stability-solvers", default='"wcsph","pcisph","dfsph"',
-                        help="pressure solvers of the stability sweep, as --vary values (WCSPH's runs take minutes each)")
+                        help="pressure solvers of the stability sweep and its control, as --vary values (WCSPH's runs take minutes each)")
     parser.add_argument("--threads", type=int, default=1, help="OpenMP threads of each run (default: 1)")
-    parser.add_argument("--only", choices=["one_at_a_time", "stability"], help="run one sweep only")
+    parser.add_argument("--only", choices=["one_at_a_time", "stability", "free_jet"], help="run one sweep only")
     parser.add_argument("--timeout", type=int, default=240,
                         help="seconds after which a stability run is stopped (default 240; with WCSPH: 600)")
     parser.add_argument("--jobs", type=int, default=1,
@@ -114,6 +124,10 @@ def main():
             notes = sweep(drench, STABILITY, base / "stability", args.duration, args.threads, args.stability_solvers,
                           args.jobs, args.timeout)
             keep(base / "stability" / "sweep.csv", notes, out / "accuracy_stability.csv")
+        if args.only in (None, "free_jet"):
+            notes = sweep(drench, FREE_JET, base / "free_jet", args.duration, args.threads, args.stability_solvers,
+                          args.jobs, args.timeout)
+            keep(base / "free_jet" / "sweep.csv", notes, out / "accuracy_free_jet.csv")
 
 
 if __name__ == "__main__":
