@@ -2,7 +2,7 @@
 """Runs bench_surface (issue 25) and writes its CSV with the machine and its load noted on top.
 
     python3 bench/bench_surface.py --bench build/bench/bench_surface \
-        --out bench/results/debian12-2core/surface.csv [--repetitions 3]
+        --out bench/results/debian12-2core/surface.csv [--repetitions 7]
 
 Two threads (OpenMP, and TBB through bench_surface's tbb::global_control), every row repeated with Google
 Benchmark's random interleaving so that the paths compared share the machine's moods, medians only. The lines
@@ -35,8 +35,9 @@ def cpu_model():
 def commit():
     result = subprocess.run(["git", "-C", str(ROOT), "rev-parse", "--short", "HEAD"], capture_output=True,
                             text=True)
-    dirty = subprocess.run(["git", "-C", str(ROOT), "status", "--porcelain", "--untracked-files=no"],
-                           capture_output=True, text=True).stdout.strip()
+    # Results and the pages made from them do not change the build under test.
+    dirty = subprocess.run(["git", "-C", str(ROOT), "status", "--porcelain", "--untracked-files=no", "--", ".",
+                            ":!bench/results", ":!docs"], capture_output=True, text=True).stdout.strip()
     return result.stdout.strip() + (" (with uncommitted changes)" if dirty else "")
 
 
@@ -44,7 +45,7 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--bench", default=str(ROOT / "build" / "bench" / "bench_surface"))
     parser.add_argument("--out", required=True, help="CSV to write")
-    parser.add_argument("--repetitions", type=int, default=3)
+    parser.add_argument("--repetitions", type=int, default=7)
     parser.add_argument("--threads", type=int, default=2)
     args = parser.parse_args()
     notes = {"cpu": cpu_model(), "commit": commit(), "threads": str(args.threads), "load_before": load_average()}
