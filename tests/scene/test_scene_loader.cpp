@@ -231,6 +231,14 @@ TEST(SceneLoader, RejectsNegativeMaxReliefPerSubstep) {
                           "fluid.pcisph.max_relief_per_substep must be > 0, got -0.1 (x.json)"));
 }
 
+TEST(SceneLoader, ReadsWcsphMaxCompressionNullMeaningNoLimit) {
+  EXPECT_EQ(parse("{}").fluid.wcsph.max_compression, 0.05);
+  EXPECT_EQ(parse(R"({"fluid": {"wcsph": {"max_compression": 0.1}}})").fluid.wcsph.max_compression, 0.1);
+  EXPECT_FALSE(parse(R"({"fluid": {"wcsph": {"max_compression": null}}})").fluid.wcsph.max_compression);
+  EXPECT_TRUE(scene_error(R"({"fluid": {"wcsph": {"max_compression": 0}}})",
+                          "fluid.wcsph.max_compression must be > 0, got 0 (x.json)"));
+}
+
 TEST(SceneLoader, AcceptsZeroMaxParticlesAndZeroFrameRate) {
   const SceneConfig c =
       parse(R"({"emitters": [{"type": "nozzle", "max_particles": 0}], "time": {"frame_rate": 0}})");

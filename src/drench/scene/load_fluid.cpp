@@ -23,7 +23,7 @@ FluidSettings read_fluid(const Node& node) {
   if (const Node c = r["max_speed"]; c.present())
     fluid.max_speed = c.value().is_null() ? std::nullopt : std::optional<Scalar>(c.number(kPositive));
 
-  const ObjectReader wcsph(r["wcsph"], {"speed_of_sound", "exponent"});
+  const ObjectReader wcsph(r["wcsph"], {"speed_of_sound", "exponent", "max_compression"});
   // null is accepted as "auto" so that --set fluid.wcsph.speed_of_sound=null can undo a file's value.
   if (const Node c = wcsph["speed_of_sound"]; c.present() && !c.value().is_null())
     fluid.wcsph.speed_of_sound = c.number(kPositive);
@@ -55,9 +55,10 @@ FluidSettings read_fluid(const Node& node) {
   dfsph.require_order("min_iterations", fluid.dfsph.min_iterations, "max_iterations",
                       fluid.dfsph.max_iterations);
 
-  // null is "no limit" (the published PCISPH and DFSPH), so that --set can undo the default.
+  // null is "no limit" (the published WCSPH, PCISPH and DFSPH), so that --set can undo the default.
   for (auto [reader, key, limit] :
-       {std::tuple{&pcisph, "max_compression_per_iteration", &fluid.pcisph.max_compression_per_iteration},
+       {std::tuple{&wcsph, "max_compression", &fluid.wcsph.max_compression},
+        std::tuple{&pcisph, "max_compression_per_iteration", &fluid.pcisph.max_compression_per_iteration},
         std::tuple{&pcisph, "max_relief_per_substep", &fluid.pcisph.max_relief_per_substep},
         std::tuple{&dfsph, "max_relief_per_substep", &fluid.dfsph.max_relief_per_substep}}) {
     if (const Node c = (*reader)[key]; c.present()) {

@@ -32,6 +32,13 @@ struct WcsphSettings {
   /// density variation (Monaghan 1994).
   std::optional<Scalar> speed_of_sound;
   Scalar exponent = 7.0;  ///< gamma of the Tait equation (dimensionless), >= 1
+  /// The largest compression (fraction of rest density, > 0) the Tait equation turns into pressure: a
+  /// particle compressed further pushes as one compressed this much; unset = all of it, as published. A
+  /// drench addition, as PcisphSettings::max_relief_per_substep and for the same reason: the coupling stops
+  /// particles against the cloth inside the fluid's sub-steps and stacks them, and the seventh power throws
+  /// them at several times the jet's speed (the jet on a 1 mm cloth at dt 1 ms: 19 m/s without it, 10 with;
+  /// docs/accuracy.md). At Mach 0.1 the flow's own compression stays near 1%, below the limit.
+  std::optional<Scalar> max_compression = 0.05;
 };
 
 /// Floating-point precision of PCISPH's and DFSPH's iterations: the passes over neighbor pairs that each

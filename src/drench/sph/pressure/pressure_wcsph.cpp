@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include <drench/common/parallel.hpp>
 
@@ -10,7 +11,9 @@ namespace drench {
 PressureWcsph::PressureWcsph(const FluidSettings& settings, Scalar speed_of_sound)
     : m_speed_of_sound(speed_of_sound),
       m_exponent(settings.wcsph.exponent),
-      m_stiffness(settings.rest_density * speed_of_sound * speed_of_sound / settings.wcsph.exponent) {}
+      m_stiffness(settings.rest_density * speed_of_sound * speed_of_sound / settings.wcsph.exponent),
+      m_max_ratio(settings.wcsph.max_compression ? 1.0 + *settings.wcsph.max_compression
+                                                 : std::numeric_limits<Scalar>::infinity()) {}
 
 PressureStats PressureWcsph::solve(const FluidContext& ctx, const Vec3Array& /*velocities_adv*/,
                                    Scalar /*dt*/, Vec3Array& accelerations) {
@@ -22,7 +25,8 @@ PressureStats PressureWcsph::solve(const FluidContext& ctx, const Vec3Array& /*v
 #pragma omp parallel for schedule(static)
   for (std::size_t i = 0; i < n; ++i) {
     const Scalar rho = particles.densities[i];
-    const Scalar p = std::max(0.0, m_stiffness * (std::pow(rho / rho0, m_exponent) - 1.0));
+    const Scalar p =
+        std::max(0.0, m_stiffness * (std::pow(std::min(rho / rho0, m_max_ratio), m_exponent) - 1.0));
     particles.pressures[i] = p;
     m_pressure_points[i] = packed(particles.positions[i], p / (rho * rho));
   }

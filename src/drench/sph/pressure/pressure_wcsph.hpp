@@ -5,7 +5,8 @@
 namespace drench {
 
 /// Weakly compressible SPH, Becker & Teschner 2007: Tait equation p = B ((rho / rho0)^gamma - 1) with
-/// B = rho0 c^2 / gamma, clamped at 0 so that a free surface does not pull particles together.
+/// B = rho0 c^2 / gamma, clamped at 0 so that a free surface does not pull particles together, and rho / rho0
+/// at most 1 + WcsphSettings::max_compression when that is set.
 class PressureWcsph final : public PressureSolver {
  public:
   /// @param speed_of_sound  c (unit: m/s), > 0
@@ -19,6 +20,7 @@ class PressureWcsph final : public PressureSolver {
   Scalar m_speed_of_sound;
   Scalar m_exponent;
   Scalar m_stiffness;                  // B (unit: Pa)
+  Scalar m_max_ratio;                  // the largest rho / rho0 turned into pressure (infinity: no limit)
   PackedPointArray m_pressure_points;  // N: positions (unit: m), w = p / rho^2
 };
 
