@@ -8,8 +8,9 @@
 #include <optional>
 
 #include <drench/scene/scene_config.hpp>
-#include <drench/sph/emitters.hpp>
 #include <drench/sph/fluid_solver.hpp>
+
+#include "stacked_block.hpp"
 
 namespace drench {
 namespace {
@@ -30,25 +31,9 @@ Relief relieve(std::optional<double> max_relief) {
   settings.particle_spacing = kSpacing;
   settings.pcisph.max_relief_per_substep = max_relief;
   FluidSolver fluid(settings, Vec3::Zero(), BoundaryParticles{}, {}, false, 10.0);
-  BoxEmitterSettings box;
-  box.max = Vec3::Constant(8 * kSpacing);
-  std::uint32_t next_id = 0;
-  emit_box(box, kSpacing, settings.rest_density * kSpacing * kSpacing * kSpacing, fluid.particles(), next_id);
-  ParticleSet& p = fluid.particles();
-  // One more particle next to the one nearest the block's centre, as the coupling stacks particles.
-  const Vec3 centre = Vec3::Constant(4.5 * kSpacing);
-  std::size_t nearest = 0;
-  for (std::size_t i = 0; i < p.size(); ++i) {
-    if ((p.positions[i] - centre).norm() < (p.positions[nearest] - centre).norm()) nearest = i;
-  }
-  const std::uint32_t id = next_id;
-  p.add(p.positions[nearest] + Vec3(0.1 * kSpacing, 0, 0), Vec3::Zero(), p.masses[nearest], next_id++);
-  const auto compression = [&] {
-    for (std::size_t i = 0; i < p.size(); ++i) {
-      if (p.ids[i] == id) return p.densities[i] / settings.rest_density - 1.0;
-    }
-    return 0.0;
-  };
+  const std::uint32_t id = testing::stack_in_block(fluid, kSpacing);
+  const auto compression = [&] { return testing::compression_of(fluid, id); };
+  const ParticleSet& p = fluid.particles();
   Relief r;
   EXPECT_TRUE(fluid.step(1e-4).ok());  // one sub-step: nothing moves before it, so no CFL limit
   r.before = compression();

@@ -9,8 +9,9 @@
 #include <cmath>
 #include <optional>
 
-#include <drench/sph/emitters.hpp>
 #include <drench/sph/fluid_solver.hpp>
+
+#include "stacked_block.hpp"
 
 namespace drench {
 namespace {
@@ -34,24 +35,9 @@ Stacked relax(std::optional<double> max_compression) {
   settings.pressure_solver = PressureSolverKind::WCSPH;
   settings.wcsph.max_compression = max_compression;
   FluidSolver fluid(settings, Vec3::Zero(), BoundaryParticles{}, {}, false, kSpeedOfSound);
-  BoxEmitterSettings box;
-  box.max = Vec3::Constant(8 * kSpacing);
-  std::uint32_t next_id = 0;
-  emit_box(box, kSpacing, settings.rest_density * kSpacing * kSpacing * kSpacing, fluid.particles(), next_id);
-  ParticleSet& p = fluid.particles();
-  const Vec3 centre = Vec3::Constant(4.5 * kSpacing);
-  std::size_t nearest = 0;
-  for (std::size_t i = 0; i < p.size(); ++i) {
-    if ((p.positions[i] - centre).norm() < (p.positions[nearest] - centre).norm()) nearest = i;
-  }
-  const std::uint32_t id = next_id;
-  p.add(p.positions[nearest] + Vec3(0.1 * kSpacing, 0, 0), Vec3::Zero(), p.masses[nearest], next_id++);
-  const auto compression = [&] {
-    for (std::size_t i = 0; i < p.size(); ++i) {
-      if (p.ids[i] == id) return p.densities[i] / settings.rest_density - 1.0;
-    }
-    return 0.0;
-  };
+  const std::uint32_t id = testing::stack_in_block(fluid, kSpacing);
+  const auto compression = [&] { return testing::compression_of(fluid, id); };
+  const ParticleSet& p = fluid.particles();
   Stacked s;
   EXPECT_TRUE(fluid.step(1e-12).ok());  // densities and pressures of the initial state; nothing moves
   s.compression_start = compression();
