@@ -1,13 +1,15 @@
 // `drench render` (render/render_run.hpp), headless: the cloth's and the water's pixels are where the camera
 // puts them (a known point projected, the pixel's colour class checked), on frames written by hand and on a
 // short run of the jet scene; the surface replaces the particles; the cloth is shaded on both sides; bad
-// input is named and writes nothing; --video says plainly when ffmpeg is missing.
+// input is named and writes nothing; --video says plainly when ffmpeg is missing, and with the real ffmpeg
+// writes an MP4 that shows what the PNGs show.
 
 #include <drench/render/render_run.hpp>
 
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -16,6 +18,7 @@
 
 #include <drench/bullet/bullet_cloth.hpp>
 #include <drench/common/error.hpp>
+#include <drench/common/program.hpp>
 #include <drench/io/atomic_file.hpp>
 #include <drench/io/ply_reader.hpp>
 #include <drench/io/ply_writer.hpp>
@@ -277,6 +280,46 @@ TEST(RenderRun, VideoGoesThroughFfmpegAtTheScenesFrameRate) {
             std::string::npos)
       << args;
   EXPECT_NE(args.find("-c:v libx264 -pix_fmt yuv420p"), std::string::npos) << args;
+}
+
+/// What a program printed on standard output, or "" when it could not be started.
+std::string output_of(const std::string& command) {
+  std::string text;
+  if (FILE* pipe = ::popen(command.c_str(), "r")) {
+    char buffer[256];
+    while (std::fgets(buffer, sizeof buffer, pipe))
+      text += buffer;
+    ::pclose(pipe);
+  }
+  return text;
+}
+
+// The real ffmpeg (scripts/setup installs it): the MP4 holds every frame at the scene's rate, in the format
+// players take, and its first frame, decoded back, shows the water and the cloth where the PNG does.
+TEST(RenderRun, VideoThroughTheRealFfmpegHoldsEveryFrameAndShowsTheScene) {
+  if (find_program("ffmpeg").empty() || find_program("ffprobe").empty())
+    GTEST_SKIP() << "ffmpeg is not installed (Debian: ffmpeg; scripts/setup)";
+  TempDir dir;
+  write_hand_made_run(dir.path(), hand_made_scene(true));
+  RenderOptions options = small_render(dir.path());
+  options.video = true;
+  const RenderResult result = render_run(options);
+  ASSERT_EQ(result.video_path, (dir.path() / "render/video.mp4").string()) << result.video_note;
+  const std::string probe = output_of(
+      "ffprobe -v error -count_frames -select_streams v:0 -show_entries "
+      "stream=codec_name,pix_fmt,width,height,r_frame_rate,nb_read_frames -of default=nw=1 " +
+      result.video_path);
+  for (const char* line : {"codec_name=h264", "pix_fmt=yuv420p", "width=320", "height=180",
+                           "r_frame_rate=30/1", "nb_read_frames=2"}) {
+    EXPECT_NE(probe.find(line), std::string::npos) << line << " not in:\n" << probe;
+  }
+  const fs::path first = dir.path() / "first.png";
+  ASSERT_EQ(
+      std::system(("ffmpeg -v error -i " + result.video_path + " -frames:v 1 " + first.string()).c_str()), 0);
+  const Image image = read_png(first.string());
+  EXPECT_TRUE(shows(image, result.camera, kWaterCentre, ColourClass::WATER));
+  EXPECT_TRUE(shows(image, result.camera, kClothPoint, ColourClass::CLOTH));
+  EXPECT_TRUE(shows(image, result.camera, kEmptyPoint, ColourClass::BACKDROP));
 }
 
 // A real run: the jet scene shortened to 80 steps (the jet has not reached the cloth yet) with a coarser
