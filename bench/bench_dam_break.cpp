@@ -129,8 +129,8 @@ void pcisph_1m(benchmark::State& s) {
 
 /// Issue 29's time to solution: the 59K dam break for 0.5 s (the work of ../shared/notes/peer-sph.md, whose
 /// SPlisHSPlasH ratios were measured on it) with time.adaptive steps of at most `dt` (unit: s) under the CFL
-/// number `cfl`, each solver held to an average density error of 0.05% in every sub-step: PCISPH and DFSPH
-/// (as published, without drench's relief and compression limits) iterate to it (eta 0.0005), WCSPH meets
+/// number `cfl`, each solver held to an average density error of 0.05% in every sub-step, as published
+/// (without drench's relief and compression limits): PCISPH and DFSPH iterate to it (eta 0.0005), WCSPH meets
 /// it or not through its speed of sound
 /// (`speed_of_sound`, unit: m/s; ignored by the others). A run stops at the first sub-step that leaves it or
 /// the first non-finite state (within_error 0), so a setting past the solver's limit costs little.
@@ -148,7 +148,7 @@ void time_to_solution(benchmark::State& state, const std::string& solver, double
        // particle to the rest density, so the error it stops at is the
        // error reported. drench's limits are for coupled scenes.
        "fluid.pcisph.max_relief_per_substep=null", "fluid.pcisph.max_compression_per_iteration=null",
-       "fluid.dfsph.max_relief_per_substep=null"});
+       "fluid.dfsph.max_relief_per_substep=null", "fluid.wcsph.max_compression=null"});
   if (solver == "wcsph") overrides.push_back("fluid.wcsph.speed_of_sound=" + std::to_string(speed_of_sound));
   const drench::SceneConfig config = load_dam_break(overrides);
   for (auto _ : state) {
