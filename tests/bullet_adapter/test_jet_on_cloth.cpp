@@ -131,6 +131,16 @@ TEST(JetOnCloth, NeverLeaksWithContinuousHandlingAtALargeStepDfsph) {
   expect_sound_jet(run(config), "dfsph_dt_4ms");
 }
 
+// WCSPH turns the coupling's compression into pressure through the Tait equation's seventh power; its
+// max_compression bounds that push. Without it this run throws particles at 28 m/s (docs/accuracy.md, the
+// stability table, for the full scene).
+TEST(JetOnCloth, NeverLeaksWithContinuousHandlingAtTwiceTheStepWcsph) {
+  SceneConfig config = reduced_jet_on_cloth(0.002, true);
+  config.cloth->substeps = 4;
+  config.fluid.pressure_solver = PressureSolverKind::WCSPH;
+  expect_sound_jet(run(config), "wcsph_dt_2ms");
+}
+
 // The paper's Tables 1-2 go to a 5 mm thickness, one particle spacing, where the coupling moves the water
 // near the cloth the most: without PCISPH's max_compression_per_iteration this run exceeds its speed bound
 // and the full scene blows up (bench_jet_on_cloth table_thickness_5mm).
