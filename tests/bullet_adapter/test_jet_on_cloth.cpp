@@ -132,8 +132,8 @@ TEST(JetOnCloth, NeverLeaksWithContinuousHandlingAtALargeStepDfsph) {
 }
 
 // WCSPH turns the coupling's compression into pressure through the Tait equation's seventh power; its
-// max_compression bounds that push. Without it this run throws particles at 28 m/s (docs/accuracy.md, the
-// stability table, for the full scene).
+// max_compression bounds that push; without it this run exceeds its speed bound (docs/accuracy.md, the
+// largest step that holds, for the full scene).
 TEST(JetOnCloth, NeverLeaksWithContinuousHandlingAtTwiceTheStepWcsph) {
   SceneConfig config = reduced_jet_on_cloth(0.002, true);
   config.cloth->substeps = 4;

@@ -35,11 +35,8 @@ struct WcsphSettings {
   /// The largest compression (fraction of rest density, > 0) the Tait equation turns into pressure: a
   /// particle compressed further pushes as one compressed this much; unset = all of it, as published. A
   /// drench addition, as PcisphSettings::max_relief_per_substep and for the same reason: the coupling stacks
-  /// particles against the cloth (a particle at 40% over rest at dt 1 ms), and the seventh power throws
-  /// them at several times the jet's speed (the jet on a 1 mm cloth at dt 1 ms: 19 m/s without it, 10 with;
-  /// docs/accuracy.md). At Mach 0.1 the flow's own compression stays within a few percent: the dam break
-  /// (dam_break.json, 3 s) first meets the limit when its wave hits the far wall, and the mean density error
-  /// moves by 0.05% of itself.
+  /// particles against the cloth, and the seventh power throws them at several times the jet's speed. The
+  /// flow's own compression at Mach 0.1 seldom reaches it (docs/accuracy.md, the largest step that holds).
   std::optional<Scalar> max_compression = 0.05;
 };
 
