@@ -1,0 +1,3 @@
+// Hostile input and hard cases (issue 39): output.
+
+#include <gtest/gtest.h>
