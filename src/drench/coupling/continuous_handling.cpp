@@ -92,6 +92,51 @@ void resolve_impact(StepContext& ctx, Index p, const Impact& impact, double thic
   ctx.apply(p, impact.triangle, w, (target - vn) / ctx.inverse_mass(p, impact.triangle, w) * normal);
 }
 
+/// The last resort, when even the fail-safe leaves impacts (a particle between two faces of a fold that move
+/// apart cannot follow both): the particles and the moving nodes of the colliding pairs stop where they
+/// started the step, so that those pairs do not move relative to each other and cannot cross; the start of
+/// the step was free of crossings. What now collides with a stopped particle or face joins it, round after
+/// round, so the zones grow until no pair collides; a crossing stays only where a node cannot be stopped (a
+/// pinned node moved by its engine). Rigid impact zones (Bridson et al. 2002) in their simplest form, at
+/// rest: momentum is not conserved for what stopped, which the counters report.
+/// @param pairs, impacts  scratch; impacts holds the fail-safe's leftover impacts on entry
+/// @return COUPLING_ZONES_STOPPED, with COUPLING_UNRESOLVED when an impact remained (named in `unresolved`)
+std::uint32_t freeze_impact_zones(StepContext& ctx, TriangleBroadPhase& broad_phase,
+                                  std::vector<std::pair<Index, Index>>& pairs,
+                                  std::vector<std::pair<Index, Impact>>& impacts,
+                                  std::pair<std::int64_t, std::int64_t>* unresolved) {
+  ClothMesh& cloth = ctx.cloth();
+  CouplingStepStats& stats = ctx.stats();
+  std::vector<std::uint8_t> stopped_particle(ctx.x0().size(), 0);
+  std::vector<std::uint8_t> stopped_node(cloth.node_count(), 0);
+  // Every round stops at least one particle or node that moved (else it ends), so the rounds are bounded by
+  // their count; in practice a round or two.
+  while (!impacts.empty()) {
+    bool progress = false;
+    for (const auto& [p, impact] : impacts) {
+      if (!stopped_particle[p]) {
+        stopped_particle[p] = 1;
+        ctx.place(p, ctx.x0()[p]);
+        ++stats.stopped_particles;
+        progress = true;
+      }
+      for (const Index node : cloth.triangles[impact.triangle]) {
+        if (stopped_node[node] || cloth.positions_t1[node] == cloth.positions_t0[node]) continue;
+        stopped_node[node] = 1;
+        cloth.positions_t1[node] = cloth.positions_t0[node];
+        ++stats.stopped_nodes;
+        progress = true;
+      }
+    }
+    if (!progress) break;
+    broad_phase.find_pairs(ctx.x0(), ctx.x1(), cloth, 0.0, nullptr, pairs);
+    find_impacts(ctx, pairs, impacts);
+  }
+  if (impacts.empty()) return COUPLING_ZONES_STOPPED;
+  if (unresolved) *unresolved = {impacts.front().first, impacts.front().second.triangle};
+  return COUPLING_ZONES_STOPPED | COUPLING_UNRESOLVED;
+}
+
 }  // namespace
 
 void StepContext::mark_changed_candidates(std::vector<std::uint8_t>& only) const {
@@ -115,8 +160,9 @@ void StepContext::mark_changed_candidates(std::vector<std::uint8_t>& only) const
   }
 }
 
-std::uint32_t resolve_ccd(StepContext& ctx, TriangleBroadPhase& broad_phase,
-                          const CouplingSettings& settings) {
+std::uint32_t resolve_ccd(StepContext& ctx, TriangleBroadPhase& broad_phase, const CouplingSettings& settings,
+                          std::pair<std::int64_t, std::int64_t>* unresolved) {
+  if (unresolved) *unresolved = {-1, -1};
   std::uint32_t status = COUPLING_OK;
   ClothMesh& cloth = ctx.cloth();
   CouplingStepStats& stats = ctx.stats();
@@ -157,7 +203,7 @@ std::uint32_t resolve_ccd(StepContext& ctx, TriangleBroadPhase& broad_phase,
       }
       broad_phase.find_pairs(ctx.x0(), ctx.x1(), cloth, 0.0, nullptr, pairs);
       find_impacts(ctx, pairs, impacts);
-      if (!impacts.empty()) status |= COUPLING_UNRESOLVED;
+      if (!impacts.empty()) status |= freeze_impact_zones(ctx, broad_phase, pairs, impacts, unresolved);
       break;
     }
     stats.ccd_impacts += impacts.size();

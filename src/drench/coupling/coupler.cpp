@@ -59,6 +59,7 @@ Coupler::~Coupler() = default;
 std::uint32_t Coupler::step(const FluidView& fluid, ClothMesh& cloth, double dt, CouplingStepStats& stats) {
   m_node_impulses.assign(cloth.node_count(), Vec3::Zero());
   m_impulse_links.clear();
+  m_unresolved = {-1, -1};
   // Exact, not a heuristic: every pair a stage acts on comes from the broad phase, asked at x_t0 with margin
   // thickness / 2 (proximity) and over x_t0 to x_t1 with margin 0 (the first CCD round); both particle boxes
   // lie inside particle_box(x_t0, x_t1, thickness) and every triangle's box inside the mesh's, so when no
@@ -113,7 +114,7 @@ std::uint32_t Coupler::correct(const FluidView& fluid, ClothMesh& cloth, double 
   if (!m_settings.continuous) return status;
 
   const auto ccd_start = Clock::now();
-  status |= resolve_ccd(ctx, *m_broad_phase, m_settings);  // sec. 3.3, eq. 5-6, until collision free
+  status |= resolve_ccd(ctx, *m_broad_phase, m_settings, &m_unresolved);  // sec. 3.3, eq. 5-6
   stats.seconds_ccd += seconds_since(ccd_start);
   return status;
 }

@@ -7,6 +7,7 @@
 
 #include <cstdint>
 #include <memory>
+#include <utility>
 
 #include <drench/common/effect_counter.hpp>
 #include <drench/common/types.hpp>
@@ -34,6 +35,10 @@ struct CouplingStepStats {
   std::uint64_t ccd_iterations = 0;  ///< rounds of CCD run
   std::uint64_t failsafe_activations = 0;  ///< particles the fail-safe moved with their triangle
   std::uint64_t obstacle_stops = 0;        ///< particles stopped by the cloth inside fluid sub-steps
+  /// Particles and cloth nodes the last resort stopped at their start positions for a step, where even the
+  /// fail-safe left a collision (COUPLING_ZONES_STOPPED)
+  std::uint64_t stopped_particles = 0;
+  std::uint64_t stopped_nodes = 0;
   double slip_sum_mps = 0.0;  ///< sum over contacts of the relative tangential speed after coupling
   double vertical_impulse_on_cloth = 0.0;  ///< sum of the y components of the impulses on cloth nodes (N s)
   double seconds_repulsion = 0.0;          ///< wall time of proximity + repulsion + friction (unit: s)
@@ -45,8 +50,14 @@ enum CouplingStatus : std::uint32_t {
   COUPLING_OK = 0,
   /// The continuous handling needed the fail-safe; fine when rare. Raise max_ccd_iterations if frequent.
   COUPLING_FAILSAFE_USED = 1u << 0,
-  /// Even the fail-safe left a crossing (the leak audit will count it). Smaller dt helps.
+  /// A collision remained after every resolution (a node that cannot be stopped, such as a pinned node its
+  /// engine moves, swept a particle); Coupler::unresolved() names it, the step reports LEAKED and the leak
+  /// audit counts the crossing. Smaller dt helps.
   COUPLING_UNRESOLVED = 1u << 1,
+  /// The fail-safe left collisions (a particle caught in a fold), so the particles and nodes involved were
+  /// stopped at their start positions for the step; no crossing, but momentum was not conserved for them
+  /// (CouplingStepStats::stopped_particles, stopped_nodes). Rare; lower dt if frequent.
+  COUPLING_ZONES_STOPPED = 1u << 2,
 };
 
 class TriangleBroadPhase;
@@ -94,6 +105,10 @@ class Coupler {
   /// what CarriedWater::attach needs to carry each particle with the nodes its impulse goes to.
   const ImpulseLinks& impulse_links() const { return m_impulse_links; }
 
+  /// After a step() that returned COUPLING_UNRESOLVED, the particle (index in that step's arrays) and the
+  /// triangle of a collision left; (-1, -1) otherwise.
+  std::pair<std::int64_t, std::int64_t> unresolved() const { return m_unresolved; }
+
  private:
   /// step() after its set-up: the stages of sec. 3 in the paper's order (coupler_stages.hpp).
   std::uint32_t correct(const FluidView& fluid, ClothMesh& cloth, double dt, CouplingStepStats& stats);
@@ -105,6 +120,7 @@ class Coupler {
   Vec3Array m_node_impulses;
   ImpulseLinks m_largest;  // N, scratch of step()
   ImpulseLinks m_impulse_links;
+  std::pair<std::int64_t, std::int64_t> m_unresolved{-1, -1};
   std::unique_ptr<TriangleBroadPhase> m_broad_phase;
 };
 

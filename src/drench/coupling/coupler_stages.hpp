@@ -186,13 +186,16 @@ void apply_friction(StepContext& ctx, std::vector<Contact>& contacts, const Coup
 /// corrected: rounds of point-triangle CCD (eq. 5-6) and an inelastic impulse at each particle's earliest
 /// impact, the first round over every pair, later ones over the pairs whose motion the previous round
 /// changed, until no pair collides. After settings.max_ccd_iterations rounds the fail-safe moves each
-/// particle still colliding with its triangle's contact point, which that triangle cannot cross.
-/// Adds to the stats' ccd_iterations, ccd_impacts and failsafe_activations.
+/// particle still colliding with its triangle's contact point, which that triangle cannot cross; and where
+/// that is not enough (folds), the colliding particles and nodes stop at their start positions for the step
+/// (impact zones at rest), until no pair collides.
+/// Adds to the stats' ccd_iterations, ccd_impacts, failsafe_activations, stopped_particles, stopped_nodes.
 /// @param broad_phase  the coupler's, queried with margin 0 for swept boxes
 /// @param settings  cloth_thickness (unit: m) > 0, max_ccd_iterations >= 1
-/// @return COUPLING_FAILSAFE_USED and COUPLING_UNRESOLVED flags, or COUPLING_OK
-std::uint32_t resolve_ccd(StepContext& ctx, TriangleBroadPhase& broad_phase,
-                          const CouplingSettings& settings);
+/// @param unresolved  optional output: (particle index, triangle) of a collision left, else (-1, -1)
+/// @return COUPLING_FAILSAFE_USED, COUPLING_ZONES_STOPPED and COUPLING_UNRESOLVED flags, or COUPLING_OK
+std::uint32_t resolve_ccd(StepContext& ctx, TriangleBroadPhase& broad_phase, const CouplingSettings& settings,
+                          std::pair<std::int64_t, std::int64_t>* unresolved = nullptr);
 
 }  // namespace coupling_detail
 }  // namespace drench
