@@ -87,12 +87,53 @@ void validate_triangle_mesh(const TriangleMesh& mesh, const std::string& what) {
   }
 }
 
-ClothWithObstacles::ClothWithObstacles(ClothEngine* cloth, std::vector<TriangleMesh> obstacles)
+ClothWithObstacles::ClothWithObstacles(ClothEngine* cloth, std::vector<TriangleMesh> obstacles,
+                                       double clearance)
     : m_cloth(cloth), m_obstacles(std::move(obstacles)) {
   if (m_obstacles.empty()) throw Error("ClothWithObstacles needs at least one obstacle");
   for (std::size_t i = 0; i < m_obstacles.size(); ++i)
     validate_triangle_mesh(m_obstacles[i], "obstacles[" + std::to_string(i) + "]");
   pull_cloth();
+  if (m_cloth) {
+    for (const TriangleMesh& obstacle : m_obstacles) {
+      const auto first = static_cast<Index>(m_rigid.positions_t0.size());
+      m_rigid.positions_t0.insert(m_rigid.positions_t0.end(), obstacle.positions.begin(),
+                                  obstacle.positions.end());
+      for (const Triangle& t : obstacle.triangles)
+        m_rigid.triangles.push_back({t[0] + first, t[1] + first, t[2] + first});
+    }
+    m_rigid.positions_t1 = m_rigid.positions_t0;
+    m_rigid.inverse_masses.assign(m_rigid.positions_t0.size(), 0.0);
+    CouplingSettings settings;  // free slip: the cloth slides on the obstacles as Bullet's would
+    settings.cloth_thickness = clearance;
+    m_holder = std::make_unique<Coupler>(settings, false);
+  }
+}
+
+ClothWithObstacles::~ClothWithObstacles() = default;
+
+void ClothWithObstacles::hold_cloth_off_obstacles(double dt) {
+  const std::size_t m = m_cloth_nodes;
+  const auto first = [m](const Vec3Array& array) {
+    return Vec3Array(array.begin(), array.begin() + static_cast<long>(m));
+  };
+  const Vec3Array x0 = first(m_mesh.positions_t0);
+  Vec3Array x1 = first(m_mesh.positions_t1);
+  Vec3Array v(m);
+  ScalarArray masses(m);
+  bool any_moves = false;
+  for (std::size_t i = 0; i < m; ++i) {
+    v[i] = (x1[i] - x0[i]) / dt;
+    const double im = m_mesh.inverse_masses[i];
+    masses[i] = im > 0.0 ? 1.0 / im : 1.0;  // the obstacles' nodes take nothing: only the ratio matters
+    any_moves = any_moves || im > 0.0;
+  }
+  if (!any_moves) return;
+  m_holder->step(FluidView{&x0, &x1, &v, &masses}, m_rigid, dt, m_hold_stats);
+  for (std::size_t i = 0; i < m; ++i) {
+    // A pinned node goes where its engine puts it (end_step would ignore the change anyway).
+    if (m_mesh.inverse_masses[i] > 0.0) m_mesh.positions_t1[i] = x1[i];
+  }
 }
 
 void ClothWithObstacles::pull_cloth() {
@@ -150,6 +191,9 @@ void ClothWithObstacles::step(double dt) {
   m_cloth->step(dt);
   const Vec3Array& t1 = m_cloth->mesh().positions_t1;
   std::copy(t1.begin(), t1.end(), m_mesh.positions_t1.begin());
+  // A non-finite cloth is not corrected: the step reports it and nothing couples it.
+  if (std::all_of(t1.begin(), t1.end(), [](const Vec3& x) { return x.allFinite(); }))
+    hold_cloth_off_obstacles(dt);
 }
 
 void ClothWithObstacles::end_step(double dt) {

@@ -10,6 +10,7 @@
 
 #include <drench/common/triangle_mesh.hpp>
 #include <drench/coupling/cloth_engine.hpp>
+#include <drench/coupling/coupler.hpp>
 
 namespace drench {
 
@@ -40,12 +41,19 @@ void validate_triangle_mesh(const TriangleMesh& mesh, const std::string& what);
 /// A cloth engine (or none) and static obstacles seen by the coupling as one mesh: the cloth's M nodes
 /// first, then every obstacle's, of inverse mass 0 and never moving. Everything the coupled step does to a
 /// ClothEngine passes to the cloth for its own nodes; obstacle nodes take no impulse and no carried mass.
+/// The obstacles hold the cloth as they hold the water: after the engine's step, the cloth's nodes are
+/// coupled with the obstacles' faces as particles are (sec. 3's repulsion and continuous handling, eq. 1-6,
+/// free slip), so no node passes a face, and the engine takes the correction at end_step.
 class ClothWithObstacles final : public ClothEngine {
  public:
   /// @param cloth  the scene's cloth, or nullptr; borrowed, it must outlive this
   /// @param obstacles  one or more meshes, each valid (validate_triangle_mesh)
-  /// @throws drench::Error when an obstacle is not valid, naming it (`obstacles[i]`)
-  ClothWithObstacles(ClothEngine* cloth, std::vector<TriangleMesh> obstacles);
+  /// @param clearance  the distance the obstacles keep the cloth's nodes at (unit: m), > 0 and finite: the
+  ///        coupling's cloth thickness, which the water keeps too
+  /// @throws drench::Error when an obstacle is not valid, naming it (`obstacles[i]`); SceneError for a
+  ///         clearance out of range
+  ClothWithObstacles(ClothEngine* cloth, std::vector<TriangleMesh> obstacles, double clearance = 0.001);
+  ~ClothWithObstacles() override;
 
   void begin_step() override;
   void apply_impulses(const Vec3Array& impulses) override;
@@ -59,16 +67,24 @@ class ClothWithObstacles final : public ClothEngine {
   /// Nodes of the cloth, the first of mesh()'s (0 without a cloth).
   std::size_t cloth_nodes() const { return m_cloth ? m_cloth->mesh().node_count() : 0; }
   const std::vector<TriangleMesh>& obstacles() const { return m_obstacles; }
+  /// What holding the cloth off the obstacles did, summed over steps: `contacts` node-face pairs within the
+  /// clearance, `ccd_impacts` nodes stopped before a face.
+  const CouplingStepStats& cloth_contact_stats() const { return m_hold_stats; }
 
  private:
   /// Copies the cloth's part of mesh() from the engine; rebuilds the whole mesh if its size changed.
   void pull_cloth();
+  /// The cloth's predicted motion corrected so that no node passes an obstacle's face (see the class).
+  void hold_cloth_off_obstacles(double dt);
 
   ClothEngine* m_cloth;
   std::vector<TriangleMesh> m_obstacles;
   ClothMesh m_mesh;
   std::size_t m_cloth_nodes = 0, m_cloth_triangles = 0;
   bool m_built = false;
+  ClothMesh m_rigid;                  // the obstacles alone, for the cloth's nodes to be coupled with
+  std::unique_ptr<Coupler> m_holder;  // couples the cloth's nodes, as particles, with m_rigid
+  CouplingStepStats m_hold_stats;
 };
 
 }  // namespace drench
