@@ -85,6 +85,10 @@ int run_command(const std::string& scene_path, const std::string& out_dir,
     std::fprintf(stderr, "drench: simulation stopped: %s\n", result.status.describe().c_str());
     return 2;
   }
+  if (result.status.failed()) {
+    std::fprintf(stderr, "drench: simulation failed: %s\n", result.status.describe().c_str());
+    return 2;
+  }
   return 0;
 }
 

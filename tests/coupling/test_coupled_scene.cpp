@@ -5,6 +5,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <string>
+#include <utility>
 
 #include <drench/scene/simulation.hpp>
 #include "coupling_fixtures.hpp"
@@ -88,6 +90,115 @@ TEST(CoupledScene, JetLeaksThroughAStaticPlateWithRepulsionOnly) {
   while (!sim.finished())
     ASSERT_TRUE(sim.step().ok());
   EXPECT_GT(sim.leak_stats().leaks, 0u) << "the audit must see what repulsion alone lets through (Fig. 4)";
+}
+
+// A leak is never silent (issue 39): the step that leaks says LEAKED, names a particle that did cross the
+// plate (y = 0, from above to below, within its edges) and a face of it, and the run counts as failed.
+TEST(CoupledScene, AStepThatLeaksSaysSoAndNamesTheParticleAndFace) {
+  Simulation sim(jet_on_plate(0.004, false),
+                 [](const ClothSettings& s, const Vec3&) { return std::make_unique<RigidPatch>(s); });
+  std::uint64_t leaks_before = 0;
+  bool named = false;
+  while (!sim.finished() && !named) {
+    const StepStatus status = sim.step();
+    ASSERT_TRUE(status.ok()) << status.describe();
+    const bool leaked = sim.leak_stats().leaks > leaks_before;
+    leaks_before = sim.leak_stats().leaks;
+    ASSERT_EQ(leaked, (status.flags & StepStatus::LEAKED) != 0) << "at step " << sim.steps_done();
+    if (!leaked) {
+      EXPECT_FALSE(status.failed());
+      continue;
+    }
+    EXPECT_TRUE(status.failed());
+    EXPECT_NE(status.describe().find("LEAKED: particle id " + std::to_string(status.leaked_particle)),
+              std::string::npos)
+        << status.describe();
+    ASSERT_GE(status.leaked_triangle, 0);
+    ASSERT_LT(status.leaked_triangle, static_cast<std::int64_t>(sim.contact_mesh()->triangle_count()));
+    const ParticleSet& p = sim.particles();
+    const auto it = std::find(p.ids.begin(), p.ids.end(), static_cast<std::uint32_t>(status.leaked_particle));
+    ASSERT_NE(it, p.ids.end()) << "the named particle is not in the fluid";
+    const std::size_t i = static_cast<std::size_t>(it - p.ids.begin());
+    EXPECT_GT(p.positions_t0[i].y(), 0.0);
+    EXPECT_LT(p.positions[i].y(), 0.0);
+    named = true;
+  }
+  EXPECT_TRUE(named) << "no step leaked: the scene no longer tests the LEAKED status";
+}
+
+/// A patch whose engine moves node `node` by `displacement` in every step and reports `velocity` for it: a
+/// cloth blowing up, as far as the coupled step can tell.
+class BlowingUpPatch final : public ClothEngine {
+ public:
+  BlowingUpPatch(const ClothSettings& s, Index node, const Vec3& displacement, const Vec3& velocity)
+      : m_node(node), m_displacement(displacement), m_velocity(velocity) {
+    m_mesh = test::grid_mesh(s.nodes_x, s.size_x, s.center.y(), 1.0, s.center.x() - s.size_x / 2,
+                             s.center.z() - s.size_z / 2);
+  }
+  void begin_step() override { m_mesh.positions_t0 = m_mesh.positions_t1; }
+  void apply_impulses(const Vec3Array&) override {}
+  void set_carried_masses(const ScalarArray&) override {}
+  void step(double) override { m_mesh.positions_t1[m_node] += m_displacement; }
+  ClothMesh& mesh() override { return m_mesh; }
+  void end_step(double) override {}
+  Vec3Array velocities() const override {
+    Vec3Array v(m_mesh.node_count(), Vec3::Zero());
+    v[m_node] = m_velocity;
+    return v;
+  }
+  double total_mass() const override { return 1.0; }
+
+ private:
+  ClothMesh m_mesh;
+  Index m_node;
+  Vec3 m_displacement, m_velocity;
+};
+
+// The cloth's blow-up checks beside fluid.max_speed (issue 39): a node faster than cloth.max_speed stops
+// the run as RUNAWAY_NODE naming it; an edge stretched beyond cloth.max_strain as CLOTH_OVERSTRETCHED naming
+// its nodes; within the limits, or with the limits off (null), nothing is said.
+TEST(CoupledScene, ABlownUpClothStopsTheRunNamingTheNodeOrEdge) {
+  SceneConfig config = jet_on_plate(0.001, true);
+  config.cloth->max_speed = 50.0;
+  config.cloth->max_strain = 1.2;
+  const auto run = [&](const SceneConfig& c, const Vec3& displacement, const Vec3& velocity) {
+    Simulation sim(c, [&](const ClothSettings& s, const Vec3&) {
+      return std::make_unique<BlowingUpPatch>(s, 5, displacement, velocity);
+    });
+    StepStatus status;
+    for (int i = 0; i < 5 && status.ok(); ++i)
+      status |= sim.step();
+    return std::make_pair(status, sim.max_cloth_strain());
+  };
+  // Node 5 of the 11 x 11 patch (0.02 m edges) at 60 m/s, not moving: over the speed limit only.
+  auto [fast, fast_strain] = run(config, Vec3::Zero(), Vec3(0, 60, 0));
+  EXPECT_EQ(fast.flags & (StepStatus::RUNAWAY_NODE | StepStatus::CLOTH_OVERSTRETCHED),
+            StepStatus::RUNAWAY_NODE);
+  EXPECT_FALSE(fast.ok());
+  EXPECT_EQ(fast.runaway_node, 5);
+  EXPECT_DOUBLE_EQ(fast.runaway_node_speed, 60.0);
+  EXPECT_NE(fast.describe().find("RUNAWAY_NODE: cloth node 5 moved at 60 m/s"), std::string::npos)
+      << fast.describe();
+  EXPECT_EQ(fast_strain, 0.0);
+  // Node 5 pulled 1 cm along -z per step at 1 m/s, away from node 16 (its neighbour along z, 0.02 m): their
+  // edge reaches a strain of 0.5 after one step, 1.0 after two, 1.5 after three, over the limit of 1.2.
+  auto [torn, torn_strain] = run(config, Vec3(0, 0, -0.01), Vec3(0, 0, -1));
+  EXPECT_EQ(torn.flags & (StepStatus::RUNAWAY_NODE | StepStatus::CLOTH_OVERSTRETCHED),
+            StepStatus::CLOTH_OVERSTRETCHED);
+  EXPECT_EQ(torn.overstretched_edge[0], 5);
+  EXPECT_EQ(torn.overstretched_edge[1], 16);
+  EXPECT_NEAR(torn.edge_strain, 1.5, 1e-9);
+  EXPECT_NEAR(torn_strain, 1.5, 1e-9);
+  EXPECT_NE(torn.describe().find("CLOTH_OVERSTRETCHED: the cloth edge between nodes 5 and 16"),
+            std::string::npos)
+      << torn.describe();
+  // The same cloths with the limits off: five steps, no flag; the strain is still measured.
+  config.cloth->max_speed.reset();
+  config.cloth->max_strain.reset();
+  EXPECT_TRUE(run(config, Vec3::Zero(), Vec3(0, 60, 0)).first.ok());
+  const auto [off, off_strain] = run(config, Vec3(0, 0, -0.01), Vec3(0, 0, -1));
+  EXPECT_TRUE(off.ok());
+  EXPECT_NEAR(off_strain, 2.5, 1e-9);
 }
 
 }  // namespace

@@ -75,6 +75,8 @@ CouplingStepStats difference(const CouplingStepStats& a, const CouplingStepStats
   d.ccd_iterations = a.ccd_iterations - b.ccd_iterations;
   d.failsafe_activations = a.failsafe_activations - b.failsafe_activations;
   d.obstacle_stops = a.obstacle_stops - b.obstacle_stops;
+  d.stopped_particles = a.stopped_particles - b.stopped_particles;
+  d.stopped_nodes = a.stopped_nodes - b.stopped_nodes;
   d.slip_sum_mps = a.slip_sum_mps - b.slip_sum_mps;
   d.vertical_impulse_on_cloth = a.vertical_impulse_on_cloth - b.vertical_impulse_on_cloth;
   d.seconds_repulsion = a.seconds_repulsion - b.seconds_repulsion;
@@ -88,6 +90,10 @@ LeakAuditStats difference(const LeakAuditStats& a, const LeakAuditStats& b) {
   d.pairs = a.pairs - b.pairs;
   d.exact_checks = a.exact_checks - b.exact_checks;
   d.seconds = a.seconds - b.seconds;
+  if (d.leaks > 0) {
+    d.leak_particle = a.leak_particle;
+    d.leak_triangle = a.leak_triangle;
+  }
   return d;
 }
 

@@ -53,7 +53,10 @@ std::vector<TriangleMesh> static_triangle_meshes(const btCollisionWorld& world);
 
 /// What one coupled step did.
 struct CoupledStepReport {
-  StepStatus fluid;                      ///< the fluid's flags; NON_FINITE_STATE names the particle
+  /// The step's flags: the fluid's (NON_FINITE_STATE names the particle), the cloth's blow-up checks
+  /// (RUNAWAY_NODE, CLOTH_OVERSTRETCHED against the scene's cloth.max_speed and max_strain, defaults when
+  /// the scene has no `cloth`) and LEAKED (a particle crossed a face)
+  StepStatus fluid;
   std::uint32_t coupling = COUPLING_OK;  ///< COUPLING_* flags of coupler.step
   CouplingStepStats coupling_stats;      ///< contacts, impacts, impulses of this step
   LeakAuditStats leak_stats;             ///< crossings of the cloth in this step (effect "leak_audit")
@@ -69,8 +72,11 @@ struct CoupledStepReport {
     double emit = 0, fluid = 0, cloth = 0, coupling = 0, total = 0;
   } seconds;  ///< wall time per stage (unit: s); coupling includes the leak audit
 
-  /// False when the fluid or the cloth became non-finite.
+  /// False when the fluid or the cloth became non-finite or blew up (a particle or node over its speed
+  /// limit, an edge over its strain limit): the state is no longer worth stepping.
   bool ok() const { return fluid.ok() && non_finite_node < 0; }
+  /// True when the step cannot be trusted: !ok(), or a particle LEAKED through the cloth.
+  bool failed() const { return !ok() || fluid.failed(); }
 };
 
 class CoupledWorld {
@@ -86,8 +92,8 @@ class CoupledWorld {
   ///        gravity, fluid, emitters (boxes are filled now, nozzles emit per step), static boundaries, kill
   ///        regions, time.dt (the dt of step()), coupling settings and effects ("viscosity", "coupling",
   ///        "friction", "leak_audit"; a stage the scene does not list is not built). The speed of sound is
-  ///        the scene's or automatic_speed_of_sound(scene). scene.cloth is ignored: the cloth is the
-  ///        caller's.
+  ///        the scene's or automatic_speed_of_sound(scene). Of scene.cloth only the blow-up limits
+  ///        (max_speed, max_strain) are read: the cloth is the caller's.
   /// @throws SceneError when the world's soft-body gravity differs from the scene's, the cloth is not in the
   ///         world, the scene's dt or gravity is not finite or dt <= 0, or the coupling settings are out of
   ///         range; drench::Error when the cloth's mesh is invalid (ClothMesh::validate) or a static mesh has

@@ -6,6 +6,7 @@
 
 #include <functional>
 #include <memory>
+#include <optional>
 #include <stdexcept>
 #include <string>
 
@@ -33,6 +34,14 @@ struct ClothSettings {
   double stretch_stiffness = 1.0;  ///< Bullet's linear stiffness kLST, in (0, 1]
   double bending_stiffness = 0.5;  ///< stiffness of the bending links (distance 2), in [0, 1]; 0 = none
   double damping = 0.0;            ///< Bullet's kDP, in [0, 1]
+  /// A node faster than this at the end of a step stops the run with RUNAWAY_NODE (unit: m/s), > 0;
+  /// nullopt: no limit. Far above any cloth under water, so only a blow-up reaches it (docs/scenes.md gives
+  /// the demo scenes' fastest nodes).
+  std::optional<double> max_speed = 100.0;
+  /// An edge stretched beyond this strain, (length - rest length) / rest length with the rest length the
+  /// edge's length when the simulation was built, stops the run with CLOTH_OVERSTRETCHED (dimensionless),
+  /// > 0; nullopt: no limit. A cloth stretched to twice its size has come apart numerically.
+  std::optional<double> max_strain = 1.0;
 };
 
 /// One cloth in a coupled simulation.

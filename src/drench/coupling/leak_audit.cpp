@@ -98,7 +98,8 @@ std::uint64_t audit_leaks(const Vec3Array& particles_t0, const Vec3Array& partic
   for (std::size_t t = 0; t < boxes.size(); ++t)
     grid[key(cell_of(boxes[t].lo))].push_back(static_cast<Index>(t));
 
-  std::vector<std::uint8_t> flags(n, 0);
+  // Per particle, 1 + the first triangle it crosses, or 0.
+  std::vector<std::uint64_t> flags(n, 0);
   std::vector<std::uint64_t> pairs_per(n, 0), exact_per(n, 0);
 #pragma omp parallel for schedule(dynamic, 64)
   for (std::size_t p = 0; p < n; ++p) {
@@ -124,7 +125,7 @@ std::uint64_t audit_leaks(const Vec3Array& particles_t0, const Vec3Array& partic
             ++exact_per[p];
             const ccd::VertexFaceQuery q{x0[0], x0[1], x0[2], x0[3], x1[0], x1[1], x1[2], x1[3]};
             if (ccd::transversal_crossing_exact(q)) {
-              flags[p] = 1;
+              flags[p] = 1 + static_cast<std::uint64_t>(t);
               break;
             }
           }
@@ -133,11 +134,17 @@ std::uint64_t audit_leaks(const Vec3Array& particles_t0, const Vec3Array& partic
     }
   }
   for (std::size_t p = 0; p < n; ++p) {
-    count += flags[p];
+    if (flags[p] != 0) {
+      if (count == 0) {
+        stats.leak_particle = static_cast<std::int64_t>(p);
+        stats.leak_triangle = static_cast<std::int64_t>(flags[p] - 1);
+      }
+      ++count;
+      if (leaked) (*leaked)[p] = 1;
+    }
     stats.pairs += pairs_per[p];
     stats.exact_checks += exact_per[p];
   }
-  if (leaked) *leaked = flags;
   stats.leaks += count;
   stats.seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return count;

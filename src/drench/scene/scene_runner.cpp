@@ -102,7 +102,10 @@ nlohmann::json make_summary(const Simulation& sim, double wall_seconds, const st
   s["speed_of_sound_mps"] = sim.speed_of_sound();
   s["status"] = status.describe().empty() ? "ok" : status.describe();
   s["max_speed_mps"] = {{"particle", sim.max_particle_speed()}};
-  if (sim.cloth()) s["max_speed_mps"]["node"] = sim.max_node_speed();
+  if (sim.cloth()) {
+    s["max_speed_mps"]["node"] = sim.max_node_speed();
+    s["max_cloth_strain"] = sim.max_cloth_strain();
+  }
   if (sim.closed()) {
     const double initial = sim.initial_fluid_energy(), final = sim.fluid_energy();
     s["fluid_energy_J"] = {{"initial", initial}, {"final", final}};
@@ -120,11 +123,18 @@ nlohmann::json make_summary(const Simulation& sim, double wall_seconds, const st
       for (const TriangleMesh& obstacle : sim.obstacles())
         faces += obstacle.triangles.size();
       s["obstacle_faces"] = faces;
+      if (sim.cloth()) {
+        const CouplingStepStats held = sim.cloth_obstacle_stats();
+        s["cloth_obstacle_contacts"] = held.contacts;
+        s["cloth_obstacle_impacts"] = held.ccd_impacts;
+      }
     }
     s["contacts"] = c.contacts;
     s["ccd_impacts"] = c.ccd_impacts;
     s["ccd_iterations"] = c.ccd_iterations;
     s["failsafe_activations"] = c.failsafe_activations;
+    s["stopped_particles"] = c.stopped_particles;
+    s["stopped_nodes"] = c.stopped_nodes;
     s["obstacle_stops"] = c.obstacle_stops;
     s["mean_contact_slip_mps"] = c.contacts > 0 ? c.slip_sum_mps / static_cast<double>(c.contacts) : 0.0;
     s["coupling_status"] = sim.coupling_status();

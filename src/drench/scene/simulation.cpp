@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <stdexcept>
+#include <string>
 #include <unordered_map>
 
 #include <drench/common/error.hpp>
@@ -143,7 +145,8 @@ Simulation::Simulation(const SceneConfig& config, std::unique_ptr<ClothEngine> c
     obstacles.push_back(std::move(mesh));
   // Without obstacles the engine is the cloth itself: the obstacles cost nothing when a scene has none.
   if (!obstacles.empty())
-    m_with_obstacles = std::make_unique<ClothWithObstacles>(m_cloth.get(), std::move(obstacles));
+    m_with_obstacles = std::make_unique<ClothWithObstacles>(m_cloth.get(), std::move(obstacles),
+                                                            m_config.coupling.cloth_thickness);
   m_engine = m_with_obstacles ? static_cast<ClothEngine*>(m_with_obstacles.get()) : m_cloth.get();
   if (m_engine) m_engine->mesh().validate();
   if (m_config.coupling.asks_tangential() && !m_config.has_effect("friction")) {
@@ -182,6 +185,62 @@ Simulation::Simulation(const SceneConfig& config, std::unique_ptr<ClothEngine> c
   }
   m_initial_energy = fluid_energy();
   if (m_engine) m_pending_cloth_impulses.assign(m_engine->mesh().node_count(), Vec3::Zero());
+  if (m_cloth) {
+    // The cloth's edges and their lengths now, the rest lengths cloth.max_strain is measured against.
+    const ClothMesh& mesh = m_cloth->mesh();
+    for (const Triangle& t : mesh.triangles) {
+      for (int k = 0; k < 3; ++k)
+        m_cloth_edges.push_back({std::min(t[k], t[(k + 1) % 3]), std::max(t[k], t[(k + 1) % 3])});
+    }
+    std::sort(m_cloth_edges.begin(), m_cloth_edges.end());
+    m_cloth_edges.erase(std::unique(m_cloth_edges.begin(), m_cloth_edges.end()), m_cloth_edges.end());
+    const Vec3Array& x =
+        mesh.positions_t1.size() == mesh.node_count() ? mesh.positions_t1 : mesh.positions_t0;
+    m_rest_lengths.reserve(m_cloth_edges.size());
+    for (const auto& [a, b] : m_cloth_edges)
+      m_rest_lengths.push_back((x[a] - x[b]).norm());
+  }
+}
+
+void Simulation::check_cloth(StepStatus& status) {
+  const ClothSettings limits = m_config.cloth.value_or(ClothSettings{});
+  const Vec3Array velocities = m_cloth->velocities();
+  std::int64_t fastest = -1;
+  Scalar fastest_speed = 0.0;
+  for (std::size_t i = 0; i < velocities.size(); ++i) {
+    const Scalar node_speed = velocities[i].norm();
+    // `!(a <= b)` rather than std::max, so that a NaN speed stays NaN in the summary.
+    if (!(node_speed <= m_max_node_speed)) m_max_node_speed = node_speed;
+    if (!(node_speed <= fastest_speed)) {
+      fastest = static_cast<std::int64_t>(i);
+      fastest_speed = node_speed;
+    }
+  }
+  if (limits.max_speed && fastest >= 0 && !(fastest_speed <= *limits.max_speed)) {
+    status.flags |= StepStatus::RUNAWAY_NODE;
+    status.runaway_node = fastest;
+    status.runaway_node_speed = fastest_speed;
+  }
+  // Between steps positions_t1 is where the cloth is (end_step wrote it back to the engine).
+  const Vec3Array& x = m_cloth->mesh().positions_t1;
+  std::size_t most = m_cloth_edges.size();
+  Scalar most_strain = 0.0;
+  for (std::size_t e = 0; e < m_cloth_edges.size(); ++e) {
+    if (!(m_rest_lengths[e] > 0.0)) continue;  // an edge of zero length has no strain to speak of
+    const auto& [a, b] = m_cloth_edges[e];
+    const Scalar strain = (x[a] - x[b]).norm() / m_rest_lengths[e] - 1.0;
+    if (!(strain <= most_strain)) {
+      most = e;
+      most_strain = strain;
+    }
+  }
+  if (!(most_strain <= m_max_strain)) m_max_strain = most_strain;
+  if (limits.max_strain && most < m_cloth_edges.size() && !(most_strain <= *limits.max_strain)) {
+    status.flags |= StepStatus::CLOTH_OVERSTRETCHED;
+    status.overstretched_edge[0] = m_cloth_edges[most].first;
+    status.overstretched_edge[1] = m_cloth_edges[most].second;
+    status.edge_strain = most_strain;
+  }
 }
 
 EffectCounters Simulation::effect_counters() const {
@@ -260,12 +319,7 @@ StepStatus Simulation::step(Scalar dt) {
   // `!(a <= b)` rather than std::max, so that a NaN speed stays NaN in the summary.
   const Scalar particle_speed = m_fluid->max_speed();
   if (!(particle_speed <= m_max_particle_speed)) m_max_particle_speed = particle_speed;
-  if (m_cloth) {
-    for (const Vec3& v : m_cloth->velocities()) {
-      const Scalar node_speed = v.norm();
-      if (!(node_speed <= m_max_node_speed)) m_max_node_speed = node_speed;
-    }
-  }
+  if (m_cloth) check_cloth(status);
   ++m_steps;
   m_time += dt;
   m_min_dt = std::min(m_min_dt, dt);
@@ -358,6 +412,13 @@ void Simulation::step_cloth_and_couple(Scalar dt, StepStatus& status) {
       m_last_coupling_status = m_effects.coupler->step(view, mesh, dt, m_coupling_stats);
     }
     m_coupling_status |= m_last_coupling_status;
+    if (m_last_coupling_status & COUPLING_UNRESOLVED) {
+      // A collision the coupler could not resolve: a crossing may remain, audited or not.
+      const auto [particle, triangle] = m_effects.coupler->unresolved();
+      status.flags |= StepStatus::LEAKED;
+      status.leaked_particle = p.ids[static_cast<std::size_t>(particle)];
+      status.leaked_triangle = triangle;
+    }
   }
   {
     ScopedTimer timer(m_cloth_seconds);
@@ -374,7 +435,12 @@ void Simulation::step_cloth_and_couple(Scalar dt, StepStatus& status) {
       near = any_particle_box_overlaps(p.positions_t0, p.positions, 0.0, mesh_box(mesh));
     }
     if (near) {
-      audit_leaks(p.positions_t0, p.positions, mesh, m_leak_stats);
+      if (audit_leaks(p.positions_t0, p.positions, mesh, m_leak_stats) > 0 &&
+          !(status.flags & StepStatus::LEAKED)) {
+        status.flags |= StepStatus::LEAKED;
+        status.leaked_particle = p.ids[static_cast<std::size_t>(m_leak_stats.leak_particle)];
+        status.leaked_triangle = m_leak_stats.leak_triangle;
+      }
       ++m_effects.leak_counter.passes;
     } else {
       ++m_effects.leak_counter.skipped;

@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <limits>
 #include <memory>
+#include <utility>
 #include <vector>
 
 #include <drench/coupling/carried_water.hpp>
@@ -97,6 +98,11 @@ class Simulation {
   const ClothMesh* contact_mesh() const { return m_engine ? &m_engine->mesh() : nullptr; }
   /// Coupling figures summed over all steps (zero without the "coupling" effect).
   const CouplingStepStats& coupling_stats() const { return m_coupling_stats; }
+  /// What holding the cloth off the obstacles did, summed over steps (zero without both a cloth and
+  /// obstacles; ClothWithObstacles::cloth_contact_stats).
+  CouplingStepStats cloth_obstacle_stats() const {
+    return m_with_obstacles ? m_with_obstacles->cloth_contact_stats() : CouplingStepStats{};
+  }
   /// Leak audit figures summed over all steps (zero without the "leak_audit" effect).
   const LeakAuditStats& leak_stats() const { return m_leak_stats; }
   /// Wall time of the cloth's own steps and of the whole coupling stage (unit: s).
@@ -126,6 +132,10 @@ class Simulation {
   /// step: a run that stays finite but flings particles or nodes away is unstable all the same.
   Scalar max_particle_speed() const { return m_max_particle_speed; }
   Scalar max_node_speed() const { return m_max_node_speed; }
+  /// The largest strain of a cloth edge at the end of any step so far, (length - rest length) / rest length
+  /// with the rest length its length when the simulation was built (dimensionless); 0 before the first step
+  /// or without a cloth.
+  Scalar max_cloth_strain() const { return m_max_strain; }
   /// The fluid's mechanical energy now (unit: J): kinetic plus potential in gravity, the potential measured
   /// from the lowest particle at construction, so that a still column has energy > 0.
   double fluid_energy() const;
@@ -140,6 +150,9 @@ class Simulation {
   /// 5), the leak audit, the corrections back into the engine.
   void step_cloth_and_couple(Scalar dt, StepStatus& status);
   void remove_killed();
+  /// The cloth's blow-up checks after a step: the fastest node against cloth.max_speed (RUNAWAY_NODE), the
+  /// most stretched edge against cloth.max_strain (CLOTH_OVERSTRETCHED); also keeps the run's largest.
+  void check_cloth(StepStatus& status);
   /// The cloth takes water from the particles touching it, spreads it and drips it (Fig. 9), then weighs
   /// its nodes with it for the next step.
   void wet_cloth(Scalar dt);
@@ -173,6 +186,9 @@ class Simulation {
   double m_killed_mass = 0;
   Scalar m_max_particle_speed = 0;
   Scalar m_max_node_speed = 0;
+  Scalar m_max_strain = 0;
+  std::vector<std::pair<Index, Index>> m_cloth_edges;  // each edge of the cloth once, (lower, higher node)
+  ScalarArray m_rest_lengths;                          // their lengths at construction (unit: m)
   double m_energy_floor = 0;  // -g.x of the lowest particle at construction, per kg (unit: J/kg)
   double m_initial_energy = 0;
 };

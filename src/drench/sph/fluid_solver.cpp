@@ -25,6 +25,19 @@ StepStatus& StepStatus::operator|=(const StepStatus& other) {
     runaway_particle = other.runaway_particle;
     runaway_speed = other.runaway_speed;
   }
+  if (leaked_particle < 0) {
+    leaked_particle = other.leaked_particle;
+    leaked_triangle = other.leaked_triangle;
+  }
+  if (runaway_node < 0) {
+    runaway_node = other.runaway_node;
+    runaway_node_speed = other.runaway_node_speed;
+  }
+  if (overstretched_edge[0] < 0) {
+    overstretched_edge[0] = other.overstretched_edge[0];
+    overstretched_edge[1] = other.overstretched_edge[1];
+    edge_strain = other.edge_strain;
+  }
   return *this;
 }
 
@@ -51,6 +64,27 @@ std::string StepStatus::describe() const {
     std::snprintf(speed, sizeof speed, "%.4g", runaway_speed);
     text += "RUNAWAY_PARTICLE: particle id " + std::to_string(runaway_particle) + " moved at " + speed +
             " m/s, over fluid.max_speed (lower time.dt or fluid.cfl)";
+  }
+  if (flags & LEAKED) {
+    if (!text.empty()) text += "; ";
+    text += "LEAKED: particle id " + std::to_string(leaked_particle) + " crossed face " +
+            std::to_string(leaked_triangle) +
+            " of the cloth or an obstacle (turn coupling.continuous on, lower time.dt)";
+  }
+  if (flags & RUNAWAY_NODE) {
+    if (!text.empty()) text += "; ";
+    char speed[32];
+    std::snprintf(speed, sizeof speed, "%.4g", runaway_node_speed);
+    text += "RUNAWAY_NODE: cloth node " + std::to_string(runaway_node) + " moved at " + speed +
+            " m/s, over cloth.max_speed (lower time.dt, raise cloth.substeps)";
+  }
+  if (flags & CLOTH_OVERSTRETCHED) {
+    if (!text.empty()) text += "; ";
+    char strain[32];
+    std::snprintf(strain, sizeof strain, "%.4g", edge_strain);
+    text += "CLOTH_OVERSTRETCHED: the cloth edge between nodes " + std::to_string(overstretched_edge[0]) +
+            " and " + std::to_string(overstretched_edge[1]) + " is stretched by a strain of " + strain +
+            ", over cloth.max_strain (lower time.dt, raise cloth.substeps or cloth.position_iterations)";
   }
   return text;
 }

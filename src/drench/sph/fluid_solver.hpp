@@ -34,15 +34,40 @@ struct StepStatus {
     /// A particle moved faster than fluid.max_speed at the start of a sub-step; `runaway_particle` names its
     /// id and `runaway_speed` its speed. The run has blown up: lower dt or the CFL factor.
     RUNAWAY_PARTICLE = 1u << 3,
+    /// A particle ended the step on the other side of a cloth or obstacle face than it started (the leak
+    /// audit's transversal crossing), or the continuous handling could not rule one out; `leaked_particle`
+    /// and `leaked_triangle` name the first. The run goes on (the crossing is counted in `leaks`), but its
+    /// result breaks the paper's promise: turn `coupling.continuous` on, lower time.dt.
+    LEAKED = 1u << 4,
+    /// A cloth node moved faster than cloth.max_speed at the end of a step; `runaway_node` names it and
+    /// `runaway_node_speed` gives its speed. The cloth has blown up: lower time.dt, raise cloth.substeps.
+    RUNAWAY_NODE = 1u << 5,
+    /// A cloth edge was stretched beyond cloth.max_strain of its length when the simulation was built;
+    /// `overstretched_edge` names its nodes and `edge_strain` its strain. The cloth has torn apart
+    /// numerically: lower time.dt, raise cloth.substeps or cloth.position_iterations.
+    CLOTH_OVERSTRETCHED = 1u << 6,
   };
   std::uint32_t flags = 0;
   std::int64_t non_finite_particle = -1;  ///< id of the first non-finite particle, or -1
   std::int64_t non_finite_node = -1;      ///< index of the first non-finite cloth node, or -1
   std::int64_t runaway_particle = -1;     ///< id of the fastest particle over fluid.max_speed, or -1
   double runaway_speed = 0.0;             ///< its speed (unit: m/s)
+  std::int64_t leaked_particle = -1;      ///< id of the first particle that crossed a face, or -1
+  std::int64_t leaked_triangle = -1;      ///< the face it crossed (index in the contact mesh), or -1
+  std::int64_t runaway_node = -1;         ///< index of the fastest cloth node over cloth.max_speed, or -1
+  double runaway_node_speed = 0.0;        ///< its speed (unit: m/s)
+  std::int64_t overstretched_edge[2] = {-1, -1};  ///< the nodes of the most stretched edge, or -1
+  double edge_strain = 0.0;  ///< its strain, (length - rest length) / rest length (dimensionless)
 
-  /// False when the state is no longer worth stepping: non-finite, or a particle over fluid.max_speed.
-  bool ok() const { return (flags & (NON_FINITE_STATE | NON_FINITE_CLOTH | RUNAWAY_PARTICLE)) == 0; }
+  /// False when the state is no longer worth stepping: non-finite, a particle over fluid.max_speed, a
+  /// node over cloth.max_speed or an edge beyond cloth.max_strain.
+  bool ok() const {
+    return (flags & (NON_FINITE_STATE | NON_FINITE_CLOTH | RUNAWAY_PARTICLE | RUNAWAY_NODE |
+                     CLOTH_OVERSTRETCHED)) == 0;
+  }
+  /// True when the result cannot be trusted: !ok(), or a particle LEAKED through the cloth. A run with such a
+  /// status never ends as a success (`drench run` exits 2). PRESSURE_NOT_CONVERGED alone is a warning.
+  bool failed() const { return !ok() || (flags & LEAKED) != 0; }
   StepStatus& operator|=(const StepStatus& other);
   /// One line naming each raised flag (and the particle id), empty when no flag is raised.
   std::string describe() const;
