@@ -343,6 +343,10 @@ int run_sweep(const SweepOptions& options) {
       failure = "killed by signal " + std::to_string(WTERMSIG(status));
     } else if (WIFEXITED(status) && WEXITSTATUS(status) == 1) {
       failure = "error: " + last_line(run_log(i));
+    } else if (WIFEXITED(status) &&
+               (WEXITSTATUS(status) == 128 + SIGINT || WEXITSTATUS(status) == 128 + SIGTERM) &&
+               fs::exists(out / "summary.json")) {
+      // A run that a stop signal ended cleanly: its summary's status says "interrupted".
     } else if (WIFEXITED(status) && WEXITSTATUS(status) > 2) {
       failure = "exit " + std::to_string(WEXITSTATUS(status)) + ": " + last_line(run_log(i));
     }

@@ -5,9 +5,11 @@
 #include <fcntl.h>
 #include <gtest/gtest.h>
 #include <signal.h>
+#include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <filesystem>
@@ -87,12 +89,18 @@ std::vector<std::string> entries(const fs::path& dir) {
   return names;
 }
 
-/// Starts `drench ARGUMENTS...` in `cwd` with stdout and stderr into `log`.
-pid_t start_drench(const std::vector<std::string>& arguments, const fs::path& cwd, const fs::path& log) {
+/// Starts `drench ARGUMENTS...` in `cwd` with stdout and stderr into `log`, its address space limited to
+/// `memory_limit` bytes when that is not 0.
+pid_t start_drench(const std::vector<std::string>& arguments, const fs::path& cwd, const fs::path& log,
+                   rlim_t memory_limit = 0) {
   std::vector<std::string> argv_strings = {DRENCH_EXECUTABLE};
   argv_strings.insert(argv_strings.end(), arguments.begin(), arguments.end());
   const pid_t pid = ::fork();
   if (pid == 0) {
+    if (memory_limit > 0) {
+      const rlimit limit = {memory_limit, memory_limit};
+      ::setrlimit(RLIMIT_AS, &limit);
+    }
     const int fd = ::open(log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
     if (fd < 0 || ::chdir(cwd.c_str()) != 0) ::_exit(127);
     ::dup2(fd, STDOUT_FILENO);
@@ -395,6 +403,33 @@ TEST(HostileOutput, CommandLineErrorsExit1WithAShortMessage) {
   EXPECT_EQ(read(log), std::string(DRENCH_VERSION) + "\n");
 }
 
+// A huge scene aborted with an uncaught std::bad_alloc (exit 134), and surface.cell_size=1e-7 with an
+// uncaught openvdb::ArithmeticError. Either is now one line and exit 1 (before the simulation started) or 2
+// (after), or a refusal of the value (1); never an abort.
+TEST(HostileOutput, OutOfMemoryAndForeignErrorsAreOneLineNotAnAbort) {
+  const TempDir dir;
+  const std::string scene = dir.write("tank.json", tank_scene(0.01, 100));
+  const fs::path log = dir.path() / "log.txt";
+  // 48 million particles of 1 mm, in an address space of 1.5 GB.
+  const int out_of_memory = wait_exit(start_drench({"run", scene, "--out", (dir.path() / "huge").string(),
+                                                    "--quiet", "--set", "fluid.particle_spacing=0.001"},
+                                                   dir.path(), log, rlim_t(1500) << 20),
+                                      60.0);
+  EXPECT_EQ(out_of_memory, 1) << read(log);
+  std::string message = read(log);
+  EXPECT_EQ(message.rfind("drench: ", 0), 0u) << message;
+  EXPECT_EQ(std::count(message.begin(), message.end(), '\n'), 1) << message;
+  EXPECT_FALSE(fs::exists(dir.path() / "huge")) << "refused before the folder was made";
+
+  const int foreign = run_drench({"run", scene, "--out", (dir.path() / "vdb").string(), "--quiet", "--set",
+                                  "effects=[\"surface\"]", "--set", "surface.cell_size=1e-7"},
+                                 dir.path(), log);
+  EXPECT_TRUE(foreign == 1 || foreign == 2) << foreign << "\n" << read(log);
+  message = read(log);
+  EXPECT_EQ(message.rfind("drench: ", 0), 0u) << message;
+  EXPECT_EQ(std::count(message.begin(), message.end(), '\n'), 1) << message;
+}
+
 // NaN figures were written as a bare null in summary.json.
 TEST(HostileOutput, ANonFiniteSummaryFigureIsNullWithANoteSayingWhich) {
   json summary = {{"steps", 3},
@@ -433,6 +468,27 @@ TEST(HostileOutput, ASweepIntoAReusedFolderIsRefusedUnlessOverwrite) {
   EXPECT_EQ(run_drench(again, dir.path(), log), 0) << read(log);
   EXPECT_TRUE(fs::exists(out / "runs/001/summary.json"));
   EXPECT_EQ(json::parse(read(out / drench::kOutputManifest))["command"], "sweep");
+}
+
+// SIGINT to a sweep: passed on once to the run under way, which ends "interrupted"; the next is not started.
+TEST(HostileOutput, ASweepPassesSigintOnToItsRunAndExits130) {
+  const TempDir dir;
+  const std::string scene = dir.write("long.json", tank_scene(600, 100));
+  const fs::path out = dir.path() / "sweep";
+  const pid_t pid =
+      start_drench({"sweep", scene, "--vary", "time.dt=0.0025,0.002", "--out", out.string(), "--quiet"},
+                   dir.path(), dir.path() / "log.txt");
+  const bool started =
+      wait_for_file(out, 30.0, [](const fs::path& p) { return p.filename() == "fluid_0001.ply"; });
+  EXPECT_TRUE(started) << read(dir.path() / "log.txt");
+  ::kill(pid, SIGINT);
+  EXPECT_EQ(wait_exit(pid, 30.0), 130) << read(dir.path() / "log.txt");
+  EXPECT_EQ(json::parse(read(out / "runs/001/summary.json"))["status"], "interrupted");
+  EXPECT_FALSE(fs::exists(out / "runs/002"));
+  const std::string csv = read(out / "sweep.csv");
+  EXPECT_NE(csv.find("\n1,time.dt=0.0025,0,0.0025,interrupted,"), std::string::npos) << csv;
+  EXPECT_NE(csv.find("\n2,time.dt=0.002,0,0.002,not run: the sweep was interrupted,"), std::string::npos)
+      << csv;
 }
 
 }  // namespace
