@@ -153,7 +153,7 @@ bool wait_for_file(const fs::path& dir, double timeout_s, Predicate predicate) {
 /// A run of the tank into `out`: `frames` frames at 100 per second.
 int run_tank(const TempDir& dir, const fs::path& out, int frames, std::vector<std::string> extra = {}) {
   const std::string scene = dir.write("tank.json", tank_scene(0.01 * (frames - 1), 100));
-  std::vector<std::string> arguments = {"run", scene, "--out", out.string(), "--quiet"};
+  std::vector<std::string> arguments = {"run", scene, "--out", out.string(), "--threads", "1", "--quiet"};
   arguments.insert(arguments.end(), extra.begin(), extra.end());
   return run_drench(arguments, dir.path(), dir.path() / "log.txt");
 }
@@ -241,8 +241,8 @@ TEST(HostileOutput, OverwriteRefusesAndDeletesNothingWhenAFileIsNotDrenchs) {
 /// Starts a 600 s tank run, waits for its frame 1 and sends `signal`; returns the exit status.
 int interrupt_run(const TempDir& dir, const fs::path& out, int signal) {
   const std::string scene = dir.write("long.json", tank_scene(600, 100));
-  const pid_t pid =
-      start_drench({"run", scene, "--out", out.string(), "--quiet"}, dir.path(), dir.path() / "log.txt");
+  const pid_t pid = start_drench({"run", scene, "--out", out.string(), "--threads", "1", "--quiet"},
+                                 dir.path(), dir.path() / "log.txt");
   const bool started =
       wait_for_file(out, 30.0, [](const fs::path& p) { return p.filename() == "fluid_0001.ply"; });
   EXPECT_TRUE(started) << read(dir.path() / "log.txt");
@@ -282,10 +282,13 @@ TEST(HostileOutput, SigtermEndsARunWithAnInterruptedSummaryAndExit143) {
 fs::path run_with_reconstruction(const TempDir& dir) {
   const fs::path out = dir.path() / "out";
   const std::string scene = dir.write("tank.json", tank_scene(0.04, 100, true));
-  EXPECT_EQ(run_drench({"run", scene, "--out", out.string(), "--quiet"}, dir.path(), dir.path() / "log.txt"),
+  EXPECT_EQ(run_drench({"run", scene, "--out", out.string(), "--threads", "1", "--quiet"}, dir.path(),
+                       dir.path() / "log.txt"),
             0)
       << read(dir.path() / "log.txt");
-  EXPECT_EQ(run_drench({"reconstruct", out.string(), "--quiet"}, dir.path(), dir.path() / "log.txt"), 0)
+  EXPECT_EQ(run_drench({"reconstruct", out.string(), "--threads", "1", "--quiet"}, dir.path(),
+                       dir.path() / "log.txt"),
+            0)
       << read(dir.path() / "log.txt");
   EXPECT_TRUE(fs::exists(out / "reconstruct.json"));
   return out;
@@ -298,8 +301,9 @@ TEST(HostileOutput, AnInterruptedReconstructLeavesTheEarlierSurfacesByteForByte)
   const auto before = snapshot(out);
   // A fine grid (about 1 s a frame here), so that the reconstruction is still under way when its first new
   // surface exists.
-  const pid_t pid = start_drench({"reconstruct", out.string(), "--set", "surface.cell_size=0.004", "--quiet"},
-                                 dir.path(), dir.path() / "log.txt");
+  const pid_t pid = start_drench(
+      {"reconstruct", out.string(), "--set", "surface.cell_size=0.004", "--threads", "1", "--quiet"},
+      dir.path(), dir.path() / "log.txt");
   const bool started = wait_for_file(out, 30.0, [](const fs::path& p) {
     return p.parent_path().filename().string().rfind("reconstruct.tmp-", 0) == 0 &&
            p.filename() == "surface_0000.ply";
@@ -336,7 +340,8 @@ TEST(HostileOutput, RenderRefusesARunWithAMissingFrameFileNamingIt) {
   const TempDir dir;
   const fs::path out = dir.path() / "out";
   const std::string scene = dir.write("cloth.json", cloth_scene());
-  ASSERT_EQ(run_drench({"run", scene, "--out", out.string(), "--quiet"}, dir.path(), dir.path() / "log.txt"),
+  ASSERT_EQ(run_drench({"run", scene, "--out", out.string(), "--threads", "1", "--quiet"}, dir.path(),
+                       dir.path() / "log.txt"),
             0)
       << read(dir.path() / "log.txt");
   ASSERT_TRUE(fs::exists(out / "frames/cloth_0005.ply"));
@@ -403,6 +408,31 @@ TEST(HostileOutput, CommandLineErrorsExit1WithAShortMessage) {
   EXPECT_EQ(read(log), std::string(DRENCH_VERSION) + "\n");
 }
 
+// What --overwrite may remove: the manifest's files and their temporaries, nothing beside them.
+TEST(HostileOutput, ManifestPatternsCoverOnlyDrenchsFiles) {
+  using drench::output_pattern_covers;
+  EXPECT_TRUE(output_pattern_covers("frames/fluid_*.ply", "frames/fluid_0001.ply"));
+  EXPECT_TRUE(output_pattern_covers("frames/fluid_*.ply", "frames/fluid_0001.ply.tmp-4242"));
+  EXPECT_FALSE(output_pattern_covers("frames/fluid_*.ply", "frames/fluid_0001.ply.tmp-"));
+  EXPECT_FALSE(output_pattern_covers("frames/fluid_*.ply", "frames/fluid_0001.ply.tmp-42x"));
+  EXPECT_FALSE(output_pattern_covers("frames/fluid_*.ply", "frames/fluid_0001.ply.bak"));
+  EXPECT_FALSE(output_pattern_covers("frames/fluid_*.ply", "frames/old/fluid_0001.ply"));
+  EXPECT_FALSE(output_pattern_covers("frames/fluid_*.ply", "fluid_0001.ply"));
+  EXPECT_FALSE(output_pattern_covers("summary.json", "summary.json.orig"));
+  EXPECT_TRUE(
+      output_pattern_covers("reconstruct.tmp-*/surface_*.ply", "reconstruct.tmp-77/surface_0003.ply"));
+  const auto covered = [](const std::string& file) {
+    for (const std::string& pattern : drench::sweep_output_patterns())
+      if (output_pattern_covers(pattern, file)) return true;
+    return false;
+  };
+  EXPECT_TRUE(covered("runs/001/frames/cloth_0000.ply"));
+  EXPECT_TRUE(covered("runs/012.log"));
+  EXPECT_TRUE(covered("runs/001/drench_run.json"));
+  EXPECT_FALSE(covered("runs/001/notes.txt"));
+  EXPECT_FALSE(covered("notes.txt"));
+}
+
 // A huge scene aborted with an uncaught std::bad_alloc (exit 134), and surface.cell_size=1e-7 with an
 // uncaught openvdb::ArithmeticError. Either is now one line and exit 1 (before the simulation started) or 2
 // (after), or a refusal of the value (1); never an abort.
@@ -454,8 +484,8 @@ TEST(HostileOutput, ASweepIntoAReusedFolderIsRefusedUnlessOverwrite) {
   const std::string scene = dir.write("tank.json", tank_scene(0.02, 0));
   const fs::path out = dir.path() / "sweep";
   const fs::path log = dir.path() / "log.txt";
-  const std::vector<std::string> sweep = {"sweep", scene,        "--vary", "time.dt=0.005",
-                                          "--out", out.string(), "--quiet"};
+  const std::vector<std::string> sweep = {"sweep",      scene,       "--vary", "time.dt=0.005", "--out",
+                                          out.string(), "--threads", "1",      "--quiet"};
   ASSERT_EQ(run_drench(sweep, dir.path(), log), 0) << read(log);
   ASSERT_TRUE(fs::exists(out / "runs/001/summary.json")) << read(log);
   EXPECT_TRUE(fs::exists(out / "runs/001.log"));
@@ -475,9 +505,9 @@ TEST(HostileOutput, ASweepPassesSigintOnToItsRunAndExits130) {
   const TempDir dir;
   const std::string scene = dir.write("long.json", tank_scene(600, 100));
   const fs::path out = dir.path() / "sweep";
-  const pid_t pid =
-      start_drench({"sweep", scene, "--vary", "time.dt=0.0025,0.002", "--out", out.string(), "--quiet"},
-                   dir.path(), dir.path() / "log.txt");
+  const pid_t pid = start_drench(
+      {"sweep", scene, "--vary", "time.dt=0.0025,0.002", "--out", out.string(), "--threads", "1", "--quiet"},
+      dir.path(), dir.path() / "log.txt");
   const bool started =
       wait_for_file(out, 30.0, [](const fs::path& p) { return p.filename() == "fluid_0001.ply"; });
   EXPECT_TRUE(started) << read(dir.path() / "log.txt");
