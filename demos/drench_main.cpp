@@ -23,7 +23,6 @@
 #include <iostream>
 #include <limits>
 #include <new>
-#include <sstream>
 #include <string>
 #include <system_error>
 #include <utility>
@@ -51,7 +50,7 @@ namespace {
 
 /// What the command is doing, for the message of an error that carries no context (out of memory).
 const char* g_activity = "starting";
-/// Whether a simulation (or a sweep's runs) has started: an error then exits 2, else 1.
+/// Whether `drench run` has started simulating: an error then exits 2, else 1.
 bool g_simulation_started = false;
 
 /// A summary figure, NaN where summary.json holds null (a non-finite figure, docs/output.md).

@@ -148,9 +148,11 @@ ReconstructResult reconstruct_run(const ReconstructOptions& options) {
   ProgressLine progress(options.progress, frames.size());
   for (const FrameFiles& frame : frames) {
     if (options.stop && options.stop->load(std::memory_order_relaxed)) {
-      result.interrupted = true;
-      result.wall_seconds = wall();
-      return result;
+      // The surfaces made so far are discarded with the staging folder: the result counts nothing.
+      ReconstructResult stopped;
+      stopped.interrupted = true;
+      stopped.wall_seconds = wall();
+      return stopped;
     }
     PlyData fluid, cloth;
     {

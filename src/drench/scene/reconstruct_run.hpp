@@ -26,7 +26,8 @@ struct ReconstructResult {
   std::uint64_t surface_triangles = 0;      ///< summed over the frames
   std::uint64_t surface_intersections = 0;  ///< summed over the frames (count_surface_intersections)
   double wall_seconds = 0.0;                ///< the whole command, reading and checking included (unit: s)
-  bool interrupted = false;  ///< `stop` ended it: nothing in the run folder changed, `report` is empty
+  /// `stop` ended it: nothing in the run folder changed, and the counts and `report` are empty.
+  bool interrupted = false;
 };
 
 /// Reconstructs the surface of every frame a run saved: for each `frames/fluid_NNNN.ply` in frame order,
