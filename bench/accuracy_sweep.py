@@ -72,7 +72,8 @@ FREE_JET = [
 
 def sweep(drench, arguments, out_dir, duration, threads, solvers="", jobs=1, timeout=240):
     arguments = [a.format(solvers=solvers, timeout=timeout) if "{" in a else a for a in arguments]
-    command = [drench, "sweep", SCENE, *arguments, "--threads", str(threads), "--out", str(out_dir)]
+    command = [drench, "sweep", SCENE, *arguments, "--threads", str(threads), "--out", str(out_dir),
+               "--overwrite"]
     if jobs > 1:
         command += ["--jobs", str(jobs)]
     if duration is not None:

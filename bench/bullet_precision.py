@@ -36,7 +36,7 @@ def centre_height(ply):
 
 
 def run(binary, out):
-    subprocess.run([binary, "run", str(SCENE), "--out", str(out), "--quiet"], check=True,
+    subprocess.run([binary, "run", str(SCENE), "--out", str(out), "--overwrite", "--quiet"], check=True,
                    stdout=subprocess.DEVNULL)
     summary = json.loads((out / "summary.json").read_text())
     heights = [centre_height(p) for p in sorted((out / "frames").glob("cloth_*.ply"))]

@@ -43,7 +43,7 @@ def main():
             for aware in ("true", "false"):
                 out = base / f"{name}_{'aware' if aware == 'true' else 'plain'}{suffix}"
                 print(f"{name}, contact_aware={aware}", file=sys.stderr, flush=True)
-                subprocess.run([args.drench, "run", str(scene), "--out", str(out), "--quiet", *extra, "--set",
+                subprocess.run([args.drench, "run", str(scene), "--out", str(out), "--overwrite", "--quiet", *extra, "--set",
                                 f"surface.contact_aware={aware}"], check=True, stdout=subprocess.DEVNULL)
                 summary = json.loads((out / "summary.json").read_text())
                 rows.append({

@@ -1,21 +1,28 @@
 // The drench command:
-//   drench run SCENE.json --out DIR [--set json.path=value ...] [--steps N]
+//   drench run SCENE.json --out DIR [--overwrite] [--set json.path=value ...] [--steps N]
 //   drench reconstruct DIR [--set json.path=value ...]   the surface again from a run's saved frames
 //   drench render DIR [--camera JSON] [--size WxH] [--out DIR] [--video]   a run's frames as PNG (and MP4)
 //   drench view SCENE.json [--set ...] [--size WxH] [--frames N --screenshot FILE] [--keys SEQ]   live window
 //   drench ccd FILE_OR_DIR... [--list]      point-triangle CCD against labelled queries (*.vf.txt)
-//   drench sweep SCENE.json --vary key=v1,v2 ... --out DIR   the scene over settings: sweep.csv, report.md
-// Exit status: 0 success; 1 bad input (scene, file, arguments) or, for `ccd`, a missed collision; 2 the
-// simulation became non-finite, or, for `sweep`, a run did not end "ok".
+//   drench sweep SCENE.json --vary key=v1,v2 ... --out DIR [--overwrite]   the scene over settings
+// Exit status: 0 success; 1 bad input (scene, file, arguments, an --out folder that is not drench's to
+// write), out of memory or another error before the simulation started, or, for `ccd`, a missed collision;
+// 2 the simulation became non-finite, blew up or leaked, or failed after it started, or, for `sweep`, a run
+// did not end "ok"; 130 (SIGINT) or 143 (SIGTERM): `run`, `reconstruct` or `sweep` was interrupted and
+// stopped cleanly (a run's summary.json says "interrupted"; reconstruct left the earlier surfaces).
 
 #include <omp.h>
 
 #include <CLI/CLI.hpp>
 #include <algorithm>
+#include <atomic>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
+#include <limits>
+#include <new>
 #include <string>
 #include <system_error>
 #include <utility>
@@ -30,22 +37,40 @@
 #ifdef DRENCH_HAVE_VIEWER
 #include <drench/render/viewer.hpp>
 #endif
+#include <drench/scene/output_folder.hpp>
 #include <drench/scene/reconstruct_run.hpp>
 #include <drench/scene/scene_loader.hpp>
 #include <drench/scene/scene_runner.hpp>
 #include <drench/scene/simulation.hpp>
 
+#include "stop_signal.hpp"
 #include "sweep_command.hpp"
 
 namespace {
 
+/// What the command is doing, for the message of an error that carries no context (out of memory).
+const char* g_activity = "starting";
+/// Whether `drench run` has started simulating: an error then exits 2, else 1.
+bool g_simulation_started = false;
+
+/// A summary figure, NaN where summary.json holds null (a non-finite figure, docs/output.md).
+double figure(const nlohmann::json& value) {
+  return value.is_number() ? value.get<double>() : std::numeric_limits<double>::quiet_NaN();
+}
+
 int run_command(const std::string& scene_path, const std::string& out_dir,
-                const std::vector<std::string>& overrides, std::int64_t steps, bool quiet) {
+                const std::vector<std::string>& overrides, std::int64_t steps, bool quiet, bool overwrite) {
+  // The folder first, before the scene is read: a run that could not write there is refused at once.
+  drench::check_output_folder(out_dir, "--out", overwrite);
   // Everything is validated before the output folder is touched: a bad scene writes nothing.
+  g_activity = "reading the scene";
   const nlohmann::json document = drench::read_scene_document(scene_path, overrides);
   const drench::SceneConfig config =
       drench::parse_scene(document, drench::scene_source(scene_path, overrides));
+  g_activity = "setting up the simulation";
   drench::Simulation simulation(config, drench::bullet::cloth_engine_factory());
+  // The manifest is the folder's first file, so that --overwrite knows later what this run wrote.
+  drench::prepare_output_folder(out_dir, "--out", "run", drench::run_output_patterns(), overwrite);
 
   drench::RunOptions options;
   options.out_dir = out_dir;
@@ -65,14 +90,18 @@ int run_command(const std::string& scene_path, const std::string& out_dir,
                    config.time.dt, omp_get_max_threads());
     }
   }
+  options.stop = &drench::stop_requested();
+  drench::install_stop_handler(true);
+  g_activity = "simulating";
+  g_simulation_started = true;
   const drench::RunResult result = drench::run_scene(simulation, options);
   const auto& s = result.summary;
   std::printf(
       "%lld steps, %g s simulated in %.2f s wall; %lld particles (%lld removed); density error mean "
       "%.3g%% max %.3g%%; %lld frames in %s\n",
-      s["steps"].get<long long>(), s["sim_time_s"].get<double>(), s["wall_s"].get<double>(),
+      s["steps"].get<long long>(), figure(s["sim_time_s"]), figure(s["wall_s"]),
       s["particles"].get<long long>(), s["removed"].get<long long>(),
-      100 * s["density_error"]["mean"].get<double>(), 100 * s["density_error"]["max"].get<double>(),
+      100 * figure(s["density_error"]["mean"]), 100 * figure(s["density_error"]["max"]),
       s["frames"].get<long long>(), out_dir.c_str());
   if (s.contains("contacts")) {
     std::printf("coupling: %lld contacts, %lld sub-step stops, %lld CCD impacts, %lld fail-safe",
@@ -84,6 +113,12 @@ int run_command(const std::string& scene_path, const std::string& out_dir,
   if (!result.status.ok()) {
     std::fprintf(stderr, "drench: simulation stopped: %s\n", result.status.describe().c_str());
     return 2;
+  }
+  if (result.interrupted) {
+    std::fprintf(stderr,
+                 "drench: interrupted by signal %d after step %lld; summary.json says \"interrupted\"\n",
+                 drench::stop_signal(), s["steps"].get<long long>());
+    return drench::stopped_exit_status();
   }
   if (result.status.failed()) {
     std::fprintf(stderr, "drench: simulation failed: %s\n", result.status.describe().c_str());
@@ -97,7 +132,17 @@ int reconstruct_command(const std::string& run_dir, const std::vector<std::strin
   options.run_dir = run_dir;
   options.overrides = overrides;
   options.progress = !quiet;
+  options.stop = &drench::stop_requested();
+  drench::install_stop_handler(true);
+  g_activity = "reconstructing the surfaces";
   const drench::ReconstructResult result = drench::reconstruct_run(options);
+  if (result.interrupted) {
+    std::fprintf(stderr,
+                 "drench: interrupted by signal %d; the earlier surfaces and reconstruct.json in %s are "
+                 "untouched\n",
+                 drench::stop_signal(), run_dir.c_str());
+    return drench::stopped_exit_status();
+  }
   std::printf(
       "%lld frames reconstructed in %.2f s: %llu surface triangles, %llu crossings of the cloth and "
       "obstacles; surface_NNNN.ply and reconstruct.json in %s\n",
@@ -108,6 +153,7 @@ int reconstruct_command(const std::string& run_dir, const std::vector<std::strin
 }
 
 int render_command(drench::render::RenderOptions options, const std::string& size, bool quiet) {
+  g_activity = "rendering";
   drench::render::parse_image_size(size, options.width, options.height);
   options.progress = !quiet;
   // Said before the frames are drawn, so that nobody waits minutes for a video that will not come.
@@ -259,9 +305,103 @@ int ccd_command(const std::vector<std::string>& paths, bool list) {
   return 0;
 }
 
+/// `message` with every word (a run of non-blank characters) over 40 characters cut to its first 24 and its
+/// length: a 309-digit number or a pasted scene must not fill the terminal, and the start tells which it was.
+std::string shorten_long_words(const std::string& message) {
+  constexpr std::size_t kLongest = 40, kKept = 24;
+  std::string shortened, word;
+  auto flush = [&] {
+    if (word.size() > kLongest) {
+      shortened += word.substr(0, kKept) + "...(" + std::to_string(word.size()) + " characters)";
+    } else {
+      shortened += word;
+    }
+    word.clear();
+  };
+  for (const char c : message) {
+    if (c == ' ' || c == '\n' || c == '\t') {
+      flush();
+      shortened += c;
+    } else {
+      word += c;
+    }
+  }
+  flush();
+  return shortened;
+}
+
+/// `message` on one line: an error from a library (OpenVDB, the standard library) may span several.
+std::string one_line(std::string message) {
+  std::replace(message.begin(), message.end(), '\n', ' ');
+  return message;
+}
+
+/// `text` as a message quotes it: up to 40 characters whole, else its first 24 and its length.
+std::string quoted_argument(const std::string& text) {
+  return "'" + shorten_long_words(text) + "'";
+}
+
+/// A check of a whole number in [low, high] written as decimal digits. CLI11's own checks let "1e308"
+/// through to the conversion, saturate a 309-digit number to the largest integer, and print the bound of
+/// their range as a 309-digit number.
+CLI::Validator whole_number(unsigned long long low, unsigned long long high) {
+  const std::string range = "[" + std::to_string(low) + ", " + std::to_string(high) + "]";
+  return CLI::Validator(
+      [low, high, range](std::string& text) -> std::string {
+        // 19 digits always fit an unsigned 64-bit integer; the bounds here are below 2^63.
+        if (text.empty() || text.size() > 19 || text.find_first_not_of("0123456789") != std::string::npos ||
+            std::stoull(text) < low || std::stoull(text) > high)
+          return "must be a whole number in " + range + ", got " + quoted_argument(text);
+        return "";
+      },
+      "INT in " + range);
+}
+
+/// A check of a finite number >= 0, e.g. a time in seconds.
+CLI::Validator non_negative_number() {
+  return CLI::Validator(
+      [](std::string& text) -> std::string {
+        char* end = nullptr;
+        const double value = std::strtod(text.c_str(), &end);
+        if (text.empty() || *end != '\0' || !std::isfinite(value) || value < 0)
+          return "must be a finite number >= 0, got " + quoted_argument(text);
+        return "";
+      },
+      "NUMBER >= 0");
+}
+
+constexpr unsigned long long kMaxCount = std::numeric_limits<std::int64_t>::max();
+constexpr unsigned long long kMaxThreads = 1024;
+
+int dispatch(int argc, char** argv);
+
 }  // namespace
 
+// Every error ends as one line and an exit status, never as an abort: drench's own errors (bad input, 1),
+// running out of memory and errors from other libraries (1 before the simulation started, 2 after).
 int main(int argc, char** argv) {
+  try {
+    return dispatch(argc, argv);
+  } catch (const drench::Error& e) {
+    std::fprintf(stderr, "drench: %s\n", one_line(e.what()).c_str());
+    return 1;
+  } catch (const std::bad_alloc&) {
+    std::fprintf(stderr,
+                 "drench: out of memory while %s; try a smaller scene (fewer particles or cloth nodes)\n",
+                 g_activity);
+    return g_simulation_started ? 2 : 1;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "drench: error while %s: %s\n", g_activity, one_line(e.what()).c_str());
+    return g_simulation_started ? 2 : 1;
+  } catch (...) {
+    std::fprintf(stderr, "drench: unknown error while %s\n", g_activity);
+    return g_simulation_started ? 2 : 1;
+  }
+}
+
+namespace {
+
+int dispatch(int argc, char** argv) {
   CLI::App app{"drench: SPH fluid with two-way cloth contact (Huber, Eberhardt & Weiskopf 2013)"};
   app.set_version_flag("--version", DRENCH_VERSION);
   app.require_subcommand(1);
@@ -270,13 +410,16 @@ int main(int argc, char** argv) {
   std::vector<std::string> overrides;
   std::int64_t steps = -1;
   int threads = 0;
-  bool quiet = false;
+  bool quiet = false, overwrite = false;
   CLI::App* run = app.add_subcommand("run", "simulate a scene, writing frames and summary.json");
   run->add_option("scene", scene_path, "scene file (JSON, SI units; see docs/scenes.md)")->required();
   run->add_option("--out", out_dir, "output folder (frames/, summary.json)")->required();
   run->add_option("--set", overrides, "override a scene value, e.g. --set time.dt=0.004 (repeatable)");
-  run->add_option("--steps", steps, "stop after N steps")->check(CLI::NonNegativeNumber);
-  run->add_option("--threads", threads, "OpenMP threads (default: all cores)")->check(CLI::PositiveNumber);
+  run->add_option("--steps", steps, "stop after N steps")->check(whole_number(0, kMaxCount));
+  run->add_option("--threads", threads, "OpenMP threads (default: all cores)")
+      ->check(whole_number(1, kMaxThreads));
+  run->add_flag("--overwrite", overwrite,
+                "replace an earlier drench run in --out (only the files its drench_run.json lists)");
   run->add_flag("--quiet", quiet, "no banner and no progress line");
 
   std::string reconstruct_dir;
@@ -289,7 +432,7 @@ int main(int argc, char** argv) {
       "--set", overrides,
       "override a value of the run's scene, e.g. --set surface.cell_size=0.004 (repeatable)");
   reconstruct->add_option("--threads", threads, "OpenMP threads (default: all cores)")
-      ->check(CLI::PositiveNumber);
+      ->check(whole_number(1, kMaxThreads));
   reconstruct->add_flag("--quiet", quiet, "no progress line");
 
   drench::render::RenderOptions render_options;
@@ -314,9 +457,9 @@ int main(int argc, char** argv) {
   view->add_option("scene", scene_path, "scene file (JSON, SI units; see docs/scenes.md)")->required();
   view->add_option("--set", overrides, "override a scene value, e.g. --set time.dt=0.004 (repeatable)");
   view->add_option("--threads", threads, "OpenMP threads of the simulation (default: all cores)")
-      ->check(CLI::PositiveNumber);
+      ->check(whole_number(1, kMaxThreads));
   view->add_option("--size", view_size, "window size WIDTHxHEIGHT in pixels")->capture_default_str();
-  view->add_option("--frames", view_frames, "quit after N drawn frames")->check(CLI::NonNegativeNumber);
+  view->add_option("--frames", view_frames, "quit after N drawn frames")->check(whole_number(0, kMaxCount));
   view->add_option("--screenshot", view_screenshot, "with --frames: write the last frame as PNG to FILE");
   view->add_option("--keys", view_keys,
                    "keys to press, one per frame from the first, e.g. ' . . p p' (space pauses, . steps)");
@@ -347,28 +490,39 @@ int main(int argc, char** argv) {
   sweep->add_flag("--one-at-a-time", sweep_options.one_at_a_time,
                   "vary each setting alone around the scene's values instead of running the grid");
   sweep->add_option("--repeat", sweep_options.repeats, "runs of each setting")
-      ->check(CLI::PositiveNumber)
+      ->check(whole_number(1, std::numeric_limits<int>::max()))
       ->capture_default_str();
   sweep->add_option("--jobs", sweep_options.jobs, "runs side by side (their times then share the cores)")
-      ->check(CLI::PositiveNumber)
+      ->check(whole_number(1, kMaxThreads))
       ->capture_default_str();
   sweep->add_option("--threads", sweep_options.threads, "OpenMP threads per run (default: cores / jobs)")
-      ->check(CLI::PositiveNumber);
+      ->check(whole_number(1, kMaxThreads));
   sweep
       ->add_option("--timeout", sweep_options.timeout_s,
                    "stop a run after this many seconds of wall time; its row says so (default: no limit)")
-      ->check(CLI::NonNegativeNumber);
+      ->check(non_negative_number());
   sweep
       ->add_option("--error", sweep_options.error_key,
                    "the summary figure pareto.png plots against wall time")
       ->capture_default_str();
   sweep->add_option("--set", sweep_options.overrides, "override a scene value in every run (repeatable)");
+  sweep->add_flag("--overwrite", sweep_options.overwrite,
+                  "replace an earlier sweep in --out (only the files its drench_run.json lists)");
   sweep->add_flag("--quiet", sweep_options.quiet, "no line per finished run");
 
-  CLI11_PARSE(app, argc, argv);
-  if (threads > 0) omp_set_num_threads(threads);
   try {
-    if (run->parsed()) return run_command(scene_path, out_dir, overrides, steps, quiet);
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    // --help and --version are "errors" that exit 0 and print as CLI11 prints them.
+    if (e.get_exit_code() == static_cast<int>(CLI::ExitCodes::Success)) return app.exit(e);
+    // Every other mistake on the command line is bad input: exit 1, as documented, not CLI11's own codes.
+    std::fprintf(stderr, "drench: %s\nRun with --help for more information.\n",
+                 shorten_long_words(one_line(e.what())).c_str());
+    return 1;
+  }
+  if (threads > 0) omp_set_num_threads(threads);
+  {
+    if (run->parsed()) return run_command(scene_path, out_dir, overrides, steps, quiet, overwrite);
     if (reconstruct->parsed()) return reconstruct_command(reconstruct_dir, overrides, quiet);
     if (render->parsed()) return render_command(render_options, render_size, quiet);
     if (view->parsed())
@@ -384,14 +538,19 @@ int main(int argc, char** argv) {
       if (error) sweep_options.program = argv[0];
       for (int i = 0; i < argc; ++i)
         sweep_options.command_line += (i ? " " : "drench") + (i ? std::string(argv[i]) : std::string());
+      g_activity = "sweeping";
       const int failed = drench::run_sweep(sweep_options);
       std::printf("sweep: %s/sweep.csv, report.md and pareto.png; %d run(s) not ok\n",
                   sweep_options.out_dir.c_str(), failed);
+      if (drench::stop_signal() != 0) {
+        std::fprintf(stderr, "drench: sweep interrupted by signal %d; its rows so far are in sweep.csv\n",
+                     drench::stop_signal());
+        return drench::stopped_exit_status();
+      }
       return failed > 0 ? 2 : 0;
     }
-  } catch (const drench::Error& e) {
-    std::fprintf(stderr, "drench: %s\n", e.what());
-    return 1;
   }
   return 0;
 }
+
+}  // namespace

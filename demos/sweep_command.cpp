@@ -22,7 +22,10 @@
 #include <drench/common/error.hpp>
 #include <drench/common/program.hpp>
 #include <drench/io/atomic_file.hpp>
+#include <drench/scene/output_folder.hpp>
 #include <drench/scene/scene_loader.hpp>
+
+#include "stop_signal.hpp"
 
 extern char** environ;
 
@@ -76,8 +79,14 @@ struct Child {
   bool timed_out = false;  ///< killed for running past --timeout
 };
 
-/// Starts `arguments` with stdout and stderr into `log`. @throws IoError when it cannot start.
+/// Starts `arguments` with stdout and stderr into `log`, in a process group of its own: a Ctrl-C at the
+/// terminal reaches the sweep alone, which passes it on once (a second signal would end a run at once).
+/// @throws IoError when it cannot start.
 pid_t spawn_logged(const std::vector<std::string>& arguments, const fs::path& log) {
+  posix_spawnattr_t attributes;
+  posix_spawnattr_init(&attributes);
+  posix_spawnattr_setflags(&attributes, POSIX_SPAWN_SETPGROUP);
+  posix_spawnattr_setpgroup(&attributes, 0);
   posix_spawn_file_actions_t actions;
   posix_spawn_file_actions_init(&actions);
   posix_spawn_file_actions_addopen(&actions, STDOUT_FILENO, log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
@@ -87,8 +96,9 @@ pid_t spawn_logged(const std::vector<std::string>& arguments, const fs::path& lo
     argv.push_back(const_cast<char*>(argument.c_str()));
   argv.push_back(nullptr);
   pid_t pid = 0;
-  const int error = posix_spawn(&pid, argv[0], &actions, nullptr, argv.data(), environ);
+  const int error = posix_spawn(&pid, argv[0], &actions, &attributes, argv.data(), environ);
   posix_spawn_file_actions_destroy(&actions);
+  posix_spawnattr_destroy(&attributes);
   if (error != 0) throw IoError("sweep: cannot start " + arguments[0] + ": " + std::strerror(error));
   return pid;
 }
@@ -189,6 +199,7 @@ int run_sweep(const SweepOptions& options) {
     throw SceneError("--error " + options.error_key + ": not a column; one of " + known);
   }
   if (options.jobs < 1) throw SceneError("--jobs must be >= 1");
+  check_output_folder(options.out_dir, "--out", options.overwrite);
 
   // Every setting is validated as `drench run` would before anything is written or started.
   const nlohmann::json scene = read_scene_document(options.scene_path, options.overrides);
@@ -205,6 +216,7 @@ int run_sweep(const SweepOptions& options) {
   }
 
   const fs::path dir = options.out_dir;
+  prepare_output_folder(options.out_dir, "--out", "sweep", sweep_output_patterns(), options.overwrite);
   std::error_code error;
   fs::create_directories(dir / "runs", error);
   if (error) throw IoError("sweep: cannot create " + (dir / "runs").string() + ": " + error.message());
@@ -217,6 +229,8 @@ int run_sweep(const SweepOptions& options) {
     std::string number = std::to_string(i + 1);
     return dir / "runs" / (std::string(width - number.size(), '0') + number);
   };
+  // Beside the run's folder, not in it: `drench run` writes only into a folder of its own.
+  auto run_log = [&](std::size_t i) { return fs::path(run_dir(i).string() + ".log"); };
 
   // The axes' values as each run had them: its own, else the scene's.
   std::vector<std::string> axis_keys;
@@ -260,7 +274,23 @@ int run_sweep(const SweepOptions& options) {
   std::vector<Child> running;
   std::size_t next = 0, finished = 0;
   int failures = 0;
+  install_stop_handler(false);
+  bool stop_passed_on = false;
   while (finished < runs.size()) {
+    if (stop_signal() != 0 && !stop_passed_on) {
+      // Each run under way ends after its step as "interrupted"; the runs not started are rows that say so.
+      for (const Child& c : running)
+        ::kill(c.pid, stop_signal());
+      stop_passed_on = true;
+      for (; next < runs.size(); ++next) {
+        rows[next] = sweep_row(nullptr, "not run: the sweep was interrupted");
+        done[next] = true;
+        ++finished;
+        ++failures;
+      }
+      write_csv();
+      continue;
+    }
     while (next < runs.size() && static_cast<int>(running.size()) < options.jobs) {
       const fs::path out = run_dir(next);
       std::vector<std::string> arguments = {options.program, "run",       options.scene_path,      "--out",
@@ -271,16 +301,15 @@ int run_sweep(const SweepOptions& options) {
         arguments.push_back("--set");
         arguments.push_back(assignment);
       }
-      fs::remove_all(out, error);
-      fs::create_directories(out, error);
-      if (error) throw IoError("sweep: cannot create " + out.string() + ": " + error.message());
-      running.push_back({spawn_logged(arguments, out / "log.txt"), next, std::chrono::steady_clock::now()});
+      running.push_back({spawn_logged(arguments, run_log(next)), next, std::chrono::steady_clock::now()});
       ++next;
     }
+    if (running.empty()) continue;
     int status = 0;
-    // Polled rather than blocking, so that a run past --timeout is stopped: a setting that slows to a crawl
-    // (a blow-up the CFL limit keeps sub-stepping) is a row, not a sweep that never ends.
-    const pid_t pid = ::waitpid(-1, &status, options.timeout_s > 0 ? WNOHANG : 0);
+    // Polled rather than blocking, so that a run past --timeout is stopped (a setting that slows to a crawl,
+    // a blow-up the CFL limit keeps sub-stepping, is a row, not a sweep that never ends) and a stop signal
+    // is passed on at once.
+    const pid_t pid = ::waitpid(-1, &status, WNOHANG);
     if (pid < 0) {
       if (errno == EINTR) continue;
       throw IoError(std::string("sweep: waitpid: ") + std::strerror(errno));
@@ -288,7 +317,8 @@ int run_sweep(const SweepOptions& options) {
     if (pid == 0) {
       const auto now = std::chrono::steady_clock::now();
       for (Child& c : running) {
-        if (!c.timed_out && std::chrono::duration<double>(now - c.start).count() > options.timeout_s) {
+        if (options.timeout_s > 0 && !c.timed_out &&
+            std::chrono::duration<double>(now - c.start).count() > options.timeout_s) {
           ::kill(c.pid, SIGKILL);
           c.timed_out = true;
         }
@@ -312,9 +342,13 @@ int run_sweep(const SweepOptions& options) {
     } else if (WIFSIGNALED(status)) {
       failure = "killed by signal " + std::to_string(WTERMSIG(status));
     } else if (WIFEXITED(status) && WEXITSTATUS(status) == 1) {
-      failure = "error: " + last_line(out / "log.txt");
+      failure = "error: " + last_line(run_log(i));
+    } else if (WIFEXITED(status) &&
+               (WEXITSTATUS(status) == 128 + SIGINT || WEXITSTATUS(status) == 128 + SIGTERM) &&
+               fs::exists(out / "summary.json")) {
+      // A run that a stop signal ended cleanly: its summary's status says "interrupted".
     } else if (WIFEXITED(status) && WEXITSTATUS(status) > 2) {
-      failure = "exit " + std::to_string(WEXITSTATUS(status)) + ": " + last_line(out / "log.txt");
+      failure = "exit " + std::to_string(WEXITSTATUS(status)) + ": " + last_line(run_log(i));
     }
     nlohmann::json summary;
     bool have_summary = false;
@@ -393,7 +427,7 @@ int run_sweep(const SweepOptions& options) {
      << options.jobs << " at a time with " << threads << " threads each, on " << cpu_model() << " (" << cores
      << " cores), " << date << ", drench " << DRENCH_VERSION << ". " << failures
      << " runs did not end \"ok\". One row per run in "
-     << "[sweep.csv](sweep.csv); each run's files in `runs/NNN/`.\n\n"
+     << "[sweep.csv](sweep.csv); each run's files in `runs/NNN/`, its output in `runs/NNN.log`.\n\n"
      << "| setting | runs | wall s | fluid s | cloth s | coupling s | surface s | " << options.error_key
      << " | leaks | max particle m/s | status |\n|---|---|---|---|---|---|---|---|---|---|---|\n";
   auto column_median = [&](const std::string& setting, const char* column) {

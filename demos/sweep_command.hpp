@@ -23,13 +23,18 @@ struct SweepOptions {
   std::string error_key = "density_error_mean";  ///< the sweep_columns() entry the Pareto plot uses
   std::string command_line;                      ///< as the user typed it, for the report
   bool quiet = false;                            ///< no line per finished run
+  bool overwrite = false;  ///< replace an earlier sweep in out_dir (output_folder.hpp); else it must be empty
 };
 
 /// Runs the sweep and writes its files; sweep.csv is rewritten (atomically) after every finished run, so an
-/// interrupted sweep keeps the rows it has. A run that fails or blows up is a row with its status.
+/// interrupted sweep keeps the rows it has. A run that fails or blows up is a row with its status. The runs
+/// go into runs/NNN/ with their output in runs/NNN.log. SIGINT or SIGTERM (stop_signal.hpp) is passed on
+/// once to the runs under way, which end as "interrupted"; no further run starts (their rows say so), and the
+/// report is written for what ran.
 /// @return the number of runs whose status is not "ok"
 /// @throws SceneError when the scene, an override or a setting is invalid (before anything is written), or
-///         `error_key` is not a column; IoError when DIR cannot be written or a run cannot be started.
+///         `error_key` is not a column; IoError when DIR cannot be written, is not empty (without
+///         `overwrite`) or holds files an earlier sweep did not write, or a run cannot be started.
 int run_sweep(const SweepOptions& options);
 
 }  // namespace drench

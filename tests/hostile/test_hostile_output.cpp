@@ -1,3 +1,524 @@
-// Hostile input and hard cases (issue 39): output.
+// Hostile input and hard cases (issue 39): output that cannot be lost or mixed, and the command line.
+// Each test runs the built `drench` command (DRENCH_EXECUTABLE) as a user does, in a folder of its own, on
+// a small tank of water (864 particles of 4 cm) or a small jet on a 9 x 9 cloth.
 
+#include <fcntl.h>
 #include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <regex>
+#include <sstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include <drench/scene/output_folder.hpp>
+#include <drench/scene/reconstruct_run.hpp>
+#include <drench/scene/scene_runner.hpp>
+
+#include "../temp_dir.hpp"
+
+namespace {
+
+namespace fs = std::filesystem;
+using drench::test::TempDir;
+using nlohmann::json;
+
+/// The tank at 4 cm: `duration` seconds at dt 2.5 ms, a frame every 1 / `frame_rate` s.
+std::string tank_scene(double duration, double frame_rate, bool surface = false) {
+  json scene = json::parse(R"({
+    "gravity": [0, -9.81, 0],
+    "fluid": {"rest_density": 1000, "particle_spacing": 0.04, "pressure_solver": "pcisph",
+              "viscosity": {"method": "artificial", "coefficient": 0.1}},
+    "emitters": [{"type": "box", "min": [0, 0, 0], "max": [0.4, 0.3, 0.4]}],
+    "boundaries": [{"type": "box", "min": [0, 0, 0], "max": [0.4, 0.6, 0.4], "open_top": true, "layers": 2}],
+    "effects": ["viscosity"]
+  })");
+  scene["time"] = {{"dt", 0.0025}, {"duration", duration}, {"frame_rate", frame_rate}};
+  if (surface) scene["effects"].push_back("surface");
+  return scene.dump(2);
+}
+
+/// A jet of at most 200 particles on a 9 x 9 cloth pinned at its corners: frames 0 to 5.
+std::string cloth_scene() {
+  return R"({
+    "gravity": [0, -9.81, 0],
+    "fluid": {"rest_density": 1000, "particle_spacing": 0.02, "pressure_solver": "pcisph"},
+    "emitters": [{"type": "nozzle", "center": [0, 0.1, 0], "direction": [0, -1, 0], "radius": 0.03,
+                  "speed": 1.0, "max_particles": 200}],
+    "cloth": {"mesh": "patch", "center": [0, 0, 0], "size": [0.3, 0.3], "nodes": [9, 9],
+              "area_density": 0.2, "pinned": "corners"},
+    "coupling": {"cloth_thickness": 0.002},
+    "time": {"dt": 0.002, "duration": 0.1, "frame_rate": 50},
+    "effects": ["coupling"]
+  })";
+}
+
+std::string read(const fs::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  std::ostringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+/// Every regular file under `dir` (relative name -> contents).
+std::map<std::string, std::string> snapshot(const fs::path& dir) {
+  std::map<std::string, std::string> files;
+  for (const auto& entry : fs::recursive_directory_iterator(dir))
+    if (entry.is_regular_file()) files[fs::relative(entry.path(), dir).generic_string()] = read(entry.path());
+  return files;
+}
+
+/// Every entry under `dir`, folders included (relative names).
+std::vector<std::string> entries(const fs::path& dir) {
+  std::vector<std::string> names;
+  for (const auto& entry : fs::recursive_directory_iterator(dir))
+    names.push_back(fs::relative(entry.path(), dir).generic_string());
+  std::sort(names.begin(), names.end());
+  return names;
+}
+
+/// Starts `drench ARGUMENTS...` in `cwd` with stdout and stderr into `log`, its address space limited to
+/// `memory_limit` bytes when that is not 0.
+pid_t start_drench(const std::vector<std::string>& arguments, const fs::path& cwd, const fs::path& log,
+                   rlim_t memory_limit = 0) {
+  std::vector<std::string> argv_strings = {DRENCH_EXECUTABLE};
+  argv_strings.insert(argv_strings.end(), arguments.begin(), arguments.end());
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    if (memory_limit > 0) {
+      const rlimit limit = {memory_limit, memory_limit};
+      ::setrlimit(RLIMIT_AS, &limit);
+    }
+    const int fd = ::open(log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    if (fd < 0 || ::chdir(cwd.c_str()) != 0) ::_exit(127);
+    ::dup2(fd, STDOUT_FILENO);
+    ::dup2(fd, STDERR_FILENO);
+    std::vector<char*> argv;
+    for (std::string& argument : argv_strings)
+      argv.push_back(argument.data());
+    argv.push_back(nullptr);
+    ::execv(argv[0], argv.data());
+    ::_exit(127);
+  }
+  return pid;
+}
+
+/// The exit status of `pid`, 128 + the signal when a signal ended it, or -1 when it is still running after
+/// `timeout_s` (it is then killed).
+int wait_exit(pid_t pid, double timeout_s) {
+  const auto start = std::chrono::steady_clock::now();
+  while (true) {
+    int status = 0;
+    const pid_t done = ::waitpid(pid, &status, WNOHANG);
+    if (done == pid) return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+    if (std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() > timeout_s) {
+      ::kill(pid, SIGKILL);
+      ::waitpid(pid, &status, 0);
+      return -1;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  }
+}
+
+/// Runs `drench ARGUMENTS...` to its end (at most 60 s) and returns its exit status.
+int run_drench(const std::vector<std::string>& arguments, const fs::path& cwd, const fs::path& log) {
+  return wait_exit(start_drench(arguments, cwd, log), 60.0);
+}
+
+/// Waits up to `timeout_s` for a file matching `predicate` under `dir`; false when none came.
+template <class Predicate>
+bool wait_for_file(const fs::path& dir, double timeout_s, Predicate predicate) {
+  const auto start = std::chrono::steady_clock::now();
+  while (std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() < timeout_s) {
+    std::error_code ec;
+    for (fs::recursive_directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec))
+      if (predicate(it->path())) return true;
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }
+  return false;
+}
+
+/// A run of the tank into `out`: `frames` frames at 100 per second.
+int run_tank(const TempDir& dir, const fs::path& out, int frames, std::vector<std::string> extra = {}) {
+  const std::string scene = dir.write("tank.json", tank_scene(0.01 * (frames - 1), 100));
+  std::vector<std::string> arguments = {"run", scene, "--out", out.string(), "--threads", "1", "--quiet"};
+  arguments.insert(arguments.end(), extra.begin(), extra.end());
+  return run_drench(arguments, dir.path(), dir.path() / "log.txt");
+}
+
+// `--out ''` wrote into the working directory and overwrote its summary.json and scene.json.
+TEST(HostileOutput, AnEmptyOutIsRefusedAndTheWorkingDirectoryIsUntouched) {
+  const TempDir dir;
+  const std::string scene = dir.write("tank.json", tank_scene(0.01, 100));
+  const TempDir work("work");
+  work.write("summary.json", "a user's own summary\n");
+  work.write("scene.json", "a user's own scene\n");
+  const auto before = snapshot(work.path());
+  EXPECT_EQ(run_drench({"run", scene, "--out", "", "--quiet"}, work.path(), dir.path() / "log.txt"), 1);
+  const std::string log = read(dir.path() / "log.txt");
+  EXPECT_NE(log.find("drench: --out '': must name a folder"), std::string::npos) << log;
+  EXPECT_EQ(snapshot(work.path()), before);
+  EXPECT_EQ(entries(work.path()), (std::vector<std::string>{"scene.json", "summary.json"}));
+
+  // A file is not a folder either.
+  const std::string file = work.write("notes.txt", "not a folder\n");
+  EXPECT_EQ(run_drench({"run", scene, "--out", file, "--quiet"}, work.path(), dir.path() / "log.txt"), 1);
+  EXPECT_NE(read(dir.path() / "log.txt").find("--out " + file + ": exists and is not a folder"),
+            std::string::npos)
+      << read(dir.path() / "log.txt");
+  EXPECT_EQ(read(file), "not a folder\n");
+}
+
+// An --out holding an earlier run kept its frames, and reconstruct and render then saw both runs.
+TEST(HostileOutput, AReusedFolderIsRefusedWithoutOverwriteAndLeftAsItWas) {
+  const TempDir dir;
+  const fs::path out = dir.path() / "out";
+  ASSERT_EQ(run_tank(dir, out, 6), 0) << read(dir.path() / "log.txt");
+  ASSERT_TRUE(fs::exists(out / "frames/fluid_0005.ply"));
+  const json manifest = json::parse(read(out / drench::kOutputManifest));
+  EXPECT_EQ(manifest["command"], "run");
+  EXPECT_EQ(manifest["files"], json(drench::run_output_patterns()));
+
+  const auto before = snapshot(out);
+  EXPECT_EQ(run_tank(dir, out, 3), 1);
+  const std::string log = read(dir.path() / "log.txt");
+  EXPECT_NE(log.find("--out " + out.string() + ": the folder is not empty (it holds " +
+                     (out / drench::kOutputManifest).string() + ")"),
+            std::string::npos)
+      << log;
+  EXPECT_NE(log.find("add --overwrite"), std::string::npos) << log;
+  EXPECT_EQ(snapshot(out), before) << "a refused run changed the folder";
+}
+
+TEST(HostileOutput, OverwriteRemovesTheEarlierRunsFrames) {
+  const TempDir dir;
+  const fs::path out = dir.path() / "out";
+  ASSERT_EQ(run_tank(dir, out, 6), 0) << read(dir.path() / "log.txt");
+  ASSERT_TRUE(fs::exists(out / "frames/fluid_0005.ply"));
+  // A temporary that a killed writer left is the earlier run's too.
+  std::ofstream(out / "frames/fluid_0006.ply.tmp-12345") << "half a frame";
+  ASSERT_EQ(run_tank(dir, out, 3, {"--overwrite"}), 0) << read(dir.path() / "log.txt");
+  EXPECT_EQ(entries(out / "frames"),
+            (std::vector<std::string>{"fluid_0000.ply", "fluid_0001.ply", "fluid_0002.ply"}));
+  EXPECT_EQ(json::parse(read(out / "summary.json"))["frames"], 3);
+}
+
+TEST(HostileOutput, OverwriteRefusesAndDeletesNothingWhenAFileIsNotDrenchs) {
+  const TempDir dir;
+  const fs::path out = dir.path() / "out";
+  ASSERT_EQ(run_tank(dir, out, 4), 0) << read(dir.path() / "log.txt");
+  std::ofstream(out / "frames/notes.txt") << "the user's notes\n";
+  const auto before = snapshot(out);
+  EXPECT_EQ(run_tank(dir, out, 2, {"--overwrite"}), 1);
+  const std::string log = read(dir.path() / "log.txt");
+  EXPECT_NE(log.find((out / "frames/notes.txt").string() + " was not written by drench"), std::string::npos)
+      << log;
+  EXPECT_NE(log.find("nothing deleted"), std::string::npos) << log;
+  EXPECT_EQ(snapshot(out), before);
+
+  // Without a manifest nothing in the folder is known to be drench's.
+  const fs::path other = dir.path() / "other";
+  fs::create_directories(other / "frames");
+  std::ofstream(other / "frames/fluid_0000.ply") << "someone else's frame";
+  EXPECT_EQ(run_tank(dir, other, 2, {"--overwrite"}), 1);
+  EXPECT_NE(read(dir.path() / "log.txt").find("but no drench_run.json"), std::string::npos)
+      << read(dir.path() / "log.txt");
+  EXPECT_EQ(read(other / "frames/fluid_0000.ply"), "someone else's frame");
+}
+
+/// Starts a 600 s tank run, waits for its frame 1 and sends `signal`; returns the exit status.
+int interrupt_run(const TempDir& dir, const fs::path& out, int signal) {
+  const std::string scene = dir.write("long.json", tank_scene(600, 100));
+  const pid_t pid = start_drench({"run", scene, "--out", out.string(), "--threads", "1", "--quiet"},
+                                 dir.path(), dir.path() / "log.txt");
+  const bool started =
+      wait_for_file(out, 30.0, [](const fs::path& p) { return p.filename() == "fluid_0001.ply"; });
+  EXPECT_TRUE(started) << read(dir.path() / "log.txt");
+  ::kill(pid, signal);
+  return wait_exit(pid, 30.0);
+}
+
+// SIGINT ended a run with no summary.json.
+TEST(HostileOutput, SigintEndsARunWithAnInterruptedSummaryAndExit130) {
+  const TempDir dir;
+  const fs::path out = dir.path() / "out";
+  EXPECT_EQ(interrupt_run(dir, out, SIGINT), 130) << read(dir.path() / "log.txt");
+  ASSERT_TRUE(fs::exists(out / "summary.json")) << read(dir.path() / "log.txt");
+  const json summary = json::parse(read(out / "summary.json"));
+  EXPECT_EQ(summary["status"], "interrupted");
+  EXPECT_GE(summary["steps"].get<int>(), 4) << "frame 1 was written at step 4";
+  EXPECT_LT(summary["steps"].get<int>(), 240000);
+  // The frames on disk are those the summary counts: the step under way finished with its frame.
+  int frames = 0;
+  for (const auto& entry : fs::directory_iterator(out / "frames")) {
+    EXPECT_EQ(entry.path().extension(), ".ply") << "a temporary was left: " << entry.path();
+    ++frames;
+  }
+  EXPECT_EQ(frames, summary["frames"].get<int>());
+  EXPECT_NE(read(dir.path() / "log.txt").find("interrupted"), std::string::npos);
+}
+
+TEST(HostileOutput, SigtermEndsARunWithAnInterruptedSummaryAndExit143) {
+  const TempDir dir;
+  const fs::path out = dir.path() / "out";
+  EXPECT_EQ(interrupt_run(dir, out, SIGTERM), 143) << read(dir.path() / "log.txt");
+  EXPECT_EQ(json::parse(read(out / "summary.json"))["status"], "interrupted");
+}
+
+/// A tank run with the surface effect (frames 0 to 4), then reconstructed once, so that the folder holds a
+/// reconstruct.json and its surfaces.
+fs::path run_with_reconstruction(const TempDir& dir) {
+  const fs::path out = dir.path() / "out";
+  const std::string scene = dir.write("tank.json", tank_scene(0.04, 100, true));
+  EXPECT_EQ(run_drench({"run", scene, "--out", out.string(), "--threads", "1", "--quiet"}, dir.path(),
+                       dir.path() / "log.txt"),
+            0)
+      << read(dir.path() / "log.txt");
+  EXPECT_EQ(run_drench({"reconstruct", out.string(), "--threads", "1", "--quiet"}, dir.path(),
+                       dir.path() / "log.txt"),
+            0)
+      << read(dir.path() / "log.txt");
+  EXPECT_TRUE(fs::exists(out / "reconstruct.json"));
+  return out;
+}
+
+// SIGINT during reconstruct left surfaces at two cell sizes under a reconstruct.json of one.
+TEST(HostileOutput, AnInterruptedReconstructLeavesTheEarlierSurfacesByteForByte) {
+  const TempDir dir;
+  const fs::path out = run_with_reconstruction(dir);
+  const auto before = snapshot(out);
+  // A fine grid (about 1 s a frame here), so that the reconstruction is still under way when its first new
+  // surface exists.
+  const pid_t pid = start_drench(
+      {"reconstruct", out.string(), "--set", "surface.cell_size=0.004", "--threads", "1", "--quiet"},
+      dir.path(), dir.path() / "log.txt");
+  const bool started = wait_for_file(out, 30.0, [](const fs::path& p) {
+    return p.parent_path().filename().string().rfind("reconstruct.tmp-", 0) == 0 &&
+           p.filename() == "surface_0000.ply";
+  });
+  EXPECT_TRUE(started) << read(dir.path() / "log.txt");
+  ::kill(pid, SIGINT);
+  EXPECT_EQ(wait_exit(pid, 30.0), 130)
+      << "the reconstruction ended before the signal? " << read(dir.path() / "log.txt");
+  EXPECT_EQ(snapshot(out), before) << "the surfaces or reconstruct.json changed";
+  for (const std::string& name : entries(out))
+    EXPECT_EQ(name.find("reconstruct.tmp-"), std::string::npos) << "left behind: " << name;
+}
+
+// The same through the library's stop flag, deterministically: set before the first frame is made.
+TEST(HostileOutput, AReconstructStoppedByItsFlagWritesNothing) {
+  const TempDir dir;
+  const fs::path out = run_with_reconstruction(dir);
+  const auto before = snapshot(out);
+  const std::atomic<bool> stop{true};
+  drench::ReconstructOptions options;
+  options.run_dir = out.string();
+  options.overrides = {"surface.cell_size=0.01"};
+  options.progress = false;
+  options.stop = &stop;
+  const drench::ReconstructResult result = drench::reconstruct_run(options);
+  EXPECT_TRUE(result.interrupted);
+  EXPECT_EQ(result.frames, 0);
+  EXPECT_EQ(snapshot(out), before);
+  EXPECT_EQ(entries(out).size(), before.size() + 1) << "only the frames/ folder beside the files";
+}
+
+// render drew a frame whose cloth file was missing.
+TEST(HostileOutput, RenderRefusesARunWithAMissingFrameFileNamingIt) {
+  const TempDir dir;
+  const fs::path out = dir.path() / "out";
+  const std::string scene = dir.write("cloth.json", cloth_scene());
+  ASSERT_EQ(run_drench({"run", scene, "--out", out.string(), "--threads", "1", "--quiet"}, dir.path(),
+                       dir.path() / "log.txt"),
+            0)
+      << read(dir.path() / "log.txt");
+  ASSERT_TRUE(fs::exists(out / "frames/cloth_0005.ply"));
+  fs::remove(out / "frames/cloth_0003.ply");
+  EXPECT_EQ(
+      run_drench({"render", out.string(), "--size", "64x36", "--quiet"}, dir.path(), dir.path() / "log.txt"),
+      1);
+  EXPECT_NE(read(dir.path() / "log.txt")
+                .find((out / "frames/cloth_0003.ply").string() + ": missing, while the run has a cloth"),
+            std::string::npos)
+      << read(dir.path() / "log.txt");
+  EXPECT_FALSE(fs::exists(out / "render"));
+
+  // A gap in the numbering: --video would have stopped there without a word.
+  fs::remove(out / "frames/fluid_0003.ply");
+  EXPECT_EQ(run_drench({"render", out.string(), "--size", "64x36", "--video", "--quiet"}, dir.path(),
+                       dir.path() / "log.txt"),
+            1);
+  EXPECT_NE(
+      read(dir.path() / "log.txt")
+          .find((out / "frames/fluid_0003.ply").string() +
+                ": missing, while frame 0004 exists (the frames must be numbered from 0 without a gap)"),
+      std::string::npos)
+      << read(dir.path() / "log.txt");
+  EXPECT_FALSE(fs::exists(out / "render"));
+}
+
+/// The longest run of digits in `text`.
+std::size_t longest_digit_run(const std::string& text) {
+  std::size_t longest = 0, run = 0;
+  for (const char c : text) {
+    run = std::isdigit(static_cast<unsigned char>(c)) ? run + 1 : 0;
+    longest = std::max(longest, run);
+  }
+  return longest;
+}
+
+// Command-line errors exited 105 or 109 (CLI11's codes) with a 309-digit number in the message.
+TEST(HostileOutput, CommandLineErrorsExit1WithAShortMessage) {
+  const TempDir dir;
+  const std::string scene = dir.write("tank.json", tank_scene(0.01, 100));
+  const fs::path log = dir.path() / "log.txt";
+  const std::string huge = "1" + std::string(308, '0');
+  for (const std::vector<std::string>& arguments :
+       {std::vector<std::string>{"run", scene, "--out", "o", "--steps", huge},
+        std::vector<std::string>{"run", scene, "--out", "o", "--steps", "1e308"},
+        std::vector<std::string>{"run", scene, "--out", "o", "--threads", "99999999999999999999"},
+        std::vector<std::string>{"run", scene, "--out", "o", "--steps", "-3"},
+        std::vector<std::string>{"run", scene, "--out", "o", "--bogus"},
+        std::vector<std::string>{"run", scene}, std::vector<std::string>{"frobnicate"}}) {
+    std::string command;
+    for (const std::string& argument : arguments)
+      command += " " + argument.substr(0, 30);
+    EXPECT_EQ(run_drench(arguments, dir.path(), log), 1) << command << "\n" << read(log);
+    const std::string message = read(log);
+    EXPECT_LE(longest_digit_run(message), 40u) << command << "\n" << message;
+    EXPECT_LT(message.size(), 400u) << command << "\n" << message;
+    EXPECT_EQ(message.rfind("drench: ", 0), 0u) << command << "\n" << message;
+  }
+  EXPECT_FALSE(fs::exists(dir.path() / "o"));
+  EXPECT_EQ(run_drench({"--help"}, dir.path(), log), 0) << read(log);
+  EXPECT_NE(read(log).find("Subcommands:"), std::string::npos) << read(log);
+  EXPECT_EQ(run_drench({"--version"}, dir.path(), log), 0) << read(log);
+  EXPECT_EQ(read(log), std::string(DRENCH_VERSION) + "\n");
+}
+
+// What --overwrite may remove: the manifest's files and their temporaries, nothing beside them.
+TEST(HostileOutput, ManifestPatternsCoverOnlyDrenchsFiles) {
+  using drench::output_pattern_covers;
+  EXPECT_TRUE(output_pattern_covers("frames/fluid_*.ply", "frames/fluid_0001.ply"));
+  EXPECT_TRUE(output_pattern_covers("frames/fluid_*.ply", "frames/fluid_0001.ply.tmp-4242"));
+  EXPECT_FALSE(output_pattern_covers("frames/fluid_*.ply", "frames/fluid_0001.ply.tmp-"));
+  EXPECT_FALSE(output_pattern_covers("frames/fluid_*.ply", "frames/fluid_0001.ply.tmp-42x"));
+  EXPECT_FALSE(output_pattern_covers("frames/fluid_*.ply", "frames/fluid_0001.ply.bak"));
+  EXPECT_FALSE(output_pattern_covers("frames/fluid_*.ply", "frames/old/fluid_0001.ply"));
+  EXPECT_FALSE(output_pattern_covers("frames/fluid_*.ply", "fluid_0001.ply"));
+  EXPECT_FALSE(output_pattern_covers("summary.json", "summary.json.orig"));
+  EXPECT_TRUE(
+      output_pattern_covers("reconstruct.tmp-*/surface_*.ply", "reconstruct.tmp-77/surface_0003.ply"));
+  const auto covered = [](const std::string& file) {
+    for (const std::string& pattern : drench::sweep_output_patterns())
+      if (output_pattern_covers(pattern, file)) return true;
+    return false;
+  };
+  EXPECT_TRUE(covered("runs/001/frames/cloth_0000.ply"));
+  EXPECT_TRUE(covered("runs/012.log"));
+  EXPECT_TRUE(covered("runs/001/drench_run.json"));
+  EXPECT_FALSE(covered("runs/001/notes.txt"));
+  EXPECT_FALSE(covered("notes.txt"));
+}
+
+// A huge scene aborted with an uncaught std::bad_alloc (exit 134), and surface.cell_size=1e-7 with an
+// uncaught openvdb::ArithmeticError. Either is now one line and exit 1 (before the simulation started) or 2
+// (after), or a refusal of the value (1); never an abort.
+TEST(HostileOutput, OutOfMemoryAndForeignErrorsAreOneLineNotAnAbort) {
+  const TempDir dir;
+  const std::string scene = dir.write("tank.json", tank_scene(0.01, 100));
+  const fs::path log = dir.path() / "log.txt";
+  // 48 million particles of 1 mm, in an address space of 1.5 GB.
+  const int out_of_memory = wait_exit(start_drench({"run", scene, "--out", (dir.path() / "huge").string(),
+                                                    "--quiet", "--set", "fluid.particle_spacing=0.001"},
+                                                   dir.path(), log, rlim_t(1500) << 20),
+                                      60.0);
+  EXPECT_EQ(out_of_memory, 1) << read(log);
+  std::string message = read(log);
+  EXPECT_EQ(message.rfind("drench: ", 0), 0u) << message;
+  EXPECT_EQ(std::count(message.begin(), message.end(), '\n'), 1) << message;
+  EXPECT_FALSE(fs::exists(dir.path() / "huge")) << "refused before the folder was made";
+
+  const int foreign = run_drench({"run", scene, "--out", (dir.path() / "vdb").string(), "--quiet", "--set",
+                                  "effects=[\"surface\"]", "--set", "surface.cell_size=1e-7"},
+                                 dir.path(), log);
+  EXPECT_TRUE(foreign == 1 || foreign == 2) << foreign << "\n" << read(log);
+  message = read(log);
+  EXPECT_EQ(message.rfind("drench: ", 0), 0u) << message;
+  EXPECT_EQ(std::count(message.begin(), message.end(), '\n'), 1) << message;
+}
+
+// NaN figures were written as a bare null in summary.json.
+TEST(HostileOutput, ANonFiniteSummaryFigureIsNullWithANoteSayingWhich) {
+  json summary = {{"steps", 3},
+                  {"energy_drift", std::nan("")},
+                  {"density_error", {{"mean", 0.01}, {"max", std::numeric_limits<double>::infinity()}}},
+                  {"list", {1.0, -std::numeric_limits<double>::infinity()}}};
+  drench::apply_non_finite_rule(summary);
+  const json written = json::parse(summary.dump());
+  EXPECT_TRUE(written["energy_drift"].is_null());
+  EXPECT_TRUE(written["density_error"]["max"].is_null());
+  EXPECT_EQ(written["density_error"]["mean"], 0.01);
+  EXPECT_EQ(written["non_finite"],
+            json({{"energy_drift", "nan"}, {"density_error.max", "inf"}, {"list[1]", "-inf"}}));
+  // Applied twice (make_summary, then run_scene after its own keys), the notes stay.
+  drench::apply_non_finite_rule(summary);
+  EXPECT_EQ(json::parse(summary.dump()), written);
+}
+
+// A sweep into a folder that holds an earlier sweep: refused, or replaced with --overwrite.
+TEST(HostileOutput, ASweepIntoAReusedFolderIsRefusedUnlessOverwrite) {
+  const TempDir dir;
+  const std::string scene = dir.write("tank.json", tank_scene(0.02, 0));
+  const fs::path out = dir.path() / "sweep";
+  const fs::path log = dir.path() / "log.txt";
+  const std::vector<std::string> sweep = {"sweep",      scene,       "--vary", "time.dt=0.005", "--out",
+                                          out.string(), "--threads", "1",      "--quiet"};
+  ASSERT_EQ(run_drench(sweep, dir.path(), log), 0) << read(log);
+  ASSERT_TRUE(fs::exists(out / "runs/001/summary.json")) << read(log);
+  EXPECT_TRUE(fs::exists(out / "runs/001.log"));
+  const auto before = snapshot(out);
+  EXPECT_EQ(run_drench(sweep, dir.path(), log), 1);
+  EXPECT_NE(read(log).find("the folder is not empty"), std::string::npos) << read(log);
+  EXPECT_EQ(snapshot(out), before);
+  std::vector<std::string> again = sweep;
+  again.push_back("--overwrite");
+  EXPECT_EQ(run_drench(again, dir.path(), log), 0) << read(log);
+  EXPECT_TRUE(fs::exists(out / "runs/001/summary.json"));
+  EXPECT_EQ(json::parse(read(out / drench::kOutputManifest))["command"], "sweep");
+}
+
+// SIGINT to a sweep: passed on once to the run under way, which ends "interrupted"; the next is not started.
+TEST(HostileOutput, ASweepPassesSigintOnToItsRunAndExits130) {
+  const TempDir dir;
+  const std::string scene = dir.write("long.json", tank_scene(600, 100));
+  const fs::path out = dir.path() / "sweep";
+  const pid_t pid = start_drench(
+      {"sweep", scene, "--vary", "time.dt=0.0025,0.002", "--out", out.string(), "--threads", "1", "--quiet"},
+      dir.path(), dir.path() / "log.txt");
+  const bool started =
+      wait_for_file(out, 30.0, [](const fs::path& p) { return p.filename() == "fluid_0001.ply"; });
+  EXPECT_TRUE(started) << read(dir.path() / "log.txt");
+  ::kill(pid, SIGINT);
+  EXPECT_EQ(wait_exit(pid, 30.0), 130) << read(dir.path() / "log.txt");
+  EXPECT_EQ(json::parse(read(out / "runs/001/summary.json"))["status"], "interrupted");
+  EXPECT_FALSE(fs::exists(out / "runs/002"));
+  const std::string csv = read(out / "sweep.csv");
+  EXPECT_NE(csv.find("\n1,time.dt=0.0025,0,0.0025,interrupted,"), std::string::npos) << csv;
+  EXPECT_NE(csv.find("\n2,time.dt=0.002,0,0.002,not run: the sweep was interrupted,"), std::string::npos)
+      << csv;
+}
+
+}  // namespace

@@ -64,6 +64,44 @@ std::vector<FrameFiles> list_frames(const fs::path& frames_dir) {
   return list;
 }
 
+/// The name a run gives frame `number`'s file of a kind, e.g. "cloth_0003.ply".
+std::string frame_file_name(const char* prefix, std::int64_t number) {
+  char name[48];
+  std::snprintf(name, sizeof name, "%s%04lld.ply", prefix, static_cast<long long>(number));
+  return name;
+}
+
+/// Refuses a frame set a run cannot have left whole: frames not numbered 0, 1, 2, ... without a gap, or a
+/// frame without a part the run saved for every frame (the fluid always; the cloth when the scene has one or
+/// any frame does; the surface with the `surface` effect). Drawn anyway, such a frame would show the water
+/// without its cloth, or a video would end at the gap.
+/// @throws IoError naming the first missing file.
+void check_frames_complete(const std::vector<FrameFiles>& frames, const fs::path& frames_dir,
+                           const SceneConfig& config) {
+  bool cloth = config.cloth.has_value();
+  for (const FrameFiles& frame : frames)
+    cloth = cloth || !frame.cloth.empty();
+  const bool surface = config.has_effect("surface");
+  std::int64_t expected = 0;
+  for (const FrameFiles& frame : frames) {
+    const auto missing = [&](const char* prefix, std::int64_t number, const std::string& why) {
+      return IoError((frames_dir / frame_file_name(prefix, number)).string() + ": missing, " + why +
+                     "; drench render draws only a whole run (run it again, or `drench reconstruct` for "
+                     "surfaces)");
+    };
+    if (frame.number != expected) {
+      throw missing(
+          "fluid_", expected,
+          "while frame " + frame.digits + " exists (the frames must be numbered from 0 without a gap)");
+    }
+    if (frame.fluid.empty()) throw missing("fluid_", frame.number, "while other files of the frame exist");
+    if (cloth && frame.cloth.empty()) throw missing("cloth_", frame.number, "while the run has a cloth");
+    if (surface && frame.surface.empty())
+      throw missing("surface_", frame.number, "while the run has the `surface` effect");
+    ++expected;
+  }
+}
+
 /// A PLY file that must be a triangle mesh (a cloth frame, a surface, the obstacles).
 TriangleMesh read_mesh(const fs::path& path) {
   PlyData data = read_ply(path.string());
@@ -173,6 +211,8 @@ RenderResult render_run(const RenderOptions& options) {
       speed_scale = std::max(speed_scale, speed_quantile(frame.fluid, 0.99));
     }
   }
+  // After the read pass, so that a malformed file is named as such rather than as the frame set's gap.
+  check_frames_complete(frames, dir / "frames", config);
   const Eigen::AlignedBox3d bounds = framed_bounds(config, stage, fluid_box);
   const Scalar aspect = static_cast<Scalar>(options.width) / options.height;
   result.camera = resolve_camera(camera_settings, bounds, aspect);
@@ -233,26 +273,14 @@ RenderResult render_run(const RenderOptions& options) {
       const std::string temporary = video.string() + ".tmp-" + std::to_string(::getpid());
       const double rate = config.time.frame_rate > 0 ? config.time.frame_rate : 30.0;
       // Even sides for yuv420p, which every player takes; frames numbered on from the first one saved.
-      const int status = run_program({ffmpeg,
-                                      "-hide_banner",
-                                      "-loglevel",
-                                      "error",
-                                      "-y",
-                                      "-framerate",
-                                      format_number(rate),
-                                      "-start_number",
-                                      std::to_string(frames.front().number),
-                                      "-i",
-                                      (out_dir / "frame_%04d.png").string(),
-                                      "-vf",
-                                      "pad=ceil(iw/2)*2:ceil(ih/2)*2",
-                                      "-c:v",
-                                      "libx264",
-                                      "-pix_fmt",
-                                      "yuv420p",
-                                      "-f",
-                                      "mp4",
-                                      temporary});
+      const int status =
+          run_program({ffmpeg, "-hide_banner", "-loglevel", "error", "-y", "-framerate", format_number(rate),
+                       "-start_number", std::to_string(frames.front().number), "-i",
+                       (out_dir / "frame_%04d.png").string(), "-vf", "pad=ceil(iw/2)*2:ceil(ih/2)*2", "-c:v",
+                       "libx264", "-pix_fmt", "yuv420p",
+                       // Exactly this run's frames: never an older render's frame_NNNN.png
+                       // that follows them in the folder.
+                       "-frames:v", std::to_string(frames.size()), "-f", "mp4", temporary});
       if (status != 0) {
         std::remove(temporary.c_str());
         throw IoError(

@@ -46,12 +46,14 @@ void parse_image_size(const std::string& text, int& width, int& height);
 /// `video`, then writes `out_dir`/video.mp4 at the scene's frame rate through ffmpeg when it is on $PATH;
 /// without ffmpeg, `video_note` says so and the PNGs stand.
 ///
-/// Everything is read and checked, and the OpenGL context made, before anything is written: bad input
-/// writes nothing. Each PNG (and the MP4) is written under a temporary name and renamed.
+/// The frames must be whole (numbered from 0 without a gap; each with its fluid, its cloth when the run has a
+/// cloth, its surface with the `surface` effect), else nothing is drawn. Everything is read and checked, and
+/// the OpenGL context made, before anything is written: bad input writes nothing. Each PNG (and the MP4) is
+/// written under a temporary name and renamed.
 /// @throws drench::Error for a size < 1; SceneError for a bad scene.json, a malformed `camera_json` or an
 ///         unknown camera key (naming camera.<key>); IoError naming the file when scene.json or the frames
-///         are missing, a frame is malformed, a file cannot be written, or ffmpeg fails; RenderError when no
-///         headless OpenGL context can be made.
+///         are missing, a frame's file is missing (the first such), a frame is malformed, a file cannot be
+///         written, or ffmpeg fails; RenderError when no headless OpenGL context can be made.
 RenderResult render_run(const RenderOptions& options);
 
 }  // namespace drench::render

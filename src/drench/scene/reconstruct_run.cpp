@@ -1,6 +1,7 @@
 #include <drench/scene/reconstruct_run.hpp>
 
 #include <omp.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <chrono>
@@ -129,9 +130,30 @@ ReconstructResult reconstruct_run(const ReconstructOptions& options) {
     }
   }
 
+  // The new surfaces go beside the old ones and replace them only once all are made: an interrupted or
+  // failed reconstruction must not leave surfaces at two cell sizes under a reconstruct.json of one.
+  const fs::path staging = dir / ("reconstruct.tmp-" + std::to_string(::getpid()));
+  fs::remove_all(staging, ec);
+  fs::create_directory(staging, ec);
+  if (ec) throw IoError(staging.string() + ": cannot create: " + ec.message());
+  struct RemoveStaging {
+    const fs::path& path;
+    ~RemoveStaging() {
+      std::error_code ignored;
+      fs::remove_all(path, ignored);
+    }
+  } remove_staging{staging};
+
   ReconstructResult result;
   ProgressLine progress(options.progress, frames.size());
   for (const FrameFiles& frame : frames) {
+    if (options.stop && options.stop->load(std::memory_order_relaxed)) {
+      // The surfaces made so far are discarded with the staging folder: the result counts nothing.
+      ReconstructResult stopped;
+      stopped.interrupted = true;
+      stopped.wall_seconds = wall();
+      return stopped;
+    }
     PlyData fluid, cloth;
     {
       ScopedTimer timer(read_seconds);
@@ -153,10 +175,18 @@ ReconstructResult reconstruct_run(const ReconstructOptions& options) {
     result.surface_triangles += mesh.triangles.size();
     {
       ScopedTimer timer(write_seconds);
-      write_surface_ply(frame.surface.string(), mesh);
+      write_surface_ply((staging / frame.surface.filename()).string(), mesh);
     }
     ++result.frames;
     progress.update(static_cast<std::size_t>(result.frames), wall());
+  }
+
+  // The swap: a rename per file (no signal is checked from here on), then reconstruct.json, last.
+  for (const FrameFiles& frame : frames) {
+    fs::rename(staging / frame.surface.filename(), frame.surface, ec);
+    if (ec)
+      throw IoError("cannot move " + (staging / frame.surface.filename()).string() + " to " +
+                    frame.surface.string() + ": " + ec.message());
   }
 
   nlohmann::json& r = result.report;

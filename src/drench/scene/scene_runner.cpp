@@ -50,7 +50,30 @@ class ProgressLine {
   double m_last = 0;
 };
 
+/// Replaces every non-finite number under `value` by null and records it in `notes` under its path ("a.b",
+/// "a[2]"): JSON has no NaN or infinity, and a bare null would not say which it was.
+void mark_non_finite(nlohmann::json& value, const std::string& path, nlohmann::json& notes) {
+  if (value.is_object()) {
+    for (auto it = value.begin(); it != value.end(); ++it)
+      mark_non_finite(it.value(), path.empty() ? it.key() : path + "." + it.key(), notes);
+  } else if (value.is_array()) {
+    for (std::size_t i = 0; i < value.size(); ++i)
+      mark_non_finite(value[i], path + "[" + std::to_string(i) + "]", notes);
+  } else if (value.is_number_float() && !std::isfinite(value.get<double>())) {
+    const double number = value.get<double>();
+    notes[path] = std::isnan(number) ? "nan" : number > 0 ? "inf" : "-inf";
+    value = nullptr;
+  }
+}
+
 }  // namespace
+
+void apply_non_finite_rule(nlohmann::json& summary) {
+  nlohmann::json notes = summary.value("non_finite", nlohmann::json::object());
+  summary.erase("non_finite");
+  mark_non_finite(summary, "", notes);
+  if (!notes.empty()) summary["non_finite"] = notes;
+}
 
 nlohmann::json make_summary(const Simulation& sim, double wall_seconds, const std::string& scene_sha256,
                             const StepStatus& status, const EffectCounter& surface) {
@@ -166,6 +189,7 @@ nlohmann::json make_summary(const Simulation& sim, double wall_seconds, const st
       s["timings_s"]["wetting"] = w.seconds;
     }
   }
+  apply_non_finite_rule(s);
   return s;
 }
 
@@ -245,13 +269,24 @@ RunResult run_scene(Simulation& sim, const RunOptions& options) {
   RunResult result;
   ProgressLine progress(options.progress);
   write_due_frames();
+  auto stop_asked = [&] { return options.stop && options.stop->load(std::memory_order_relaxed); };
   while (sim.steps_done() < last_step && !sim.finished()) {
+    // Between steps only: the state and the frames on disk then agree with summary.json.
+    if (stop_asked()) {
+      result.interrupted = true;
+      break;
+    }
     result.status |= sim.step();
     if (!result.status.ok()) break;
     write_due_frames();
     progress.update(sim, last_step, wall());
   }
   result.summary = make_summary(sim, wall(), options.scene_sha256, result.status, surface_counter);
+  if (result.interrupted) {
+    // What went wrong before the signal stays said: a leak does not become a clean interruption.
+    const std::string flags = result.summary["status"];
+    result.summary["status"] = flags == "ok" ? std::string("interrupted") : "interrupted; " + flags;
+  }
   result.effects = sim.effect_counters();
   result.effects.surface = surface_counter;
   result.summary["frames"] = frame;
@@ -262,6 +297,7 @@ RunResult run_scene(Simulation& sim, const RunOptions& options) {
     result.summary["timings_s"]["surface_audit"] = surface_audit_seconds;
     result.summary["surface_intersections"] = surface_intersections;
   }
+  apply_non_finite_rule(result.summary);
   write_file_atomic((out / "summary.json").string(), result.summary.dump(2) + "\n");
   return result;
 }
