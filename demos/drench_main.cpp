@@ -8,8 +8,6 @@
 // Exit status: 0 success; 1 bad input (scene, file, arguments) or, for `ccd`, a missed collision; 2 the
 // simulation became non-finite, or, for `sweep`, a run did not end "ok".
 
-#include <omp.h>
-
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <chrono>
@@ -25,6 +23,7 @@
 #include <drench/ccd/ccd_query_file.hpp>
 #include <drench/ccd/point_triangle_ccd.hpp>
 #include <drench/common/error.hpp>
+#include <drench/common/parallel.hpp>
 #include <drench/common/program.hpp>
 #include <drench/render/render_run.hpp>
 #ifdef DRENCH_HAVE_VIEWER
@@ -57,12 +56,12 @@ int run_command(const std::string& scene_path, const std::string& out_dir,
     if (config.time.adaptive) {
       std::fprintf(stderr, "drench %s: %s, %zu particles, %g s in steps of %g to %g s, %d threads\n",
                    DRENCH_VERSION, scene_path.c_str(), simulation.particles().size(), config.time.duration,
-                   config.time.dt_min, config.time.dt, omp_get_max_threads());
+                   config.time.dt_min, config.time.dt, drench::thread_count());
     } else {
       std::fprintf(stderr, "drench %s: %s, %zu particles, %lld steps of %g s, %d threads\n", DRENCH_VERSION,
                    scene_path.c_str(), simulation.particles().size(),
                    static_cast<long long>(options.max_steps.value_or(simulation.total_steps())),
-                   config.time.dt, omp_get_max_threads());
+                   config.time.dt, drench::thread_count());
     }
   }
   const drench::RunResult result = drench::run_scene(simulation, options);
@@ -272,7 +271,8 @@ int main(int argc, char** argv) {
   run->add_option("--out", out_dir, "output folder (frames/, summary.json)")->required();
   run->add_option("--set", overrides, "override a scene value, e.g. --set time.dt=0.004 (repeatable)");
   run->add_option("--steps", steps, "stop after N steps")->check(CLI::NonNegativeNumber);
-  run->add_option("--threads", threads, "OpenMP threads (default: all cores)")->check(CLI::PositiveNumber);
+  run->add_option("--threads", threads, "threads (default: the CPUs this process may use)")
+      ->check(CLI::PositiveNumber);
   run->add_flag("--quiet", quiet, "no banner and no progress line");
 
   std::string reconstruct_dir;
@@ -284,7 +284,7 @@ int main(int argc, char** argv) {
   reconstruct->add_option(
       "--set", overrides,
       "override a value of the run's scene, e.g. --set surface.cell_size=0.004 (repeatable)");
-  reconstruct->add_option("--threads", threads, "OpenMP threads (default: all cores)")
+  reconstruct->add_option("--threads", threads, "threads (default: the CPUs this process may use)")
       ->check(CLI::PositiveNumber);
   reconstruct->add_flag("--quiet", quiet, "no progress line");
 
@@ -309,7 +309,7 @@ int main(int argc, char** argv) {
       "view", "run a scene live in a window: orbit, pan and zoom, pause, step, restart (docs/viewer.md)");
   view->add_option("scene", scene_path, "scene file (JSON, SI units; see docs/scenes.md)")->required();
   view->add_option("--set", overrides, "override a scene value, e.g. --set time.dt=0.004 (repeatable)");
-  view->add_option("--threads", threads, "OpenMP threads of the simulation (default: all cores)")
+  view->add_option("--threads", threads, "threads of the simulation (default: the CPUs this process may use)")
       ->check(CLI::PositiveNumber);
   view->add_option("--size", view_size, "window size WIDTHxHEIGHT in pixels")->capture_default_str();
   view->add_option("--frames", view_frames, "quit after N drawn frames")->check(CLI::NonNegativeNumber);
@@ -348,7 +348,9 @@ int main(int argc, char** argv) {
   sweep->add_option("--jobs", sweep_options.jobs, "runs side by side (their times then share the cores)")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
-  sweep->add_option("--threads", sweep_options.threads, "OpenMP threads per run (default: cores / jobs)")
+  sweep
+      ->add_option("--threads", sweep_options.threads,
+                   "threads per run (default: the CPUs this process may use / jobs)")
       ->check(CLI::PositiveNumber);
   sweep
       ->add_option("--timeout", sweep_options.timeout_s,
@@ -362,8 +364,8 @@ int main(int argc, char** argv) {
   sweep->add_flag("--quiet", sweep_options.quiet, "no line per finished run");
 
   CLI11_PARSE(app, argc, argv);
-  if (threads > 0) omp_set_num_threads(threads);
   try {
+    if (threads > 0) drench::set_thread_count(threads);
     if (run->parsed()) return run_command(scene_path, out_dir, overrides, steps, quiet);
     if (reconstruct->parsed()) return reconstruct_command(reconstruct_dir, overrides, quiet);
     if (render->parsed()) return render_command(render_options, render_size, quiet);
