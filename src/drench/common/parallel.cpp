@@ -172,9 +172,9 @@ class Pool {
     m_caller_waiting.store(false, std::memory_order_relaxed);
   }
 
-  void work(int index) {
+  /// A worker's life: wait for a job newer than `seen`, join it while it is open, take chunks, leave.
+  void work(int index, std::uint64_t seen) {
     t_in_loop = true;
-    std::uint64_t seen = m_state.load(std::memory_order_acquire) >> kEpochShift;
     for (;;) {
       const auto new_job = [&] {
         return (m_state.load(std::memory_order_seq_cst) >> kEpochShift) != seen ||
@@ -218,8 +218,10 @@ class Pool {
       t.join();
     m_workers.clear();
     m_stop.store(false, std::memory_order_relaxed);
+    // The epoch before the caller publishes its job: a thread that starts late still joins that job.
+    const std::uint64_t seen = m_state.load(std::memory_order_relaxed) >> kEpochShift;
     for (int i = 1; i <= workers; ++i)
-      m_workers.emplace_back([this, i] { work(i); });
+      m_workers.emplace_back([this, i, seen] { work(i, seen); });
   }
 
   std::atomic<int> m_wanted{default_thread_count()};
