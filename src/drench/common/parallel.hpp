@@ -5,7 +5,8 @@
 /// Why not OpenMP: libgomp's threads spin at every barrier for up to 300,000 spins before they sleep, and its
 /// wait policy can only be set in the environment before the program loads it, so a library cannot choose it
 /// for the program that embeds it. Beside one busy thread on a 2-core machine a jet on a cloth ran 5.7x
-/// slower on two threads than on one. This pool's idle threads spin for at most kSpinTime, then block.
+/// slower on two threads than on one. This pool's idle threads spin for at most 50 us (parallel.cpp's
+/// kSpinTime), then block.
 
 #include <algorithm>
 #include <cstddef>
@@ -79,8 +80,9 @@ inline constexpr std::size_t kLightChunk = 2048;
 /// per element or per chunk only (never in an order that depends on the thread), so that the results are the
 /// same for any thread count and any deal. `slot` in [0, thread_count()) names the participant running the
 /// chunk, for per-thread scratch space: no two chunks run at once with the same slot. A loop started inside
-/// a body runs serially on that thread. An exception thrown by the body reaches the caller, after the chunks
-/// already running have finished (the others are skipped).
+/// a body, or while another thread's loop holds the pool (two user threads, e.g. render/'s LiveSimulation and
+/// LiveSurface), runs serially on its caller, chunk by chunk in order. An exception thrown by the body
+/// reaches the caller, after the chunks already running have finished (the others are skipped).
 /// @param n  elements; 0 calls nothing
 /// @param grain  elements per chunk, > 0
 template <class Body>
