@@ -271,7 +271,8 @@ int main(int argc, char** argv) {
   run->add_option("--out", out_dir, "output folder (frames/, summary.json)")->required();
   run->add_option("--set", overrides, "override a scene value, e.g. --set time.dt=0.004 (repeatable)");
   run->add_option("--steps", steps, "stop after N steps")->check(CLI::NonNegativeNumber);
-  run->add_option("--threads", threads, "threads (default: the CPUs this process may use)")
+  run->add_option("--threads", threads,
+                  "threads (default: OMP_NUM_THREADS, else the CPUs this process may use)")
       ->check(CLI::PositiveNumber);
   run->add_flag("--quiet", quiet, "no banner and no progress line");
 
@@ -284,7 +285,9 @@ int main(int argc, char** argv) {
   reconstruct->add_option(
       "--set", overrides,
       "override a value of the run's scene, e.g. --set surface.cell_size=0.004 (repeatable)");
-  reconstruct->add_option("--threads", threads, "threads (default: the CPUs this process may use)")
+  reconstruct
+      ->add_option("--threads", threads,
+                   "threads (default: OMP_NUM_THREADS, else the CPUs this process may use)")
       ->check(CLI::PositiveNumber);
   reconstruct->add_flag("--quiet", quiet, "no progress line");
 
@@ -309,7 +312,8 @@ int main(int argc, char** argv) {
       "view", "run a scene live in a window: orbit, pan and zoom, pause, step, restart (docs/viewer.md)");
   view->add_option("scene", scene_path, "scene file (JSON, SI units; see docs/scenes.md)")->required();
   view->add_option("--set", overrides, "override a scene value, e.g. --set time.dt=0.004 (repeatable)");
-  view->add_option("--threads", threads, "threads of the simulation (default: the CPUs this process may use)")
+  view->add_option("--threads", threads,
+                   "threads of the simulation (default: OMP_NUM_THREADS, else the CPUs this process may use)")
       ->check(CLI::PositiveNumber);
   view->add_option("--size", view_size, "window size WIDTHxHEIGHT in pixels")->capture_default_str();
   view->add_option("--frames", view_frames, "quit after N drawn frames")->check(CLI::NonNegativeNumber);
@@ -350,7 +354,7 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   sweep
       ->add_option("--threads", sweep_options.threads,
-                   "threads per run (default: the CPUs this process may use / jobs)")
+                   "threads per run (default: OMP_NUM_THREADS, else the CPUs this process may use, / jobs)")
       ->check(CLI::PositiveNumber);
   sweep
       ->add_option("--timeout", sweep_options.timeout_s,
