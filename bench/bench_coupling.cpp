@@ -5,7 +5,8 @@
 //   <build>/bench/bench_coupling --benchmark_out=bench/results/<machine>/coupling.csv
 //       --benchmark_out_format=csv --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
 //       [--benchmark_filter=...]
-// Thread count: OMP_NUM_THREADS. On a shared machine, compare medians of repetitions.
+// Thread count: OMP_NUM_THREADS (drench::thread_count()). On a shared machine, compare medians of
+// repetitions.
 //
 // find_pairs/particles:<N>/margin_mm:<m>/<grid|fcl>: one TriangleBroadPhase::find_pairs call per iteration,
 // the object kept across iterations as the coupler keeps it. N particles spread uniformly in a
@@ -23,7 +24,6 @@
 // ms_repulsion, ms_ccd (the coupler's own stage times). A counter that does not apply to a row is nan.
 
 #include <benchmark/benchmark.h>
-#include <omp.h>
 
 #include <chrono>
 #include <cmath>
@@ -35,6 +35,7 @@
 #include <utility>
 #include <vector>
 
+#include <drench/common/parallel.hpp>
 #include <drench/coupling/broad_phase.hpp>
 #include <drench/coupling/cloth_mesh.hpp>
 #include <drench/coupling/coupler.hpp>
@@ -124,7 +125,7 @@ void find_pairs(benchmark::State& state, const std::vector<BroadPhaseCase>& step
   state.counters["particles"] = static_cast<double>(steps[0].x0.size());
   state.counters["triangles"] = static_cast<double>(steps[0].cloth.triangle_count());
   state.counters["pairs"] = static_cast<double>(pair_counts[0]);
-  state.counters["threads"] = omp_get_max_threads();
+  state.counters["threads"] = drench::thread_count();
   add_missing_counters(state);
 }
 
@@ -200,7 +201,7 @@ void coupler_step(benchmark::State& state, BroadPhaseKind kind) {
   state.counters["status"] = static_cast<double>(status);
   state.counters["ms_repulsion"] = 1e3 * stats.seconds_repulsion;
   state.counters["ms_ccd"] = 1e3 * stats.seconds_ccd;
-  state.counters["threads"] = omp_get_max_threads();
+  state.counters["threads"] = drench::thread_count();
   add_missing_counters(state);
 }
 

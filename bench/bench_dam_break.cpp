@@ -8,7 +8,6 @@
 // Thread count: OMP_NUM_THREADS (docs/performance.md's numbers: 1 and 2).
 
 #include <benchmark/benchmark.h>
-#include <omp.h>
 #include <sys/resource.h>
 
 #include <chrono>
@@ -16,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include <drench/common/parallel.hpp>
 #include <drench/scene/scene_loader.hpp>
 #include <drench/scene/simulation.hpp>
 
@@ -68,7 +68,7 @@ void run(benchmark::State& state, double spacing, const std::string& solver, dou
     const auto& f = sim.fluid().statistics();
     const double n = static_cast<double>(sim.particles().size());
     state.counters["particles"] = n;
-    state.counters["threads"] = omp_get_max_threads();
+    state.counters["threads"] = drench::thread_count();
     state.counters["ms_per_step"] = 1e3 * wall / steps;
     state.counters["particle_steps_per_s"] = n * steps / wall;
     state.counters["particle_substeps_per_s"] = n * f.substeps / wall;

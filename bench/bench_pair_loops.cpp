@@ -10,7 +10,6 @@
 // Thread count: OMP_NUM_THREADS. Setting up (the 60 steps) takes about 10 s on one thread.
 
 #include <benchmark/benchmark.h>
-#include <omp.h>
 
 #include <algorithm>
 #include <cmath>
@@ -104,16 +103,14 @@ void densities(benchmark::State& state) {
   const Fixture& f = fixture();
   const std::size_t n = particles(state);
   drench::ScalarArray out(n);
-  const std::size_t chunks = (n + drench::kParticleChunk - 1) / drench::kParticleChunk;
-  std::vector<double> taken(omp_get_max_threads(), 0.0);
+  const int threads = drench::thread_count();
+  std::vector<double> taken(static_cast<std::size_t>(threads), 0.0);
   for (auto _ : state) {
-#pragma omp parallel for schedule(dynamic, 1)
-    for (std::size_t k = 0; k < chunks; ++k) {
-      const std::size_t begin = k * drench::kParticleChunk;
-      drench::sph_densities(*f.ctx, f.x_mass, begin, std::min(n, begin + drench::kParticleChunk),
-                            &out[begin]);
-      taken[omp_get_thread_num()] += 1.0;
-    }
+    drench::parallel_for_slots(n, drench::kParticleChunk, threads,
+                               [&](std::size_t begin, std::size_t end, int slot) {
+                                 drench::sph_densities(*f.ctx, f.x_mass, begin, end, &out[begin]);
+                                 taken[static_cast<std::size_t>(slot)] += 1.0;
+                               });
     benchmark::DoNotOptimize(out.data());
   }
   report(state, n);

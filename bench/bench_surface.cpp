@@ -16,7 +16,6 @@
 // paths, is held to the same count by a tbb::global_control in main().
 
 #include <benchmark/benchmark.h>
-#include <omp.h>
 #include <openvdb/openvdb.h>
 #include <openvdb/tools/ParticlesToLevelSet.h>
 #include <openvdb/tools/VolumeToMesh.h>
@@ -31,6 +30,7 @@
 #include <vector>
 
 #include <drench/bullet/bullet_cloth.hpp>
+#include <drench/common/parallel.hpp>
 #include <drench/scene/scene_loader.hpp>
 #include <drench/scene/simulation.hpp>
 #include <drench/surface/surface_reconstruction.hpp>
@@ -193,7 +193,7 @@ std::size_t openvdb_surface(const Vec3Array& particles, double spacing, double c
 void report(benchmark::State& state, double particles, double triangles, double wall) {
   for (const char* name : {"nodes", "frames", "occluded_pairs", "reset_nodes"})
     state.counters[name] = 0.0;
-  state.counters["threads"] = omp_get_max_threads();
+  state.counters["threads"] = drench::thread_count();
   state.counters["particles"] = particles;
   state.counters["triangles"] = triangles;
   state.counters["particles_per_s"] = particles * static_cast<double>(state.iterations()) / wall;
@@ -286,9 +286,9 @@ BENCHMARK_CAPTURE(jet_on_cloth, plain, false)->UseManualTime()->Unit(benchmark::
 BENCHMARK_CAPTURE(jet_on_cloth, contact_aware, true)->UseManualTime()->Unit(benchmark::kMillisecond);
 
 int main(int argc, char** argv) {
-  // OpenVDB runs on TBB, which would otherwise take every core; both paths get OpenMP's thread count.
+  // OpenVDB runs on TBB, which would otherwise take every core; both paths get drench's thread count.
   const tbb::global_control tbb_threads(tbb::global_control::max_allowed_parallelism,
-                                        static_cast<std::size_t>(omp_get_max_threads()));
+                                        static_cast<std::size_t>(drench::thread_count()));
   openvdb::initialize();
   benchmark::Initialize(&argc, argv);
   if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;

@@ -11,8 +11,6 @@
 // did not end "ok"; 130 (SIGINT) or 143 (SIGTERM): `run`, `reconstruct` or `sweep` was interrupted and
 // stopped cleanly (a run's summary.json says "interrupted"; reconstruct left the earlier surfaces).
 
-#include <omp.h>
-
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <atomic>
@@ -32,6 +30,7 @@
 #include <drench/ccd/ccd_query_file.hpp>
 #include <drench/ccd/point_triangle_ccd.hpp>
 #include <drench/common/error.hpp>
+#include <drench/common/parallel.hpp>
 #include <drench/common/program.hpp>
 #include <drench/render/render_run.hpp>
 #ifdef DRENCH_HAVE_VIEWER
@@ -82,12 +81,12 @@ int run_command(const std::string& scene_path, const std::string& out_dir,
     if (config.time.adaptive) {
       std::fprintf(stderr, "drench %s: %s, %zu particles, %g s in steps of %g to %g s, %d threads\n",
                    DRENCH_VERSION, scene_path.c_str(), simulation.particles().size(), config.time.duration,
-                   config.time.dt_min, config.time.dt, omp_get_max_threads());
+                   config.time.dt_min, config.time.dt, drench::thread_count());
     } else {
       std::fprintf(stderr, "drench %s: %s, %zu particles, %lld steps of %g s, %d threads\n", DRENCH_VERSION,
                    scene_path.c_str(), simulation.particles().size(),
                    static_cast<long long>(options.max_steps.value_or(simulation.total_steps())),
-                   config.time.dt, omp_get_max_threads());
+                   config.time.dt, drench::thread_count());
     }
   }
   options.stop = &drench::stop_requested();
@@ -416,7 +415,7 @@ int dispatch(int argc, char** argv) {
   run->add_option("--out", out_dir, "output folder (frames/, summary.json)")->required();
   run->add_option("--set", overrides, "override a scene value, e.g. --set time.dt=0.004 (repeatable)");
   run->add_option("--steps", steps, "stop after N steps")->check(whole_number(0, kMaxCount));
-  run->add_option("--threads", threads, "OpenMP threads (default: all cores)")
+  run->add_option("--threads", threads, "threads (default: OMP_NUM_THREADS, else the CPUs this process may use)")
       ->check(whole_number(1, kMaxThreads));
   run->add_flag("--overwrite", overwrite,
                 "replace an earlier drench run in --out (only the files its drench_run.json lists)");
@@ -431,7 +430,7 @@ int dispatch(int argc, char** argv) {
   reconstruct->add_option(
       "--set", overrides,
       "override a value of the run's scene, e.g. --set surface.cell_size=0.004 (repeatable)");
-  reconstruct->add_option("--threads", threads, "OpenMP threads (default: all cores)")
+  reconstruct->add_option("--threads", threads, "threads (default: OMP_NUM_THREADS, else the CPUs this process may use)")
       ->check(whole_number(1, kMaxThreads));
   reconstruct->add_flag("--quiet", quiet, "no progress line");
 
@@ -456,7 +455,7 @@ int dispatch(int argc, char** argv) {
       "view", "run a scene live in a window: orbit, pan and zoom, pause, step, restart (docs/viewer.md)");
   view->add_option("scene", scene_path, "scene file (JSON, SI units; see docs/scenes.md)")->required();
   view->add_option("--set", overrides, "override a scene value, e.g. --set time.dt=0.004 (repeatable)");
-  view->add_option("--threads", threads, "OpenMP threads of the simulation (default: all cores)")
+  view->add_option("--threads", threads, "threads of the simulation (default: OMP_NUM_THREADS, else the CPUs this process may use)")
       ->check(whole_number(1, kMaxThreads));
   view->add_option("--size", view_size, "window size WIDTHxHEIGHT in pixels")->capture_default_str();
   view->add_option("--frames", view_frames, "quit after N drawn frames")->check(whole_number(0, kMaxCount));
@@ -495,7 +494,7 @@ int dispatch(int argc, char** argv) {
   sweep->add_option("--jobs", sweep_options.jobs, "runs side by side (their times then share the cores)")
       ->check(whole_number(1, kMaxThreads))
       ->capture_default_str();
-  sweep->add_option("--threads", sweep_options.threads, "OpenMP threads per run (default: cores / jobs)")
+  sweep->add_option("--threads", sweep_options.threads, "threads per run (default: OMP_NUM_THREADS, else the CPUs this process may use, / jobs)")
       ->check(whole_number(1, kMaxThreads));
   sweep
       ->add_option("--timeout", sweep_options.timeout_s,
@@ -520,7 +519,7 @@ int dispatch(int argc, char** argv) {
                  shorten_long_words(one_line(e.what())).c_str());
     return 1;
   }
-  if (threads > 0) omp_set_num_threads(threads);
+  if (threads > 0) drench::set_thread_count(threads);
   {
     if (run->parsed()) return run_command(scene_path, out_dir, overrides, steps, quiet, overwrite);
     if (reconstruct->parsed()) return reconstruct_command(reconstruct_dir, overrides, quiet);

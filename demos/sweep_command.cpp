@@ -20,6 +20,7 @@
 #include <thread>
 
 #include <drench/common/error.hpp>
+#include <drench/common/parallel.hpp>
 #include <drench/common/program.hpp>
 #include <drench/io/atomic_file.hpp>
 #include <drench/scene/output_folder.hpp>
@@ -222,8 +223,7 @@ int run_sweep(const SweepOptions& options) {
   if (error) throw IoError("sweep: cannot create " + (dir / "runs").string() + ": " + error.message());
 
   const unsigned cores = std::max(1u, std::thread::hardware_concurrency());
-  const int threads =
-      options.threads > 0 ? options.threads : std::max(1, static_cast<int>(cores) / options.jobs);
+  const int threads = options.threads > 0 ? options.threads : std::max(1, thread_count() / options.jobs);
   const std::size_t width = std::to_string(runs.size()).size() < 3 ? 3 : std::to_string(runs.size()).size();
   auto run_dir = [&](std::size_t i) {
     std::string number = std::to_string(i + 1);

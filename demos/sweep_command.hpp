@@ -18,7 +18,7 @@ struct SweepOptions {
   bool one_at_a_time = false;          ///< each axis varied alone around the scene, not the grid
   int repeats = 1;                     ///< runs per setting, >= 1
   int jobs = 1;                        ///< runs side by side, >= 1
-  int threads = 0;                     ///< OpenMP threads per run; 0: the cores shared among the jobs
+  int threads = 0;                     ///< threads per run; 0: thread_count() shared among the jobs
   double timeout_s = 0;  ///< a run's wall time limit (unit: s), after which it is killed; 0: none
   std::string error_key = "density_error_mean";  ///< the sweep_columns() entry the Pareto plot uses
   std::string command_line;                      ///< as the user typed it, for the report

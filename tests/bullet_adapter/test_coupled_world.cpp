@@ -310,5 +310,23 @@ TEST(CoupledWorld, OwnedWorldNeedsTheScenesCloth) {
   expect_scene_error([&] { CoupledWorld{scene}; }, {"cloth.area_density must be > 0", "got -1 (test scene)"});
 }
 
+// A game sets drench's thread count through the world it uses: the count drench's loops use, refused
+// outside [1, 1024] with the value named.
+TEST(CoupledWorld, SetsDrenchsThreadCountAndRefusesBadCounts) {
+  const int before = CoupledWorld::thread_count();
+  CoupledWorld::set_thread_count(1);
+  EXPECT_EQ(drench::thread_count(), 1);
+  CoupledWorld::set_thread_count(2);
+  EXPECT_EQ(CoupledWorld::thread_count(), 2);
+  try {
+    CoupledWorld::set_thread_count(0);
+    ADD_FAILURE() << "set_thread_count(0) did not throw";
+  } catch (const drench::Error& e) {
+    EXPECT_STREQ(e.what(), "thread count must be in [1, 1024], got 0");
+  }
+  EXPECT_EQ(CoupledWorld::thread_count(), 2);
+  CoupledWorld::set_thread_count(before);
+}
+
 }  // namespace
 }  // namespace drench::bullet

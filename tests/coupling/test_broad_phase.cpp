@@ -1,12 +1,12 @@
 // Broad phases return exactly the brute-force set of (particle, triangle) pairs whose swept boxes overlap.
 
 #include <gtest/gtest.h>
-#include <omp.h>
 
 #include <algorithm>
 #include <memory>
 #include <random>
 
+#include <drench/common/parallel.hpp>
 #include <drench/coupling/broad_phase.hpp>
 #include "coupling_fixtures.hpp"
 
@@ -54,7 +54,7 @@ TEST(BroadPhase, ReusedOverMovingStepsMatchesBruteForceAtAnyThreadCount) {
   std::vector<std::uint8_t> only(particles.x0.size());
   for (auto& flag : only)
     flag = u(rng) > 0.0 ? 1 : 0;
-  const int threads = omp_get_max_threads();
+  const int threads = thread_count();
   for (BroadPhaseKind kind : {BroadPhaseKind::GRID, BroadPhaseKind::FCL}) {
     const std::unique_ptr<TriangleBroadPhase> broad_phase = make_broad_phase(kind);
     ClothMesh mesh = test::grid_mesh(21, 0.3, 0.0, 1.0);
@@ -69,9 +69,9 @@ TEST(BroadPhase, ReusedOverMovingStepsMatchesBruteForceAtAnyThreadCount) {
                                     [&](const auto& pair) { return !only[pair.first]; }),
                      expected.end());
       ASSERT_GT(expected.size(), 100u);
-      omp_set_num_threads(1 + step % 2);
+      set_thread_count(1 + step % 2);
       broad_phase->find_pairs(particles.x0, particles.x1, mesh, margin, &only, got);
-      omp_set_num_threads(threads);
+      set_thread_count(threads);
       EXPECT_EQ(got, expected) << "step " << step << ", broad phase " << static_cast<int>(kind);
     }
   }

@@ -1,12 +1,11 @@
 // The viewer's simulation side (render/live_simulation.hpp), without a window: paused it steps only when
 // asked, once per request; running it stops at the scene's duration; a restart starts a new generation
-// from step 0; the stepping thread keeps the caller's OpenMP thread count; the surface worker refuses a
+// from step 0; the stepping thread uses drench's thread count; the surface worker refuses a
 // second request while one is under way and hands back a mesh.
 
 #include <drench/render/live_simulation.hpp>
 
 #include <gtest/gtest.h>
-#include <omp.h>
 
 #include <atomic>
 #include <chrono>
@@ -14,6 +13,7 @@
 #include <thread>
 
 #include <drench/bullet/bullet_cloth.hpp>
+#include <drench/common/parallel.hpp>
 #include <drench/scene/scene_loader.hpp>
 
 namespace drench::render {
@@ -82,16 +82,16 @@ TEST(LiveSimulation, RunsToTheScenesDurationThenRestartsFromStepZero) {
   EXPECT_TRUE(live.error().empty());
 }
 
-TEST(LiveSimulation, StepsWithTheCallersNumberOfOpenMpThreads) {
-  // `--threads 1` on a machine of more cores: a std::thread would start from OpenMP's default, all of them.
-  const int before = omp_get_max_threads();
-  omp_set_num_threads(1);
+TEST(LiveSimulation, StepsWithDrenchsThreadCount) {
+  // `--threads 1` on a machine of more cores: the stepping thread must see 1, not the default.
+  const int before = thread_count();
+  set_thread_count(1);
   std::atomic<int> seen{0};
   const LiveSimulation::Factory jet = jet_on_cloth(0.01);
   {
     LiveSimulation live(
         [&] {
-          seen = omp_get_max_threads();
+          seen = thread_count();
           return jet();
         },
         true);
@@ -100,7 +100,7 @@ TEST(LiveSimulation, StepsWithTheCallersNumberOfOpenMpThreads) {
     Snapshot snapshot;
     ASSERT_TRUE(wait_for(live, snapshot, [](const Snapshot& s) { return s.generation == 1; }));
   }
-  omp_set_num_threads(before);
+  set_thread_count(before);
   EXPECT_EQ(seen, 1);
 }
 

@@ -2,10 +2,13 @@
 // reductions in index order).
 
 #include <gtest/gtest.h>
-#include <omp.h>
 
+#include <algorithm>
 #include <cstring>
 #include <string>
+#include <thread>
+
+#include <drench/common/parallel.hpp>
 
 #include "physics_helpers.hpp"
 
@@ -13,13 +16,13 @@ namespace drench {
 namespace {
 
 ParticleSet run_dam_break(int threads, int steps, const std::string& solver = "pcisph") {
-  const int saved = omp_get_max_threads();
-  omp_set_num_threads(threads);
+  const int saved = thread_count();
+  set_thread_count(threads);
   Simulation sim(testing::demo_scene("dam_break.json",
                                      {"fluid.particle_spacing=0.1", "fluid.pressure_solver=" + solver}));
   for (int s = 0; s < steps; ++s)
     sim.step();
-  omp_set_num_threads(saved);
+  set_thread_count(saved);
   return sim.particles();
 }
 
@@ -32,7 +35,7 @@ bool bitwise_equal(const ParticleSet& a, const ParticleSet& b) {
 }
 
 TEST(Determinism, TwoRunsWithTheSameThreadCountAreBitIdentical) {
-  const int threads = std::max(2, omp_get_num_procs());
+  const int threads = std::max(2, static_cast<int>(std::thread::hardware_concurrency()));
   EXPECT_TRUE(bitwise_equal(run_dam_break(threads, 60), run_dam_break(threads, 60)));
 }
 

@@ -31,6 +31,7 @@
 #include <vector>
 
 #include <drench/bullet/bullet_cloth.hpp>
+#include <drench/common/parallel.hpp>
 #include <drench/coupling/coupler.hpp>
 #include <drench/coupling/leak_audit.hpp>
 #include <drench/scene/scene_config.hpp>
@@ -135,6 +136,17 @@ class CoupledWorld {
   /// Particles ever created and ever removed.
   std::int64_t created() const { return m_simulation->created(); }
   std::int64_t removed() const { return m_simulation->removed(); }
+
+  /// Sets the number of threads drench's fluid and coupling loops use, the calling thread included
+  /// (drench::set_thread_count): for the whole process, every CoupledWorld and every drench loop, from the
+  /// next loop on. A game that keeps cores for its own threads gives drench the rest; results are the same
+  /// bits for any count. Bullet's own step is not affected.
+  /// @param n  threads, in [1, kMaxThreadCount]
+  /// @throws drench::Error naming n when it is outside that range
+  static void set_thread_count(int n) { drench::set_thread_count(n); }
+  /// The number of threads drench's loops use (drench::thread_count): by default the CPUs this process may
+  /// run on, or OMP_NUM_THREADS.
+  static int thread_count() { return drench::thread_count(); }
 
  private:
   CoupledWorld(std::unique_ptr<BulletCloth> cloth, const SceneConfig& scene,

@@ -1,7 +1,5 @@
 #include <drench/render/live_simulation.hpp>
 
-#include <omp.h>
-
 #include <chrono>
 #include <exception>
 #include <utility>
@@ -22,13 +20,7 @@ LiveSimulation::LiveSimulation(Factory make, bool paused) : m_make(std::move(mak
   m_simulation = m_make();
   m_idle = m_simulation->finished();
   publish();
-  // omp_set_num_threads (`--threads`) sets the calling thread's setting only; a std::thread starts from
-  // OpenMP's default, all cores, so the stepping thread takes the caller's.
-  const int threads = omp_get_max_threads();
-  m_thread = std::thread([this, threads] {
-    omp_set_num_threads(threads);
-    loop();
-  });
+  m_thread = std::thread([this] { loop(); });
 }
 
 LiveSimulation::~LiveSimulation() {
@@ -181,11 +173,7 @@ void LiveSimulation::loop() {
 
 LiveSurface::LiveSurface(Scalar particle_spacing, const SurfaceSettings& settings, TriangleMesh obstacles)
     : m_spacing(particle_spacing), m_settings(settings), m_obstacles(std::move(obstacles)) {
-  const int threads = omp_get_max_threads();  // as LiveSimulation's thread
-  m_thread = std::thread([this, threads] {
-    omp_set_num_threads(threads);
-    loop();
-  });
+  m_thread = std::thread([this] { loop(); });
 }
 
 LiveSurface::~LiveSurface() {

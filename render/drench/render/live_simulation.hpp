@@ -44,8 +44,10 @@ class LiveSimulation {
   using Factory = std::function<std::unique_ptr<Simulation>()>;
 
   /// Builds the first Simulation on the calling thread (so that a bad scene throws here, before any window
-  /// opens), publishes its initial state and starts the thread, paused or not. The thread steps with the
-  /// caller's number of OpenMP threads (omp_get_max_threads).
+  /// opens), publishes its initial state and starts the thread, paused or not. The thread steps with drench's
+  /// thread count (common/parallel.hpp), which is the process's. While the surface worker (LiveSurface)
+  /// reconstructs at the same time, whichever of the two starts a parallel loop while the other's loop holds
+  /// the pool runs that loop on its own thread: results are the same, the two never wait for each other.
   /// @throws whatever `make` throws (SceneError for a scene that cannot be built)
   LiveSimulation(Factory make, bool paused);
   /// Stops the thread after the step it is in, and joins it.

@@ -1,32 +1,133 @@
 #pragma once
-/// How drench's particle loops are cut for OpenMP, and compiled for the CPU they run on.
+/// drench's parallel loops: a thread pool of its own, how particle loops are cut into chunks for it, and how
+/// hot loops are compiled for the CPU they run on.
+///
+/// Why not OpenMP: libgomp's threads spin at every barrier for up to 300,000 spins before they sleep, and its
+/// wait policy can only be set in the environment before the program loads it, so a library cannot choose it
+/// for the program that embeds it. Beside one busy thread on a 2-core machine a jet on a cloth ran 5.7x
+/// slower on two threads than on one. This pool's idle threads spin for at most 50 us (parallel.cpp's
+/// kSpinTime), then block.
 
 #include <algorithm>
 #include <cstddef>
+#include <type_traits>
+#include <utility>
+#include <vector>
 
 namespace drench {
 
+/// Largest thread count set_thread_count accepts.
+inline constexpr int kMaxThreadCount = 1024;
+
+/// Sets the number of threads drench's parallel loops use, the calling thread included, for every thread of
+/// the process from the next loop on (threads beyond the first are started on first use, stopped and
+/// restarted when the number changes). Safe to call from any thread at any time; a loop already running
+/// finishes with the threads it has. Results do not depend on it: every loop gives the same bits for any
+/// thread count.
+/// @param n  threads, in [1, kMaxThreadCount]
+/// @throws Error naming n when it is outside [1, kMaxThreadCount]
+void set_thread_count(int n);
+
+/// The number of threads drench's parallel loops use (>= 1). Until set_thread_count is called: the value of
+/// the environment variable OMP_NUM_THREADS when it is an integer in [1, kMaxThreadCount] (its first entry if
+/// it is a list; read once, at the first call, so scripts written for drench's OpenMP builds keep their
+/// meaning; any other value is ignored, as libgomp ignores it), else the CPUs this process may run on (its
+/// affinity mask; std::thread::hardware_concurrency where that is not available).
+int thread_count();
+
+namespace detail {
+
+/// One chunk of a loop: calls the body at `body` on [begin, end) as participant `slot`.
+using ChunkFunction = void (*)(void* body, std::size_t begin, std::size_t end, int slot);
+
+/// Runs fn on the chunks [k grain, min(n, (k + 1) grain)), each taken by the next free participant (the
+/// calling thread is participant 0, the pool's threads 1, 2, ...; only those below `slots` take chunks), and
+/// returns when every chunk is done. Runs the chunks in order on the calling thread when there is one chunk,
+/// one thread, when called from inside a loop's body (a nested loop) or while another thread's loop holds
+/// the pool. The first exception a chunk throws is rethrown here once every running chunk has finished; the
+/// chunks not yet started are skipped.
+void run_chunks(std::size_t n, std::size_t grain, int slots, ChunkFunction fn, void* body);
+
+template <class Body>
+void call_chunk(void* body, std::size_t begin, std::size_t end, int slot) {
+  Body& b = *static_cast<Body*>(body);
+  if constexpr (std::is_invocable_v<Body&, std::size_t, std::size_t, int>) {
+    b(begin, end, slot);
+  } else {
+    (void)slot;
+    b(begin, end);
+  }
+}
+
+}  // namespace detail
+
 /// Particles per chunk in loops over neighbor pairs, each chunk taken by the next free thread
-/// (`schedule(dynamic, kParticleChunk)`, for_each_chunk). Particles are z-ordered, so contiguous halves of
-/// the array are regions of space with unequal work (the one on the floor has the boundary neighbors, the one
-/// at the free surface half-empty neighborhoods); chunks interleave the regions and keep each chunk's
-/// neighbors in cache. Every loop using them writes per-particle (or per-chunk) results only, so results stay
-/// bit-identical for any thread count, whichever thread takes a chunk.
+/// (for_each_chunk). Particles are z-ordered, so contiguous halves of the array are regions of space with
+/// unequal work (the one on the floor has the boundary neighbors, the one at the free surface half-empty
+/// neighborhoods); chunks interleave the regions and keep each chunk's neighbors in cache. Every loop using
+/// them writes per-particle (or per-chunk) results only, so results stay bit-identical for any thread count,
+/// whichever thread takes a chunk.
 inline constexpr std::size_t kParticleChunk = 256;
 
+/// Elements per chunk of light loops (a few nanoseconds per element: copies, an equation of state, an
+/// integration step): large enough that taking a chunk (one atomic add) costs under a percent of it, small
+/// enough that a thread slowed by another busy thread on its core takes fewer chunks instead of holding up
+/// the loop's end. A loop of at most this many elements runs on the calling thread alone, waking nobody.
+inline constexpr std::size_t kLightChunk = 2048;
+
+/// Calls body(begin, end) (or body(begin, end, slot)) for the chunks [k grain, min(n, (k + 1) grain)) of
+/// [0, n), each chunk going to the next free thread; returns when all are done. The body must write results
+/// per element or per chunk only (never in an order that depends on the thread), so that the results are the
+/// same for any thread count and any deal. `slot` in [0, thread_count()) names the participant running the
+/// chunk, for per-thread scratch space: no two chunks run at once with the same slot. A loop started inside
+/// a body, or while another thread's loop holds the pool (two user threads, e.g. render/'s LiveSimulation and
+/// LiveSurface), runs serially on its caller, chunk by chunk in order. An exception thrown by the body
+/// reaches the caller, after the chunks already running have finished (the others are skipped).
+/// @param n  elements; 0 calls nothing
+/// @param grain  elements per chunk, > 0
+template <class Body>
+void parallel_for(std::size_t n, std::size_t grain, Body body) {
+  detail::run_chunks(n, grain, thread_count(), &detail::call_chunk<Body>, &body);
+}
+
+/// parallel_for with slots in [0, slots) only: for a caller that sized its per-thread scratch space before
+/// the loop (thread_count() may change in between, from another thread).
+/// @param slots  participants at most, >= 1
+template <class Body>
+void parallel_for_slots(std::size_t n, std::size_t grain, int slots, Body body) {
+  detail::run_chunks(n, grain, slots, &detail::call_chunk<Body>, &body);
+}
+
 /// Calls body(begin, end) for the chunks [k kParticleChunk, min(n, (k + 1) kParticleChunk)) of n particles,
-/// each chunk going to the next free thread (`schedule(dynamic, 1)` over chunks). For loops whose body per
-/// chunk is a DRENCH_SIMD_CLONES function: one dispatch per chunk, not per particle. A chunk's results do not
-/// depend on the thread that computes it (the body writes per-particle or per-chunk results only), so the
-/// dynamic deal keeps runs bit-identical; it lets a thread whose core runs slower (the other core busy on a
-/// shared host) take fewer chunks, where the static deal made the other wait at every loop's end
-/// (bench_pair_loops densities, counter chunks_last_thread; bench_dam_break pcisph_59k on 2 threads).
+/// each chunk going to the next free thread. For loops whose body per chunk is a DRENCH_SIMD_CLONES function:
+/// one dispatch per chunk, not per particle. A chunk's results do not depend on the thread that computes it
+/// (the body writes per-particle or per-chunk results only), so the dynamic deal keeps runs bit-identical; it
+/// lets a thread whose core runs slower (the other core busy on a shared host) take fewer chunks, where a
+/// static deal made the other wait at every loop's end (bench_pair_loops densities, counter
+/// chunks_last_thread; bench_dam_break pcisph_59k on 2 threads).
 template <class Body>
 void for_each_chunk(std::size_t n, Body body) {
-  const std::size_t chunks = (n + kParticleChunk - 1) / kParticleChunk;
-#pragma omp parallel for schedule(dynamic, 1)
-  for (std::size_t k = 0; k < chunks; ++k)
-    body(k * kParticleChunk, std::min(n, (k + 1) * kParticleChunk));
+  parallel_for(n, kParticleChunk, std::move(body));
+}
+
+/// Reduces [0, n) in chunks of `grain`: map(begin, end) gives each chunk's partial result, and the partials
+/// are folded in chunk order, combine(combine(identity, p_0), p_1) ..., whatever thread computed them: a
+/// floating-point sum gives the same bits for any thread count. The calls of map run in parallel as
+/// parallel_for's body.
+/// @param n  elements; 0 returns identity
+/// @param grain  elements per chunk, > 0
+template <class T, class Map, class Combine>
+T parallel_reduce(std::size_t n, std::size_t grain, T identity, Map map, Combine combine) {
+  static_assert(!std::is_same_v<T, bool>, "chunks write their partials concurrently: use int, not bool");
+  const std::size_t chunks = (n + grain - 1) / grain;
+  if (chunks <= 1) return chunks == 0 ? identity : combine(identity, map(std::size_t{0}, n));
+  std::vector<T> partial(chunks, identity);
+  parallel_for(n, grain,
+               [&](std::size_t begin, std::size_t end) { partial[begin / grain] = map(begin, end); });
+  T result = identity;
+  for (const T& p : partial)
+    result = combine(result, p);
+  return result;
 }
 
 }  // namespace drench

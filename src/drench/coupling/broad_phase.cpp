@@ -1,12 +1,11 @@
 #include <drench/coupling/broad_phase.hpp>
 
-#include <omp.h>
-
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
 
 #include <drench/common/key_index_table.hpp>
+#include <drench/common/parallel.hpp>
 
 namespace drench {
 namespace {
@@ -167,14 +166,14 @@ void collect_pairs(const Vec3Array& particles_t0, const Vec3Array& particles_t1,
                    std::vector<std::pair<Index, Index>>& pairs) {
   pairs.clear();
   const std::size_t n = particles_t0.size();
-  const int threads = omp_get_max_threads();
-  std::vector<std::vector<std::pair<Index, Index>>> found(static_cast<std::size_t>(threads));
-#pragma omp parallel
-  {
-    std::vector<std::pair<Index, Index>>& mine = found[static_cast<std::size_t>(omp_get_thread_num())];
+  // One list per chunk of particles, concatenated in chunk order: pairs come in particle order, whichever
+  // thread took a chunk.
+  constexpr std::size_t kChunk = 256;
+  std::vector<std::vector<std::pair<Index, Index>>> found((n + kChunk - 1) / kChunk);
+  parallel_for(n, kChunk, [&](std::size_t begin, std::size_t end) {
+    std::vector<std::pair<Index, Index>>& mine = found[begin / kChunk];
     std::vector<Index> candidates;
-#pragma omp for schedule(static)
-    for (std::size_t p = 0; p < n; ++p) {
+    for (std::size_t p = begin; p < end; ++p) {
       if (only && !(*only)[p]) continue;
       const Box3 box = particle_box(particles_t0[p], particles_t1[p], 2.0 * margin);
       candidates.clear();
@@ -185,8 +184,11 @@ void collect_pairs(const Vec3Array& particles_t0, const Vec3Array& particles_t1,
         if (box.overlaps(triangle_boxes[t])) mine.emplace_back(static_cast<Index>(p), t);
       }
     }
-  }
-  // Static scheduling hands out particles in blocks in thread order: concatenating keeps particle order.
+  });
+  std::size_t total = 0;
+  for (const auto& part : found)
+    total += part.size();
+  pairs.reserve(total);
   for (const auto& part : found)
     pairs.insert(pairs.end(), part.begin(), part.end());
 }

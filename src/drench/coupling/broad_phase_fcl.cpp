@@ -6,7 +6,6 @@
 #include <fcl/broadphase/broadphase_dynamic_AABB_tree.h>
 #include <fcl/geometry/shape/box.h>
 #include <fcl/narrowphase/collision_object.h>
-#include <omp.h>
 
 #include <algorithm>
 #include <cstdint>

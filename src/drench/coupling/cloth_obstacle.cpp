@@ -5,6 +5,7 @@
 #include <utility>
 
 #include <drench/ccd/point_triangle_ccd.hpp>
+#include <drench/common/parallel.hpp>
 
 namespace drench {
 
@@ -42,14 +43,15 @@ void ClothObstacle::apply(const Vec3Array& positions_before, ParticleSet& partic
   ++m_counter.passes;
   m_broad_phase->find_pairs(positions_before, particles.positions, m_static, 0.0, nullptr, m_pairs);
   std::vector<ccd::CcdResult> hits(m_pairs.size());
-#pragma omp parallel for schedule(dynamic, 256)
-  for (std::size_t k = 0; k < m_pairs.size(); ++k) {
-    const auto [p, t] = m_pairs[k];
-    const Triangle& tri = m_static.triangles[t];
-    const Vec3Array& x = m_static.positions_t0;
-    hits[k] = ccd::point_triangle_ccd({positions_before[p], x[tri[0]], x[tri[1]], x[tri[2]],
-                                       particles.positions[p], x[tri[0]], x[tri[1]], x[tri[2]]});
-  }
+  parallel_for(m_pairs.size(), 256, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t k = begin; k < end; ++k) {
+      const auto [p, t] = m_pairs[k];
+      const Triangle& tri = m_static.triangles[t];
+      const Vec3Array& x = m_static.positions_t0;
+      hits[k] = ccd::point_triangle_ccd({positions_before[p], x[tri[0]], x[tri[1]], x[tri[2]],
+                                         particles.positions[p], x[tri[0]], x[tri[1]], x[tri[2]]});
+    }
+  });
   // In particle order, the earliest hit of each particle; its approach along the triangle's normal is stopped
   // (eq. 2: the relative normal velocity becomes zero; the position clamp below keeps the motion off the
   // plane), the rest of its velocity kept.

@@ -9,6 +9,7 @@
 
 #include <drench/ccd/ccd_exact_reference.hpp>
 #include <drench/ccd/point_triangle_ccd.hpp>
+#include <drench/common/parallel.hpp>
 #include <drench/coupling/coupler_stages.hpp>
 
 namespace drench {
@@ -27,9 +28,10 @@ struct Impact {
 void find_impacts(const StepContext& ctx, const std::vector<std::pair<Index, Index>>& pairs,
                   std::vector<std::pair<Index, Impact>>& impacts) {
   std::vector<ccd::CcdResult> results(pairs.size());
-#pragma omp parallel for schedule(dynamic, 256)
-  for (std::size_t k = 0; k < pairs.size(); ++k)
-    results[k] = ccd::point_triangle_ccd(ctx.query(pairs[k].first, pairs[k].second));
+  parallel_for(pairs.size(), 256, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t k = begin; k < end; ++k)
+      results[k] = ccd::point_triangle_ccd(ctx.query(pairs[k].first, pairs[k].second));
+  });
   impacts.clear();
   for (std::size_t k = 0; k < pairs.size(); ++k) {
     if (!results[k].hit) continue;
@@ -154,10 +156,11 @@ void StepContext::mark_changed_candidates(std::vector<std::uint8_t>& only) const
   }
   const std::size_t n = m_x0.size();
   only.resize(n);
-#pragma omp parallel for schedule(static)
-  for (std::size_t p = 0; p < n; ++p) {
-    only[p] = m_particle_changed[p] || particle_box(m_x0[p], m_x1[p], 0.0).overlaps(changed_triangles);
-  }
+  parallel_for(n, kLightChunk, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t p = begin; p < end; ++p) {
+      only[p] = m_particle_changed[p] || particle_box(m_x0[p], m_x1[p], 0.0).overlaps(changed_triangles);
+    }
+  });
 }
 
 std::uint32_t resolve_ccd(StepContext& ctx, TriangleBroadPhase& broad_phase, const CouplingSettings& settings,

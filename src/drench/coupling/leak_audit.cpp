@@ -6,6 +6,7 @@
 #include <unordered_map>
 
 #include <drench/ccd/ccd_exact_reference.hpp>
+#include <drench/common/parallel.hpp>
 
 namespace drench {
 namespace {
@@ -101,38 +102,40 @@ std::uint64_t audit_leaks(const Vec3Array& particles_t0, const Vec3Array& partic
   // Per particle, 1 + the first triangle it crosses, or 0.
   std::vector<std::uint64_t> flags(n, 0);
   std::vector<std::uint64_t> pairs_per(n, 0), exact_per(n, 0);
-#pragma omp parallel for schedule(dynamic, 64)
-  for (std::size_t p = 0; p < n; ++p) {
-    const Bounds box = bounds_of({&particles_t0[p], &particles_t1[p]});
-    const Eigen::Array3d lo = cell_of(box.lo) - 1.0;
-    const Eigen::Array3d hi = cell_of(box.hi);
-    if ((hi - lo + 1.0).prod() > 1e6) continue;  // a particle flying kilometres: not a cloth contact question
-    for (double z = lo[2]; z <= hi[2] && !flags[p]; z += 1.0) {
-      for (double y = lo[1]; y <= hi[1] && !flags[p]; y += 1.0) {
-        for (double x = lo[0]; x <= hi[0] && !flags[p]; x += 1.0) {
-          const auto it = grid.find(key(Eigen::Array3d(x, y, z)));
-          if (it == grid.end()) continue;
-          for (Index t : it->second) {
-            const Bounds& tb = boxes[t];
-            if ((box.hi.array() < tb.lo.array()).any() || (tb.hi.array() < box.lo.array()).any()) continue;
-            ++pairs_per[p];
-            const Triangle& tri = cloth.triangles[t];
-            const Vec3 x0[4] = {particles_t0[p], cloth.positions_t0[tri[0]], cloth.positions_t0[tri[1]],
-                                cloth.positions_t0[tri[2]]};
-            const Vec3 x1[4] = {particles_t1[p], cloth.positions_t1[tri[0]], cloth.positions_t1[tri[1]],
-                                cloth.positions_t1[tri[2]]};
-            if (certainly_one_signed(x0, x1)) continue;
-            ++exact_per[p];
-            const ccd::VertexFaceQuery q{x0[0], x0[1], x0[2], x0[3], x1[0], x1[1], x1[2], x1[3]};
-            if (ccd::transversal_crossing_exact(q)) {
-              flags[p] = 1 + static_cast<std::uint64_t>(t);
-              break;
+  parallel_for(n, 64, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t p = begin; p < end; ++p) {
+      const Bounds box = bounds_of({&particles_t0[p], &particles_t1[p]});
+      const Eigen::Array3d lo = cell_of(box.lo) - 1.0;
+      const Eigen::Array3d hi = cell_of(box.hi);
+      if ((hi - lo + 1.0).prod() > 1e6)
+        continue;  // a particle flying kilometres: not a cloth contact question
+      for (double z = lo[2]; z <= hi[2] && !flags[p]; z += 1.0) {
+        for (double y = lo[1]; y <= hi[1] && !flags[p]; y += 1.0) {
+          for (double x = lo[0]; x <= hi[0] && !flags[p]; x += 1.0) {
+            const auto it = grid.find(key(Eigen::Array3d(x, y, z)));
+            if (it == grid.end()) continue;
+            for (Index t : it->second) {
+              const Bounds& tb = boxes[t];
+              if ((box.hi.array() < tb.lo.array()).any() || (tb.hi.array() < box.lo.array()).any()) continue;
+              ++pairs_per[p];
+              const Triangle& tri = cloth.triangles[t];
+              const Vec3 x0[4] = {particles_t0[p], cloth.positions_t0[tri[0]], cloth.positions_t0[tri[1]],
+                                  cloth.positions_t0[tri[2]]};
+              const Vec3 x1[4] = {particles_t1[p], cloth.positions_t1[tri[0]], cloth.positions_t1[tri[1]],
+                                  cloth.positions_t1[tri[2]]};
+              if (certainly_one_signed(x0, x1)) continue;
+              ++exact_per[p];
+              const ccd::VertexFaceQuery q{x0[0], x0[1], x0[2], x0[3], x1[0], x1[1], x1[2], x1[3]};
+              if (ccd::transversal_crossing_exact(q)) {
+                flags[p] = 1 + static_cast<std::uint64_t>(t);
+                break;
+              }
             }
           }
         }
       }
     }
-  }
+  });
   for (std::size_t p = 0; p < n; ++p) {
     if (flags[p] != 0) {
       if (count == 0) {

@@ -5,6 +5,7 @@
 #include <utility>
 #include <vector>
 
+#include <drench/common/parallel.hpp>
 #include <drench/common/triangle_geometry.hpp>
 #include <drench/coupling/coupler_stages.hpp>
 
@@ -16,41 +17,42 @@ std::vector<Contact> find_contacts(const StepContext& ctx, const std::vector<std
   std::vector<Contact> candidates(pairs.size());
   std::vector<std::uint8_t> keep(pairs.size(), 0);
   const ClothMesh& cloth = ctx.cloth();
-#pragma omp parallel for schedule(static)
-  for (std::size_t k = 0; k < pairs.size(); ++k) {
-    const auto [p, t] = pairs[k];
-    const Triangle& tri = cloth.triangles[t];
-    const Vec3& a = cloth.positions_t0[tri[0]];
-    const Vec3& b = cloth.positions_t0[tri[1]];
-    const Vec3& c = cloth.positions_t0[tri[2]];
-    const Vec3& x = ctx.x0()[p];
-    const Vec3 w = closest_point_barycentric(x, a, b, c);
-    const Vec3 closest = w[0] * a + w[1] * b + w[2] * c;
-    const Vec3 offset = x - closest;
-    const double distance = offset.norm();
-    if (!(distance < thickness)) continue;
-    Vec3 normal = (b - a).cross(c - a);
-    const double area2 = normal.norm();
-    if (distance > 1e-9 * thickness) {
-      normal = offset / distance;
-    } else if (area2 > 0.0) {
-      // Exactly on the triangle: the side is unknown, take the side the particle comes from.
-      normal /= area2;
-      if (normal.dot(ctx.relative_velocity(p, t, w)) > 0.0) normal = -normal;
-    } else {
-      continue;  // on a zero-area triangle: nothing defines a normal; the neighbours handle it
+  parallel_for(pairs.size(), 256, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t k = begin; k < end; ++k) {
+      const auto [p, t] = pairs[k];
+      const Triangle& tri = cloth.triangles[t];
+      const Vec3& a = cloth.positions_t0[tri[0]];
+      const Vec3& b = cloth.positions_t0[tri[1]];
+      const Vec3& c = cloth.positions_t0[tri[2]];
+      const Vec3& x = ctx.x0()[p];
+      const Vec3 w = closest_point_barycentric(x, a, b, c);
+      const Vec3 closest = w[0] * a + w[1] * b + w[2] * c;
+      const Vec3 offset = x - closest;
+      const double distance = offset.norm();
+      if (!(distance < thickness)) continue;
+      Vec3 normal = (b - a).cross(c - a);
+      const double area2 = normal.norm();
+      if (distance > 1e-9 * thickness) {
+        normal = offset / distance;
+      } else if (area2 > 0.0) {
+        // Exactly on the triangle: the side is unknown, take the side the particle comes from.
+        normal /= area2;
+        if (normal.dot(ctx.relative_velocity(p, t, w)) > 0.0) normal = -normal;
+      } else {
+        continue;  // on a zero-area triangle: nothing defines a normal; the neighbours handle it
+      }
+      Contact& contact = candidates[k];
+      contact.particle = p;
+      contact.triangle = t;
+      contact.weights = w;
+      contact.normal = normal;
+      contact.overlap = thickness - distance;
+      contact.inverse_mass = ctx.inverse_mass(p, t, w);
+      const Vec3 v = ctx.relative_velocity(p, t, w);
+      contact.tangential_pre = v - v.dot(normal) * normal;
+      keep[k] = 1;
     }
-    Contact& contact = candidates[k];
-    contact.particle = p;
-    contact.triangle = t;
-    contact.weights = w;
-    contact.normal = normal;
-    contact.overlap = thickness - distance;
-    contact.inverse_mass = ctx.inverse_mass(p, t, w);
-    const Vec3 v = ctx.relative_velocity(p, t, w);
-    contact.tangential_pre = v - v.dot(normal) * normal;
-    keep[k] = 1;
-  }
+  });
   std::vector<Contact> contacts;
   for (std::size_t k = 0; k < pairs.size(); ++k) {
     if (!keep[k]) continue;

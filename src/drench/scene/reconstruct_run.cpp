@@ -1,6 +1,5 @@
 #include <drench/scene/reconstruct_run.hpp>
 
-#include <omp.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -11,6 +10,7 @@
 #include <utility>
 
 #include <drench/common/error.hpp>
+#include <drench/common/parallel.hpp>
 #include <drench/common/progress_line.hpp>
 #include <drench/common/stopwatch.hpp>
 #include <drench/io/atomic_file.hpp>
@@ -200,7 +200,7 @@ ReconstructResult reconstruct_run(const ReconstructOptions& options) {
                     {"surface_audit", audit_seconds},
                     {"read", read_seconds},
                     {"write", write_seconds}};
-  r["threads"] = omp_get_max_threads();
+  r["threads"] = thread_count();
   r["version"] = DRENCH_VERSION;
   r["scene_sha256"] = sha256_hex(canonical_scene_text(document));
   result.wall_seconds = wall();

@@ -1,6 +1,5 @@
 #include <drench/scene/scene_runner.hpp>
 
-#include <omp.h>
 #include <unistd.h>
 
 #include <chrono>
@@ -9,6 +8,7 @@
 #include <filesystem>
 
 #include <drench/common/error.hpp>
+#include <drench/common/parallel.hpp>
 #include <drench/common/stopwatch.hpp>
 #include <drench/io/atomic_file.hpp>
 #include <drench/scene/effect_registry.hpp>
@@ -103,7 +103,7 @@ nlohmann::json make_summary(const Simulation& sim, double wall_seconds, const st
                     {"forces", t.forces},        {"pressure", t.pressure},   {"integrate", t.integrate},
                     {"emit", sim.emit_seconds()}};
   s["wall_s"] = wall_seconds;
-  s["threads"] = omp_get_max_threads();
+  s["threads"] = thread_count();
   s["version"] = DRENCH_VERSION;
   s["scene_sha256"] = scene_sha256;
   s["effects"] = sim.effects();

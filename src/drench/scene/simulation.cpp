@@ -2,12 +2,14 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <limits>
 #include <stdexcept>
 #include <string>
 #include <unordered_map>
 
 #include <drench/common/error.hpp>
+#include <drench/common/parallel.hpp>
 #include <drench/common/stopwatch.hpp>
 #include <drench/coupling/broad_phase.hpp>
 #include <drench/coupling/cloth_obstacle.hpp>
@@ -493,21 +495,27 @@ void Simulation::remove_killed() {
   ParticleSet& particles = m_fluid->particles();
   const std::size_t n = particles.size();
   std::vector<std::uint8_t> remove(n, 0);
-  std::size_t flagged = 0;
-#pragma omp parallel for schedule(static) reduction(+ : flagged)
-  for (std::size_t i = 0; i < n; ++i) {
-    const Vec3& x = particles.positions[i];
-    for (const auto& region : m_config.kill_regions) {
-      const bool out = region.kind == KillRegionSettings::Kind::PLANE
-                           ? (x - region.point).dot(region.normal) < 0.0
-                           : ((x.array() < region.min.array()) || (x.array() > region.max.array())).any();
-      if (out) {
-        remove[i] = 1;
-        ++flagged;
-        break;
-      }
-    }
-  }
+  const std::size_t flagged = parallel_reduce(
+      n, kLightChunk, std::size_t{0},
+      [&](std::size_t begin, std::size_t end) {
+        std::size_t count = 0;
+        for (std::size_t i = begin; i < end; ++i) {
+          const Vec3& x = particles.positions[i];
+          for (const auto& region : m_config.kill_regions) {
+            const bool out =
+                region.kind == KillRegionSettings::Kind::PLANE
+                    ? (x - region.point).dot(region.normal) < 0.0
+                    : ((x.array() < region.min.array()) || (x.array() > region.max.array())).any();
+            if (out) {
+              remove[i] = 1;
+              ++count;
+              break;
+            }
+          }
+        }
+        return count;
+      },
+      std::plus<std::size_t>());
   if (flagged == 0) return;
   for (std::size_t i = 0; i < n; ++i)  // in order, so that the sum is the same whatever the threads
     if (remove[i]) m_killed_mass += particles.masses[i];

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <utility>
 
 #include <drench/common/parallel.hpp>
 #include <drench/common/stopwatch.hpp>
@@ -126,11 +127,16 @@ void FluidSolver::update_neighbors(Scalar max_displacement) {
 }
 
 Scalar FluidSolver::max_speed() const {
-  Scalar max_speed_sq = 0.0;
   const auto& v = m_particles.velocities;
-#pragma omp parallel for schedule(static) reduction(max : max_speed_sq)
-  for (std::size_t i = 0; i < v.size(); ++i)
-    max_speed_sq = std::max(max_speed_sq, v[i].squaredNorm());
+  const Scalar max_speed_sq = parallel_reduce(
+      v.size(), kLightChunk, Scalar(0.0),
+      [&](std::size_t begin, std::size_t end) {
+        Scalar m = 0.0;
+        for (std::size_t i = begin; i < end; ++i)
+          m = std::max(m, v[i].squaredNorm());
+        return m;
+      },
+      [](Scalar a, Scalar b) { return std::max(a, b); });
   return std::sqrt(max_speed_sq);
 }
 
@@ -198,9 +204,10 @@ StepStatus FluidSolver::substep(Scalar dt, Scalar max_speed, SubstepConstraint* 
   {
     ScopedTimer timer(m_stats.timings_s.density);
     m_positions_mass.resize(n);
-#pragma omp parallel for schedule(static)
-    for (std::size_t i = 0; i < n; ++i)
-      m_positions_mass[i] = packed(m_particles.positions[i], m_particles.masses[i]);
+    parallel_for(n, kLightChunk, [&](std::size_t begin, std::size_t end) {
+      for (std::size_t i = begin; i < end; ++i)
+        m_positions_mass[i] = packed(m_particles.positions[i], m_particles.masses[i]);
+    });
     for_each_chunk(n, [&](std::size_t begin, std::size_t end) {
       sph_densities(ctx, m_positions_mass, begin, end, &m_particles.densities[begin]);
     });
@@ -220,9 +227,10 @@ StepStatus FluidSolver::substep(Scalar dt, Scalar max_speed, SubstepConstraint* 
       ++m_viscosity_counter.passes;
     }
     m_velocities_adv.resize(n);
-#pragma omp parallel for schedule(static)
-    for (std::size_t i = 0; i < n; ++i)
-      m_velocities_adv[i] = m_particles.velocities[i] + dt * m_accelerations[i];
+    parallel_for(n, kLightChunk, [&](std::size_t begin, std::size_t end) {
+      for (std::size_t i = begin; i < end; ++i)
+        m_velocities_adv[i] = m_particles.velocities[i] + dt * m_accelerations[i];
+    });
   }
   PressureStats pressure;
   {
@@ -240,19 +248,25 @@ StepStatus FluidSolver::substep(Scalar dt, Scalar max_speed, SubstepConstraint* 
   if (!pressure.converged || !divergence.converged) status.flags |= StepStatus::PRESSURE_NOT_CONVERGED;
   ScopedTimer timer(m_stats.timings_s.integrate);
   if (constraint) m_positions_before = m_particles.positions;
-  std::size_t first_bad = n;
-  std::int64_t guarded = 0;
-#pragma omp parallel for schedule(static) reduction(min : first_bad) reduction(+ : guarded)
-  for (std::size_t i = 0; i < n; ++i) {
-    Vec3& v = m_particles.velocities[i];
-    Vec3& x = m_particles.positions[i];
-    v = m_velocities_adv[i] + dt * m_pressure_accelerations[i];
-    const Vec3 x_t0 = x;
-    x += dt * v;
-    for (const BoundarySettings& guard : m_guards)
-      guarded += enforce_boundary(guard, x_t0, x, v) ? 1 : 0;
-    if (!v.allFinite() || !x.allFinite()) first_bad = std::min(first_bad, i);
-  }
+  // (first non-finite particle, particles the guards moved): a min and an integer sum, so any deal.
+  using Tally = std::pair<std::size_t, std::int64_t>;
+  const auto [first_bad, guarded] = parallel_reduce(
+      n, kLightChunk, Tally(n, 0),
+      [&](std::size_t begin, std::size_t end) {
+        Tally t(n, 0);
+        for (std::size_t i = begin; i < end; ++i) {
+          Vec3& v = m_particles.velocities[i];
+          Vec3& x = m_particles.positions[i];
+          v = m_velocities_adv[i] + dt * m_pressure_accelerations[i];
+          const Vec3 x_t0 = x;
+          x += dt * v;
+          for (const BoundarySettings& guard : m_guards)
+            t.second += enforce_boundary(guard, x_t0, x, v) ? 1 : 0;
+          if (!v.allFinite() || !x.allFinite()) t.first = std::min(t.first, i);
+        }
+        return t;
+      },
+      [](const Tally& a, const Tally& b) { return Tally(std::min(a.first, b.first), a.second + b.second); });
   m_stats.boundary_guards += guarded;
   if (constraint) constraint->apply(m_positions_before, m_particles, dt);
   if (first_bad < n) {

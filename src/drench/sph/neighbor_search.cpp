@@ -6,8 +6,6 @@
 #include <limits>
 #include <utility>
 
-#include <omp.h>
-
 #include <drench/common/parallel.hpp>
 #include <drench/sph/candidate_scan.hpp>
 
@@ -93,9 +91,10 @@ std::uint64_t NeighborSearch::cell_key(const Vec3& x) const {
 IndexArray NeighborSearch::z_order(const Vec3Array& points) const {
   const std::size_t n = points.size();
   std::vector<std::pair<std::uint64_t, Index>> keyed(n);
-#pragma omp parallel for schedule(static)
-  for (std::size_t i = 0; i < n; ++i)
-    keyed[i] = {cell_key(points[i]), static_cast<Index>(i)};
+  parallel_for(n, kLightChunk, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t i = begin; i < end; ++i)
+      keyed[i] = {cell_key(points[i]), static_cast<Index>(i)};
+  });
   std::sort(keyed.begin(), keyed.end());
   IndexArray order(n);
   for (std::size_t k = 0; k < n; ++k)
@@ -106,9 +105,10 @@ IndexArray NeighborSearch::z_order(const Vec3Array& points) const {
 void NeighborSearch::build(const Vec3Array& points) {
   const std::size_t n = points.size();
   std::vector<Vec3i> cells(n);
-#pragma omp parallel for schedule(static)
-  for (std::size_t i = 0; i < n; ++i)
-    cells[i] = cell_of(points[i]);
+  parallel_for(n, kLightChunk, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t i = begin; i < end; ++i)
+      cells[i] = cell_of(points[i]);
+  });
   Vec3i lo = Vec3i::Constant(std::numeric_limits<int>::max());
   Vec3i hi = Vec3i::Constant(std::numeric_limits<int>::min());
   for (const Vec3i& c : cells) {
@@ -136,13 +136,14 @@ void NeighborSearch::build(const Vec3Array& points) {
   m_xs.resize(n + kScanPadding);
   m_ys.resize(n + kScanPadding);
   m_zs.resize(n + kScanPadding);
-#pragma omp parallel for schedule(static)
-  for (std::size_t k = 0; k < n; ++k) {
-    const Vec3& x = points[m_sorted_index[k]];
-    m_xs[k] = x.x();
-    m_ys[k] = x.y();
-    m_zs[k] = x.z();
-  }
+  parallel_for(n, kLightChunk, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t k = begin; k < end; ++k) {
+      const Vec3& x = points[m_sorted_index[k]];
+      m_xs[k] = x.x();
+      m_ys[k] = x.y();
+      m_zs[k] = x.z();
+    }
+  });
 }
 
 void NeighborSearch::build_dense(const std::vector<Vec3i>& cells, const Vec3i& lo, const Vec3i& dims) {
@@ -247,7 +248,7 @@ void NeighborSearch::find(const Vec3Array& queries, NeighborList& out, bool excl
   // were unbalanced (the half at the floor has the boundary neighbors). Each thread gathers into its own
   // buffer and remembers where each of its chunks starts; the chunks are then copied to their place in query
   // order, so the result is the same for any thread count and any deal.
-  const int threads = omp_get_max_threads();
+  const int threads = thread_count();
   const std::size_t chunks = (m + kParticleChunk - 1) / kParticleChunk;
   // The per-thread buffers keep their capacity from call to call: grown from empty by doubling, every call
   // copied each buffer about twice over before its first write.
@@ -255,75 +256,75 @@ void NeighborSearch::find(const Vec3Array& queries, NeighborList& out, bool excl
   if (buffers.size() < static_cast<std::size_t>(threads)) buffers.resize(static_cast<std::size_t>(threads));
   std::vector<int> chunk_owner(chunks);
   std::vector<std::size_t> chunk_start(chunks);
-#pragma omp parallel num_threads(threads)
-  {
-    const int thread = omp_get_thread_num();
-    IndexArray& local = buffers[static_cast<std::size_t>(thread)];
-    CandidateRuns runs;
-    std::size_t used =
-        0;  // local is grown ahead of the writes; only its first `used` entries are this call's
-#pragma omp for schedule(dynamic, 1)
-    for (std::size_t k = 0; k < chunks; ++k) {
-      chunk_owner[k] = thread;
-      chunk_start[k] = used;
-      const std::size_t chunk_end = std::min(m, (k + 1) * kParticleChunk);
-      // Each query scans the runs of its 27 cells in place in the sorted arrays (nine rows in the dense
-      // grid); the runs are looked up once per run of queries in one cell. Copying the candidates into one
-      // array per run of queries first was rejected: particles drift between sorts, so a copy serves only
-      // about three queries, and the eight-lane scans do better in place (bench_dam_break pcisph_59k; on the
-      // sorted block of bench_neighbor_search they are even, and only the four-lane scan, for CPUs without
-      // AVX2, loses a little). A row-by-row scan that skipped cells beyond the radius was slower still.
-      bool buffered = false;
-      Vec3i buffered_cell = Vec3i::Zero();
-      for (std::size_t i = k * kParticleChunk; i < chunk_end; ++i) {
-        const Vec3& x = queries[i];
-        const Vec3i c = cell_of(x);
-        if (!buffered || c != buffered_cell) {
-          candidate_runs(c, runs);
-          buffered = true;
-          buffered_cell = c;
-        }
-        const Index self = exclude_self ? static_cast<Index>(i) : kNoIndex;
-        const std::size_t room = used + runs.total + kScanPadding;
-        if (local.size() < room) local.resize(std::max(2 * local.size(), room));
-        const std::size_t first = used;
-        Index* dst = local.data() + used;
-        switch (m_scan) {
+  // Per thread: the buffer is grown ahead of the writes; only its first `used` entries are this call's.
+  std::vector<std::size_t> used_by(static_cast<std::size_t>(threads), 0);
+  parallel_for_slots(
+      m, kParticleChunk, threads, [&](std::size_t chunk_begin, std::size_t chunk_end, int thread) {
+        const std::size_t k = chunk_begin / kParticleChunk;
+        IndexArray& local = buffers[static_cast<std::size_t>(thread)];
+        std::size_t used = used_by[static_cast<std::size_t>(thread)];
+        CandidateRuns runs;
+        chunk_owner[k] = thread;
+        chunk_start[k] = used;
+        // Each query scans the runs of its 27 cells in place in the sorted arrays (nine rows in the dense
+        // grid); the runs are looked up once per run of queries in one cell. Copying the candidates into one
+        // array per run of queries first was rejected: particles drift between sorts, so a copy serves only
+        // about three queries, and the eight-lane scans do better in place (bench_dam_break pcisph_59k; on
+        // the sorted block of bench_neighbor_search they are even, and only the four-lane scan, for CPUs
+        // without AVX2, loses a little). A row-by-row scan that skipped cells beyond the radius was slower
+        // still.
+        bool buffered = false;
+        Vec3i buffered_cell = Vec3i::Zero();
+        for (std::size_t i = chunk_begin; i < chunk_end; ++i) {
+          const Vec3& x = queries[i];
+          const Vec3i c = cell_of(x);
+          if (!buffered || c != buffered_cell) {
+            candidate_runs(c, runs);
+            buffered = true;
+            buffered_cell = c;
+          }
+          const Index self = exclude_self ? static_cast<Index>(i) : kNoIndex;
+          const std::size_t room = used + runs.total + kScanPadding;
+          if (local.size() < room) local.resize(std::max(2 * local.size(), room));
+          const std::size_t first = used;
+          Index* dst = local.data() + used;
+          switch (m_scan) {
 #if DRENCH_HAS_AVX512_SCAN
-          case CandidateScan::kAvx512Compress:
-            used += scan_runs_compress(m_xs.data(), m_ys.data(), m_zs.data(), m_sorted_index.data(),
-                                       runs.begin, runs.end, runs.runs, x, r2, self, dst);
-            break;
+            case CandidateScan::kAvx512Compress:
+              used += scan_runs_compress(m_xs.data(), m_ys.data(), m_zs.data(), m_sorted_index.data(),
+                                         runs.begin, runs.end, runs.runs, x, r2, self, dst);
+              break;
 #endif
 #if DRENCH_HAS_AVX2_SCAN
-          case CandidateScan::kAvx2Permute:
-            used += scan_runs_permute(m_xs.data(), m_ys.data(), m_zs.data(), m_sorted_index.data(),
-                                      runs.begin, runs.end, runs.runs, x, r2, self, dst);
-            break;
+            case CandidateScan::kAvx2Permute:
+              used += scan_runs_permute(m_xs.data(), m_ys.data(), m_zs.data(), m_sorted_index.data(),
+                                        runs.begin, runs.end, runs.runs, x, r2, self, dst);
+              break;
 #endif
-          default:
-            used += scan_runs_lanes(m_xs.data(), m_ys.data(), m_zs.data(), m_sorted_index.data(), runs.begin,
-                                    runs.end, runs.runs, x, r2, self, dst);
+            default:
+              used += scan_runs_lanes(m_xs.data(), m_ys.data(), m_zs.data(), m_sorted_index.data(),
+                                      runs.begin, runs.end, runs.runs, x, r2, self, dst);
+          }
+          out.offsets[i + 1] = static_cast<std::uint32_t>(used - first);
         }
-        out.offsets[i + 1] = static_cast<std::uint32_t>(used - first);
-      }
-    }
-  }
+        used_by[static_cast<std::size_t>(thread)] = used;
+      });
   for (std::size_t i = 0; i < m; ++i)
     out.offsets[i + 1] += out.offsets[i];
   // The copy is parallel too: a serial concatenation was a tenth of WCSPH's sub-step on two threads
   // (bench_dam_break wcsph_59k). The list keeps its old entries until the copy overwrites every one: cleared
   // first, the resize zero-filled the whole list (a memset of 4 bytes per pair) on every search.
   out.indices.resize(out.offsets[m]);
-#pragma omp parallel for schedule(static)
-  for (std::size_t k = 0; k < chunks; ++k) {
-    const std::size_t begin = out.offsets[k * kParticleChunk];
-    const std::size_t end = out.offsets[std::min(m, (k + 1) * kParticleChunk)];
-    const auto from = buffers[static_cast<std::size_t>(chunk_owner[k])].begin() +
-                      static_cast<std::ptrdiff_t>(chunk_start[k]);
-    std::copy(from, from + static_cast<std::ptrdiff_t>(end - begin),
-              out.indices.begin() + static_cast<std::ptrdiff_t>(begin));
-  }
+  parallel_for(chunks, 4, [&](std::size_t first_chunk, std::size_t end_chunk) {
+    for (std::size_t k = first_chunk; k < end_chunk; ++k) {
+      const std::size_t begin = out.offsets[k * kParticleChunk];
+      const std::size_t end = out.offsets[std::min(m, (k + 1) * kParticleChunk)];
+      const auto from = buffers[static_cast<std::size_t>(chunk_owner[k])].begin() +
+                        static_cast<std::ptrdiff_t>(chunk_start[k]);
+      std::copy(from, from + static_cast<std::ptrdiff_t>(end - begin),
+                out.indices.begin() + static_cast<std::ptrdiff_t>(begin));
+    }
+  });
 }
 
 }  // namespace drench

@@ -2,6 +2,9 @@
 
 #include <algorithm>
 #include <cassert>
+#include <utility>
+
+#include <drench/common/parallel.hpp>
 
 namespace drench {
 
@@ -20,9 +23,10 @@ namespace {
 template <class T>
 void permute_array(std::vector<T>& values, const IndexArray& order) {
   std::vector<T> sorted(values.size());
-#pragma omp parallel for schedule(static)
-  for (std::size_t k = 0; k < order.size(); ++k)
-    sorted[k] = values[order[k]];
+  parallel_for(order.size(), kLightChunk, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t k = begin; k < end; ++k)
+      sorted[k] = values[order[k]];
+  });
   values.swap(sorted);
 }
 
@@ -73,14 +77,21 @@ void ParticleSet::reserve(std::size_t n) {
 
 Scalar ParticleSet::common_mass() const {
   if (masses.empty()) return 0.0;
-  Scalar lo = masses[0];
-  Scalar hi = masses[0];
-#pragma omp parallel for schedule(static) reduction(min : lo) reduction(max : hi)
-  for (std::size_t i = 0; i < masses.size(); ++i) {
-    lo = std::min(lo, masses[i]);
-    hi = std::max(hi, masses[i]);
-  }
-  return lo == hi ? lo : 0.0;
+  using Range = std::pair<Scalar, Scalar>;
+  const Range range = parallel_reduce(
+      masses.size(), kLightChunk, Range(masses[0], masses[0]),
+      [&](std::size_t begin, std::size_t end) {
+        Range r(masses[begin], masses[begin]);
+        for (std::size_t i = begin; i < end; ++i) {
+          r.first = std::min(r.first, masses[i]);
+          r.second = std::max(r.second, masses[i]);
+        }
+        return r;
+      },
+      [](const Range& a, const Range& b) {
+        return Range(std::min(a.first, b.first), std::max(a.second, b.second));
+      });
+  return range.first == range.second ? range.first : 0.0;
 }
 
 }  // namespace drench

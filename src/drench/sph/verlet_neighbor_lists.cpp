@@ -70,10 +70,15 @@ VerletNeighborLists::VerletNeighborLists(const CubicSplineKernel& kernel, Scalar
 }
 
 bool VerletNeighborLists::moved_beyond_half_skin(const Vec3Array& positions) const {
-  Scalar max_sq = 0.0;
-#pragma omp parallel for schedule(static) reduction(max : max_sq)
-  for (std::size_t i = 0; i < positions.size(); ++i)
-    max_sq = std::max(max_sq, (positions[i] - m_positions[i]).squaredNorm());
+  const Scalar max_sq = parallel_reduce(
+      positions.size(), kLightChunk, Scalar(0.0),
+      [&](std::size_t begin, std::size_t end) {
+        Scalar m = 0.0;
+        for (std::size_t i = begin; i < end; ++i)
+          m = std::max(m, (positions[i] - m_positions[i]).squaredNorm());
+        return m;
+      },
+      [](Scalar a, Scalar b) { return std::max(a, b); });
   // A NaN displacement fails `<=` and so rebuilds, as does any motion beyond half the skin.
   return !(max_sq <= 0.25 * m_skin * m_skin);
 }
@@ -131,23 +136,24 @@ void VerletNeighborLists::filter(const NeighborList& candidates, const Vec3Array
   // the skin), and a write never leaves the particle's range. The distance is NeighborSearch::find's
   // expression (source minus query, summed x, y, z), so a pair is kept exactly when a fresh search would
   // report it. The gradient factors are taken in the second pass, over the kept pairs only and vectorized.
-#pragma omp parallel for schedule(dynamic, kParticleChunk)
-  for (std::size_t i = 0; i < n; ++i) {
-    const std::uint32_t first = candidates.offsets[i];
-    Index* kept = m_kept.data() + first;
-    Scalar* kept_r2 = m_kept_r2.data() + first;
-    const Scalar x0 = x[i].x(), x1 = x[i].y(), x2 = x[i].z();
-    std::uint32_t count = 0;
-    for (std::uint32_t c = first; c < candidates.offsets[i + 1]; ++c) {
-      const Index j = candidates.indices[c];
-      const Scalar d0 = sources[j].x() - x0, d1 = sources[j].y() - x1, d2 = sources[j].z() - x2;
-      const Scalar r2 = d0 * d0 + d1 * d1 + d2 * d2;
-      kept[count] = j;
-      kept_r2[count] = r2;
-      count += r2 < r2_max ? 1u : 0u;
+  parallel_for(n, kParticleChunk, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t i = begin; i < end; ++i) {
+      const std::uint32_t first = candidates.offsets[i];
+      Index* kept = m_kept.data() + first;
+      Scalar* kept_r2 = m_kept_r2.data() + first;
+      const Scalar x0 = x[i].x(), x1 = x[i].y(), x2 = x[i].z();
+      std::uint32_t count = 0;
+      for (std::uint32_t c = first; c < candidates.offsets[i + 1]; ++c) {
+        const Index j = candidates.indices[c];
+        const Scalar d0 = sources[j].x() - x0, d1 = sources[j].y() - x1, d2 = sources[j].z() - x2;
+        const Scalar r2 = d0 * d0 + d1 * d1 + d2 * d2;
+        kept[count] = j;
+        kept_r2[count] = r2;
+        count += r2 < r2_max ? 1u : 0u;
+      }
+      out.offsets[i + 1] = count;
     }
-    out.offsets[i + 1] = count;
-  }
+  });
   for (std::size_t i = 0; i < n; ++i)
     out.offsets[i + 1] += out.offsets[i];
   out.indices.resize(out.offsets[n]);

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <functional>
 #include <limits>
 #include <string>
 #include <unordered_map>
@@ -10,6 +11,7 @@
 
 #include <drench/ccd/exact_predicates.hpp>
 #include <drench/common/error.hpp>
+#include <drench/common/parallel.hpp>
 #include <drench/common/triangle_geometry.hpp>
 #include <drench/surface/triangle_bins.hpp>
 #include <drench/surface/vdb_mesher.hpp>
@@ -203,15 +205,16 @@ std::vector<double> inverse_number_densities(const ParticleCells& cells, Scalar 
   const Vec3Array& particles = cells.positions();
   std::vector<double> inverse(particles.size());
   const double radius2 = radius * radius;
-#pragma omp parallel for schedule(static)
-  for (std::size_t i = 0; i < particles.size(); ++i) {
-    double sum = 0.0;
-    cells.for_each_near(particles[i], [&](Index j) {
-      const double d2 = (particles[j] - particles[i]).squaredNorm();
-      if (d2 < radius2) sum += zb_kernel(d2 / radius2);
-    });
-    inverse[i] = 1.0 / sum;
-  }
+  parallel_for(particles.size(), kParticleChunk, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t i = begin; i < end; ++i) {
+      double sum = 0.0;
+      cells.for_each_near(particles[i], [&](Index j) {
+        const double d2 = (particles[j] - particles[i]).squaredNorm();
+        if (d2 < radius2) sum += zb_kernel(d2 / radius2);
+      });
+      inverse[i] = 1.0 / sum;
+    }
+  });
   return inverse;
 }
 
@@ -257,95 +260,101 @@ SurfaceMesh reconstruct_surface(const Vec3Array& particles, Scalar particle_spac
   const TriangleBins bins = aware ? TriangleBins(obstacles, radius) : TriangleBins();
   lap(local.seconds_densities);
   std::vector<float> values(nodes.size(), outside);
-  std::uint64_t occluded = 0, reset = 0;
   const double radius2 = radius * radius;
 
-#pragma omp parallel
-  {
-    std::vector<std::pair<Index, Index>> near;  // (obstacle, triangle) within reach of the node
-    // The faces within reach of the node's block of 8^3 nodes (OpenVDB's leaf; active_nodes() lists the
-    // nodes leaf by leaf), collected once per block and filtered per node: the node's list is the same,
-    // without a node's hash lookups and sort (bench_surface jet_on_cloth/contact_aware).
-    std::vector<std::pair<Index, Index>> block_near;
-    Vec3i block = Vec3i::Constant(std::numeric_limits<int>::min());
-#pragma omp for schedule(dynamic, 1024) reduction(+ : occluded, reset)
-    for (std::size_t n = 0; n < nodes.size(); ++n) {
-      const Vec3 x = nodes[n].cast<double>() * cell;
-      near.clear();
-      if (aware) {
-        const Vec3i leaf(nodes[n].x() >> 3, nodes[n].y() >> 3, nodes[n].z() >> 3);
-        if (leaf != block) {
-          block = leaf;
-          const Vec3 lo = (8 * leaf).cast<double>() * cell,
-                     hi = (8 * leaf + Vec3i::Constant(7)).cast<double>() * cell;
-          bins.collect_box(lo - Vec3::Constant(radius), hi + Vec3::Constant(radius), block_near);
-        }
-        bins.filter_box(block_near, x - Vec3::Constant(radius), x + Vec3::Constant(radius), near);
-      }
-      bool too_close = false;
-      for (const auto& [o, t] : near) {
-        const Triangle& tri = (*obstacles[o].triangles)[t];
-        const Vec3Array& p = *obstacles[o].positions;
-        const Vec3 w = closest_point_barycentric(x, p[tri[0]], p[tri[1]], p[tri[2]]);
-        const Vec3 closest = w.x() * p[tri[0]] + w.y() * p[tri[1]] + w.z() * p[tri[2]];
-        // The paper's delta, and a drench addition that makes the guarantee exact: a node of any grid cell
-        // the face passes through is outside too, so no cell the face meets holds a piece of surface, and
-        // OpenVDB's quads, each inside the four cells around one grid edge, cannot cross the face.
-        if ((closest - x).squaredNorm() < offset * offset ||
-            triangle_overlaps_cube(p[tri[0]], p[tri[1]], p[tri[2]], x, cell * (1.0 + 1e-9))) {
-          too_close = true;
-          break;
-        }
-      }
-      if (too_close) {  // Fig. 2b
-        ++reset;
-        continue;
-      }
-      double weight = 0.0;
-      Vec3 mean = Vec3::Zero();
-      if (near.empty()) {
-        // No face in reach, so no visibility test: a lambda this small is inlined into for_each_near's loop,
-        // where the one below, with the segment tests, was a call per candidate (perf: the field's lambda
-        // out of line, 56% of a reconstruction). Same sums in the same order: the same bits.
-        cells.for_each_near(x, [&](Index i) {
-          const Vec3& p = sorted[i];
-          const double d2 = (p - x).squaredNorm();
-          if (d2 >= radius2) return;
-          const double w = zb_kernel(d2 / radius2) * inverse_density[i];
-          weight += w;
-          mean += w * p;
-        });
-      } else {
-        cells.for_each_near(x, [&](Index i) {
-          const Vec3& p = sorted[i];
-          const double d2 = (p - x).squaredNorm();
-          if (d2 >= radius2) return;
-          for (const auto& [o, t] : near) {  // Fig. 2a: only particles the node sees
+  // Per chunk of nodes: (occluded, reset), integer sums.
+  using Counts = std::pair<std::uint64_t, std::uint64_t>;
+  const Counts counts = parallel_reduce(
+      nodes.size(), 1024, Counts(0, 0),
+      [&](std::size_t begin, std::size_t end) {
+        std::uint64_t occluded = 0, reset = 0;
+        std::vector<std::pair<Index, Index>> near;  // (obstacle, triangle) within reach of the node
+        // The faces within reach of the node's block of 8^3 nodes (OpenVDB's leaf; active_nodes() lists the
+        // nodes leaf by leaf), collected once per block and filtered per node: the node's list is the same,
+        // without a node's hash lookups and sort (bench_surface jet_on_cloth/contact_aware).
+        std::vector<std::pair<Index, Index>> block_near;
+        Vec3i block = Vec3i::Constant(std::numeric_limits<int>::min());
+        for (std::size_t n = begin; n < end; ++n) {
+          const Vec3 x = nodes[n].cast<double>() * cell;
+          near.clear();
+          if (aware) {
+            const Vec3i leaf(nodes[n].x() >> 3, nodes[n].y() >> 3, nodes[n].z() >> 3);
+            if (leaf != block) {
+              block = leaf;
+              const Vec3 lo = (8 * leaf).cast<double>() * cell,
+                         hi = (8 * leaf + Vec3i::Constant(7)).cast<double>() * cell;
+              bins.collect_box(lo - Vec3::Constant(radius), hi + Vec3::Constant(radius), block_near);
+            }
+            bins.filter_box(block_near, x - Vec3::Constant(radius), x + Vec3::Constant(radius), near);
+          }
+          bool too_close = false;
+          for (const auto& [o, t] : near) {
             const Triangle& tri = (*obstacles[o].triangles)[t];
-            const Vec3Array& q = *obstacles[o].positions;
-            if (segment_crosses_triangle(x, p, q[tri[0]], q[tri[1]], q[tri[2]])) {
-              ++occluded;
-              return;
+            const Vec3Array& p = *obstacles[o].positions;
+            const Vec3 w = closest_point_barycentric(x, p[tri[0]], p[tri[1]], p[tri[2]]);
+            const Vec3 closest = w.x() * p[tri[0]] + w.y() * p[tri[1]] + w.z() * p[tri[2]];
+            // The paper's delta, and a drench addition that makes the guarantee exact: a node of any grid
+            // cell the face passes through is outside too, so no cell the face meets holds a piece of
+            // surface, and OpenVDB's quads, each inside the four cells around one grid edge, cannot cross the
+            // face.
+            if ((closest - x).squaredNorm() < offset * offset ||
+                triangle_overlaps_cube(p[tri[0]], p[tri[1]], p[tri[2]], x, cell * (1.0 + 1e-9))) {
+              too_close = true;
+              break;
             }
           }
-          const double w = zb_kernel(d2 / radius2) * inverse_density[i];
-          weight += w;
-          mean += w * p;
-        });
-      }
-      if (weight > 0.0 && density_field) {
-        // The colour field is about 1 inside and 0 far outside; scaled by the spacing, its values near the
-        // surface are lengths like the Zhu-Bridson field's, which the mesher's interpolation expects.
-        values[n] = static_cast<float>(std::min<double>((kColourLevel - weight) * particle_spacing, outside));
-      } else if (weight > 0.0) {
-        mean /= weight;
-        values[n] = static_cast<float>(std::min<double>((x - mean).norm() - particle_radius, outside));
-      }
-    }
-  }
+          if (too_close) {  // Fig. 2b
+            ++reset;
+            continue;
+          }
+          double weight = 0.0;
+          Vec3 mean = Vec3::Zero();
+          if (near.empty()) {
+            // No face in reach, so no visibility test: a lambda this small is inlined into for_each_near's
+            // loop, where the one below, with the segment tests, was a call per candidate (perf: the field's
+            // lambda out of line, 56% of a reconstruction). Same sums in the same order: the same bits.
+            cells.for_each_near(x, [&](Index i) {
+              const Vec3& p = sorted[i];
+              const double d2 = (p - x).squaredNorm();
+              if (d2 >= radius2) return;
+              const double w = zb_kernel(d2 / radius2) * inverse_density[i];
+              weight += w;
+              mean += w * p;
+            });
+          } else {
+            cells.for_each_near(x, [&](Index i) {
+              const Vec3& p = sorted[i];
+              const double d2 = (p - x).squaredNorm();
+              if (d2 >= radius2) return;
+              for (const auto& [o, t] : near) {  // Fig. 2a: only particles the node sees
+                const Triangle& tri = (*obstacles[o].triangles)[t];
+                const Vec3Array& q = *obstacles[o].positions;
+                if (segment_crosses_triangle(x, p, q[tri[0]], q[tri[1]], q[tri[2]])) {
+                  ++occluded;
+                  return;
+                }
+              }
+              const double w = zb_kernel(d2 / radius2) * inverse_density[i];
+              weight += w;
+              mean += w * p;
+            });
+          }
+          if (weight > 0.0 && density_field) {
+            // The colour field is about 1 inside and 0 far outside; scaled by the spacing, its values near
+            // the surface are lengths like the Zhu-Bridson field's, which the mesher's interpolation expects.
+            values[n] =
+                static_cast<float>(std::min<double>((kColourLevel - weight) * particle_spacing, outside));
+          } else if (weight > 0.0) {
+            mean /= weight;
+            values[n] = static_cast<float>(std::min<double>((x - mean).norm() - particle_radius, outside));
+          }
+        }
+        return Counts(occluded, reset);
+      },
+      [](const Counts& a, const Counts& b) { return Counts(a.first + b.first, a.second + b.second); });
   lap(local.seconds_field);
-  local.occluded = occluded;
-  local.reset_nodes = reset;
+  local.occluded = counts.first;
+  local.reset_nodes = counts.second;
   grid.set_values(nodes, values);
   grid.mesh(mesh.positions, mesh.triangles);
   compute_vertex_normals(mesh);
@@ -363,25 +372,26 @@ std::uint64_t count_surface_intersections(const SurfaceMesh& surface,
     edges += (surface.positions[t[1]] - surface.positions[t[0]]).norm();
   const double cell = std::max(4.0 * edges / static_cast<double>(surface.triangles.size()), 1e-6);
   const TriangleBins bins(obstacles, cell);
-  std::uint64_t count = 0;
-#pragma omp parallel
-  {
-    std::vector<std::pair<Index, Index>> near;
-#pragma omp for schedule(dynamic, 256) reduction(+ : count)
-    for (std::size_t s = 0; s < surface.triangles.size(); ++s) {
-      const Triangle& st = surface.triangles[s];
-      const Vec3& a = surface.positions[st[0]];
-      const Vec3& b = surface.positions[st[1]];
-      const Vec3& c = surface.positions[st[2]];
-      bins.collect_box(a.cwiseMin(b).cwiseMin(c), a.cwiseMax(b).cwiseMax(c), near);
-      for (const auto& [o, t] : near) {
-        const Triangle& ot = (*obstacles[o].triangles)[t];
-        const Vec3Array& q = *obstacles[o].positions;
-        if (ccd::triangles_meet_exact(a, b, c, q[ot[0]], q[ot[1]], q[ot[2]])) ++count;
-      }
-    }
-  }
-  return count;
+  return parallel_reduce(
+      surface.triangles.size(), 256, std::uint64_t{0},
+      [&](std::size_t begin, std::size_t end) {
+        std::uint64_t found = 0;
+        std::vector<std::pair<Index, Index>> near;
+        for (std::size_t s = begin; s < end; ++s) {
+          const Triangle& st = surface.triangles[s];
+          const Vec3& a = surface.positions[st[0]];
+          const Vec3& b = surface.positions[st[1]];
+          const Vec3& c = surface.positions[st[2]];
+          bins.collect_box(a.cwiseMin(b).cwiseMin(c), a.cwiseMax(b).cwiseMax(c), near);
+          for (const auto& [o, t] : near) {
+            const Triangle& ot = (*obstacles[o].triangles)[t];
+            const Vec3Array& q = *obstacles[o].positions;
+            if (ccd::triangles_meet_exact(a, b, c, q[ot[0]], q[ot[1]], q[ot[2]])) ++found;
+          }
+        }
+        return found;
+      },
+      std::plus<std::uint64_t>());
 }
 
 }  // namespace drench

@@ -33,11 +33,12 @@ void ViscosityXsph::add_accelerations(const FluidContext& ctx, Scalar dt, Vec3Ar
   const std::size_t n = p.size();
   m_x_volume.resize(n);
   m_velocities.resize(n);
-#pragma omp parallel for schedule(static)
-  for (std::size_t i = 0; i < n; ++i) {
-    m_x_volume[i] = packed(p.positions[i], p.masses[i] / p.densities[i]);
-    m_velocities[i] = packed(p.velocities[i], 0.0);
-  }
+  parallel_for(n, kLightChunk, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t i = begin; i < end; ++i) {
+      m_x_volume[i] = packed(p.positions[i], p.masses[i] / p.densities[i]);
+      m_velocities[i] = packed(p.velocities[i], 0.0);
+    }
+  });
   const Scalar factor = m_coefficient / dt;
   for_each_chunk(n, [&](std::size_t begin, std::size_t end) {
     add_xsph(ctx, m_x_volume, m_velocities, factor, begin, end, &accelerations[begin]);
@@ -50,19 +51,20 @@ void ViscosityArtificial::add_accelerations(const FluidContext& ctx, Scalar /*dt
   const Scalar h = ctx.kernel.smoothing_length();
   const Scalar eps = 0.01 * h * h;
   const Scalar scale = m_alpha * m_speed_of_sound * h;
-#pragma omp parallel for schedule(dynamic, kParticleChunk)
-  for (std::size_t i = 0; i < p.size(); ++i) {
-    Vec3 a = Vec3::Zero();
-    for (const Index* j = ctx.fluid_neighbors.begin(i); j != ctx.fluid_neighbors.end(i); ++j) {
-      const Vec3 x_ij = p.positions[i] - p.positions[*j];
-      const Scalar vx = (p.velocities[i] - p.velocities[*j]).dot(x_ij);
-      if (vx >= 0.0) continue;
-      const Scalar mu = vx / (x_ij.squaredNorm() + eps);
-      const Scalar pi_ij = -scale * mu / (0.5 * (p.densities[i] + p.densities[*j]));
-      a -= p.masses[*j] * pi_ij * ctx.kernel.gradient(x_ij);
+  parallel_for(p.size(), kParticleChunk, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t i = begin; i < end; ++i) {
+      Vec3 a = Vec3::Zero();
+      for (const Index* j = ctx.fluid_neighbors.begin(i); j != ctx.fluid_neighbors.end(i); ++j) {
+        const Vec3 x_ij = p.positions[i] - p.positions[*j];
+        const Scalar vx = (p.velocities[i] - p.velocities[*j]).dot(x_ij);
+        if (vx >= 0.0) continue;
+        const Scalar mu = vx / (x_ij.squaredNorm() + eps);
+        const Scalar pi_ij = -scale * mu / (0.5 * (p.densities[i] + p.densities[*j]));
+        a -= p.masses[*j] * pi_ij * ctx.kernel.gradient(x_ij);
+      }
+      accelerations[i] += a;
     }
-    accelerations[i] += a;
-  }
+  });
 }
 
 std::unique_ptr<NonPressureForce> make_viscosity(const ViscositySettings& settings, Scalar speed_of_sound) {

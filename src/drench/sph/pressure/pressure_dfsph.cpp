@@ -143,22 +143,24 @@ void PressureDfsph::compute_factors(const FluidContext& ctx) {
   m_velocities_float.resize(m_single ? n : 0);
   m_boundary_float.resize(m_single ? ctx.boundary.size() : 0);
   m_inv_denominator.resize(n);
-#pragma omp parallel for schedule(static)
-  for (std::size_t i = 0; i < n; ++i) {
-    m_points[i] = packed(particles.positions[i], particles.masses[i]);
-    if (m_single) {
-      m_points_float[i] = packed_float(particles.positions[i] - origin, particles.masses[i]);
-      m_kappa_points_float[i] = packed_float(particles.positions[i] - origin, 0.0);
-    } else {
-      m_kappa_points[i] = packed(particles.positions[i], 0.0);
+  parallel_for(n, kLightChunk, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t i = begin; i < end; ++i) {
+      m_points[i] = packed(particles.positions[i], particles.masses[i]);
+      if (m_single) {
+        m_points_float[i] = packed_float(particles.positions[i] - origin, particles.masses[i]);
+        m_kappa_points_float[i] = packed_float(particles.positions[i] - origin, 0.0);
+      } else {
+        m_kappa_points[i] = packed(particles.positions[i], 0.0);
+      }
     }
-  }
+  });
   if (m_single) {
-#pragma omp parallel for schedule(static)
-    for (std::size_t b = 0; b < ctx.boundary.size(); ++b) {
-      const PackedPoint& p = ctx.boundary[b];
-      m_boundary_float[b] = packed_float(Vec3(p.x, p.y, p.z) - origin, p.w);
-    }
+    parallel_for(ctx.boundary.size(), kLightChunk, [&](std::size_t begin, std::size_t end) {
+      for (std::size_t b = begin; b < end; ++b) {
+        const PackedPoint& p = ctx.boundary[b];
+        m_boundary_float[b] = packed_float(Vec3(p.x, p.y, p.z) - origin, p.w);
+      }
+    });
   }
   for_each_chunk(n, [&](std::size_t begin, std::size_t end) {
     dfsph_denominators(ctx, m_points, begin, end, &m_inv_denominator[begin]);
@@ -173,11 +175,12 @@ void PressureDfsph::compute_factors(const FluidContext& ctx) {
 void PressureDfsph::set_velocities(const Vec3Array& velocities) {
   const std::size_t n = velocities.size();
   m_velocities.resize(n);
-#pragma omp parallel for schedule(static)
-  for (std::size_t i = 0; i < n; ++i) {
-    m_velocities[i] = packed(velocities[i], 0.0);
-    if (m_single) m_velocities_float[i] = packed_float(velocities[i], 0.0);
-  }
+  parallel_for(n, kLightChunk, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t i = begin; i < end; ++i) {
+      m_velocities[i] = packed(velocities[i], 0.0);
+      if (m_single) m_velocities_float[i] = packed_float(velocities[i], 0.0);
+    }
+  });
 }
 
 void PressureDfsph::update_velocities(const FluidContext& ctx, Scalar dt, Vec3Array* accelerations,
@@ -204,17 +207,22 @@ void PressureDfsph::update_velocities(const FluidContext& ctx, Scalar dt, Vec3Ar
 
 bool PressureDfsph::apply_warm_start(const ScalarArray& warm, Scalar scale, ScalarArray& totals) {
   const std::size_t n = warm.size();
-  bool any = false;
-#pragma omp parallel for schedule(static) reduction(|| : any)
-  for (std::size_t i = 0; i < n; ++i)
-    any = any || (m_error[i] > 0.0 && warm[i] != 0.0);
+  const int any = parallel_reduce(
+      n, kLightChunk, 0,
+      [&](std::size_t begin, std::size_t end) {
+        for (std::size_t i = begin; i < end; ++i)
+          if (m_error[i] > 0.0 && warm[i] != 0.0) return 1;
+        return 0;
+      },
+      [](int a, int b) { return a | b; });
   if (!any) return false;
-#pragma omp parallel for schedule(static)
-  for (std::size_t i = 0; i < n; ++i) {
-    const Scalar w = m_error[i] > 0.0 ? scale * warm[i] : 0.0;
-    set_kappa(i, w);
-    totals[i] += w;
-  }
+  parallel_for(n, kLightChunk, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t i = begin; i < end; ++i) {
+      const Scalar w = m_error[i] > 0.0 ? scale * warm[i] : 0.0;
+      set_kappa(i, w);
+      totals[i] += w;
+    }
+  });
   return true;
 }
 
@@ -299,12 +307,13 @@ DivergenceStats PressureDfsph::correct_divergence(const FluidContext& ctx, Scala
     errors = measure(ctx, dt, Measure::DIVERGENCE);
   }
   stats.average_divergence_error = errors.sum * scale;
-#pragma omp parallel for schedule(static)
-  for (std::size_t i = 0; i < n; ++i) {
-    const PackedPoint& v = m_velocities[i];
-    particles.velocities[i] = Vec3(v.x, v.y, v.z);
-    m_warm_divergence[i] = m_kappa_divergence[i];
-  }
+  parallel_for(n, kLightChunk, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t i = begin; i < end; ++i) {
+      const PackedPoint& v = m_velocities[i];
+      particles.velocities[i] = Vec3(v.x, v.y, v.z);
+      m_warm_divergence[i] = m_kappa_divergence[i];
+    }
+  });
   return stats;
 }
 
@@ -345,12 +354,13 @@ PressureStats PressureDfsph::solve(const FluidContext& ctx, const Vec3Array& vel
   }
   stats.average_density_error = errors.sum * scale;
   stats.max_density_error = errors.max / rho0;
-#pragma omp parallel for schedule(static)
-  for (std::size_t i = 0; i < n; ++i) {
-    const Scalar rho = particles.densities[i];
-    particles.pressures[i] = rho * rho * (m_kappa[i] + m_kappa_divergence[i]);
-    m_warm[i] = m_kappa[i];
-  }
+  parallel_for(n, kLightChunk, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t i = begin; i < end; ++i) {
+      const Scalar rho = particles.densities[i];
+      particles.pressures[i] = rho * rho * (m_kappa[i] + m_kappa_divergence[i]);
+      m_warm[i] = m_kappa[i];
+    }
+  });
   return stats;
 }
 

@@ -58,18 +58,21 @@ PressureStats PressurePcisph::solve(const FluidContext& ctx, const Vec3Array& ve
   std::fill(accelerations.begin(), accelerations.end(), Vec3::Zero());
   if (n == 0) return stats;
   if (single) {
-#pragma omp parallel for schedule(static)
-    for (std::size_t i = 0; i < n; ++i)
-      m_pressure_points_float[i] = packed_float(particles.positions[i] - origin, 0.0);
-#pragma omp parallel for schedule(static)
-    for (std::size_t b = 0; b < ctx.boundary.size(); ++b) {
-      const PackedPoint& p = ctx.boundary[b];
-      m_boundary_float[b] = packed_float(Vec3(p.x, p.y, p.z) - origin, p.w);
-    }
+    parallel_for(n, kLightChunk, [&](std::size_t begin, std::size_t end) {
+      for (std::size_t i = begin; i < end; ++i)
+        m_pressure_points_float[i] = packed_float(particles.positions[i] - origin, 0.0);
+    });
+    parallel_for(ctx.boundary.size(), kLightChunk, [&](std::size_t begin, std::size_t end) {
+      for (std::size_t b = begin; b < end; ++b) {
+        const PackedPoint& p = ctx.boundary[b];
+        m_boundary_float[b] = packed_float(Vec3(p.x, p.y, p.z) - origin, p.w);
+      }
+    });
   } else {
-#pragma omp parallel for schedule(static)
-    for (std::size_t i = 0; i < n; ++i)
-      m_pressure_points[i] = packed(particles.positions[i], 0.0);
+    parallel_for(n, kLightChunk, [&](std::size_t begin, std::size_t end) {
+      for (std::size_t i = begin; i < end; ++i)
+        m_pressure_points[i] = packed(particles.positions[i], 0.0);
+    });
   }
   // Positions predicted with the current pressure accelerations, for the particles [begin, end).
   const auto predict = [&](std::size_t begin, std::size_t end) {

@@ -2,7 +2,9 @@
 
 #include <algorithm>
 #include <limits>
+#include <utility>
 
+#include <drench/common/parallel.hpp>
 #include <drench/sph/pressure/pressure_dfsph.hpp>
 #include <drench/sph/pressure/pressure_pcisph.hpp>
 #include <drench/sph/pressure/pressure_wcsph.hpp>
@@ -16,20 +18,23 @@ namespace {
 /// thread count gives the same bits.
 void finite_bounding_box(const Vec3Array& points, Vec3& lo, Vec3& hi) {
   constexpr Scalar kInf = std::numeric_limits<Scalar>::infinity();
-  Scalar lo_x = kInf, lo_y = kInf, lo_z = kInf, hi_x = -kInf, hi_y = -kInf, hi_z = -kInf;
-#pragma omp parallel for schedule(static) reduction(min : lo_x, lo_y, lo_z) reduction(max : hi_x, hi_y, hi_z)
-  for (std::size_t i = 0; i < points.size(); ++i) {
-    const Vec3& x = points[i];
-    if (!x.allFinite()) continue;
-    lo_x = std::min(lo_x, x.x());
-    lo_y = std::min(lo_y, x.y());
-    lo_z = std::min(lo_z, x.z());
-    hi_x = std::max(hi_x, x.x());
-    hi_y = std::max(hi_y, x.y());
-    hi_z = std::max(hi_z, x.z());
-  }
-  lo = Vec3(lo_x, lo_y, lo_z);
-  hi = Vec3(hi_x, hi_y, hi_z);
+  using Box = std::pair<Vec3, Vec3>;
+  const Box empty(Vec3::Constant(kInf), Vec3::Constant(-kInf));
+  const Box box = parallel_reduce(
+      points.size(), kLightChunk, empty,
+      [&](std::size_t begin, std::size_t end) {
+        Box b = empty;
+        for (std::size_t i = begin; i < end; ++i) {
+          const Vec3& x = points[i];
+          if (!x.allFinite()) continue;
+          b.first = b.first.cwiseMin(x);
+          b.second = b.second.cwiseMax(x);
+        }
+        return b;
+      },
+      [](const Box& a, const Box& b) { return Box(a.first.cwiseMin(b.first), a.second.cwiseMax(b.second)); });
+  lo = box.first;
+  hi = box.second;
 }
 
 /// Single precision rounds a coordinate by up to 2^-24 of its distance from the fluid's centre; beyond this

@@ -22,14 +22,15 @@ PressureStats PressureWcsph::solve(const FluidContext& ctx, const Vec3Array& /*v
   m_pressure_points.resize(n);
   accelerations.resize(n);
   const Scalar rho0 = ctx.rest_density;
-#pragma omp parallel for schedule(static)
-  for (std::size_t i = 0; i < n; ++i) {
-    const Scalar rho = particles.densities[i];
-    const Scalar p =
-        std::max(0.0, m_stiffness * (std::pow(std::min(rho / rho0, m_max_ratio), m_exponent) - 1.0));
-    particles.pressures[i] = p;
-    m_pressure_points[i] = packed(particles.positions[i], p / (rho * rho));
-  }
+  parallel_for(n, kLightChunk, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t i = begin; i < end; ++i) {
+      const Scalar rho = particles.densities[i];
+      const Scalar p =
+          std::max(0.0, m_stiffness * (std::pow(std::min(rho / rho0, m_max_ratio), m_exponent) - 1.0));
+      particles.pressures[i] = p;
+      m_pressure_points[i] = packed(particles.positions[i], p / (rho * rho));
+    }
+  });
   for_each_chunk(n, [&](std::size_t begin, std::size_t end) {
     pressure_accelerations(ctx, m_pressure_points, begin, end, &accelerations[begin]);
   });
