@@ -32,6 +32,7 @@
 #endif
 #include <drench/scene/reconstruct_run.hpp>
 #include <drench/scene/scene_loader.hpp>
+#include <drench/scene/scene_resources.hpp>
 #include <drench/scene/scene_runner.hpp>
 #include <drench/scene/simulation.hpp>
 
@@ -40,11 +41,13 @@
 namespace {
 
 int run_command(const std::string& scene_path, const std::string& out_dir,
-                const std::vector<std::string>& overrides, std::int64_t steps, bool quiet) {
+                const std::vector<std::string>& overrides, std::int64_t steps, bool quiet,
+                double max_output) {
   // Everything is validated before the output folder is touched: a bad scene writes nothing.
   const nlohmann::json document = drench::read_scene_document(scene_path, overrides);
   const drench::SceneConfig config =
       drench::parse_scene(document, drench::scene_source(scene_path, overrides));
+  drench::check_scene_resources(config, out_dir, max_output);
   drench::Simulation simulation(config, drench::bullet::cloth_engine_factory());
 
   drench::RunOptions options;
@@ -144,6 +147,7 @@ int view_command(const std::string& scene_path, const std::vector<std::string>& 
   drench::render::check_view_options(options);
   const nlohmann::json document = drench::read_scene_document(scene_path, overrides);
   options.config = drench::parse_scene(document, drench::scene_source(scene_path, overrides));
+  drench::check_scene_resources(options.config, "", 0.0);  // memory only: the viewer writes no frames
   options.has_surface = document.contains("surface") || options.config.has_effect("surface");
   options.cloth_factory = drench::bullet::cloth_engine_factory();
   const drench::render::ViewResult r = drench::render::run_viewer(options);
@@ -274,6 +278,10 @@ int main(int argc, char** argv) {
   run->add_option("--steps", steps, "stop after N steps")->check(CLI::NonNegativeNumber);
   run->add_option("--threads", threads, "OpenMP threads (default: all cores)")->check(CLI::PositiveNumber);
   run->add_flag("--quiet", quiet, "no banner and no progress line");
+  double max_output = drench::kDefaultMaxOutputBytes;
+  run->add_option("--max-output", max_output,
+                  "refuse a scene whose frames would exceed BYTES (default 10 GiB)")
+      ->check(CLI::PositiveNumber);
 
   std::string reconstruct_dir;
   CLI::App* reconstruct = app.add_subcommand(
@@ -364,7 +372,7 @@ int main(int argc, char** argv) {
   CLI11_PARSE(app, argc, argv);
   if (threads > 0) omp_set_num_threads(threads);
   try {
-    if (run->parsed()) return run_command(scene_path, out_dir, overrides, steps, quiet);
+    if (run->parsed()) return run_command(scene_path, out_dir, overrides, steps, quiet, max_output);
     if (reconstruct->parsed()) return reconstruct_command(reconstruct_dir, overrides, quiet);
     if (render->parsed()) return render_command(render_options, render_size, quiet);
     if (view->parsed())
