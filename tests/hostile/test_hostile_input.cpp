@@ -183,20 +183,19 @@ TEST(HostileInput, ObjIndexBeyond32BitsIsRefusedNamingFileLineAndIndex) {
   const std::string wrapped = dir.write("wrapped.obj", "v 0 0 0\nv 1 0 0\nv 0 0 1\nf 1 2 4294967299\n");
   EXPECT_TRUE(throws_containing<SceneError>(
       [&] { load_obj_mesh(wrapped, "obstacles[0].mesh"); },
-      {"obstacles[0].mesh: OBJ file \"" + wrapped + "\" line 4: vertex index 4294967299 is out of range"}));
+      {"obstacles[0].mesh: OBJ file \"" + wrapped + "\" line 4: vertex index 4294967299 out of range"}));
   const std::string negative = dir.write("negative.obj", "v 0 0 0\nv 1 0 0\nv 0 0 1\nf -4294967297 2 3\n");
   EXPECT_TRUE(throws_containing<SceneError>([&] { load_obj_mesh(negative); },
-                                            {"line 4: vertex index -4294967297 is out of range"}));
+                                            {"line 4: vertex index -4294967297 out of range"}));
   const std::string behind = dir.write("behind.obj", "v 0 0 0\nv 1 0 0\nf -1 -2 -3\nv 0 0 1\n");
-  EXPECT_TRUE(
-      throws_containing<SceneError>([&] { load_obj_mesh(behind); },
-                                    {"line 3: vertex index -3 is out of range: only 2 vertices precede it"}));
+  EXPECT_TRUE(throws_containing<SceneError>(
+      [&] { load_obj_mesh(behind); }, {"line 3: vertex index -3 out of range: only 2 vertices precede it"}));
   const std::string past = dir.write("past.obj", "v 0 0 0\nv 1 0 0\nv 0 0 1\nf 1 2 3\nf 1 2 7\n");
   EXPECT_TRUE(throws_containing<SceneError>([&] { load_obj_mesh(past); },
-                                            {"line 5: vertex index 7 is out of range 1..3"}));
+                                            {"line 5: vertex index 7 out of range 1..3"}));
   const std::string texture = dir.write("texture.obj", "v 0 0 0\nv 1 0 0\nv 0 0 1\nf 1/99999999999 2 3\n");
   EXPECT_TRUE(throws_containing<SceneError>([&] { load_obj_mesh(texture); },
-                                            {"line 4: texture index 99999999999 is out of range"}));
+                                            {"line 4: texture index 99999999999 out of range"}));
 }
 
 // 4. Derived quantities: a mass that underflows or overflows is refused naming the key it comes from.

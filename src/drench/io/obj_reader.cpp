@@ -66,11 +66,11 @@ void check_face_token(const std::string& key, const std::string& path, int line,
       fail(std::string(what) + " \"" + digits + "\" is not an integer");
     if (errno == ERANGE || index > std::numeric_limits<int>::max() ||
         index < -std::numeric_limits<int>::max())
-      fail(std::string(what) + " " + digits + " is out of range (an OBJ index must fit 32 bits)");
+      fail(std::string(what) + " " + digits + " out of range (an OBJ index must fit 32 bits)");
     if (index == 0) fail(std::string(what) + " 0 is invalid (OBJ indices start at 1)");
     if (part != 0) continue;
     if (index < 0 && -index > vertices) {
-      fail("vertex index " + digits + " is out of range: only " + std::to_string(vertices) +
+      fail("vertex index " + digits + " out of range: only " + std::to_string(vertices) +
            " vertices precede it");
     }
     if (index > largest.index) largest = {index, line};
@@ -121,7 +121,7 @@ void check_obj_text(const std::string& key, const std::string& path, const std::
   if (first_forward.line > 0 && first_forward.index > vertices) {
     throw SceneError(obj_error(key, path,
                                "line " + std::to_string(first_forward.line) + ": vertex index " +
-                                   std::to_string(first_forward.index) + " is out of range 1.." +
+                                   std::to_string(first_forward.index) + " out of range 1.." +
                                    std::to_string(vertices)));
   }
 }
