@@ -193,6 +193,10 @@ TEST(HostileInput, ObjIndexBeyond32BitsIsRefusedNamingFileLineAndIndex) {
   const std::string past = dir.write("past.obj", "v 0 0 0\nv 1 0 0\nv 0 0 1\nf 1 2 3\nf 1 2 7\n");
   EXPECT_TRUE(throws_containing<SceneError>([&] { load_obj_mesh(past); },
                                             {"line 5: vertex index 7 out of range 1..3"}));
+  EXPECT_TRUE(
+      throws_containing<SceneError>([&] { load_obj_mesh("/dev/zero", "obstacles[0].mesh"); },
+                                    {"obstacles[0].mesh: OBJ file \"/dev/zero\" cannot be read: not a "
+                                     "regular file"}));
   const std::string texture = dir.write("texture.obj", "v 0 0 0\nv 1 0 0\nv 0 0 1\nf 1/99999999999 2 3\n");
   EXPECT_TRUE(throws_containing<SceneError>([&] { load_obj_mesh(texture); },
                                             {"line 4: texture index 99999999999 out of range"}));
@@ -285,6 +289,14 @@ TEST(HostileInput, ParticlesBeyondMemoryAreRefusedBeforeAnyAllocation) {
   EXPECT_TRUE(contains(c.output, "bytes available (MemAvailable)")) << c.output;
   EXPECT_LT(c.seconds, 5.0);
   EXPECT_FALSE(fs::exists(dir.path() / "out"));
+  // drench sweep checks every run's scene before the first starts.
+  const Command sweep =
+      drench_command("sweep " + demo("dam_break.json") + " --vary fluid.particle_spacing=0.05,1e-9 --out " +
+                         (dir.path() / "sweep").string(),
+                     dir.path() / "log2");
+  EXPECT_EQ(sweep.status, 1) << sweep.output;
+  EXPECT_TRUE(contains(sweep.output, "about 1e+27 fluid particles")) << sweep.output;
+  EXPECT_FALSE(fs::exists(dir.path() / "sweep"));
   // A boundary of 1 mm around a 1 km box: named by its key.
   const SceneConfig boundary = parse(
       R"({"fluid": {"particle_spacing": 0.001}, "boundaries": [{"type": "box", "max": [1000, 1000, 1000]}]})");

@@ -1,10 +1,12 @@
 #include <drench/io/obj_reader.hpp>
 
+#include <sys/stat.h>
 #include <tiny_obj_loader.h>
 
 #include <algorithm>
 #include <cerrno>
 #include <cmath>
+#include <cstdint>
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
@@ -133,6 +135,18 @@ double triangle_area(const Vec3& a, const Vec3& b, const Vec3& c) {
 }  // namespace
 
 TriangleMesh load_obj_mesh(const std::string& path, const std::string& key) {
+  // Checked before it is opened: a FIFO or a device such as /dev/zero would block or never end.
+  struct stat info {};
+  if (::stat(path.c_str(), &info) == 0) {
+    if (!S_ISREG(info.st_mode))
+      throw SceneError(obj_error(key, path, "cannot be read: not a regular file (a folder, FIFO or device)"));
+    if (static_cast<std::uint64_t>(info.st_size) > kMaxObjFileBytes) {
+      throw SceneError(obj_error(key, path,
+                                 "cannot be read: " + std::to_string(info.st_size) +
+                                     " bytes, more than the " + std::to_string(kMaxObjFileBytes) +
+                                     " (1 GiB) an OBJ file may have"));
+    }
+  }
   std::ifstream file(path, std::ios::binary);
   if (!file) throw SceneError(obj_error(key, path, std::string("cannot be read: ") + std::strerror(errno)));
   const std::string text{std::istreambuf_iterator<char>(file), std::istreambuf_iterator<char>()};
