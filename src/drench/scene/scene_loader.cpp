@@ -93,7 +93,7 @@ TimeSettings read_time(const Node& node) {
   if (!(frames <= kMaxCount)) {
     fail_key(written_key(node, {"frame_rate", "duration"}),
              "gives " + approx(frames) +
-                 " frames (time.duration x time.frame_rate + 1); at most 2^53 = 9.0e15 " + "can be counted");
+                 " frames (time.duration x time.frame_rate + 1); at most 2^53 = 9.0e15 can be counted");
   }
   return time;
 }
@@ -304,8 +304,9 @@ std::string read_text_file(const std::string& path) {
   return text;
 }
 
-/// The keys of a scene that name files, with the value that is not a file ("patch", "v_plane").
-/// `visit(value)` gets each such string value.
+/// Calls `visit(value)` on each value of `document` that names a file: `cloth.mesh` unless "patch",
+/// `obstacles[i].mesh` unless "v_plane", and only where it is a non-empty string (validation reports the
+/// rest).
 template <class Visit>
 void for_each_file_path(json& document, Visit visit) {
   if (!document.is_object()) return;
