@@ -39,6 +39,7 @@
 #include <drench/scene/output_folder.hpp>
 #include <drench/scene/reconstruct_run.hpp>
 #include <drench/scene/scene_loader.hpp>
+#include <drench/scene/scene_resources.hpp>
 #include <drench/scene/scene_runner.hpp>
 #include <drench/scene/simulation.hpp>
 
@@ -58,7 +59,8 @@ double figure(const nlohmann::json& value) {
 }
 
 int run_command(const std::string& scene_path, const std::string& out_dir,
-                const std::vector<std::string>& overrides, std::int64_t steps, bool quiet, bool overwrite) {
+                const std::vector<std::string>& overrides, std::int64_t steps, bool quiet, bool overwrite,
+                double max_output) {
   // The folder first, before the scene is read: a run that could not write there is refused at once.
   drench::check_output_folder(out_dir, "--out", overwrite);
   // Everything is validated before the output folder is touched: a bad scene writes nothing.
@@ -66,6 +68,7 @@ int run_command(const std::string& scene_path, const std::string& out_dir,
   const nlohmann::json document = drench::read_scene_document(scene_path, overrides);
   const drench::SceneConfig config =
       drench::parse_scene(document, drench::scene_source(scene_path, overrides));
+  drench::check_scene_resources(config, out_dir, max_output);
   g_activity = "setting up the simulation";
   drench::Simulation simulation(config, drench::bullet::cloth_engine_factory());
   // The manifest is the folder's first file, so that --overwrite knows later what this run wrote.
@@ -193,6 +196,7 @@ int view_command(const std::string& scene_path, const std::vector<std::string>& 
   drench::render::check_view_options(options);
   const nlohmann::json document = drench::read_scene_document(scene_path, overrides);
   options.config = drench::parse_scene(document, drench::scene_source(scene_path, overrides));
+  drench::check_scene_resources(options.config, "", 0.0);  // memory only: the viewer writes no frames
   options.has_surface = document.contains("surface") || options.config.has_effect("surface");
   options.cloth_factory = drench::bullet::cloth_engine_factory();
   const drench::render::ViewResult r = drench::render::run_viewer(options);
@@ -420,6 +424,10 @@ int dispatch(int argc, char** argv) {
   run->add_flag("--overwrite", overwrite,
                 "replace an earlier drench run in --out (only the files its drench_run.json lists)");
   run->add_flag("--quiet", quiet, "no banner and no progress line");
+  double max_output = drench::kDefaultMaxOutputBytes;
+  run->add_option("--max-output", max_output,
+                  "refuse a scene whose frames would exceed BYTES (default 10 GiB)")
+      ->check(CLI::PositiveNumber);
 
   std::string reconstruct_dir;
   CLI::App* reconstruct = app.add_subcommand(
@@ -521,7 +529,7 @@ int dispatch(int argc, char** argv) {
   }
   if (threads > 0) drench::set_thread_count(threads);
   {
-    if (run->parsed()) return run_command(scene_path, out_dir, overrides, steps, quiet, overwrite);
+    if (run->parsed()) return run_command(scene_path, out_dir, overrides, steps, quiet, overwrite, max_output);
     if (reconstruct->parsed()) return reconstruct_command(reconstruct_dir, overrides, quiet);
     if (render->parsed()) return render_command(render_options, render_size, quiet);
     if (view->parsed())

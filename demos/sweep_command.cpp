@@ -25,6 +25,7 @@
 #include <drench/io/atomic_file.hpp>
 #include <drench/scene/output_folder.hpp>
 #include <drench/scene/scene_loader.hpp>
+#include <drench/scene/scene_resources.hpp>
 
 #include "stop_signal.hpp"
 
@@ -207,13 +208,26 @@ int run_sweep(const SweepOptions& options) {
   parse_scene(scene, scene_source(options.scene_path, options.overrides));
   const std::vector<SweepRun> runs =
       plan_sweep(scene, options.axes, options.cases, options.one_at_a_time, options.repeats);
+  // And each run's resources, as `drench run` checks them: the runs side by side share the memory, and
+  // all of them write to the same disk.
+  ResourceLimits limits = machine_limits(options.out_dir, kDefaultMaxOutputBytes);
+  limits.memory_bytes /= options.jobs;
+  double output_bytes = 0;
   for (const SweepRun& run : runs) {
     std::vector<std::string> all = options.overrides;
     all.insert(all.end(), run.assignments.begin(), run.assignments.end());
     nlohmann::json document = scene;
     for (const std::string& assignment : run.assignments)
       apply_override(document, assignment);
-    parse_scene(document, scene_source(options.scene_path, all));
+    const SceneConfig config = parse_scene(document, scene_source(options.scene_path, all));
+    const ResourceEstimate estimate = estimate_resources(config);
+    check_resources(config, estimate, limits);
+    output_bytes += estimate.output_bytes.value;
+  }
+  if (!(output_bytes <= limits.disk_bytes)) {
+    throw SceneError("sweep: its " + std::to_string(runs.size()) + " runs make about " +
+                     format_number(output_bytes) + " bytes of output, more than the " +
+                     format_number(limits.disk_bytes) + " bytes free on the disk of --out");
   }
 
   const fs::path dir = options.out_dir;

@@ -1,3 +1,393 @@
-// Hostile input and hard cases (issue 39): input.
-
+// Hostile input and hard cases (issue 39): input. Each test gives drench what a careful user gave it (a
+// scene nested 100,000 deep, /dev/zero, an OBJ index past 2^32, a spacing of 1e-308, a cloth of 4096 x 4096
+// nodes, ...) and asserts the refusal: its message names the key, path or file, and it comes before
+// anything is allocated or written (the output folder stays absent, the command returns at once).
 #include <gtest/gtest.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <string>
+
+#include <drench/common/error.hpp>
+#include <drench/io/obj_reader.hpp>
+#include <drench/scene/scene_loader.hpp>
+#include <drench/scene/scene_resources.hpp>
+#include <drench/scene/simulation.hpp>
+#include <drench/surface/surface_reconstruction.hpp>
+#include "../temp_dir.hpp"
+
+namespace drench {
+namespace {
+
+namespace fs = std::filesystem;
+
+/// Exit status and output (stdout and stderr together) of one `drench` command, and its wall time (s).
+struct Command {
+  int status = -1;
+  std::string output;
+  double seconds = 0.0;
+};
+
+std::string read(const fs::path& file) {
+  std::ifstream in(file);
+  std::ostringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+/// Runs `drench ARGUMENTS` in `folder` (the working directory), as a user does.
+Command drench_command(const std::string& arguments, const fs::path& log, const fs::path& folder = ".") {
+  const std::string command = "cd '" + folder.string() + "' && " + std::string(DRENCH_EXECUTABLE) + " " +
+                              arguments + " > '" + log.string() + "' 2>&1";
+  const auto start = std::chrono::steady_clock::now();
+  const int status = std::system(command.c_str());
+  Command result;
+  result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  result.status = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  result.output = read(log);
+  return result;
+}
+
+std::string demo(const std::string& name) {
+  return std::string(DRENCH_SOURCE_DIR) + "/demos/scenes/" + name;
+}
+
+/// Passes when `function` throws an `Exception` whose message contains every one of `expected`.
+template <class Exception, class Function>
+testing::AssertionResult throws_containing(Function&& function, std::initializer_list<std::string> expected) {
+  try {
+    function();
+  } catch (const Exception& e) {
+    const std::string message = e.what();
+    for (const std::string& part : expected) {
+      if (message.find(part) == std::string::npos)
+        return testing::AssertionFailure()
+               << "message \"" << message << "\" does not contain \"" << part << "\"";
+    }
+    return testing::AssertionSuccess();
+  } catch (const std::exception& e) {
+    return testing::AssertionFailure() << "threw another exception type: " << e.what();
+  }
+  return testing::AssertionFailure() << "did not throw";
+}
+
+testing::AssertionResult contains(const std::string& text, const std::string& part) {
+  if (text.find(part) != std::string::npos) return testing::AssertionSuccess();
+  return testing::AssertionFailure() << "\"" << text << "\" does not contain \"" << part << "\"";
+}
+
+SceneConfig parse(const std::string& text) {
+  return parse_scene(nlohmann::json::parse(text), "x.json");
+}
+
+// 1. JSON: nesting, duplicate keys, the file itself, and --set values held to the same.
+
+TEST(HostileInput, SceneNestedDeeperThan64LevelsIsRefusedNamingTheFile) {
+  const test::TempDir dir;
+  const std::string deep = std::string(100000, '[') + std::string(100000, ']');
+  const std::string file = dir.write("deep.json", deep);
+  const Command c =
+      drench_command("run " + file + " --out " + (dir.path() / "out").string(), dir.path() / "log");
+  EXPECT_EQ(c.status, 1) << c.output;
+  EXPECT_TRUE(contains(c.output, file + ": JSON nested deeper than 64 levels")) << c.output;
+  EXPECT_FALSE(fs::exists(dir.path() / "out"));
+  // 64 levels are fine as JSON (the scene is then refused for its content, not its depth).
+  const std::string ok = dir.write("ok.json", "{\"a\": " + std::string(63, '[') + std::string(63, ']') + "}");
+  EXPECT_TRUE(throws_containing<SceneError>([&] { load_scene_file(ok); }, {"a is not a known key"}));
+}
+
+TEST(HostileInput, DuplicateKeyIsRefusedNamingItsJsonPathAndFile) {
+  const test::TempDir dir;
+  const std::string file = dir.write(
+      "dup.json", R"({"time": {"dt": 0.001, "duration": 1}, "emitters": [{"type": "box"}, {"type": "box",
+      "min": [0, 0, 0], "min": [1, 1, 1]}]})");
+  EXPECT_TRUE(throws_containing<SceneError>([&] { load_scene_file(file); },
+                                            {file + ": duplicate key \"min\" at emitters[1].min"}));
+  const std::string top = dir.write("top.json", R"({"time": {"dt": 0.001}, "time": {"dt": 0.002}})");
+  EXPECT_TRUE(throws_containing<SceneError>([&] { load_scene_file(top); },
+                                            {top + ": duplicate key \"time\" at time"}));
+}
+
+TEST(HostileInput, SceneFileMustBeARegularFileOfAtMost16MiB) {
+  const test::TempDir dir;
+  EXPECT_TRUE(throws_containing<IoError>(
+      [&] { load_scene_file("/dev/zero"); },
+      {"/dev/zero: cannot read scene file: not a regular file (a FIFO, device or socket)"}));
+  EXPECT_TRUE(throws_containing<IoError>([&] { load_scene_file(dir.path().string()); },
+                                         {": cannot read scene file: it is a folder"}));
+  const std::string fifo = (dir.path() / "fifo.json").string();
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  EXPECT_TRUE(throws_containing<IoError>([&] { load_scene_file(fifo); },
+                                         {fifo + ": cannot read scene file: not a regular file"}));
+  const std::string large = (dir.path() / "large.json").string();
+  { std::ofstream(large) << "{}"; }
+  fs::resize_file(large, kMaxSceneFileBytes + 1);  // sparse: no 16 MiB written
+  EXPECT_TRUE(throws_containing<SceneError>(
+      [&] { load_scene_file(large); },
+      {large + ": cannot read scene file: 16777217 bytes, more than the 16 MiB"}));
+  // The command returns at once on /dev/zero (it read forever) and writes nothing.
+  const Command c =
+      drench_command("run /dev/zero --out " + (dir.path() / "out").string(), dir.path() / "log");
+  EXPECT_EQ(c.status, 1) << c.output;
+  EXPECT_LT(c.seconds, 5.0);
+  EXPECT_FALSE(fs::exists(dir.path() / "out"));
+}
+
+TEST(HostileInput, SetValuesAreHeldToTheSameJsonLimits) {
+  const test::TempDir dir;
+  const std::string file = dir.write("scene.json", "{}");
+  const std::string deep = "fluid=" + std::string(100, '[') + std::string(100, ']');
+  EXPECT_TRUE(throws_containing<SceneError>([&] { load_scene_file(file, {deep}); },
+                                            {"--set fluid=[[[", "JSON nested deeper than 64 levels"}));
+  EXPECT_TRUE(throws_containing<SceneError>([&] { load_scene_file(file, {R"(time={"dt": 1, "dt": 2})"}); },
+                                            {"duplicate key \"dt\" at time.dt"}));
+}
+
+// 2. Paths: relative to the scene file's folder, wherever drench runs, and the same in the run's copy.
+
+TEST(HostileInput, RelativeObjPathIsTheSceneFoldersInRunAndInTheRunsCopy) {
+  const test::TempDir dir;
+  dir.write("scenes/rock.obj", "v 0 0 0\nv 1 0 0\nv 0 0 1\nf 1 2 3\n");
+  const std::string scene = dir.write("scenes/scene.json",
+                                      R"({"obstacles": [{"mesh": "rock.obj"}], "effects": ["coupling"],
+          "time": {"dt": 0.01, "duration": 0.02, "frame_rate": 0}})");
+  fs::create_directories(dir.path() / "elsewhere");
+  const fs::path out = dir.path() / "out";
+  const Command c = drench_command("run " + scene + " --out " + out.string() + " --quiet", dir.path() / "log",
+                                   dir.path() / "elsewhere");
+  ASSERT_EQ(c.status, 0) << c.output;
+  // The run's scene.json names the file absolutely: it means the same wherever it is copied and read.
+  const nlohmann::json saved = nlohmann::json::parse(read(out / "scene.json"));
+  EXPECT_EQ(saved["obstacles"][0]["mesh"], (dir.path() / "scenes" / "rock.obj").string());
+  const Command again = drench_command(
+      "run " + (out / "scene.json").string() + " --out " + (dir.path() / "out2").string() + " --quiet",
+      dir.path() / "log2", dir.path() / "elsewhere");
+  EXPECT_EQ(again.status, 0) << again.output;
+  // A path given with --set is the working directory's, as any path on a command line.
+  const nlohmann::json overridden = read_scene_document(scene, {"obstacles[0].mesh=other.obj"});
+  EXPECT_EQ(overridden["obstacles"][0]["mesh"],
+            (fs::current_path() / "other.obj").lexically_normal().string());
+}
+
+// 3. OBJ indices: overflow and range, named with the file, the line and the index.
+
+TEST(HostileInput, ObjIndexBeyond32BitsIsRefusedNamingFileLineAndIndex) {
+  const test::TempDir dir;
+  const std::string wrapped = dir.write("wrapped.obj", "v 0 0 0\nv 1 0 0\nv 0 0 1\nf 1 2 4294967299\n");
+  EXPECT_TRUE(throws_containing<SceneError>(
+      [&] { load_obj_mesh(wrapped, "obstacles[0].mesh"); },
+      {"obstacles[0].mesh: OBJ file \"" + wrapped + "\" line 4: vertex index 4294967299 out of range"}));
+  const std::string negative = dir.write("negative.obj", "v 0 0 0\nv 1 0 0\nv 0 0 1\nf -4294967297 2 3\n");
+  EXPECT_TRUE(throws_containing<SceneError>([&] { load_obj_mesh(negative); },
+                                            {"line 4: vertex index -4294967297 out of range"}));
+  const std::string behind = dir.write("behind.obj", "v 0 0 0\nv 1 0 0\nf -1 -2 -3\nv 0 0 1\n");
+  EXPECT_TRUE(throws_containing<SceneError>(
+      [&] { load_obj_mesh(behind); }, {"line 3: vertex index -3 out of range: only 2 vertices precede it"}));
+  const std::string past = dir.write("past.obj", "v 0 0 0\nv 1 0 0\nv 0 0 1\nf 1 2 3\nf 1 2 7\n");
+  EXPECT_TRUE(throws_containing<SceneError>([&] { load_obj_mesh(past); },
+                                            {"line 5: vertex index 7 out of range 1..3"}));
+  EXPECT_TRUE(
+      throws_containing<SceneError>([&] { load_obj_mesh("/dev/zero", "obstacles[0].mesh"); },
+                                    {"obstacles[0].mesh: OBJ file \"/dev/zero\" cannot be read: not a "
+                                     "regular file"}));
+  const std::string texture = dir.write("texture.obj", "v 0 0 0\nv 1 0 0\nv 0 0 1\nf 1/99999999999 2 3\n");
+  EXPECT_TRUE(throws_containing<SceneError>([&] { load_obj_mesh(texture); },
+                                            {"line 4: texture index 99999999999 out of range"}));
+}
+
+// 4. Derived quantities: a mass that underflows or overflows is refused naming the key it comes from.
+
+TEST(HostileInput, MassThatUnderflowsIsRefusedNamingTheKeyAndTheDerivedMass) {
+  EXPECT_TRUE(throws_containing<SceneError>(
+      [] { parse(R"({"cloth": {"area_density": 1e-308}})"); },
+      {"cloth.area_density gives a cloth node of ", "kg and inverse mass inf", "got 1e-308 (x.json)"}));
+  EXPECT_TRUE(throws_containing<SceneError>([] { parse(R"({"cloth": {"size": [1e200, 1e200]}})"); },
+                                            {"cloth.size gives a cloth node of ", "got [1e+200,1e+200]"}));
+  EXPECT_TRUE(throws_containing<SceneError>(
+      [] { parse(R"({"fluid": {"rest_density": 1e-300}, "emitters": [{"type": "box"}]})"); },
+      {"fluid.rest_density gives particles of ", "(fluid.rest_density x fluid.particle_spacing^3)"}));
+  // The demo's cloth and fluid are far inside the range.
+  EXPECT_NO_THROW(load_scene_file(demo("jet_on_cloth.json")));
+}
+
+// 5. Emitters that would lay nothing, or whose loop could not progress, are refused before they start.
+
+TEST(HostileInput, EmitterThatWouldEmitNothingIsRefusedNamingTheKey) {
+  const std::string nozzle = R"("emitters": [{"type": "nozzle", "center": [0, 0.3, 0]}])";
+  EXPECT_TRUE(throws_containing<SceneError>(
+      [&] { parse(R"({"fluid": {"particle_spacing": 1e-12}, )" + nozzle + "}"); },
+      {"fluid.particle_spacing is too fine for emitters[0] at coordinates up to 0.32 m", "got 1e-12"}));
+  EXPECT_TRUE(
+      throws_containing<SceneError>([&] { parse(R"({"emitters": [{"type": "nozzle", "radius": 1e308}]})"); },
+                                    {"emitters[0].radius gives a nozzle disc", "got 1e+308"}));
+  EXPECT_TRUE(throws_containing<SceneError>(
+      [&] {
+        parse(
+            R"({"fluid": {"particle_spacing": 1e-12}, "emitters": [{"type": "box", "max": [0.1, 0.1, 0.1]}]})");
+      },
+      {"fluid.particle_spacing is too fine for emitters[0]"}));
+  // 1e-308 hung in the nozzle's emit loop: refused in the loader, before the loop.
+  const test::TempDir dir;
+  const Command c = drench_command("run " + demo("jet_on_cloth.json") + " --out " +
+                                       (dir.path() / "out").string() + " --set fluid.particle_spacing=1e-308",
+                                   dir.path() / "log");
+  EXPECT_EQ(c.status, 1) << c.output;
+  EXPECT_TRUE(contains(c.output, "fluid.particle_spacing")) << c.output;
+  EXPECT_LT(c.seconds, 5.0);
+  EXPECT_FALSE(fs::exists(dir.path() / "out"));
+  // A layer period below what double resolves over the run's times: the loop could not advance.
+  EXPECT_TRUE(throws_containing<SceneError>(
+      [] {
+        parse(R"({"fluid": {"max_speed": null}, "emitters": [{"type": "nozzle", "speed": 1e300}],
+                  "time": {"duration": 1}})");
+      },
+      {"emitters[0].speed makes emitters[0] release a layer every", "could not progress"}));
+}
+
+// 6. Resources, estimated from the scene and refused before any allocation or output.
+
+TEST(HostileInput, StepAndFrameCountsThatOverflowAreRefusedNamingTheKey) {
+  EXPECT_TRUE(throws_containing<SceneError>(
+      [] { parse(R"({"time": {"duration": 1e308}})"); },
+      {"time.duration gives inf steps (time.duration / time.dt); at most 2^53", "got 1e+308"}));
+  EXPECT_TRUE(throws_containing<SceneError>([] { parse(R"({"time": {"frame_rate": 1e308}})"); },
+                                            {"time.frame_rate gives 1e+308 frames", "at most 2^53"}));
+  EXPECT_TRUE(throws_containing<SceneError>(
+      [] { parse(R"({"time": {"adaptive": true, "dt_min": 1e-300, "dt": 1e-3, "duration": 1}})"); },
+      {"time.duration gives 1e+300 steps (time.duration / time.dt_min)", "got 1 (x.json)"}));
+}
+
+TEST(HostileInput, EstimateCountsWhatTheSimulationBuilds) {
+  // The dam break at 10 cm: the estimate's particles are emit_box's lattice exactly, its boundary
+  // particles sample_box_container's.
+  SceneConfig config = load_scene_file(demo("dam_break.json"), {"fluid.particle_spacing=0.1"});
+  const ResourceEstimate e = estimate_resources(config);
+  const Simulation simulation(config);
+  EXPECT_EQ(e.particles.value, static_cast<double>(simulation.particles().size()));
+  EXPECT_EQ(e.frames.value, 91.0);  // 3 s at 30 frames/s, and frame 0
+  EXPECT_EQ(e.particles.key, "emitters[0] with fluid.particle_spacing = 0.1 m");
+  EXPECT_GT(e.boundary_particles.value, 0.0);
+  EXPECT_GT(e.memory_bytes.value, e.particles.value * 1000.0);
+}
+
+TEST(HostileInput, ParticlesBeyondMemoryAreRefusedBeforeAnyAllocation) {
+  const test::TempDir dir;
+  const Command c = drench_command("run " + demo("dam_break.json") + " --out " +
+                                       (dir.path() / "out").string() + " --set fluid.particle_spacing=1e-9",
+                                   dir.path() / "log");
+  EXPECT_EQ(c.status, 1) << c.output;
+  EXPECT_TRUE(
+      contains(c.output, "emitters[0] with fluid.particle_spacing = 1e-09 m: about 1e+27 fluid particles"))
+      << c.output;
+  EXPECT_TRUE(contains(c.output, "bytes available (MemAvailable)")) << c.output;
+  EXPECT_LT(c.seconds, 5.0);
+  EXPECT_FALSE(fs::exists(dir.path() / "out"));
+  // drench sweep checks every run's scene before the first starts.
+  const Command sweep =
+      drench_command("sweep " + demo("dam_break.json") + " --vary fluid.particle_spacing=0.05,1e-9 --out " +
+                         (dir.path() / "sweep").string(),
+                     dir.path() / "log2");
+  EXPECT_EQ(sweep.status, 1) << sweep.output;
+  EXPECT_TRUE(contains(sweep.output, "about 1e+27 fluid particles")) << sweep.output;
+  EXPECT_FALSE(fs::exists(dir.path() / "sweep"));
+  // A boundary of 1 mm around a 1 km box: named by its key.
+  const SceneConfig boundary = parse(
+      R"({"fluid": {"particle_spacing": 0.001}, "boundaries": [{"type": "box", "max": [1000, 1000, 1000]}]})");
+  EXPECT_TRUE(throws_containing<SceneError>(
+      [&] {
+        check_resources(boundary, estimate_resources(boundary), {1e10, 1e12, 1e12});
+      },
+      {"boundaries[0] with fluid.particle_spacing = 0.001 m: about 12000048000000 boundary particles",
+       "more than the 10000000000 bytes available"}));
+}
+
+TEST(HostileInput, ClothOf4096By4096NodesIsRefusedAtOnce) {
+  const SceneConfig config = parse(R"({"cloth": {"nodes": [4096, 4096]}})");
+  const ResourceEstimate e = estimate_resources(config);
+  EXPECT_EQ(e.cloth_nodes.value, 4096.0 * 4096.0);
+  EXPECT_TRUE(throws_containing<SceneError>(
+      [&] {
+        check_resources(config, e, {8e9, 1e15, 1e15});
+      },
+      {"cloth.nodes: 16777216 cloth nodes need about 62120699200 bytes of memory",
+       "more than the 8000000000 bytes available (MemAvailable) (x.json)"}));
+  // Through the command: refused by its frames' size, in well under a second, writing nothing.
+  const test::TempDir dir;
+  const Command c =
+      drench_command("run " + demo("jet_on_cloth.json") + " --out " + (dir.path() / "out").string() +
+                         " --set cloth.nodes=[4096,4096] --max-output 1e9",
+                     dir.path() / "log");
+  EXPECT_EQ(c.status, 1) << c.output;
+  EXPECT_TRUE(contains(c.output, "cloth.nodes: ")) << c.output;
+  // Memory or output, whichever this machine runs out of first.
+  EXPECT_TRUE(contains(c.output, "16777216 cloth nodes")) << c.output;
+  EXPECT_LT(c.seconds, 1.0);
+  EXPECT_FALSE(fs::exists(dir.path() / "out"));
+}
+
+TEST(HostileInput, FramesBeyondMaxOutputAreRefusedNamingTheFrameRate) {
+  const test::TempDir dir;
+  const Command c = drench_command("run " + demo("jet_on_cloth.json") + " --out " +
+                                       (dir.path() / "out").string() + " --set time.frame_rate=1e6",
+                                   dir.path() / "log");
+  EXPECT_EQ(c.status, 1) << c.output;
+  EXPECT_TRUE(contains(c.output, "time.frame_rate: 500001 frames of about")) << c.output;
+  EXPECT_TRUE(contains(c.output, "more than --max-output 10737418240 bytes")) << c.output;
+  EXPECT_FALSE(fs::exists(dir.path() / "out"));
+  // The free disk is a limit too.
+  const SceneConfig config = load_scene_file(demo("jet_on_cloth.json"));
+  EXPECT_TRUE(throws_containing<SceneError>(
+      [&] {
+        check_resources(config, estimate_resources(config), {1e12, 1e6, 1e12});
+      },
+      {"31 frames of about", "more than the 1000000 bytes free on the disk of --out"}));
+}
+
+// 7. OpenVDB: the cell size is bounded by the spacing, and OpenVDB's exceptions become drench errors.
+
+TEST(HostileInput, SurfaceCellSizeBelowTheBoundIsRefusedInRunAndReconstruct) {
+  EXPECT_TRUE(throws_containing<SceneError>(
+      [] { parse(R"({"effects": ["surface"], "surface": {"cell_size": 1e-7}})"); },
+      {"surface.cell_size must be >= fluid.particle_spacing / 16 = 0.003125 m", "got 1e-07 (x.json)"}));
+  const test::TempDir dir;
+  const std::string scene = dir.write(
+      "scene.json",
+      R"({"fluid": {"particle_spacing": 0.05}, "emitters": [{"type": "box", "max": [0.2, 0.2, 0.2]}],
+          "boundaries": [{"type": "box", "max": [0.4, 0.4, 0.4]}], "effects": ["surface"],
+          "time": {"dt": 0.01, "duration": 0.02, "frame_rate": 50}})");
+  const fs::path out = dir.path() / "out";
+  ASSERT_EQ(drench_command("run " + scene + " --out " + out.string() + " --quiet", dir.path() / "log").status,
+            0);
+  const std::string surface = read(out / "frames" / "surface_0001.ply");
+  const Command c =
+      drench_command("reconstruct " + out.string() + " --set surface.cell_size=1e-7", dir.path() / "log2");
+  EXPECT_EQ(c.status, 1) << c.output;
+  EXPECT_TRUE(contains(c.output, "surface.cell_size must be >= fluid.particle_spacing / 16")) << c.output;
+  EXPECT_EQ(read(out / "frames" / "surface_0001.ply"), surface);  // nothing lost
+}
+
+TEST(HostileInput, OpenVdbFailureBecomesADrenchError) {
+  // Bypassing the loader (a program calling the library): a cell OpenVDB cannot invert, and a particle
+  // beyond its int32 coordinates, are drench::Error naming what failed instead of an abort.
+  SurfaceSettings settings;
+  settings.cell_size = 1e-9;
+  const Vec3Array particles = {Vec3(0, 0, 0), Vec3(1e-8, 0, 0)};
+  EXPECT_TRUE(
+      throws_containing<Error>([&] { reconstruct_surface(particles, 1e-8, settings, {}); },
+                               {"surface: OpenVDB failed to build its grid at surface cell size 1e-09 m"}));
+  settings.cell_size = 0.001;
+  const Vec3Array far = {Vec3(0, 0, 0), Vec3(1e7, 0, 0)};
+  EXPECT_TRUE(throws_containing<Error>(
+      [&] { reconstruct_surface(far, 0.002, settings, {}); },
+      {"surface: particle 1 at (1e+07, 0, 0) m is beyond the surface grid's int32"}));
+}
+
+}  // namespace
+}  // namespace drench

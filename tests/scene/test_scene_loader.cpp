@@ -1004,6 +1004,23 @@ TEST(SceneFile, MissingFileThrowsIoErrorNamingPath) {
                                          path + ": cannot read scene file: No such file or directory"));
 }
 
+TEST(SceneFile, ClothObjPathBecomesAbsoluteBesideTheSceneAndAnOverridesBesideTheWorkingDirectory) {
+  const test::TempDir dir;
+  const std::string file = dir.write("sub/scene.json", R"({"cloth": {"mesh": "../meshes/flag.obj"}})");
+  const nlohmann::json document = read_scene_document(file);
+  EXPECT_EQ(document["cloth"]["mesh"], (dir.path() / "meshes" / "flag.obj").string());
+  EXPECT_EQ(read_scene_document(file, {"cloth.mesh=flag.obj"})["cloth"]["mesh"],
+            (std::filesystem::current_path() / "flag.obj").string());
+  EXPECT_EQ(read_scene_document(file, {"cloth.mesh=patch"})["cloth"]["mesh"], "patch");
+}
+
+TEST(SceneFile, OverridePathDeeperThan64LevelsIsRefused) {
+  std::string path = "a";
+  for (int i = 0; i < 70; ++i)
+    path += ".a";
+  EXPECT_TRUE(override_error("{}", path + "=1", "path of 71 levels; JSON nested deeper than 64 levels"));
+}
+
 TEST(SceneFile, DirectoryThrowsIoErrorNamingPath) {
   const std::string path = testing::TempDir();
   EXPECT_TRUE(

@@ -1,14 +1,17 @@
 #include <drench/io/obj_reader.hpp>
 
+#include <sys/stat.h>
 #include <tiny_obj_loader.h>
 
 #include <algorithm>
 #include <cerrno>
 #include <cmath>
+#include <cstdint>
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
 #include <iterator>
+#include <limits>
 #include <sstream>
 
 #include <drench/common/error.hpp>
@@ -33,13 +36,57 @@ std::string one_line(std::string text) {
   return text;
 }
 
+/// The largest positive vertex index of the faces and its line, checked against the vertex count at the end
+/// of the file (a face may name a vertex defined after it).
+struct ForwardIndex {
+  long long index = 0;
+  int line = 0;
+};
+
+/// One vertex of an `f` line, `v`, `v/vt`, `v//vn` or `v/vt/vn`: each index an integer that fits an int
+/// (tinyobjloader wraps larger ones silently: 4294967299 became vertex 3), not 0, and a negative vertex index
+/// (counted back from the last vertex so far) within the vertices read so far.
+void check_face_token(const std::string& key, const std::string& path, int line, const std::string& token,
+                      long long vertices, ForwardIndex& largest) {
+  const auto fail = [&](const std::string& problem) {
+    throw SceneError(obj_error(key, path, "line " + std::to_string(line) + ": " + problem));
+  };
+  std::size_t start = 0;
+  for (int part = 0; part < 3 && start <= token.size(); ++part) {
+    const std::size_t slash = std::min(token.find('/', start), token.size());
+    const std::string digits = token.substr(start, slash - start);
+    start = slash + 1;
+    if (digits.empty()) {
+      if (part == 0) fail("face vertex \"" + token + "\" has no vertex index");
+      continue;  // `v//vn`: no texture coordinate
+    }
+    const char* what = part == 0 ? "vertex index" : part == 1 ? "texture index" : "normal index";
+    errno = 0;
+    char* end = nullptr;
+    const long long index = std::strtoll(digits.c_str(), &end, 10);
+    if (end != digits.c_str() + digits.size())
+      fail(std::string(what) + " \"" + digits + "\" is not an integer");
+    if (errno == ERANGE || index > std::numeric_limits<int>::max() ||
+        index < -std::numeric_limits<int>::max())
+      fail(std::string(what) + " " + digits + " out of range (an OBJ index must fit 32 bits)");
+    if (index == 0) fail(std::string(what) + " 0 is invalid (OBJ indices start at 1)");
+    if (part != 0) continue;
+    if (index < 0 && -index > vertices) {
+      fail("vertex index " + digits + " out of range: only " + std::to_string(vertices) +
+           " vertices precede it");
+    }
+    if (index > largest.index) largest = {index, line};
+  }
+}
+
 /// What tinyobjloader 2.0rc10 lets pass silently, checked on the text first: a coordinate that is not a
-/// number
-/// ("nan" and "abc" both parse as 0) or not finite, and a face of fewer than 3 vertices (dropped with a
-/// warning).
+/// number ("nan" and "abc" both parse as 0) or not finite, a face of fewer than 3 vertices (dropped with a
+/// warning), and a face index that overflows an int or is out of range (wrapped or left to later checks).
 void check_obj_text(const std::string& key, const std::string& path, const std::string& text) {
   std::istringstream lines(text);
   std::string line;
+  long long vertices = 0;
+  ForwardIndex first_forward;
   for (int number = 1; std::getline(lines, line); ++number) {
     std::istringstream tokens(line);
     std::string keyword;
@@ -59,16 +106,25 @@ void check_obj_text(const std::string& key, const std::string& path, const std::
                                          "\" is not a finite number"));
         }
       }
+      ++vertices;
     } else if (keyword == "f") {
       int count = 0;
-      for (std::string token; tokens >> token;)
+      for (std::string token; tokens >> token;) {
         ++count;
+        check_face_token(key, path, number, token, vertices, first_forward);
+      }
       if (count < 3) {
         throw SceneError(obj_error(key, path,
                                    "line " + std::to_string(number) +
                                        ": a face needs at least 3 vertices, got " + std::to_string(count)));
       }
     }
+  }
+  if (first_forward.line > 0 && first_forward.index > vertices) {
+    throw SceneError(obj_error(key, path,
+                               "line " + std::to_string(first_forward.line) + ": vertex index " +
+                                   std::to_string(first_forward.index) + " out of range 1.." +
+                                   std::to_string(vertices)));
   }
 }
 
@@ -79,6 +135,18 @@ double triangle_area(const Vec3& a, const Vec3& b, const Vec3& c) {
 }  // namespace
 
 TriangleMesh load_obj_mesh(const std::string& path, const std::string& key) {
+  // Checked before it is opened: a FIFO or a device such as /dev/zero would block or never end.
+  struct stat info {};
+  if (::stat(path.c_str(), &info) == 0) {
+    if (!S_ISREG(info.st_mode))
+      throw SceneError(obj_error(key, path, "cannot be read: not a regular file (a folder, FIFO or device)"));
+    if (static_cast<std::uint64_t>(info.st_size) > kMaxObjFileBytes) {
+      throw SceneError(obj_error(key, path,
+                                 "cannot be read: " + std::to_string(info.st_size) +
+                                     " bytes, more than the " + std::to_string(kMaxObjFileBytes) +
+                                     " (1 GiB) an OBJ file may have"));
+    }
+  }
   std::ifstream file(path, std::ios::binary);
   if (!file) throw SceneError(obj_error(key, path, std::string("cannot be read: ") + std::strerror(errno)));
   const std::string text{std::istreambuf_iterator<char>(file), std::istreambuf_iterator<char>()};

@@ -2,10 +2,72 @@
 
 #include <algorithm>
 #include <cmath>
+#include <set>
 
 #include <drench/common/error.hpp>
 
 namespace drench::loader {
+
+json parse_json_strict(const std::string& text, std::size_t max_depth, const std::string& path_prefix,
+                       std::size_t start_depth) {
+  // One frame per open array or object: the keys seen so far (objects) or the elements done (arrays), so a
+  // duplicate is named by its JSON path.
+  struct Frame {
+    bool array = false;
+    std::size_t elements = 0;
+    std::string key;
+    std::set<std::string> keys;  // a set: an object of a million keys stays fast
+  };
+  std::vector<Frame> stack;
+  const auto path = [&]() {
+    std::string text_path = path_prefix;
+    for (std::size_t k = 0; k + 1 < stack.size(); ++k) {
+      const Frame& f = stack[k];
+      if (f.array) {
+        text_path += "[" + std::to_string(f.elements) + "]";
+      } else {
+        text_path += (text_path.empty() ? "" : ".") + f.key;
+      }
+    }
+    return text_path;
+  };
+  const auto value_done = [&]() {
+    if (!stack.empty() && stack.back().array) ++stack.back().elements;
+  };
+  const json::parser_callback_t check = [&](int /*depth*/, json::parse_event_t event, json& parsed) {
+    switch (event) {
+      case json::parse_event_t::object_start:
+      case json::parse_event_t::array_start:
+        if (start_depth + stack.size() >= max_depth)
+          throw SceneError("JSON nested deeper than " + std::to_string(max_depth) +
+                           " levels of arrays and objects");
+        stack.push_back({event == json::parse_event_t::array_start, 0, "", {}});
+        break;
+      case json::parse_event_t::key: {
+        Frame& frame = stack.back();
+        const std::string key = parsed.get<std::string>();
+        if (!frame.keys.insert(key).second) {
+          frame.key = key;
+          stack.push_back({});  // so that path() includes the key itself
+          const std::string where = path();
+          throw SceneError("duplicate key \"" + key + "\" at " + where + "; each key may appear once");
+        }
+        frame.key = key;
+        break;
+      }
+      case json::parse_event_t::object_end:
+      case json::parse_event_t::array_end:
+        stack.pop_back();
+        value_done();
+        break;
+      case json::parse_event_t::value:
+        value_done();
+        break;
+    }
+    return true;
+  };
+  return json::parse(text, check);
+}
 
 std::string show(const json& value) {
   // dump() would print non-finite numbers (only possible in documents built in code, or --set 1e999) as null.

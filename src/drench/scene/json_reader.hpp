@@ -20,6 +20,22 @@ using json = nlohmann::json;
 
 inline constexpr double kInf = std::numeric_limits<double>::infinity();
 
+/// Deepest nesting of arrays and objects a scene document may have (the whole document, `--set` values
+/// included). The deepest scene of docs/scenes.md nests 4 levels; the limit keeps recursive code (dump(),
+/// the readers) far from the stack's end.
+inline constexpr std::size_t kMaxJsonDepth = 64;
+
+/// Parses JSON text as a scene needs it: at most `max_depth` levels of arrays and objects, and no key twice
+/// in one object (nlohmann keeps the last silently, so a duplicate would hide a value the user wrote).
+/// @param text  the JSON text
+/// @param max_depth  the most levels allowed, counting the outermost array or object as 1
+/// @param path_prefix  the JSON path of the text's root in messages (`--set` values), "" for a document
+/// @param start_depth  the levels above the text's root (a `--set` value's path), counted against max_depth
+/// @throws SceneError `JSON nested deeper than <max_depth> levels` or `duplicate key "<k>" at <path>`
+///         (without the file: the caller adds it); json::parse_error and json::out_of_range as json::parse.
+json parse_json_strict(const std::string& text, std::size_t max_depth, const std::string& path_prefix = "",
+                       std::size_t start_depth = 0);
+
 /// Shows a value in a message as JSON, shortened so that a misplaced object does not flood the terminal.
 std::string show(const json& value);
 /// A limit computed from another key, shortest form (5, not 5.0: it may be an iteration count).

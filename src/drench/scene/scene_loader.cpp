@@ -1,9 +1,11 @@
 #include <drench/scene/scene_loader.hpp>
 
 #include <openssl/evp.h>
+#include <sys/stat.h>
 
 #include <algorithm>
 #include <cerrno>
+#include <cstdint>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -21,11 +23,52 @@ namespace {
 
 using loader::join;
 using loader::json;
+using loader::kMaxJsonDepth;
 using loader::kNonNegative;
 using loader::kPositive;
 using loader::Node;
 using loader::ObjectReader;
 using loader::show;
+
+/// Largest step or frame count a scene may ask for: 2^53, the last integer a double holds exactly (the
+/// counts are computed from doubles and kept as int64).
+constexpr double kMaxCount = 9007199254740992.0;
+
+/// Masses (particles, cloth nodes) must lie within [kMassMin, kMassMax] kg: then their inverses and the
+/// products of any two of them (impulses, momenta, energies) stay finite doubles, far from underflow.
+constexpr double kMassMin = 1e-150;
+constexpr double kMassMax = 1e150;
+
+/// A particle spacing must span at least 2^17 units in the last place of the coordinates it is laid at
+/// (spacing >= 2^-35 |x|): a step moves a particle by a small fraction of the spacing, which must still
+/// change its position, and lattice points one spacing apart must stay apart (at 1e-12 m near 0.3 m the
+/// nozzle emitted nothing).
+constexpr double kSpacingResolution = 0x1p-35;
+
+/// The smallest surface.cell_size relative to fluid.particle_spacing: 1/16 gives 4096 cells per particle
+/// volume already; below it a frame's grid outgrows memory and OpenVDB's int32 coordinates.
+constexpr double kMinCellPerSpacing = 1.0 / 16.0;
+
+/// A derived figure in a message, to 3 digits (a key's own value is shown as written).
+std::string approx(double value) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.3g", value);
+  return text;
+}
+
+/// The first of `keys` the scene wrote, else the first (for a message about defaults).
+Node written_key(const Node& object, std::initializer_list<const char*> keys) {
+  for (const char* key : keys) {
+    if (object.child(key).present()) return object.child(key);
+  }
+  return object.child(*keys.begin());
+}
+
+/// Fails `key` with `problem`, with its value when the scene wrote it, else saying it is the default.
+[[noreturn]] void fail_key(const Node& key, const std::string& problem) {
+  if (key.present()) key.fail(problem);
+  key.fail_without_value(problem + " (with its default)");
+}
 
 /// `time` (TimeSettings): the step, the duration and the frame rate; the step may not exceed the duration.
 TimeSettings read_time(const Node& node) {
@@ -38,6 +81,20 @@ TimeSettings read_time(const Node& node) {
   r.read("dt_min", time.dt_min, kPositive);
   r.require_order("dt", time.dt, "duration", time.duration);
   r.require_order("dt_min", time.dt_min, "dt", time.dt);
+  // Step and frame counts are int64 and computed through doubles: beyond 2^53 they are no longer exact, and
+  // beyond 2^63 llround overflows (1e308 s ran one step and said "ok").
+  const double steps = time.duration / (time.adaptive ? time.dt_min : time.dt);
+  if (!(steps <= kMaxCount)) {
+    fail_key(written_key(node, {"duration", time.adaptive ? "dt_min" : "dt"}),
+             "gives " + approx(steps) + " steps (time.duration / time." + (time.adaptive ? "dt_min" : "dt") +
+                 "); at most 2^53 = 9.0e15 can be counted");
+  }
+  const double frames = time.duration * time.frame_rate + 1.0;
+  if (!(frames <= kMaxCount)) {
+    fail_key(written_key(node, {"frame_rate", "duration"}),
+             "gives " + approx(frames) +
+                 " frames (time.duration x time.frame_rate + 1); at most 2^53 = 9.0e15 can be counted");
+  }
   return time;
 }
 
@@ -103,6 +160,94 @@ void check_emitter_speeds(const SceneConfig& config, const ObjectReader& r) {
   }
 }
 
+/// The masses the scene's settings give, within [kMassMin, kMassMax]: a particle's, rest_density x
+/// spacing^3, and a patch cloth's lightest and heaviest node, area_density x cell area / 6 (a corner in one
+/// triangle) and x cell area (six triangles); the error names the key, its value and the derived mass.
+/// (An OBJ cloth's nodes are checked when it is built.)
+void check_masses(const SceneConfig& config, const ObjectReader& r) {
+  const auto outside = [](double mass) { return !(mass >= kMassMin && mass <= kMassMax); };
+  const std::string range =
+      "; masses must be within [1e-150, 1e150] kg, so that inverse masses and impulses stay finite";
+  const double s = config.fluid.particle_spacing;
+  const double particle = config.fluid.rest_density * s * s * s;
+  if (!config.emitters.empty() && outside(particle)) {
+    fail_key(written_key(r["fluid"], {"particle_spacing", "rest_density"}),
+             "gives particles of " + approx(particle) +
+                 " kg (fluid.rest_density x fluid.particle_spacing^3)" + range);
+  }
+  if (!config.cloth || config.cloth->mesh != "patch") return;
+  const ClothSettings& c = *config.cloth;
+  const double cell = c.size_x / (c.nodes_x - 1) * (c.size_z / (c.nodes_z - 1));
+  const double lightest = c.area_density * cell / 6.0;
+  const double heaviest = c.area_density * cell;
+  if (outside(lightest) || outside(heaviest)) {
+    const bool light = outside(lightest);
+    const double mass = light ? lightest : heaviest;
+    fail_key(written_key(r["cloth"], {"area_density", "size", "nodes"}),
+             "gives a cloth node of " + approx(mass) + " kg and inverse mass " + approx(1.0 / mass) +
+                 " 1/kg (" +
+                 (light ? "a corner: cloth.area_density x cell area / 6" : "cloth.area_density x cell area") +
+                 ")" + range);
+  }
+}
+
+/// What each emitter can lay at the scene's spacing: positions one spacing apart that double tells apart
+/// at the emitter's coordinates (kSpacingResolution), a nozzle disc whose lattice fits an int and whose
+/// layers, spacing / speed apart, double tells apart over the run's times. Else the emitter would emit
+/// nothing (or a loop could not progress) while the run reports success.
+void check_emitters(const SceneConfig& config, const ObjectReader& r) {
+  const double s = config.fluid.particle_spacing;
+  const Node spacing_key = r["fluid"].child("particle_spacing");
+  for (std::size_t i = 0; i < config.emitters.size(); ++i) {
+    const EmitterSettings& e = config.emitters[i];
+    const Node node = r["emitters"].element(i);
+    const std::string name = "emitters[" + std::to_string(i) + "]";
+    const bool nozzle = e.kind == EmitterSettings::Kind::NOZZLE;
+    const double reach = nozzle ? e.nozzle.center.cwiseAbs().maxCoeff() + e.nozzle.radius
+                                : std::max(e.box.min.cwiseAbs().maxCoeff(), e.box.max.cwiseAbs().maxCoeff());
+    // The lattice spans radius / spacing rows either way, counted in int. A radius the scene wrote is
+    // named first: at 1e308 it is the radius that is wrong, not the spacing.
+    const double rows = nozzle ? e.nozzle.radius / (s * 0.9) : 0.0;
+    const Node radius = node.child("radius");
+    const std::string too_wide =
+        "gives a nozzle disc " + approx(rows) +
+        " particle rows across (radius / fluid.particle_spacing); at most 1e8 can be laid";
+    if (nozzle && radius.present() && !(rows <= 1e8)) radius.fail(too_wide);
+    if (!(s >= kSpacingResolution * reach)) {
+      fail_key(spacing_key, "is too fine for " + name + " at coordinates up to " + approx(reach) +
+                                " m: a double resolves spacings from " + approx(kSpacingResolution * reach) +
+                                " m there (2^-35 of the coordinate), so the emitter would lay nothing");
+    }
+    if (nozzle && !(rows <= 1e8)) fail_key(spacing_key, too_wide);
+    if (nozzle) {
+      const double period = s / e.nozzle.speed;
+      const double latest = e.nozzle.start_time + config.time.duration;
+      if (!(period >= kSpacingResolution * latest)) {
+        const Node speed = node.child("speed");
+        fail_key(
+            speed.present() ? speed : spacing_key,
+            "makes " + name + " release a layer every " + approx(period) +
+                " s (fluid.particle_spacing / speed), below what a double resolves at t = " + approx(latest) +
+                " s (" + approx(kSpacingResolution * latest) + " s): its emit loop could not progress");
+      }
+    }
+  }
+}
+
+/// surface.cell_size at least kMinCellPerSpacing of the particle spacing.
+void check_surface(const SceneConfig& config, const ObjectReader& r) {
+  const double cell = config.surface.cell_size;
+  if (cell <= 0.0) return;  // 0: half the spacing
+  const double least = kMinCellPerSpacing * config.fluid.particle_spacing;
+  if (!(cell >= least)) {
+    r["surface"]
+        .child("cell_size")
+        .fail("must be >= fluid.particle_spacing / 16 = " + show(least) +
+              " m (finer cells give a frame's grid more cells than memory and OpenVDB's "
+              "int32 coordinates hold)");
+  }
+}
+
 /// 1-based line and column of the character at `offset`, as an editor shows them.
 std::pair<std::size_t, std::size_t> line_and_column(const std::string& text, std::size_t offset) {
   offset = std::min(offset, text.size());
@@ -128,19 +273,72 @@ std::string parser_message(const json::exception& e) {
   return bracket == std::string::npos ? message : message.substr(bracket + 2);
 }
 
+/// The scene file's text, refused before it is opened when it is not a regular file (a folder, a FIFO or
+/// a device such as /dev/zero would block or never end) or larger than kMaxSceneFileBytes.
 std::string read_text_file(const std::string& path) {
+  struct stat info {};
+  if (::stat(path.c_str(), &info) != 0)
+    throw IoError(path + ": cannot read scene file: " + std::strerror(errno));
+  if (S_ISDIR(info.st_mode)) throw IoError(path + ": cannot read scene file: it is a folder");
+  if (!S_ISREG(info.st_mode))
+    throw IoError(path + ": cannot read scene file: not a regular file (a FIFO, device or socket)");
+  const auto too_large = [&](std::uint64_t bytes) {
+    return SceneError(path + ": cannot read scene file: " + std::to_string(bytes) +
+                      " bytes, more than the 16 MiB (" + std::to_string(kMaxSceneFileBytes) +
+                      " bytes) a scene file may have");
+  };
+  if (static_cast<std::uint64_t>(info.st_size) > kMaxSceneFileBytes) throw too_large(info.st_size);
   std::FILE* file = std::fopen(path.c_str(), "rb");
   if (file == nullptr) throw IoError(path + ": cannot read scene file: " + std::strerror(errno));
   std::string text;
   char buffer[65536];
   std::size_t count = 0;
-  while ((count = std::fread(buffer, 1, sizeof buffer, file)) > 0)
+  // Bounded again while reading: the file may have grown since stat().
+  while (text.size() <= kMaxSceneFileBytes && (count = std::fread(buffer, 1, sizeof buffer, file)) > 0)
     text.append(buffer, count);
   const bool failed = std::ferror(file) != 0;
   const int error = errno;  // fclose may overwrite errno
   std::fclose(file);
   if (failed) throw IoError(path + ": cannot read scene file: " + std::strerror(error));
+  if (text.size() > kMaxSceneFileBytes) throw too_large(text.size());
   return text;
+}
+
+/// Calls `visit(value)` on each value of `document` that names a file: `cloth.mesh` unless "patch",
+/// `obstacles[i].mesh` unless "v_plane", and only where it is a non-empty string (validation reports the
+/// rest).
+template <class Visit>
+void for_each_file_path(json& document, Visit visit) {
+  if (!document.is_object()) return;
+  const auto visit_key = [&](json& object, const char* key, const char* builtin) {
+    if (!object.is_object()) return;
+    const auto it = object.find(key);
+    if (it != object.end() && it->is_string() && !it->get<std::string>().empty() &&
+        it->get<std::string>() != builtin)
+      visit(*it);
+  };
+  if (const auto cloth = document.find("cloth"); cloth != document.end()) visit_key(*cloth, "mesh", "patch");
+  if (const auto obstacles = document.find("obstacles");
+      obstacles != document.end() && obstacles->is_array()) {
+    for (json& obstacle : *obstacles)
+      visit_key(obstacle, "mesh", "v_plane");
+  }
+}
+
+/// Makes the relative file paths of `document` absolute against `base` (an absolute folder).
+void make_paths_absolute(json& document, const std::filesystem::path& base) {
+  for_each_file_path(document, [&](json& value) {
+    const std::filesystem::path file(value.get<std::string>());
+    if (file.is_relative()) value = (base / file).lexically_normal().string();
+  });
+}
+
+/// The absolute folder of `path`, for the paths its scene names.
+std::filesystem::path folder_of(const std::string& path) {
+  std::error_code error;
+  const std::filesystem::path absolute = std::filesystem::absolute(path, error);
+  if (error) throw IoError(path + ": cannot find its folder: " + error.message());
+  return absolute.parent_path();
 }
 
 /// One step of an override path: an object key, or an array index written `[i]`. A key made of digits
@@ -186,9 +384,13 @@ std::vector<PathStep> split_path(const std::string& path, const std::string& ass
 }
 
 /// The override's value: JSON when it parses, else the raw text, so `pressure_solver=wcsph` needs no quotes.
-json parse_override_value(const std::string& text, const std::string& assignment) {
+json parse_override_value(const std::string& text, const std::string& assignment, std::size_t path_depth,
+                          const std::string& path) {
+  // The value and the path it goes to together stay within the document's nesting limit.
   try {
-    return json::parse(text);
+    return loader::parse_json_strict(text, kMaxJsonDepth, path, path_depth);
+  } catch (const SceneError& e) {
+    throw SceneError("--set " + assignment + ": " + e.what());
   } catch (const json::parse_error&) {
     return json(text);
   } catch (const json::out_of_range& e) {
@@ -225,6 +427,9 @@ SceneConfig parse_scene(const nlohmann::json& document, const std::string& sourc
   if (r["camera"].present()) config.camera = loader::read_camera(r["camera"]);
   check_effects(config, r);
   check_emitter_speeds(config, r);
+  check_masses(config, r);
+  check_emitters(config, r);
+  check_surface(config, r);
   if (config.coupling.asks_tangential() && !config.has_effect("friction")) {
     const Node coupling = r["coupling"];
     const Node key =
@@ -252,7 +457,10 @@ void apply_override(nlohmann::json& document, const std::string& assignment) {
   }
   const std::string path = assignment.substr(0, equals);
   const std::vector<PathStep> steps = split_path(path, assignment);
-  json value = parse_override_value(assignment.substr(equals + 1), assignment);
+  if (steps.size() >= kMaxJsonDepth)
+    throw fail("path of " + std::to_string(steps.size()) + " levels; JSON nested deeper than " +
+               std::to_string(kMaxJsonDepth) + " levels of arrays and objects is refused");
+  json value = parse_override_value(assignment.substr(equals + 1), assignment, steps.size(), path);
 
   json* node = &document;
   std::string walked;  // the path so far, written canonically for messages
@@ -299,7 +507,9 @@ nlohmann::json read_scene_document(const std::string& path, const std::vector<st
   const std::string text = read_text_file(path);
   json document;
   try {
-    document = json::parse(text);
+    document = loader::parse_json_strict(text, kMaxJsonDepth);
+  } catch (const SceneError& e) {
+    throw SceneError(path + ": " + e.what());
   } catch (const json::parse_error& e) {
     // e.byte counts the characters read, so the offending one is at e.byte - 1.
     const auto [line, column] = line_and_column(text, e.byte == 0 ? 0 : e.byte - 1);
@@ -308,12 +518,22 @@ nlohmann::json read_scene_document(const std::string& path, const std::vector<st
   } catch (const json::exception& e) {
     throw SceneError(path + ": malformed JSON: " + parser_message(e));
   }
+  // A path the file names is relative to the file's folder; one an override names, to the working
+  // directory, as any path on a command line. Both are made absolute, so that the document (and the
+  // scene.json a run copies it to) means the same wherever it is read from.
+  make_paths_absolute(document, folder_of(path));
   for (const std::string& assignment : overrides) {
     try {
       apply_override(document, assignment);
     } catch (const SceneError& e) {
       throw SceneError(std::string(e.what()) + " (" + path + ")");
     }
+  }
+  if (!overrides.empty()) {
+    std::error_code error;
+    const std::filesystem::path working = std::filesystem::current_path(error);
+    if (error) throw IoError("cannot find the working directory for --set paths: " + error.message());
+    make_paths_absolute(document, working);
   }
   return document;
 }
@@ -327,17 +547,8 @@ std::string scene_source(const std::string& path, const std::vector<std::string>
 }
 
 SceneConfig load_scene_file(const std::string& path, const std::vector<std::string>& overrides) {
-  SceneConfig config = parse_scene(read_scene_document(path, overrides), scene_source(path, overrides));
-  // A cloth or obstacle OBJ named relative to the scene file lives next to it, wherever drench is run from.
-  if (config.cloth && config.cloth->mesh != "patch" &&
-      std::filesystem::path(config.cloth->mesh).is_relative()) {
-    config.cloth->mesh = (std::filesystem::path(path).parent_path() / config.cloth->mesh).string();
-  }
-  for (ObstacleSettings& obstacle : config.obstacles) {
-    if (obstacle.mesh != "v_plane" && std::filesystem::path(obstacle.mesh).is_relative())
-      obstacle.mesh = (std::filesystem::path(path).parent_path() / obstacle.mesh).string();
-  }
-  return config;
+  // read_scene_document has made the file paths absolute (relative ones are the scene file's folder's).
+  return parse_scene(read_scene_document(path, overrides), scene_source(path, overrides));
 }
 
 std::string sha256_hex(const std::string& bytes) {

@@ -2,6 +2,7 @@
 /// Scene files: JSON in SI units -> SceneConfig, with every key validated. The schema is documented key by
 /// key in docs/scenes.md; every error names the file, the JSON path and the value.
 
+#include <cstdint>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
@@ -9,6 +10,10 @@
 #include <drench/scene/scene_config.hpp>
 
 namespace drench {
+
+/// Largest scene file read (unit: bytes): the demo scenes take 1-3 KB, so 16 MiB leaves room for any scene
+/// written by hand or by a program, while /dev/zero or a runaway generator is refused before it is read.
+inline constexpr std::uint64_t kMaxSceneFileBytes = 16u << 20;
 
 /// Reads a scene file, applies `overrides` and validates the result.
 /// @param path  scene file (JSON)
@@ -43,8 +48,13 @@ void apply_override(nlohmann::json& document, const std::string& assignment);
 /// whose SHA-256 the summary reports as `scene_sha256`.
 std::string canonical_scene_text(const nlohmann::json& document);
 
-/// Reads a scene file and applies overrides without validating (for `scene_sha256`).
-/// @throws IoError, SceneError (malformed JSON, bad override)
+/// Reads a scene file and applies overrides without validating (for `scene_sha256`). The file must be a
+/// regular file of at most kMaxSceneFileBytes, nested at most loader::kMaxJsonDepth (64) levels, with no key
+/// twice in an object; `--set` values are held to the same. The file paths the scene names (`cloth.mesh`,
+/// `obstacles[i].mesh`) come back absolute: a relative one in the file against the file's folder, one an
+/// override names against the working directory.
+/// @throws IoError (missing, a folder, a FIFO or device, unreadable), SceneError (too large, malformed
+///         JSON, too deep, a duplicate key, a bad override); each names the file
 nlohmann::json read_scene_document(const std::string& path, const std::vector<std::string>& overrides = {});
 
 /// Lowercase hex SHA-256 of `bytes` (OpenSSL's EVP digest).

@@ -5,9 +5,40 @@
 #include <openvdb/tools/VolumeToMesh.h>
 
 #include <cmath>
+#include <cstdio>
 #include <mutex>
+#include <string>
+
+#include <drench/common/error.hpp>
 
 namespace drench {
+
+namespace {
+
+/// A figure in a message, to 4 digits.
+std::string show(double value) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.4g", value);
+  return text;
+}
+
+/// Runs `body`, turning an OpenVDB exception (e.g. ArithmeticError for a transform of a cell too small to
+/// invert) into a drench::Error that names the stage and the cell size, so that it never aborts the program.
+template <class Body>
+void vdb_call(const char* stage, double cell, Body&& body) {
+  try {
+    body();
+  } catch (const openvdb::Exception& e) {
+    throw Error("surface: OpenVDB failed to " + std::string(stage) + " at surface cell size " + show(cell) +
+                " m: " + e.what() + " (choose a larger surface.cell_size)");
+  }
+}
+
+/// Largest |coordinate| / cell a node may have: OpenVDB's coordinates are int32, and the dilation and the
+/// kernel's reach add a few nodes on either side.
+constexpr double kMaxNodeIndex = 0x1p30;
+
+}  // namespace
 
 struct VdbNodeGrid::Impl {
   openvdb::FloatGrid::Ptr grid;
@@ -16,8 +47,10 @@ struct VdbNodeGrid::Impl {
 VdbNodeGrid::VdbNodeGrid(Scalar cell, float outside) : m_impl(std::make_unique<Impl>()) {
   static std::once_flag initialized;
   std::call_once(initialized, [] { openvdb::initialize(); });
-  m_impl->grid = openvdb::FloatGrid::create(outside);
-  m_impl->grid->setTransform(openvdb::math::Transform::createLinearTransform(cell));
+  vdb_call("build its grid", cell, [&] {
+    m_impl->grid = openvdb::FloatGrid::create(outside);
+    m_impl->grid->setTransform(openvdb::math::Transform::createLinearTransform(cell));
+  });
 }
 
 VdbNodeGrid::~VdbNodeGrid() = default;
@@ -26,15 +59,22 @@ void VdbNodeGrid::activate_around(const Vec3Array& particles, int reach) {
   openvdb::FloatGrid& grid = *m_impl->grid;
   auto accessor = grid.getAccessor();
   const double cell = grid.voxelSize()[0];
-  for (const Vec3& p : particles) {
-    const openvdb::Coord c(static_cast<int>(std::floor(p.x() / cell)),
-                           static_cast<int>(std::floor(p.y() / cell)),
-                           static_cast<int>(std::floor(p.z() / cell)));
-    accessor.setValueOn(c);
+  for (std::size_t i = 0; i < particles.size(); ++i) {
+    const Vec3 node = (particles[i] / cell).array().floor().matrix();
+    if (!(node.cwiseAbs().maxCoeff() <= kMaxNodeIndex)) {
+      throw Error("surface: particle " + std::to_string(i) + " at (" + show(particles[i].x()) + ", " +
+                  show(particles[i].y()) + ", " + show(particles[i].z()) +
+                  ") m is beyond the surface grid's int32 coordinates at cell size " + show(cell) +
+                  " m (|x| / cell <= 2^30); choose a larger surface.cell_size");
+    }
+    accessor.setValueOn(
+        openvdb::Coord(static_cast<int>(node.x()), static_cast<int>(node.y()), static_cast<int>(node.z())));
   }
   // The floor node and the one past it both lie next to the particle: reach + 1 covers the kernel's cube.
-  openvdb::tools::dilateActiveValues(grid.tree(), reach + 1, openvdb::tools::NN_FACE_EDGE_VERTEX,
-                                     openvdb::tools::EXPAND_TILES);
+  vdb_call("dilate its active nodes", cell, [&] {
+    openvdb::tools::dilateActiveValues(grid.tree(), reach + 1, openvdb::tools::NN_FACE_EDGE_VERTEX,
+                                       openvdb::tools::EXPAND_TILES);
+  });
 }
 
 std::vector<Vec3i> VdbNodeGrid::active_nodes() const {
@@ -58,7 +98,8 @@ void VdbNodeGrid::mesh(Vec3Array& positions, std::vector<Triangle>& triangles) c
   std::vector<openvdb::Vec3s> points;
   std::vector<openvdb::Vec3I> tris;
   std::vector<openvdb::Vec4I> quads;
-  openvdb::tools::volumeToMesh(*m_impl->grid, points, tris, quads, 0.0, 0.0);
+  vdb_call("mesh the surface", m_impl->grid->voxelSize()[0],
+           [&] { openvdb::tools::volumeToMesh(*m_impl->grid, points, tris, quads, 0.0, 0.0); });
   positions.resize(points.size());
   for (std::size_t i = 0; i < points.size(); ++i)
     positions[i] = Vec3(points[i].x(), points[i].y(), points[i].z());

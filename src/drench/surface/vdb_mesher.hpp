@@ -13,6 +13,8 @@ namespace drench {
 class VdbNodeGrid {
  public:
   /// Nodes at integer multiples of `cell` (unit: m); a node never given a value holds `outside`.
+  /// @throws Error naming the cell size when OpenVDB refuses the transform (a cell too small to invert);
+  ///         every method turns OpenVDB's exceptions into drench::Error the same way.
   VdbNodeGrid(Scalar cell, float outside);
   ~VdbNodeGrid();
   VdbNodeGrid(const VdbNodeGrid&) = delete;
@@ -20,6 +22,7 @@ class VdbNodeGrid {
 
   /// Activates every node within `reach` nodes (a cube) of a node next to some particle: the nodes whose
   /// value some particle can change, so the work follows the fluid, not its bounding box.
+  /// @throws Error naming the particle when its node index exceeds 2^30 (OpenVDB coordinates are int32)
   void activate_around(const Vec3Array& particles, int reach);
   /// The active nodes' integer coordinates, in the grid's fixed traversal order.
   std::vector<Vec3i> active_nodes() const;
