@@ -17,6 +17,22 @@ void check_positive(const std::string& key, const char* name, double value) {
   }
 }
 
+/// Appends the obstacles' nodes and triangles to `mesh` after its nodes, static (positions_t1 = positions_t0
+/// for the new nodes) and of inverse mass 0.
+void append_obstacles(const std::vector<TriangleMesh>& obstacles, ClothMesh& mesh) {
+  const std::size_t before = mesh.positions_t0.size();
+  for (const TriangleMesh& obstacle : obstacles) {
+    const auto first = static_cast<Index>(mesh.positions_t0.size());
+    mesh.positions_t0.insert(mesh.positions_t0.end(), obstacle.positions.begin(), obstacle.positions.end());
+    for (const Triangle& t : obstacle.triangles)
+      mesh.triangles.push_back({t[0] + first, t[1] + first, t[2] + first});
+  }
+  mesh.positions_t1.resize(before);
+  mesh.positions_t1.insert(mesh.positions_t1.end(), mesh.positions_t0.begin() + static_cast<long>(before),
+                           mesh.positions_t0.end());
+  mesh.inverse_masses.resize(mesh.positions_t0.size(), 0.0);
+}
+
 }  // namespace
 
 TriangleMesh v_plane_mesh(const ObstacleSettings& s, const std::string& key) {
@@ -95,15 +111,7 @@ ClothWithObstacles::ClothWithObstacles(ClothEngine* cloth, std::vector<TriangleM
     validate_triangle_mesh(m_obstacles[i], "obstacles[" + std::to_string(i) + "]");
   pull_cloth();
   if (m_cloth) {
-    for (const TriangleMesh& obstacle : m_obstacles) {
-      const auto first = static_cast<Index>(m_rigid.positions_t0.size());
-      m_rigid.positions_t0.insert(m_rigid.positions_t0.end(), obstacle.positions.begin(),
-                                  obstacle.positions.end());
-      for (const Triangle& t : obstacle.triangles)
-        m_rigid.triangles.push_back({t[0] + first, t[1] + first, t[2] + first});
-    }
-    m_rigid.positions_t1 = m_rigid.positions_t0;
-    m_rigid.inverse_masses.assign(m_rigid.positions_t0.size(), 0.0);
+    append_obstacles(m_obstacles, m_rigid);
     CouplingSettings settings;  // free slip: the cloth slides on the obstacles as Bullet's would
     settings.cloth_thickness = clearance;
     m_holder = std::make_unique<Coupler>(settings, false);
@@ -146,15 +154,7 @@ void ClothWithObstacles::pull_cloth() {
       m_mesh.positions_t0.resize(nodes);
       m_mesh.inverse_masses.resize(nodes);
     }
-    for (const TriangleMesh& obstacle : m_obstacles) {
-      const auto first = static_cast<Index>(m_mesh.positions_t0.size());
-      m_mesh.positions_t0.insert(m_mesh.positions_t0.end(), obstacle.positions.begin(),
-                                 obstacle.positions.end());
-      for (const Triangle& t : obstacle.triangles)
-        m_mesh.triangles.push_back({t[0] + first, t[1] + first, t[2] + first});
-    }
-    m_mesh.inverse_masses.resize(m_mesh.positions_t0.size(), 0.0);
-    m_mesh.positions_t1 = m_mesh.positions_t0;
+    append_obstacles(m_obstacles, m_mesh);
     m_cloth_nodes = nodes;
     m_cloth_triangles = triangles;
     m_built = true;
