@@ -11,25 +11,12 @@
 #include <sstream>
 #include <string>
 
+#include "../drench_command.hpp"
 #include "../temp_dir.hpp"
 
 namespace {
 
 namespace fs = std::filesystem;
-
-int run_drench(const std::string& arguments, const fs::path& log) {
-  const std::string command =
-      std::string(DRENCH_EXECUTABLE) + " " + arguments + " > " + log.string() + " 2>&1";
-  const int status = std::system(command.c_str());
-  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-}
-
-std::string read_text(const fs::path& file) {
-  std::ifstream in(file);
-  std::ostringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
 
 const std::string kSmallTank = std::string(DRENCH_SOURCE_DIR) + "/demos/scenes/hydrostatic_tank.json" +
                                " --set fluid.particle_spacing=0.04 --steps 10 --quiet";
@@ -38,12 +25,12 @@ TEST(RunThreads, SummaryReportsTheThreadsAskedFor) {
   const drench::test::TempDir dir;
   for (const int threads : {1, 2}) {
     const fs::path out = dir.path() / ("t" + std::to_string(threads));
-    ASSERT_EQ(
-        run_drench("run " + kSmallTank + " --out " + out.string() + " --threads " + std::to_string(threads),
-                   dir.path() / "log.txt"),
-        0)
-        << read_text(dir.path() / "log.txt");
-    const nlohmann::json summary = nlohmann::json::parse(read_text(out / "summary.json"));
+    ASSERT_EQ(drench::test::run_drench(
+                  "run " + kSmallTank + " --out " + out.string() + " --threads " + std::to_string(threads),
+                  dir.path() / "log.txt"),
+              0)
+        << drench::test::read_text(dir.path() / "log.txt");
+    const nlohmann::json summary = nlohmann::json::parse(drench::test::read_text(out / "summary.json"));
     EXPECT_EQ(summary.at("threads").get<int>(), threads);
   }
 }
@@ -51,12 +38,14 @@ TEST(RunThreads, SummaryReportsTheThreadsAskedFor) {
 TEST(RunThreads, ACountAboveTheLimitIsRefusedBeforeAnythingIsWritten) {
   const drench::test::TempDir dir;
   const fs::path out = dir.path() / "out";
-  EXPECT_EQ(
-      run_drench("run " + kSmallTank + " --out " + out.string() + " --threads 5000", dir.path() / "log.txt"),
-      1);
-  EXPECT_NE(read_text(dir.path() / "log.txt").find("thread count must be in [1, 1024], got 5000"),
+  EXPECT_EQ(drench::test::run_drench("run " + kSmallTank + " --out " + out.string() + " --threads 5000",
+                                     dir.path() / "log.txt"),
+            1);
+  // The command line's own check refuses it, before drench::set_thread_count would (test_thread_pool).
+  EXPECT_NE(drench::test::read_text(dir.path() / "log.txt")
+                .find("--threads: must be a whole number in [1, 1024], got '5000'"),
             std::string::npos)
-      << read_text(dir.path() / "log.txt");
+      << drench::test::read_text(dir.path() / "log.txt");
   EXPECT_FALSE(fs::exists(out));
 }
 

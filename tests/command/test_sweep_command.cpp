@@ -13,25 +13,12 @@
 #include <string>
 #include <vector>
 
+#include "../drench_command.hpp"
 #include "../temp_dir.hpp"
 
 namespace {
 
 namespace fs = std::filesystem;
-
-int run(const std::string& arguments, const fs::path& log) {
-  const std::string command =
-      std::string(DRENCH_EXECUTABLE) + " " + arguments + " > " + log.string() + " 2>&1";
-  const int status = std::system(command.c_str());
-  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-}
-
-std::string read(const fs::path& file) {
-  std::ifstream in(file);
-  std::ostringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
 
 /// sweep.csv as rows of named fields (no field of this test's sweeps holds a comma or a quote).
 std::vector<std::map<std::string, std::string>> read_csv(const fs::path& file) {
@@ -71,18 +58,19 @@ const std::string kTank =
 // row with its error, and the closed tank neither gains energy nor loses more than the settling costs.
 TEST(SweepCommand, EveryRunIsARowWithItsSummarysFiguresFailuresIncluded) {
   const drench::test::TempDir dir;
-  const int status =
-      run("sweep " + kTank + " --vary time.dt=0.0025,0.01 --case 'no cloth file:cloth.mesh=\"absent.obj\"'" +
-              " --out " + (dir.path() / "sweep").string(),
-          dir.path() / "log.txt");
-  EXPECT_EQ(status, 2) << "a sweep with a failed run exits 2\n" << read(dir.path() / "log.txt");
+  const int status = drench::test::run_drench(
+      "sweep " + kTank + " --vary time.dt=0.0025,0.01 --case 'no cloth file:cloth.mesh=\"absent.obj\"'" +
+          " --out " + (dir.path() / "sweep").string(),
+      dir.path() / "log.txt");
+  EXPECT_EQ(status, 2) << "a sweep with a failed run exits 2\n"
+                       << drench::test::read_text(dir.path() / "log.txt");
   const auto rows = read_csv(dir.path() / "sweep/sweep.csv");
-  ASSERT_EQ(rows.size(), 3u) << read(dir.path() / "log.txt");
+  ASSERT_EQ(rows.size(), 3u) << drench::test::read_text(dir.path() / "log.txt");
   for (int i = 0; i < 2; ++i) {
     const auto& row = rows[i];
     EXPECT_EQ(row.at("status"), "ok");
     const nlohmann::json summary = nlohmann::json::parse(
-        read(dir.path() / "sweep/runs" / ("00" + std::to_string(i + 1)) / "summary.json"));
+        drench::test::read_text(dir.path() / "sweep/runs" / ("00" + std::to_string(i + 1)) / "summary.json"));
     EXPECT_NEAR(std::stod(row.at("density_error_mean")), summary["density_error"]["mean"].get<double>(),
                 1e-5 * summary["density_error"]["mean"].get<double>());
     EXPECT_EQ(std::stod(row.at("steps")), summary["steps"].get<double>());
@@ -97,7 +85,7 @@ TEST(SweepCommand, EveryRunIsARowWithItsSummarysFiguresFailuresIncluded) {
   EXPECT_EQ(rows[2].at("setting"), "no cloth file");
   EXPECT_NE(rows[2].at("status").find("absent.obj"), std::string::npos) << rows[2].at("status");
   EXPECT_TRUE(rows[2].at("wall_s").empty());
-  const std::string report = read(dir.path() / "sweep/report.md");
+  const std::string report = drench::test::read_text(dir.path() / "sweep/report.md");
   EXPECT_NE(report.find("1 runs did not end \"ok\""), std::string::npos) << report;
   EXPECT_TRUE(fs::exists(dir.path() / "sweep/pareto.png")) << "gnuplot is in scripts/setup";
 }
@@ -106,11 +94,12 @@ TEST(SweepCommand, EveryRunIsARowWithItsSummarysFiguresFailuresIncluded) {
 TEST(SweepCommand, ARunPastTheTimeoutIsStoppedAndIsARow) {
   const drench::test::TempDir dir;
   const auto start = std::chrono::steady_clock::now();
-  const int status = run("sweep " + kTank + " --vary time.duration=0.02,600 --timeout 2 --out " +
-                             (dir.path() / "sweep").string(),
-                         dir.path() / "log.txt");
+  const int status =
+      drench::test::run_drench("sweep " + kTank + " --vary time.duration=0.02,600 --timeout 2 --out " +
+                                   (dir.path() / "sweep").string(),
+                               dir.path() / "log.txt");
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  EXPECT_EQ(status, 2) << read(dir.path() / "log.txt");
+  EXPECT_EQ(status, 2) << drench::test::read_text(dir.path() / "log.txt");
   EXPECT_LT(seconds, 60.0) << "the 600 s run was not stopped";
   const auto rows = read_csv(dir.path() / "sweep/sweep.csv");
   ASSERT_EQ(rows.size(), 2u);
@@ -121,15 +110,18 @@ TEST(SweepCommand, ARunPastTheTimeoutIsStoppedAndIsARow) {
 TEST(SweepCommand, ABadSettingFailsBeforeAnyRunAndWritesNothing) {
   const drench::test::TempDir dir;
   const fs::path out = dir.path() / "sweep";
-  EXPECT_EQ(run("sweep " + kTank + " --vary time.dt=0.001,-1 --out " + out.string(), dir.path() / "log.txt"),
+  EXPECT_EQ(drench::test::run_drench("sweep " + kTank + " --vary time.dt=0.001,-1 --out " + out.string(),
+                                     dir.path() / "log.txt"),
             1);
-  EXPECT_NE(read(dir.path() / "log.txt").find("time.dt"), std::string::npos) << read(dir.path() / "log.txt");
+  EXPECT_NE(drench::test::read_text(dir.path() / "log.txt").find("time.dt"), std::string::npos)
+      << drench::test::read_text(dir.path() / "log.txt");
   EXPECT_FALSE(fs::exists(out));
-  EXPECT_EQ(run("sweep " + kTank + " --vary time.dt=0.001 --error speed --out " + out.string(),
-                dir.path() / "log.txt"),
-            1);
-  EXPECT_NE(read(dir.path() / "log.txt").find("density_error_mean"), std::string::npos)
-      << "the error lists the columns: " << read(dir.path() / "log.txt");
+  EXPECT_EQ(
+      drench::test::run_drench("sweep " + kTank + " --vary time.dt=0.001 --error speed --out " + out.string(),
+                               dir.path() / "log.txt"),
+      1);
+  EXPECT_NE(drench::test::read_text(dir.path() / "log.txt").find("density_error_mean"), std::string::npos)
+      << "the error lists the columns: " << drench::test::read_text(dir.path() / "log.txt");
   EXPECT_FALSE(fs::exists(out));
 }
 

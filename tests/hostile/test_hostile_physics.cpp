@@ -16,26 +16,12 @@
 #include <drench/bullet/bullet_cloth.hpp>
 #include <drench/scene/simulation.hpp>
 
+#include "../drench_command.hpp"
 #include "../temp_dir.hpp"
 
 namespace {
 
 namespace fs = std::filesystem;
-
-/// Runs `drench ARGUMENTS`, its output into `log`; the exit status, or -1 if it did not exit.
-int drench(const std::string& arguments, const fs::path& log) {
-  const std::string command =
-      std::string(DRENCH_EXECUTABLE) + " " + arguments + " > " + log.string() + " 2>&1";
-  const int status = std::system(command.c_str());
-  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-}
-
-std::string read(const fs::path& file) {
-  std::ifstream in(file);
-  std::ostringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
 
 std::string scene(const std::string& name) {
   return std::string(DRENCH_SOURCE_DIR) + "/demos/scenes/" + name;
@@ -47,13 +33,13 @@ std::string scene(const std::string& name) {
 TEST(HostilePhysics, A40MetrePerSecondJetThatTearsTheClothStopsWithExit2) {
   drench::test::TempDir dir;
   const fs::path out = dir.path() / "run";
-  const int code =
-      drench("run " + scene("jet_on_cloth.json") + " --out " + out.string() +
-                 " --quiet --threads 1 --set 'emitters[0].speed=40' --set time.dt=0.004 --set time.duration=0.2",
-             dir.path() / "log");
-  const std::string log = read(dir.path() / "log");
+  const int code = drench::test::run_drench(
+      "run " + scene("jet_on_cloth.json") + " --out " + out.string() +
+          " --quiet --threads 1 --set 'emitters[0].speed=40' --set time.dt=0.004 --set time.duration=0.2",
+      dir.path() / "log");
+  const std::string log = drench::test::read_text(dir.path() / "log");
   EXPECT_EQ(code, 2) << log;
-  const nlohmann::json summary = nlohmann::json::parse(read(out / "summary.json"));
+  const nlohmann::json summary = nlohmann::json::parse(drench::test::read_text(out / "summary.json"));
   const std::string status = summary["status"];
   EXPECT_TRUE(status.find("RUNAWAY_NODE: cloth node ") != std::string::npos ||
               status.find("CLOTH_OVERSTRETCHED: the cloth edge between nodes ") != std::string::npos)
@@ -68,12 +54,13 @@ TEST(HostilePhysics, A40MetrePerSecondJetThatTearsTheClothStopsWithExit2) {
 TEST(HostilePhysics, ARunThatLeakedEndsWithExit2AndNamesTheParticle) {
   drench::test::TempDir dir;
   const fs::path out = dir.path() / "run";
-  const int code = drench("run " + scene("leak_comparison.json") + " --out " + out.string() +
-                              " --quiet --threads 1 --set time.dt=0.004 --set time.frame_rate=0",
-                          dir.path() / "log");
-  const std::string log = read(dir.path() / "log");
+  const int code =
+      drench::test::run_drench("run " + scene("leak_comparison.json") + " --out " + out.string() +
+                                   " --quiet --threads 1 --set time.dt=0.004 --set time.frame_rate=0",
+                               dir.path() / "log");
+  const std::string log = drench::test::read_text(dir.path() / "log");
   EXPECT_EQ(code, 2) << log;
-  const nlohmann::json summary = nlohmann::json::parse(read(out / "summary.json"));
+  const nlohmann::json summary = nlohmann::json::parse(drench::test::read_text(out / "summary.json"));
   EXPECT_GT(summary["leaks"].get<int>(), 0);
   const std::string status = summary["status"];
   EXPECT_EQ(status.rfind("LEAKED: particle id ", 0), 0u) << status;
@@ -89,13 +76,14 @@ TEST(HostilePhysics, ARunThatLeakedEndsWithExit2AndNamesTheParticle) {
 TEST(HostilePhysics, ACrumpledClothAtDt4msDoesNotLeak) {
   drench::test::TempDir dir;
   const fs::path out = dir.path() / "run";
-  const int code = drench("run " + scene("crumpled_cloth.json") + " --out " + out.string() +
-                              " --quiet --threads 1 --set time.dt=0.004 --set time.duration=0.4 --set time.frame_rate=0"
-                              " --set 'cloth.size=[0.5,0.5]' --set 'cloth.nodes=[33,33]'"
-                              " --set 'emitters[0].radius=0.01' --set 'emitters[0].max_particles=3000'",
-                          dir.path() / "log");
-  const std::string log = read(dir.path() / "log");
-  const nlohmann::json summary = nlohmann::json::parse(read(out / "summary.json"));
+  const int code = drench::test::run_drench(
+      "run " + scene("crumpled_cloth.json") + " --out " + out.string() +
+          " --quiet --threads 1 --set time.dt=0.004 --set time.duration=0.4 --set time.frame_rate=0"
+          " --set 'cloth.size=[0.5,0.5]' --set 'cloth.nodes=[33,33]'"
+          " --set 'emitters[0].radius=0.01' --set 'emitters[0].max_particles=3000'",
+      dir.path() / "log");
+  const std::string log = drench::test::read_text(dir.path() / "log");
+  const nlohmann::json summary = nlohmann::json::parse(drench::test::read_text(out / "summary.json"));
   EXPECT_EQ(summary["leaks"].get<int>(), 0) << log;
   EXPECT_EQ(summary["status"], "ok") << log;
   EXPECT_EQ(code, 0) << log;
