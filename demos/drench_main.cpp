@@ -419,7 +419,8 @@ int dispatch(int argc, char** argv) {
   run->add_option("--out", out_dir, "output folder (frames/, summary.json)")->required();
   run->add_option("--set", overrides, "override a scene value, e.g. --set time.dt=0.004 (repeatable)");
   run->add_option("--steps", steps, "stop after N steps")->check(whole_number(0, kMaxCount));
-  run->add_option("--threads", threads, "threads (default: OMP_NUM_THREADS, else the CPUs this process may use)")
+  run->add_option("--threads", threads,
+                  "threads (default: OMP_NUM_THREADS, else the CPUs this process may use)")
       ->check(whole_number(1, kMaxThreads));
   run->add_flag("--overwrite", overwrite,
                 "replace an earlier drench run in --out (only the files its drench_run.json lists)");
@@ -438,7 +439,9 @@ int dispatch(int argc, char** argv) {
   reconstruct->add_option(
       "--set", overrides,
       "override a value of the run's scene, e.g. --set surface.cell_size=0.004 (repeatable)");
-  reconstruct->add_option("--threads", threads, "threads (default: OMP_NUM_THREADS, else the CPUs this process may use)")
+  reconstruct
+      ->add_option("--threads", threads,
+                   "threads (default: OMP_NUM_THREADS, else the CPUs this process may use)")
       ->check(whole_number(1, kMaxThreads));
   reconstruct->add_flag("--quiet", quiet, "no progress line");
 
@@ -463,7 +466,8 @@ int dispatch(int argc, char** argv) {
       "view", "run a scene live in a window: orbit, pan and zoom, pause, step, restart (docs/viewer.md)");
   view->add_option("scene", scene_path, "scene file (JSON, SI units; see docs/scenes.md)")->required();
   view->add_option("--set", overrides, "override a scene value, e.g. --set time.dt=0.004 (repeatable)");
-  view->add_option("--threads", threads, "threads of the simulation (default: OMP_NUM_THREADS, else the CPUs this process may use)")
+  view->add_option("--threads", threads,
+                   "threads of the simulation (default: OMP_NUM_THREADS, else the CPUs this process may use)")
       ->check(whole_number(1, kMaxThreads));
   view->add_option("--size", view_size, "window size WIDTHxHEIGHT in pixels")->capture_default_str();
   view->add_option("--frames", view_frames, "quit after N drawn frames")->check(whole_number(0, kMaxCount));
@@ -502,7 +506,9 @@ int dispatch(int argc, char** argv) {
   sweep->add_option("--jobs", sweep_options.jobs, "runs side by side (their times then share the cores)")
       ->check(whole_number(1, kMaxThreads))
       ->capture_default_str();
-  sweep->add_option("--threads", sweep_options.threads, "threads per run (default: OMP_NUM_THREADS, else the CPUs this process may use, / jobs)")
+  sweep
+      ->add_option("--threads", sweep_options.threads,
+                   "threads per run (default: OMP_NUM_THREADS, else the CPUs this process may use, / jobs)")
       ->check(whole_number(1, kMaxThreads));
   sweep
       ->add_option("--timeout", sweep_options.timeout_s,
@@ -529,7 +535,8 @@ int dispatch(int argc, char** argv) {
   }
   if (threads > 0) drench::set_thread_count(threads);
   {
-    if (run->parsed()) return run_command(scene_path, out_dir, overrides, steps, quiet, overwrite, max_output);
+    if (run->parsed())
+      return run_command(scene_path, out_dir, overrides, steps, quiet, overwrite, max_output);
     if (reconstruct->parsed()) return reconstruct_command(reconstruct_dir, overrides, quiet);
     if (render->parsed()) return render_command(render_options, render_size, quiet);
     if (view->parsed())
