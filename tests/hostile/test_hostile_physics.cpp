@@ -124,8 +124,9 @@ TEST(HostilePhysics, AnUnpinnedClothLandsOnTheSceneObstaclesInsteadOfFallingThro
     ASSERT_TRUE(status.ok()) << status.describe();
     for (const Vec3& x : sim.cloth()->mesh().positions_t1) {
       lowest = std::min(lowest, x.y());
-      if (std::abs(x.x()) < half_span && std::abs(x.z()) < 0.5 * v.width)
+      if (std::abs(x.x()) < half_span && std::abs(x.z()) < 0.5 * v.width) {
         ASSERT_GT(x.y(), std::abs(x.x()) - 1e-9) << "a cloth node went through the V at t = " << sim.time();
+      }
     }
   }
   EXPECT_LT(lowest, 0.1) << "the cloth never fell onto the V: the test tests nothing";
