@@ -12,6 +12,7 @@ the notes and the medians into docs/performance.md.
 """
 
 import argparse
+import csv
 import os
 import re
 import subprocess
@@ -39,6 +40,20 @@ def commit():
     dirty = subprocess.run(["git", "-C", str(ROOT), "status", "--porcelain", "--untracked-files=no", "--", ".",
                             ":!bench/results", ":!docs"], capture_output=True, text=True).stdout.strip()
     return result.stdout.strip() + (" (with uncommitted changes)" if dirty else "")
+
+
+def write_csv(out, rows, notes=()):
+    """Writes rows (dicts with the same keys) to the CSV `out` under `# ` note lines, through a temporary name,
+    so that a run stopped halfway leaves the earlier results whole."""
+    out = Path(out)
+    temporary = out.with_suffix(".csv.tmp")
+    with temporary.open("w", newline="") as f:
+        for note in notes:
+            f.write(f"# {note}\n")
+        writer = csv.DictWriter(f, fieldnames=list(rows[0]))
+        writer.writeheader()
+        writer.writerows(rows)
+    temporary.replace(out)
 
 
 def main():

@@ -11,7 +11,6 @@ also give the largest difference of that height from the double run of the same 
 """
 
 import argparse
-import csv
 import json
 import struct
 import subprocess
@@ -20,6 +19,8 @@ import tempfile
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT / "bench"))
+from bench_surface import write_csv  # noqa: E402  (the CSV written through a temporary name, as the others)
 SCENE = ROOT / "demos" / "scenes" / "jet_on_cloth.json"
 CENTRE = 28 * 57 + 28  # the 57 x 57 patch's centre node
 
@@ -65,13 +66,7 @@ def main():
                 })
             difference = max(abs(a - b) for a, b in zip(heights["double"], heights["single"]))
             rows[-1]["max_centre_height_difference_m"] = difference
-    out = Path(args.out)
-    temporary = out.with_suffix(".csv.tmp")
-    with temporary.open("w", newline="") as f:
-        writer = csv.DictWriter(f, fieldnames=list(rows[0]))
-        writer.writeheader()
-        writer.writerows(rows)
-    temporary.replace(out)
+    write_csv(args.out, rows)
 
 
 if __name__ == "__main__":

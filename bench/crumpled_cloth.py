@@ -27,7 +27,7 @@ ROOT = Path(__file__).resolve().parent.parent
 SCENE = ROOT / "demos" / "scenes" / "crumpled_cloth.json"
 
 sys.path.insert(0, str(ROOT / "bench"))
-from bench_surface import commit, cpu_model  # noqa: E402  (the same provenance lines as the other CSVs)
+from bench_surface import commit, cpu_model, write_csv  # noqa: E402  (the same provenance lines as the other CSVs)
 
 
 def run(binary, dt, out, limits_off):
@@ -69,13 +69,7 @@ def main():
         with out.open("a", newline="") as f:
             csv.DictWriter(f, fieldnames=list(rows[0])).writerows(rows)
         return
-    temporary = out.with_suffix(".csv.tmp")
-    with temporary.open("w", newline="") as f:
-        f.write(f"# command: {command}\n# commit: {commit()}\n# cpu: {cpu_model()}\n")
-        writer = csv.DictWriter(f, fieldnames=list(rows[0]))
-        writer.writeheader()
-        writer.writerows(rows)
-    temporary.replace(out)
+    write_csv(out, rows, [f"command: {command}", f"commit: {commit()}", f"cpu: {cpu_model()}"])
 
 
 if __name__ == "__main__":

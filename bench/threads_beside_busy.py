@@ -12,7 +12,6 @@ OpenMP.
 """
 
 import argparse
-import csv
 import json
 import os
 import subprocess
@@ -24,7 +23,7 @@ ROOT = Path(__file__).resolve().parent.parent
 SCENE = ROOT / "demos" / "scenes" / "jet_on_cloth.json"
 
 sys.path.insert(0, str(ROOT / "bench"))
-from bench_surface import commit, cpu_model  # noqa: E402  (the same provenance lines as the other CSVs)
+from bench_surface import commit, cpu_model, write_csv  # noqa: E402  (the same provenance lines as the other CSVs)
 
 
 def wall(binary, threads, out):
@@ -61,15 +60,8 @@ def main():
                     if busy:
                         busy.kill()
                         busy.wait()
-    out = Path(args.out)
-    temporary = out.with_suffix(".csv.tmp")
-    with temporary.open("w", newline="") as f:
-        f.write(f"# command: python3 bench/threads_beside_busy.py --rounds {args.rounds}\n")
-        f.write(f"# commit: {commit()}\n# cpu: {cpu_model()}\n")
-        writer = csv.DictWriter(f, fieldnames=list(rows[0]))
-        writer.writeheader()
-        writer.writerows(rows)
-    temporary.replace(out)
+    write_csv(args.out, rows, [f"command: python3 bench/threads_beside_busy.py --rounds {args.rounds}",
+                               f"commit: {commit()}", f"cpu: {cpu_model()}"])
 
 
 if __name__ == "__main__":
