@@ -20,9 +20,9 @@ inline int run_drench(const std::string& arguments, const std::filesystem::path&
   return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
 }
 
-/// The whole file as text; empty when it cannot be read.
+/// The whole file, byte for byte; empty when it cannot be read.
 inline std::string read_text(const std::filesystem::path& file) {
-  std::ifstream in(file);
+  std::ifstream in(file, std::ios::binary);
   std::ostringstream text;
   text << in.rdbuf();
   return text.str();

@@ -14,34 +14,16 @@
 #include <vector>
 
 #include <drench/common/error.hpp>
+#include "../assertions.hpp"
 #include "../temp_dir.hpp"
 #include "ccd_test_data.hpp"
 
 namespace drench::ccd {
 namespace {
 
-namespace fs = std::filesystem;
+using drench::test::throws_containing;
 
-/// Passes when `function` throws exactly an `Exception` whose message contains every string of `expected`;
-/// on failure the actual message is shown.
-template <class Exception, class Function>
-testing::AssertionResult throws_containing(Function&& function, const std::vector<std::string>& expected) {
-  try {
-    function();
-  } catch (const Exception& e) {
-    const std::string message = e.what();
-    for (const std::string& part : expected) {
-      if (message.find(part) == std::string::npos) {
-        return testing::AssertionFailure()
-               << "message \"" << message << "\" does not contain \"" << part << "\"";
-      }
-    }
-    return testing::AssertionSuccess();
-  } catch (const std::exception& e) {
-    return testing::AssertionFailure() << "threw another exception type: " << e.what();
-  }
-  return testing::AssertionFailure() << "did not throw";
-}
+namespace fs = std::filesystem;
 
 constexpr const char* kHeader =
     "# source: hand-written for test_ccd_query_file.cpp\n"

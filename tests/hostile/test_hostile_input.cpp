@@ -21,10 +21,16 @@
 #include <drench/scene/scene_resources.hpp>
 #include <drench/scene/simulation.hpp>
 #include <drench/surface/surface_reconstruction.hpp>
+#include "../assertions.hpp"
+#include "../drench_command.hpp"
 #include "../temp_dir.hpp"
 
 namespace drench {
 namespace {
+
+using drench::test::read_text;
+
+using drench::test::throws_containing;
 
 namespace fs = std::filesystem;
 
@@ -35,13 +41,6 @@ struct Command {
   double seconds = 0.0;
 };
 
-std::string read(const fs::path& file) {
-  std::ifstream in(file);
-  std::ostringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
-
 /// Runs `drench ARGUMENTS` in `folder` (the working directory), as a user does.
 Command drench_command(const std::string& arguments, const fs::path& log, const fs::path& folder = ".") {
   const std::string command = "cd '" + folder.string() + "' && " + std::string(DRENCH_EXECUTABLE) + " " +
@@ -51,31 +50,12 @@ Command drench_command(const std::string& arguments, const fs::path& log, const 
   Command result;
   result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   result.status = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  result.output = read(log);
+  result.output = read_text(log);
   return result;
 }
 
 std::string demo(const std::string& name) {
   return std::string(DRENCH_SOURCE_DIR) + "/demos/scenes/" + name;
-}
-
-/// Passes when `function` throws an `Exception` whose message contains every one of `expected`.
-template <class Exception, class Function>
-testing::AssertionResult throws_containing(Function&& function, std::initializer_list<std::string> expected) {
-  try {
-    function();
-  } catch (const Exception& e) {
-    const std::string message = e.what();
-    for (const std::string& part : expected) {
-      if (message.find(part) == std::string::npos)
-        return testing::AssertionFailure()
-               << "message \"" << message << "\" does not contain \"" << part << "\"";
-    }
-    return testing::AssertionSuccess();
-  } catch (const std::exception& e) {
-    return testing::AssertionFailure() << "threw another exception type: " << e.what();
-  }
-  return testing::AssertionFailure() << "did not throw";
 }
 
 testing::AssertionResult contains(const std::string& text, const std::string& part) {
@@ -164,7 +144,7 @@ TEST(HostileInput, RelativeObjPathIsTheSceneFoldersInRunAndInTheRunsCopy) {
                                    dir.path() / "elsewhere");
   ASSERT_EQ(c.status, 0) << c.output;
   // The run's scene.json names the file absolutely: it means the same wherever it is copied and read.
-  const nlohmann::json saved = nlohmann::json::parse(read(out / "scene.json"));
+  const nlohmann::json saved = nlohmann::json::parse(read_text(out / "scene.json"));
   EXPECT_EQ(saved["obstacles"][0]["mesh"], (dir.path() / "scenes" / "rock.obj").string());
   const Command again = drench_command(
       "run " + (out / "scene.json").string() + " --out " + (dir.path() / "out2").string() + " --quiet",
@@ -365,12 +345,12 @@ TEST(HostileInput, SurfaceCellSizeBelowTheBoundIsRefusedInRunAndReconstruct) {
   const fs::path out = dir.path() / "out";
   ASSERT_EQ(drench_command("run " + scene + " --out " + out.string() + " --quiet", dir.path() / "log").status,
             0);
-  const std::string surface = read(out / "frames" / "surface_0001.ply");
+  const std::string surface = read_text(out / "frames" / "surface_0001.ply");
   const Command c =
       drench_command("reconstruct " + out.string() + " --set surface.cell_size=1e-7", dir.path() / "log2");
   EXPECT_EQ(c.status, 1) << c.output;
   EXPECT_TRUE(contains(c.output, "surface.cell_size must be >= fluid.particle_spacing / 16")) << c.output;
-  EXPECT_EQ(read(out / "frames" / "surface_0001.ply"), surface);  // nothing lost
+  EXPECT_EQ(read_text(out / "frames" / "surface_0001.ply"), surface);  // nothing lost
 }
 
 TEST(HostileInput, OpenVdbFailureBecomesADrenchError) {

@@ -27,9 +27,12 @@
 #include <drench/scene/reconstruct_run.hpp>
 #include <drench/scene/scene_runner.hpp>
 
+#include "../drench_command.hpp"
 #include "../temp_dir.hpp"
 
 namespace {
+
+using drench::test::read_text;
 
 namespace fs = std::filesystem;
 using drench::test::TempDir;
@@ -65,18 +68,12 @@ std::string cloth_scene() {
   })";
 }
 
-std::string read(const fs::path& file) {
-  std::ifstream in(file, std::ios::binary);
-  std::ostringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
-
 /// Every regular file under `dir` (relative name -> contents).
 std::map<std::string, std::string> snapshot(const fs::path& dir) {
   std::map<std::string, std::string> files;
   for (const auto& entry : fs::recursive_directory_iterator(dir))
-    if (entry.is_regular_file()) files[fs::relative(entry.path(), dir).generic_string()] = read(entry.path());
+    if (entry.is_regular_file())
+      files[fs::relative(entry.path(), dir).generic_string()] = read_text(entry.path());
   return files;
 }
 
@@ -167,7 +164,7 @@ TEST(HostileOutput, AnEmptyOutIsRefusedAndTheWorkingDirectoryIsUntouched) {
   work.write("scene.json", "a user's own scene\n");
   const auto before = snapshot(work.path());
   EXPECT_EQ(run_drench({"run", scene, "--out", "", "--quiet"}, work.path(), dir.path() / "log.txt"), 1);
-  const std::string log = read(dir.path() / "log.txt");
+  const std::string log = read_text(dir.path() / "log.txt");
   EXPECT_NE(log.find("drench: --out '': must name a folder"), std::string::npos) << log;
   EXPECT_EQ(snapshot(work.path()), before);
   EXPECT_EQ(entries(work.path()), (std::vector<std::string>{"scene.json", "summary.json"}));
@@ -175,25 +172,25 @@ TEST(HostileOutput, AnEmptyOutIsRefusedAndTheWorkingDirectoryIsUntouched) {
   // A file is not a folder either.
   const std::string file = work.write("notes.txt", "not a folder\n");
   EXPECT_EQ(run_drench({"run", scene, "--out", file, "--quiet"}, work.path(), dir.path() / "log.txt"), 1);
-  EXPECT_NE(read(dir.path() / "log.txt").find("--out " + file + ": exists and is not a folder"),
+  EXPECT_NE(read_text(dir.path() / "log.txt").find("--out " + file + ": exists and is not a folder"),
             std::string::npos)
-      << read(dir.path() / "log.txt");
-  EXPECT_EQ(read(file), "not a folder\n");
+      << read_text(dir.path() / "log.txt");
+  EXPECT_EQ(read_text(file), "not a folder\n");
 }
 
 // An --out holding an earlier run kept its frames, and reconstruct and render then saw both runs.
 TEST(HostileOutput, AReusedFolderIsRefusedWithoutOverwriteAndLeftAsItWas) {
   const TempDir dir;
   const fs::path out = dir.path() / "out";
-  ASSERT_EQ(run_tank(dir, out, 6), 0) << read(dir.path() / "log.txt");
+  ASSERT_EQ(run_tank(dir, out, 6), 0) << read_text(dir.path() / "log.txt");
   ASSERT_TRUE(fs::exists(out / "frames/fluid_0005.ply"));
-  const json manifest = json::parse(read(out / drench::kOutputManifest));
+  const json manifest = json::parse(read_text(out / drench::kOutputManifest));
   EXPECT_EQ(manifest["command"], "run");
   EXPECT_EQ(manifest["files"], json(drench::run_output_patterns()));
 
   const auto before = snapshot(out);
   EXPECT_EQ(run_tank(dir, out, 3), 1);
-  const std::string log = read(dir.path() / "log.txt");
+  const std::string log = read_text(dir.path() / "log.txt");
   EXPECT_NE(log.find("--out " + out.string() + ": the folder is not empty (it holds " +
                      (out / drench::kOutputManifest).string() + ")"),
             std::string::npos)
@@ -205,24 +202,24 @@ TEST(HostileOutput, AReusedFolderIsRefusedWithoutOverwriteAndLeftAsItWas) {
 TEST(HostileOutput, OverwriteRemovesTheEarlierRunsFrames) {
   const TempDir dir;
   const fs::path out = dir.path() / "out";
-  ASSERT_EQ(run_tank(dir, out, 6), 0) << read(dir.path() / "log.txt");
+  ASSERT_EQ(run_tank(dir, out, 6), 0) << read_text(dir.path() / "log.txt");
   ASSERT_TRUE(fs::exists(out / "frames/fluid_0005.ply"));
   // A temporary that a killed writer left is the earlier run's too.
   std::ofstream(out / "frames/fluid_0006.ply.tmp-12345") << "half a frame";
-  ASSERT_EQ(run_tank(dir, out, 3, {"--overwrite"}), 0) << read(dir.path() / "log.txt");
+  ASSERT_EQ(run_tank(dir, out, 3, {"--overwrite"}), 0) << read_text(dir.path() / "log.txt");
   EXPECT_EQ(entries(out / "frames"),
             (std::vector<std::string>{"fluid_0000.ply", "fluid_0001.ply", "fluid_0002.ply"}));
-  EXPECT_EQ(json::parse(read(out / "summary.json"))["frames"], 3);
+  EXPECT_EQ(json::parse(read_text(out / "summary.json"))["frames"], 3);
 }
 
 TEST(HostileOutput, OverwriteRefusesAndDeletesNothingWhenAFileIsNotDrenchs) {
   const TempDir dir;
   const fs::path out = dir.path() / "out";
-  ASSERT_EQ(run_tank(dir, out, 4), 0) << read(dir.path() / "log.txt");
+  ASSERT_EQ(run_tank(dir, out, 4), 0) << read_text(dir.path() / "log.txt");
   std::ofstream(out / "frames/notes.txt") << "the user's notes\n";
   const auto before = snapshot(out);
   EXPECT_EQ(run_tank(dir, out, 2, {"--overwrite"}), 1);
-  const std::string log = read(dir.path() / "log.txt");
+  const std::string log = read_text(dir.path() / "log.txt");
   EXPECT_NE(log.find((out / "frames/notes.txt").string() + " was not written by drench"), std::string::npos)
       << log;
   EXPECT_NE(log.find("nothing deleted"), std::string::npos) << log;
@@ -233,9 +230,9 @@ TEST(HostileOutput, OverwriteRefusesAndDeletesNothingWhenAFileIsNotDrenchs) {
   fs::create_directories(other / "frames");
   std::ofstream(other / "frames/fluid_0000.ply") << "someone else's frame";
   EXPECT_EQ(run_tank(dir, other, 2, {"--overwrite"}), 1);
-  EXPECT_NE(read(dir.path() / "log.txt").find("but no drench_run.json"), std::string::npos)
-      << read(dir.path() / "log.txt");
-  EXPECT_EQ(read(other / "frames/fluid_0000.ply"), "someone else's frame");
+  EXPECT_NE(read_text(dir.path() / "log.txt").find("but no drench_run.json"), std::string::npos)
+      << read_text(dir.path() / "log.txt");
+  EXPECT_EQ(read_text(other / "frames/fluid_0000.ply"), "someone else's frame");
 }
 
 /// Starts a 600 s tank run, waits for its frame 1 and sends `signal`; returns the exit status.
@@ -245,7 +242,7 @@ int interrupt_run(const TempDir& dir, const fs::path& out, int signal) {
                                  dir.path(), dir.path() / "log.txt");
   const bool started =
       wait_for_file(out, 30.0, [](const fs::path& p) { return p.filename() == "fluid_0001.ply"; });
-  EXPECT_TRUE(started) << read(dir.path() / "log.txt");
+  EXPECT_TRUE(started) << read_text(dir.path() / "log.txt");
   ::kill(pid, signal);
   return wait_exit(pid, 30.0);
 }
@@ -254,9 +251,9 @@ int interrupt_run(const TempDir& dir, const fs::path& out, int signal) {
 TEST(HostileOutput, SigintEndsARunWithAnInterruptedSummaryAndExit130) {
   const TempDir dir;
   const fs::path out = dir.path() / "out";
-  EXPECT_EQ(interrupt_run(dir, out, SIGINT), 130) << read(dir.path() / "log.txt");
-  ASSERT_TRUE(fs::exists(out / "summary.json")) << read(dir.path() / "log.txt");
-  const json summary = json::parse(read(out / "summary.json"));
+  EXPECT_EQ(interrupt_run(dir, out, SIGINT), 130) << read_text(dir.path() / "log.txt");
+  ASSERT_TRUE(fs::exists(out / "summary.json")) << read_text(dir.path() / "log.txt");
+  const json summary = json::parse(read_text(out / "summary.json"));
   EXPECT_EQ(summary["status"], "interrupted");
   EXPECT_GE(summary["steps"].get<int>(), 4) << "frame 1 was written at step 4";
   EXPECT_LT(summary["steps"].get<int>(), 240000);
@@ -267,14 +264,14 @@ TEST(HostileOutput, SigintEndsARunWithAnInterruptedSummaryAndExit130) {
     ++frames;
   }
   EXPECT_EQ(frames, summary["frames"].get<int>());
-  EXPECT_NE(read(dir.path() / "log.txt").find("interrupted"), std::string::npos);
+  EXPECT_NE(read_text(dir.path() / "log.txt").find("interrupted"), std::string::npos);
 }
 
 TEST(HostileOutput, SigtermEndsARunWithAnInterruptedSummaryAndExit143) {
   const TempDir dir;
   const fs::path out = dir.path() / "out";
-  EXPECT_EQ(interrupt_run(dir, out, SIGTERM), 143) << read(dir.path() / "log.txt");
-  EXPECT_EQ(json::parse(read(out / "summary.json"))["status"], "interrupted");
+  EXPECT_EQ(interrupt_run(dir, out, SIGTERM), 143) << read_text(dir.path() / "log.txt");
+  EXPECT_EQ(json::parse(read_text(out / "summary.json"))["status"], "interrupted");
 }
 
 /// A tank run with the surface effect (frames 0 to 4), then reconstructed once, so that the folder holds a
@@ -285,11 +282,11 @@ fs::path run_with_reconstruction(const TempDir& dir) {
   EXPECT_EQ(run_drench({"run", scene, "--out", out.string(), "--threads", "1", "--quiet"}, dir.path(),
                        dir.path() / "log.txt"),
             0)
-      << read(dir.path() / "log.txt");
+      << read_text(dir.path() / "log.txt");
   EXPECT_EQ(run_drench({"reconstruct", out.string(), "--threads", "1", "--quiet"}, dir.path(),
                        dir.path() / "log.txt"),
             0)
-      << read(dir.path() / "log.txt");
+      << read_text(dir.path() / "log.txt");
   EXPECT_TRUE(fs::exists(out / "reconstruct.json"));
   return out;
 }
@@ -308,10 +305,10 @@ TEST(HostileOutput, AnInterruptedReconstructLeavesTheEarlierSurfacesByteForByte)
     return p.parent_path().filename().string().rfind("reconstruct.tmp-", 0) == 0 &&
            p.filename() == "surface_0000.ply";
   });
-  EXPECT_TRUE(started) << read(dir.path() / "log.txt");
+  EXPECT_TRUE(started) << read_text(dir.path() / "log.txt");
   ::kill(pid, SIGINT);
   EXPECT_EQ(wait_exit(pid, 30.0), 130)
-      << "the reconstruction ended before the signal? " << read(dir.path() / "log.txt");
+      << "the reconstruction ended before the signal? " << read_text(dir.path() / "log.txt");
   EXPECT_EQ(snapshot(out), before) << "the surfaces or reconstruct.json changed";
   for (const std::string& name : entries(out))
     EXPECT_EQ(name.find("reconstruct.tmp-"), std::string::npos) << "left behind: " << name;
@@ -343,16 +340,16 @@ TEST(HostileOutput, RenderRefusesARunWithAMissingFrameFileNamingIt) {
   ASSERT_EQ(run_drench({"run", scene, "--out", out.string(), "--threads", "1", "--quiet"}, dir.path(),
                        dir.path() / "log.txt"),
             0)
-      << read(dir.path() / "log.txt");
+      << read_text(dir.path() / "log.txt");
   ASSERT_TRUE(fs::exists(out / "frames/cloth_0005.ply"));
   fs::remove(out / "frames/cloth_0003.ply");
   EXPECT_EQ(
       run_drench({"render", out.string(), "--size", "64x36", "--quiet"}, dir.path(), dir.path() / "log.txt"),
       1);
-  EXPECT_NE(read(dir.path() / "log.txt")
+  EXPECT_NE(read_text(dir.path() / "log.txt")
                 .find((out / "frames/cloth_0003.ply").string() + ": missing, while the run has a cloth"),
             std::string::npos)
-      << read(dir.path() / "log.txt");
+      << read_text(dir.path() / "log.txt");
   EXPECT_FALSE(fs::exists(out / "render"));
 
   // A gap in the numbering: --video would have stopped there without a word.
@@ -361,11 +358,11 @@ TEST(HostileOutput, RenderRefusesARunWithAMissingFrameFileNamingIt) {
                        dir.path() / "log.txt"),
             1);
   EXPECT_NE(
-      read(dir.path() / "log.txt")
+      read_text(dir.path() / "log.txt")
           .find((out / "frames/fluid_0003.ply").string() +
                 ": missing, while frame 0004 exists (the frames must be numbered from 0 without a gap)"),
       std::string::npos)
-      << read(dir.path() / "log.txt");
+      << read_text(dir.path() / "log.txt");
   EXPECT_FALSE(fs::exists(out / "render"));
 }
 
@@ -395,17 +392,17 @@ TEST(HostileOutput, CommandLineErrorsExit1WithAShortMessage) {
     std::string command;
     for (const std::string& argument : arguments)
       command += " " + argument.substr(0, 30);
-    EXPECT_EQ(run_drench(arguments, dir.path(), log), 1) << command << "\n" << read(log);
-    const std::string message = read(log);
+    EXPECT_EQ(run_drench(arguments, dir.path(), log), 1) << command << "\n" << read_text(log);
+    const std::string message = read_text(log);
     EXPECT_LE(longest_digit_run(message), 40u) << command << "\n" << message;
     EXPECT_LT(message.size(), 400u) << command << "\n" << message;
     EXPECT_EQ(message.rfind("drench: ", 0), 0u) << command << "\n" << message;
   }
   EXPECT_FALSE(fs::exists(dir.path() / "o"));
-  EXPECT_EQ(run_drench({"--help"}, dir.path(), log), 0) << read(log);
-  EXPECT_NE(read(log).find("Subcommands:"), std::string::npos) << read(log);
-  EXPECT_EQ(run_drench({"--version"}, dir.path(), log), 0) << read(log);
-  EXPECT_EQ(read(log), std::string(DRENCH_VERSION) + "\n");
+  EXPECT_EQ(run_drench({"--help"}, dir.path(), log), 0) << read_text(log);
+  EXPECT_NE(read_text(log).find("Subcommands:"), std::string::npos) << read_text(log);
+  EXPECT_EQ(run_drench({"--version"}, dir.path(), log), 0) << read_text(log);
+  EXPECT_EQ(read_text(log), std::string(DRENCH_VERSION) + "\n");
 }
 
 // What --overwrite may remove: the manifest's files and their temporaries, nothing beside them.
@@ -445,8 +442,8 @@ TEST(HostileOutput, OutOfMemoryAndForeignErrorsAreOneLineNotAnAbort) {
                                                     "--quiet", "--set", "fluid.particle_spacing=0.001"},
                                                    dir.path(), log, rlim_t(1500) << 20),
                                       60.0);
-  EXPECT_EQ(out_of_memory, 1) << read(log);
-  std::string message = read(log);
+  EXPECT_EQ(out_of_memory, 1) << read_text(log);
+  std::string message = read_text(log);
   EXPECT_EQ(message.rfind("drench: ", 0), 0u) << message;
   EXPECT_EQ(std::count(message.begin(), message.end(), '\n'), 1) << message;
   EXPECT_FALSE(fs::exists(dir.path() / "huge")) << "refused before the folder was made";
@@ -454,8 +451,8 @@ TEST(HostileOutput, OutOfMemoryAndForeignErrorsAreOneLineNotAnAbort) {
   const int foreign = run_drench({"run", scene, "--out", (dir.path() / "vdb").string(), "--quiet", "--set",
                                   "effects=[\"surface\"]", "--set", "surface.cell_size=1e-7"},
                                  dir.path(), log);
-  EXPECT_TRUE(foreign == 1 || foreign == 2) << foreign << "\n" << read(log);
-  message = read(log);
+  EXPECT_TRUE(foreign == 1 || foreign == 2) << foreign << "\n" << read_text(log);
+  message = read_text(log);
   EXPECT_EQ(message.rfind("drench: ", 0), 0u) << message;
   EXPECT_EQ(std::count(message.begin(), message.end(), '\n'), 1) << message;
 }
@@ -486,18 +483,18 @@ TEST(HostileOutput, ASweepIntoAReusedFolderIsRefusedUnlessOverwrite) {
   const fs::path log = dir.path() / "log.txt";
   const std::vector<std::string> sweep = {"sweep",      scene,       "--vary", "time.dt=0.005", "--out",
                                           out.string(), "--threads", "1",      "--quiet"};
-  ASSERT_EQ(run_drench(sweep, dir.path(), log), 0) << read(log);
-  ASSERT_TRUE(fs::exists(out / "runs/001/summary.json")) << read(log);
+  ASSERT_EQ(run_drench(sweep, dir.path(), log), 0) << read_text(log);
+  ASSERT_TRUE(fs::exists(out / "runs/001/summary.json")) << read_text(log);
   EXPECT_TRUE(fs::exists(out / "runs/001.log"));
   const auto before = snapshot(out);
   EXPECT_EQ(run_drench(sweep, dir.path(), log), 1);
-  EXPECT_NE(read(log).find("the folder is not empty"), std::string::npos) << read(log);
+  EXPECT_NE(read_text(log).find("the folder is not empty"), std::string::npos) << read_text(log);
   EXPECT_EQ(snapshot(out), before);
   std::vector<std::string> again = sweep;
   again.push_back("--overwrite");
-  EXPECT_EQ(run_drench(again, dir.path(), log), 0) << read(log);
+  EXPECT_EQ(run_drench(again, dir.path(), log), 0) << read_text(log);
   EXPECT_TRUE(fs::exists(out / "runs/001/summary.json"));
-  EXPECT_EQ(json::parse(read(out / drench::kOutputManifest))["command"], "sweep");
+  EXPECT_EQ(json::parse(read_text(out / drench::kOutputManifest))["command"], "sweep");
 }
 
 // SIGINT to a sweep: passed on once to the run under way, which ends "interrupted"; the next is not started.
@@ -510,12 +507,12 @@ TEST(HostileOutput, ASweepPassesSigintOnToItsRunAndExits130) {
       dir.path(), dir.path() / "log.txt");
   const bool started =
       wait_for_file(out, 30.0, [](const fs::path& p) { return p.filename() == "fluid_0001.ply"; });
-  EXPECT_TRUE(started) << read(dir.path() / "log.txt");
+  EXPECT_TRUE(started) << read_text(dir.path() / "log.txt");
   ::kill(pid, SIGINT);
-  EXPECT_EQ(wait_exit(pid, 30.0), 130) << read(dir.path() / "log.txt");
-  EXPECT_EQ(json::parse(read(out / "runs/001/summary.json"))["status"], "interrupted");
+  EXPECT_EQ(wait_exit(pid, 30.0), 130) << read_text(dir.path() / "log.txt");
+  EXPECT_EQ(json::parse(read_text(out / "runs/001/summary.json"))["status"], "interrupted");
   EXPECT_FALSE(fs::exists(out / "runs/002"));
-  const std::string csv = read(out / "sweep.csv");
+  const std::string csv = read_text(out / "sweep.csv");
   EXPECT_NE(csv.find("\n1,time.dt=0.0025,0,0.0025,interrupted,"), std::string::npos) << csv;
   EXPECT_NE(csv.find("\n2,time.dt=0.002,0,0.002,not run: the sweep was interrupted,"), std::string::npos)
       << csv;

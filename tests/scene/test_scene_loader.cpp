@@ -12,29 +12,15 @@
 #include <drench/common/error.hpp>
 #include <drench/scene/effect_registry.hpp>
 #include <drench/scene/simulation.hpp>
+#include "../assertions.hpp"
 #include "../temp_dir.hpp"
 
 namespace drench {
 namespace {
 
-using nlohmann::json;
+using drench::test::throws_containing;
 
-/// Passes when `function` throws exactly an `Exception` whose message contains `expected`; on failure the
-/// actual message is shown, which is most of the point of these tests.
-template <class Exception, class Function>
-testing::AssertionResult throws_containing(Function&& function, const std::string& expected) {
-  try {
-    function();
-  } catch (const Exception& e) {
-    const std::string message = e.what();
-    if (message.find(expected) != std::string::npos) return testing::AssertionSuccess();
-    return testing::AssertionFailure()
-           << "message \"" << message << "\" does not contain \"" << expected << "\"";
-  } catch (const std::exception& e) {
-    return testing::AssertionFailure() << "threw another exception type: " << e.what();
-  }
-  return testing::AssertionFailure() << "did not throw";
-}
+using nlohmann::json;
 
 SceneConfig parse(const std::string& text) {
   return parse_scene(json::parse(text), "x.json");
