@@ -40,8 +40,8 @@ struct ClothSettings {
   std::optional<double> max_speed = 100.0;
   /// An edge stretched beyond this strain, (length - rest length) / rest length with the rest length the
   /// edge's length when the simulation was built, stops the run with CLOTH_OVERSTRETCHED (dimensionless),
-  /// > 0; nullopt: no limit. The edges at the pins of the jet's cloth reach a strain of 0.5 at dt 1 ms and
-  /// 4 at dt 4 ms and hold; a jet that tears the cloth stretches them 30 times (docs/scenes.md).
+  /// > 0; nullopt: no limit. Far above the strains the demo scenes' cloths reach at their pins and hold, far
+  /// below those of a jet that tears the cloth (docs/scenes.md gives both).
   std::optional<double> max_strain = 10.0;
 };
 
