@@ -205,7 +205,8 @@ Simulation::Simulation(const SceneConfig& config, std::unique_ptr<ClothEngine> c
 }
 
 void Simulation::check_cloth(StepStatus& status) {
-  const ClothSettings limits = m_config.cloth.value_or(ClothSettings{});
+  static const ClothSettings kDefaults;  // a cloth built by the caller (CoupledWorld) has no scene settings
+  const ClothSettings& limits = m_config.cloth ? *m_config.cloth : kDefaults;
   const Vec3Array velocities = m_cloth->velocities();
   std::int64_t fastest = -1;
   Scalar fastest_speed = 0.0;
