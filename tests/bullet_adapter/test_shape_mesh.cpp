@@ -442,6 +442,41 @@ TEST(ShapeMesh, ConvexHullWithoutMarginIsTheHullOfItsScaledPoints) {
   EXPECT_LE(relative_error(volume(mesh), 0.2 * 0.2 * 0.2), bullet_tolerance(1e-12, 1.0, 8));
 }
 
+TEST(ShapeMesh, FlatAndStraightHullsGrowIntoASlabAndACapsule) {
+  // A rectangle 0.2 x 0.1 and a segment of length 0.3 (no volume of their own) with the default margin,
+  // along the axes (where grid directions tie between their points) and tilted.
+  const Vec3 tilted_y = Vec3(0.0, 1.0, 1.0).normalized();
+  for (const Vec3& side : {Vec3(0.0, 0.0, 1.0), tilted_y}) {
+    const Vec3 a(0.2, 0.0, 0.0), b = 0.1 * side;
+    btConvexHullShape flat;
+    for (const Vec3& p : {Vec3::Zero().eval(), a, (a + b).eval(), b})
+      flat.addPoint(to_bt(p), true);
+    const double m = flat.getMargin();
+    const double max_edge = m / 4;
+    const TriangleMesh slab = shape_mesh(flat, with_max_edge(max_edge));
+    EXPECT_TRUE(closed_and_oriented(slab));
+    // Steiner in 3D for a flat convex set: 2 A m + perimeter pi m^2 / 2 + 4/3 pi m^3.
+    const double slab_volume = 2 * 0.02 * m + 0.6 * kPi * m * m / 2 + 4.0 / 3.0 * kPi * m * m * m;
+    EXPECT_LE(relative_error(volume(slab), slab_volume), 0.01) << side.transpose();
+    expect_within_support(flat, slab, max_edge * max_edge / (2 * m));
+  }
+  for (const Vec3& end : {Vec3(0.3, 0.0, 0.0), Vec3(0.1, 0.2, 0.2)}) {
+    btConvexHullShape straight;
+    straight.addPoint(btVector3(0.0, 0.0, 0.0), true);
+    straight.addPoint(to_bt(end), true);
+    const double m = straight.getMargin();
+    const TriangleMesh capsule = shape_mesh(straight, with_max_edge(m / 4));
+    EXPECT_TRUE(closed_and_oriented(capsule));
+    const Vec3 stored = to_vec3(straight.getScaledPoint(1));
+    for (const Vec3& p : capsule.positions) {
+      const double s = std::clamp(p.dot(stored) / stored.squaredNorm(), 0.0, 1.0);
+      ASSERT_NEAR((p - s * stored).norm(), m, 1e-12) << p.transpose();
+    }
+    const double exact = kPi * m * m * stored.norm() + 4.0 / 3.0 * kPi * m * m * m;
+    EXPECT_LE(relative_error(volume(capsule), exact), 0.01) << end.transpose();
+  }
+}
+
 TEST(ShapeMesh, IrregularConvexShapesStayWithinBulletsSupport) {
   // Points of a rough rock; the hull, its point cloud and its convex triangle mesh all grow by the margin.
   const std::vector<btVector3> rock = {{0.1, 0.0, 0.02},    {-0.07, 0.05, 0.0},  {0.0, -0.08, 0.03},
