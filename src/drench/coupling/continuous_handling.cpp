@@ -100,7 +100,8 @@ void resolve_impact(StepContext& ctx, Index p, const Impact& impact, double thic
 /// the step was free of crossings. What now collides with a stopped particle or face joins it, round after
 /// round, so the zones grow until no pair collides; a crossing stays only where a node cannot be stopped (a
 /// pinned node moved by its engine). Rigid impact zones (Bridson et al. 2002) in their simplest form, at
-/// rest: momentum is not conserved for what stopped, which the counters report.
+/// rest: a stopped particle's momentum goes to its triangle's nodes (StepContext::place), a stopped node's is
+/// lost, which the counters report.
 /// @param pairs, impacts  scratch; impacts holds the fail-safe's leftover impacts on entry
 /// @return COUPLING_ZONES_STOPPED, with COUPLING_UNRESOLVED when an impact remained (named in `unresolved`)
 std::uint32_t freeze_impact_zones(StepContext& ctx, TriangleBroadPhase& broad_phase,
@@ -118,7 +119,7 @@ std::uint32_t freeze_impact_zones(StepContext& ctx, TriangleBroadPhase& broad_ph
     for (const auto& [p, impact] : impacts) {
       if (!stopped_particle[p]) {
         stopped_particle[p] = 1;
-        ctx.place(p, ctx.x0()[p]);
+        ctx.place(p, ctx.x0()[p], impact.triangle, impact.ccd.barycentric);
         ++stats.stopped_particles;
         progress = true;
       }
@@ -201,7 +202,7 @@ std::uint32_t resolve_ccd(StepContext& ctx, TriangleBroadPhase& broad_phase, con
         Vec3 shift = Vec3::Zero();
         for (int i = 0; i < 3; ++i)
           shift += w[i] * (cloth.positions_t1[tri[i]] - cloth.positions_t0[tri[i]]);
-        ctx.place(p, ctx.x0()[p] + shift);
+        ctx.place(p, ctx.x0()[p] + shift, impact.triangle, w);
         ++stats.failsafe_activations;
       }
       broad_phase.find_pairs(ctx.x0(), ctx.x1(), cloth, 0.0, nullptr, pairs);

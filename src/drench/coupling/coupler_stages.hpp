@@ -102,11 +102,20 @@ class StepContext {
     }
   }
 
-  /// Moves particle p's end position (fail-safe), keeping velocity = displacement / dt.
-  void place(Index p, const Vec3& x_t1) {
-    m_v[p] += (x_t1 - m_x1[p]) / m_dt;
+  /// Moves particle p's end position (fail-safe), keeping velocity = displacement / dt. The momentum this
+  /// gives the particle is booked against the nodes of triangle t by the weights w, as apply() books an
+  /// impulse, without moving them: a rigid body or a carried-water cloth takes it from node_impulses, so the
+  /// exchange stays conservative even here.
+  void place(Index p, const Vec3& x_t1, Index t, const Vec3& w) {
+    const Vec3 dv = (x_t1 - m_x1[p]) / m_dt;
+    m_v[p] += dv;
     m_x1[p] = x_t1;
     m_particle_changed[p] = 1;
+    const Vec3 impulse = m_mass[p] * dv;
+    const Triangle& tri = triangle(t);
+    for (int i = 0; i < 3; ++i)
+      m_node_impulses[tri[i]] -= w[i] * impulse;
+    m_stats.vertical_impulse_on_cloth -= impulse.y();
   }
 
   ccd::VertexFaceQuery query(Index p, Index t) const {

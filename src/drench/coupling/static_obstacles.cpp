@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <stdexcept>
 
 #include <drench/common/error.hpp>
 
@@ -104,24 +106,24 @@ void validate_triangle_mesh(const TriangleMesh& mesh, const std::string& what) {
 }
 
 ClothWithObstacles::ClothWithObstacles(ClothEngine* cloth, std::vector<TriangleMesh> obstacles,
-                                       double clearance)
-    : m_cloth(cloth), m_obstacles(std::move(obstacles)) {
-  if (m_obstacles.empty()) throw Error("ClothWithObstacles needs at least one obstacle");
+                                       double clearance, RigidBodySource* bodies)
+    : m_cloth(cloth), m_obstacles(std::move(obstacles)), m_bodies(bodies) {
+  if (m_obstacles.empty() && !m_bodies) throw Error("ClothWithObstacles needs an obstacle or rigid bodies");
   for (std::size_t i = 0; i < m_obstacles.size(); ++i)
     validate_triangle_mesh(m_obstacles[i], "obstacles[" + std::to_string(i) + "]");
-  pull_cloth();
   if (m_cloth) {
-    append_obstacles(m_obstacles, m_rigid);
     CouplingSettings settings;  // free slip: the cloth slides on the obstacles as Bullet's would
     settings.cloth_thickness = clearance;
     m_holder = std::make_unique<Coupler>(settings, false);
   }
+  pull();
 }
 
 ClothWithObstacles::~ClothWithObstacles() = default;
 
 void ClothWithObstacles::hold_cloth_off_obstacles(double dt) {
-  const std::size_t m = m_cloth_nodes;
+  const std::size_t m = cloth_nodes();
+  if (m_rigid.triangles.empty()) return;
   const auto first = [m](const Vec3Array& array) {
     return Vec3Array(array.begin(), array.begin() + static_cast<long>(m));
   };
@@ -144,36 +146,99 @@ void ClothWithObstacles::hold_cloth_off_obstacles(double dt) {
   }
 }
 
-void ClothWithObstacles::pull_cloth() {
+void ClothWithObstacles::rebuild() {
   const std::size_t nodes = cloth_nodes();
-  const std::size_t triangles = m_cloth ? m_cloth->mesh().triangle_count() : 0;
-  if (!m_built || nodes != m_cloth_nodes || triangles != m_cloth_triangles) {
-    m_mesh = ClothMesh();
-    if (m_cloth) {
-      m_mesh.triangles = m_cloth->mesh().triangles;
-      m_mesh.positions_t0.resize(nodes);
-      m_mesh.inverse_masses.resize(nodes);
-    }
-    append_obstacles(m_obstacles, m_mesh);
-    m_cloth_nodes = nodes;
-    m_cloth_triangles = triangles;
-    m_built = true;
+  m_mesh = ClothMesh();
+  if (m_cloth) {
+    m_mesh.triangles = m_cloth->mesh().triangles;
+    m_mesh.positions_t0.resize(nodes);
+    m_mesh.positions_t1.resize(nodes);
+    m_mesh.inverse_masses.resize(nodes);
   }
-  if (!m_cloth) return;
-  const ClothMesh& cloth = m_cloth->mesh();
-  std::copy(cloth.positions_t0.begin(), cloth.positions_t0.end(), m_mesh.positions_t0.begin());
-  std::copy(cloth.positions_t1.begin(), cloth.positions_t1.end(), m_mesh.positions_t1.begin());
-  std::copy(cloth.inverse_masses.begin(), cloth.inverse_masses.end(), m_mesh.inverse_masses.begin());
+  append_obstacles(m_obstacles, m_mesh);
+  m_rigid = ClothMesh();
+  append_obstacles(m_obstacles, m_rigid);
+  m_surface_first.clear();
+  m_rigid_first.clear();
+  const auto append = [](const RigidSurface& s, ClothMesh& mesh) {
+    const auto first = static_cast<Index>(mesh.positions_t0.size());
+    for (const Triangle& t : s.triangles)
+      mesh.triangles.push_back({t[0] + first, t[1] + first, t[2] + first});
+    const std::size_t size = mesh.positions_t0.size() + s.positions_t0.size();
+    mesh.positions_t0.resize(size);
+    mesh.positions_t1.resize(size);
+    mesh.inverse_masses.resize(size, 0.0);
+    return static_cast<std::size_t>(first);
+  };
+  for (const RigidSurface& s : m_surfaces) {
+    m_surface_first.push_back(append(s, m_mesh));
+    // Static bodies hold the cloth as the static obstacles do; moving ones meet it in the engine's step.
+    m_rigid_first.push_back(m_holder && s.motion == RigidMotion::STATIC ? append(s, m_rigid) : SIZE_MAX);
+  }
+  m_built = true;
+}
+
+void ClothWithObstacles::pull() {
+  std::vector<std::uint64_t> layout = {cloth_nodes(), m_cloth ? m_cloth->mesh().triangle_count() : 0};
+  for (const RigidSurface& s : m_surfaces) {
+    layout.insert(layout.end(),
+                  {s.key, static_cast<std::uint64_t>(s.motion), s.positions_t0.size(), s.triangles.size()});
+  }
+  if (!m_built || layout != m_layout) {
+    rebuild();
+    m_layout = std::move(layout);
+  }
+  if (m_cloth) {
+    const ClothMesh& cloth = m_cloth->mesh();
+    std::copy(cloth.positions_t0.begin(), cloth.positions_t0.end(), m_mesh.positions_t0.begin());
+    std::copy(cloth.positions_t1.begin(), cloth.positions_t1.end(), m_mesh.positions_t1.begin());
+    std::copy(cloth.inverse_masses.begin(), cloth.inverse_masses.end(), m_mesh.inverse_masses.begin());
+  }
+  for (std::size_t i = 0; i < m_surfaces.size(); ++i) {
+    const RigidSurface& s = m_surfaces[i];
+    const auto at = static_cast<long>(m_surface_first[i]);
+    std::copy(s.positions_t0.begin(), s.positions_t0.end(), m_mesh.positions_t0.begin() + at);
+    std::copy(s.positions_t1.begin(), s.positions_t1.end(), m_mesh.positions_t1.begin() + at);
+    if (m_rigid_first[i] == SIZE_MAX) continue;
+    const auto rigid_at = static_cast<long>(m_rigid_first[i]);
+    std::copy(s.positions_t0.begin(), s.positions_t0.end(), m_rigid.positions_t0.begin() + rigid_at);
+    std::copy(s.positions_t1.begin(), s.positions_t1.end(), m_rigid.positions_t1.begin() + rigid_at);
+  }
 }
 
 void ClothWithObstacles::begin_step() {
   if (m_cloth) m_cloth->begin_step();
-  pull_cloth();
+  if (m_bodies) m_bodies->begin_step(m_surfaces);
+  pull();
+}
+
+void ClothWithObstacles::give_bodies(const Vec3Array& impulses) {
+  for (std::size_t i = 0; i < m_surfaces.size(); ++i) {
+    if (m_surfaces[i].motion != RigidMotion::DYNAMIC) continue;
+    const Vec3* first = impulses.data() + m_surface_first[i];
+    const std::size_t n = m_surfaces[i].positions_t0.size();
+    if (std::any_of(first, first + n, [](const Vec3& j) { return j.squaredNorm() > 0.0; }))
+      m_bodies->apply_impulses(i, m_surfaces[i], first);
+  }
 }
 
 void ClothWithObstacles::apply_impulses(const Vec3Array& impulses) {
-  if (!m_cloth) return;
-  m_cloth->apply_impulses(Vec3Array(impulses.begin(), impulses.begin() + static_cast<long>(m_cloth_nodes)));
+  if (impulses.size() != m_mesh.node_count()) {
+    throw std::invalid_argument("apply_impulses: " + std::to_string(impulses.size()) + " impulses for " +
+                                std::to_string(m_mesh.node_count()) + " nodes");
+  }
+  if (m_cloth) {
+    m_cloth->apply_impulses(Vec3Array(impulses.begin(), impulses.begin() + static_cast<long>(cloth_nodes())));
+  }
+  give_bodies(impulses);
+}
+
+void ClothWithObstacles::apply_body_impulses(const Vec3Array& node_impulses) {
+  if (node_impulses.size() != m_mesh.node_count()) {
+    throw std::invalid_argument("apply_body_impulses: " + std::to_string(node_impulses.size()) +
+                                " impulses for " + std::to_string(m_mesh.node_count()) + " nodes");
+  }
+  give_bodies(node_impulses);
 }
 
 void ClothWithObstacles::set_carried_masses(const ScalarArray& carried) {
@@ -183,12 +248,25 @@ void ClothWithObstacles::set_carried_masses(const ScalarArray& carried) {
   }
   if (!m_cloth) return;
   m_cloth->set_carried_masses(
-      ScalarArray(carried.begin(), carried.begin() + static_cast<long>(m_cloth_nodes)));
+      ScalarArray(carried.begin(), carried.begin() + static_cast<long>(cloth_nodes())));
 }
 
 void ClothWithObstacles::step(double dt) {
+  if (m_cloth) {
+    m_cloth->step(dt);
+  } else if (m_bodies) {
+    m_bodies->step(dt);
+  }
+  if (m_bodies) {
+    m_bodies->end_positions(m_surfaces);
+    for (std::size_t i = 0; i < m_surfaces.size(); ++i) {
+      const Vec3Array& t1 = m_surfaces[i].positions_t1;
+      std::copy(t1.begin(), t1.end(), m_mesh.positions_t1.begin() + static_cast<long>(m_surface_first[i]));
+      if (m_rigid_first[i] != SIZE_MAX)
+        std::copy(t1.begin(), t1.end(), m_rigid.positions_t1.begin() + static_cast<long>(m_rigid_first[i]));
+    }
+  }
   if (!m_cloth) return;
-  m_cloth->step(dt);
   const Vec3Array& t1 = m_cloth->mesh().positions_t1;
   std::copy(t1.begin(), t1.end(), m_mesh.positions_t1.begin());
   // A non-finite cloth is not corrected: the step reports it and nothing couples it.
@@ -199,7 +277,7 @@ void ClothWithObstacles::step(double dt) {
 void ClothWithObstacles::end_step(double dt) {
   if (m_cloth) {
     Vec3Array& t1 = m_cloth->mesh().positions_t1;
-    std::copy(m_mesh.positions_t1.begin(), m_mesh.positions_t1.begin() + static_cast<long>(m_cloth_nodes),
+    std::copy(m_mesh.positions_t1.begin(), m_mesh.positions_t1.begin() + static_cast<long>(cloth_nodes()),
               t1.begin());
     m_cloth->end_step(dt);
     // What the engine holds now (rounded, for a single-precision engine), for the leak audit.
@@ -210,6 +288,11 @@ void ClothWithObstacles::end_step(double dt) {
 Vec3Array ClothWithObstacles::velocities() const {
   Vec3Array v = m_cloth ? m_cloth->velocities() : Vec3Array();
   v.resize(m_mesh.node_count(), Vec3::Zero());
+  for (std::size_t i = 0; i < m_surfaces.size(); ++i) {
+    const Vec3Array& vs = m_surfaces[i].velocities_t0;
+    if (vs.size() == m_surfaces[i].positions_t0.size())
+      std::copy(vs.begin(), vs.end(), v.begin() + static_cast<long>(m_surface_first[i]));
+  }
   return v;
 }
 

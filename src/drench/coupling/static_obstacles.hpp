@@ -11,6 +11,7 @@
 #include <drench/common/triangle_mesh.hpp>
 #include <drench/coupling/cloth_engine.hpp>
 #include <drench/coupling/coupler.hpp>
+#include <drench/coupling/rigid_bodies.hpp>
 
 namespace drench {
 
@@ -38,51 +39,78 @@ TriangleMesh v_plane_mesh(const ObstacleSettings& settings, const std::string& k
 /// index or zero area in a triangle, a vertex not finite.
 void validate_triangle_mesh(const TriangleMesh& mesh, const std::string& what);
 
-/// A cloth engine (or none) and static obstacles seen by the coupling as one mesh: the cloth's M nodes
-/// first, then every obstacle's, of inverse mass 0 and never moving. Everything the coupled step does to a
-/// ClothEngine passes to the cloth for its own nodes; obstacle nodes take no impulse and no carried mass.
-/// The obstacles hold the cloth as they hold the water: after the engine's step, the cloth's nodes are
-/// coupled with the obstacles' faces as particles are (sec. 3's repulsion and continuous handling, eq. 1-6,
-/// free slip), so no node passes a face, and the engine takes the correction at end_step.
+/// A cloth engine (or none), static obstacles and moving rigid bodies (or none) seen by the coupling as one
+/// mesh: the cloth's M nodes first, then every static obstacle's, then every rigid body's surface as its
+/// RigidBodySource gave it for this step, all of inverse mass 0 but the cloth's. Everything the coupled step
+/// does to a ClothEngine passes to the cloth for its own nodes; obstacle nodes take no impulse and no carried
+/// mass, and a dynamic body's nodes pass theirs to the body (apply_impulses, apply_body_impulses). The static
+/// obstacles and static bodies hold the cloth as they hold the water: after the engine's step, the cloth's
+/// nodes are coupled with their faces as particles are (sec. 3's repulsion and continuous handling, eq. 1-6,
+/// free slip), so no node passes a face, and the engine takes the correction at end_step. Moving bodies meet
+/// the cloth in the engine's own step (Bullet's soft-rigid contact), which gives the body the cloth's push.
 class ClothWithObstacles final : public ClothEngine {
  public:
   /// @param cloth  the scene's cloth, or nullptr; borrowed, it must outlive this
-  /// @param obstacles  one or more meshes, each valid (validate_triangle_mesh)
+  /// @param obstacles  static meshes, each valid (validate_triangle_mesh); may be empty when `bodies` is
+  /// given
   /// @param clearance  the distance the obstacles keep the cloth's nodes at (unit: m), > 0 and finite: the
   ///        coupling's cloth thickness, which the water keeps too
-  /// @throws drench::Error when an obstacle is not valid, naming it (`obstacles[i]`); SceneError for a
-  ///         clearance out of range
-  ClothWithObstacles(ClothEngine* cloth, std::vector<TriangleMesh> obstacles, double clearance = 0.001);
+  /// @param bodies  the world's rigid bodies, read at every step, or nullptr; borrowed, it must outlive this.
+  ///        Without a cloth it also steps the world (RigidBodySource::step).
+  /// @throws drench::Error when an obstacle is not valid, naming it (`obstacles[i]`), or there is neither an
+  ///         obstacle nor `bodies`; SceneError for a clearance out of range
+  ClothWithObstacles(ClothEngine* cloth, std::vector<TriangleMesh> obstacles, double clearance = 0.001,
+                     RigidBodySource* bodies = nullptr);
   ~ClothWithObstacles() override;
 
   void begin_step() override;
+  /// The cloth's part to the cloth; a dynamic body's part to its body (RigidBodySource::apply_impulses).
   void apply_impulses(const Vec3Array& impulses) override;
   void set_carried_masses(const ScalarArray& carried) override;
   void step(double dt) override;
   ClothMesh& mesh() override { return m_mesh; }
   void end_step(double dt) override;
+  /// The cloth's velocities, 0 for static obstacles, each body's node velocities at the start of the step.
   Vec3Array velocities() const override;
   double total_mass() const override;
+
+  /// Gives each dynamic body the impulses the water gave its nodes in this step (unit: N s, one per node of
+  /// mesh(), e.g. Coupler::node_impulses); the other entries are ignored. Call after step(), before the
+  /// next begin_step().
+  /// @throws std::invalid_argument if `node_impulses` does not have one entry per node of mesh()
+  void apply_body_impulses(const Vec3Array& node_impulses);
 
   /// Nodes of the cloth, the first of mesh()'s (0 without a cloth).
   std::size_t cloth_nodes() const { return m_cloth ? m_cloth->mesh().node_count() : 0; }
   const std::vector<TriangleMesh>& obstacles() const { return m_obstacles; }
+  /// The rigid bodies' surfaces of the current step, in mesh() order after the static obstacles.
+  const std::vector<RigidSurface>& rigid_surfaces() const { return m_surfaces; }
+  /// The first node in mesh() of rigid_surfaces()[i].
+  std::size_t rigid_surface_first_node(std::size_t i) const { return m_surface_first[i]; }
   /// What holding the cloth off the obstacles did, summed over steps: `contacts` node-face pairs within the
   /// clearance, `ccd_impacts` nodes stopped before a face.
   const CouplingStepStats& cloth_contact_stats() const { return m_hold_stats; }
 
  private:
-  /// Copies the cloth's part of mesh() from the engine; rebuilds the whole mesh if its size changed.
-  void pull_cloth();
+  /// Copies the cloth's and the bodies' parts of mesh(); rebuilds the whole mesh if its layout changed.
+  void pull();
+  /// Lays out mesh() and the cloth holder's mesh anew for the current cloth and bodies.
+  void rebuild();
   /// The cloth's predicted motion corrected so that no node passes an obstacle's face (see the class).
   void hold_cloth_off_obstacles(double dt);
+  /// Passes the bodies' part of `impulses` (one per node of mesh()) to the dynamic bodies.
+  void give_bodies(const Vec3Array& impulses);
 
   ClothEngine* m_cloth;
   std::vector<TriangleMesh> m_obstacles;
+  RigidBodySource* m_bodies;
+  std::vector<RigidSurface> m_surfaces;
+  std::vector<std::size_t> m_surface_first;  // per surface, its first node in m_mesh
+  std::vector<std::size_t> m_rigid_first;    // per surface, its first node in m_rigid, or SIZE_MAX
+  std::vector<std::uint64_t> m_layout;       // what m_mesh was built for
   ClothMesh m_mesh;
-  std::size_t m_cloth_nodes = 0, m_cloth_triangles = 0;
   bool m_built = false;
-  ClothMesh m_rigid;                  // the obstacles alone, for the cloth's nodes to be coupled with
+  ClothMesh m_rigid;                  // the static obstacles and bodies, for the cloth's nodes to meet
   std::unique_ptr<Coupler> m_holder;  // couples the cloth's nodes, as particles, with m_rigid
   CouplingStepStats m_hold_stats;
 };

@@ -1,6 +1,8 @@
 #include <drench/scene/simulation.hpp>
 
 #include <algorithm>
+#include <cstdio>
+#include <cstdlib>
 #include <cmath>
 #include <functional>
 #include <limits>
@@ -138,7 +140,7 @@ Simulation::Simulation(const SceneConfig& config, const ClothEngineFactory& clot
     : Simulation(config, build_cloth(config, cloth_factory)) {}
 
 Simulation::Simulation(const SceneConfig& config, std::unique_ptr<ClothEngine> cloth,
-                       std::vector<TriangleMesh> more_obstacles)
+                       std::vector<TriangleMesh> more_obstacles, RigidBodySource* bodies)
     : m_config(config),
       m_speed_of_sound(config.fluid.wcsph.speed_of_sound.value_or(automatic_speed_of_sound(config))),
       m_cloth(std::move(cloth)) {
@@ -146,10 +148,12 @@ Simulation::Simulation(const SceneConfig& config, std::unique_ptr<ClothEngine> c
   for (TriangleMesh& mesh : more_obstacles)
     obstacles.push_back(std::move(mesh));
   // Without obstacles the engine is the cloth itself: the obstacles cost nothing when a scene has none.
-  if (!obstacles.empty())
+  if (!obstacles.empty() || bodies)
     m_with_obstacles = std::make_unique<ClothWithObstacles>(m_cloth.get(), std::move(obstacles),
-                                                            m_config.coupling.cloth_thickness);
+                                                            m_config.coupling.cloth_thickness, bodies);
   m_engine = m_with_obstacles ? static_cast<ClothEngine*>(m_with_obstacles.get()) : m_cloth.get();
+  if (bodies && m_config.has_effect("coupling"))
+    m_rigid_boundary = std::make_unique<RigidBoundary>(m_config.fluid.particle_spacing);
   if (m_engine) m_engine->mesh().validate();
   if (m_config.coupling.asks_tangential() && !m_config.has_effect("friction")) {
     // The coupler is built without friction then: the settings would be silently ignored.
@@ -187,6 +191,7 @@ Simulation::Simulation(const SceneConfig& config, std::unique_ptr<ClothEngine> c
   }
   m_initial_energy = fluid_energy();
   if (m_engine) m_pending_cloth_impulses.assign(m_engine->mesh().node_count(), Vec3::Zero());
+  m_pending_cloth_nodes = m_cloth ? m_cloth->mesh().node_count() : 0;
   if (m_cloth) {
     // The cloth's edges and their lengths now, the rest lengths cloth.max_strain is measured against.
     const ClothMesh& mesh = m_cloth->mesh();
@@ -317,7 +322,9 @@ StepStatus Simulation::step(Scalar dt) {
   // The cloth at its start positions is an obstacle inside the fluid's sub-steps
   // (coupling/cloth_obstacle.hpp).
   if (m_effects.obstacle) m_effects.obstacle->begin_step(m_engine->mesh(), m_engine->velocities());
+  if (m_rigid_boundary) place_rigid_boundary();
   StepStatus status = m_fluid->step(dt, m_effects.obstacle.get());
+  if (m_rigid_boundary) push_rigid_bodies();
   if (m_engine) step_cloth_and_couple(dt, status);
   // `!(a <= b)` rather than std::max, so that a NaN speed stays NaN in the summary.
   const Scalar particle_speed = m_fluid->max_speed();
@@ -333,6 +340,26 @@ StepStatus Simulation::step(Scalar dt) {
     remove_killed();
   }
   return status;
+}
+
+void Simulation::place_rigid_boundary() {
+  Vec3Array positions;
+  ScalarArray volumes;
+  m_rigid_boundary->place(m_with_obstacles->rigid_surfaces(), positions, volumes);
+  m_fluid->set_moving_boundary(positions, volumes);
+}
+
+void Simulation::push_rigid_bodies() {
+  const Vec3Array& on_boundary = m_fluid->moving_boundary_impulses();
+  if (on_boundary.empty()) return;
+  const std::vector<RigidSurface>& surfaces = m_with_obstacles->rigid_surfaces();
+  std::vector<std::size_t> first(surfaces.size());
+  for (std::size_t s = 0; s < surfaces.size(); ++s)
+    first[s] = m_with_obstacles->rigid_surface_first_node(s);
+  Vec3Array nodes(m_engine->mesh().node_count(), Vec3::Zero());
+  m_rigid_boundary->spread(surfaces, on_boundary, first, nodes);
+  // Before the bodies' step: the water's pressure moves them in it.
+  m_with_obstacles->apply_body_impulses(nodes);
 }
 
 void Simulation::step_cloth_and_couple(Scalar dt, StepStatus& status) {
@@ -355,9 +382,18 @@ void Simulation::step_cloth_and_couple(Scalar dt, StepStatus& status) {
   }
   // Before the cloth steps, so that its solver spreads the load over the cloth's links in this step: what
   // the previous step owes the cloth, and what the particles gave it inside the fluid's sub-steps.
-  // (An engine whose node count changed since has lost what it was owed: begin_step re-read its mesh.)
+  // Only the cloth's nodes are owed anything; they come first in the mesh, so a rigid body added or removed
+  // since loses the cloth nothing. (A cloth whose node count changed has lost what it was owed.)
   Vec3Array impulses(mesh.node_count(), Vec3::Zero());
-  if (m_pending_cloth_impulses.size() == impulses.size()) impulses.swap(m_pending_cloth_impulses);
+  const std::size_t cloth_nodes = m_cloth ? m_cloth->mesh().node_count() : 0;
+  if (m_pending_cloth_impulses.size() == impulses.size()) {
+    impulses.swap(m_pending_cloth_impulses);
+  } else if (m_pending_cloth_nodes == cloth_nodes) {
+    const std::size_t n = std::min({cloth_nodes, impulses.size(), m_pending_cloth_impulses.size()});
+    std::copy(m_pending_cloth_impulses.begin(), m_pending_cloth_impulses.begin() + static_cast<long>(n),
+              impulses.begin());
+  }
+  m_pending_cloth_nodes = cloth_nodes;
   m_pending_cloth_impulses.assign(mesh.node_count(), Vec3::Zero());
   m_pending_links.clear();
   if (m_effects.obstacle) {
@@ -414,6 +450,8 @@ void Simulation::step_cloth_and_couple(Scalar dt, StepStatus& status) {
     } else {
       m_last_coupling_status = m_effects.coupler->step(view, mesh, dt, m_coupling_stats);
     }
+    // A dynamic body takes what the water gave its nodes now: its engine has already stepped it.
+    if (m_with_obstacles) m_with_obstacles->apply_body_impulses(m_effects.coupler->node_impulses());
     m_coupling_status |= m_last_coupling_status;
     if (m_last_coupling_status & COUPLING_UNRESOLVED) {
       // A collision the coupler could not resolve: a crossing may remain, audited or not.

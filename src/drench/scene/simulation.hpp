@@ -13,6 +13,7 @@
 #include <drench/coupling/cloth_obstacle.hpp>
 #include <drench/coupling/coupler.hpp>
 #include <drench/coupling/leak_audit.hpp>
+#include <drench/coupling/rigid_boundary.hpp>
 #include <drench/coupling/static_obstacles.hpp>
 #include <drench/scene/effect_counters.hpp>
 #include <drench/scene/effect_registry.hpp>
@@ -38,10 +39,11 @@ class Simulation {
   /// With a cloth engine built by the caller (e.g. attached to a Bullet world the caller owns); config.cloth
   /// is then not used. `cloth` may be null for a simulation without cloth. `more_obstacles` are static
   /// meshes besides the scene's `obstacles` (e.g. a Bullet world's static triangle meshes), coupled the same
-  /// way.
+  /// way. `bodies` (borrowed, or null) are the moving rigid bodies of the world the cloth is in, read at
+  /// every step (coupling/rigid_bodies.hpp); without a cloth, they step their world themselves.
   /// @throws SceneError as the other constructor; drench::Error when an obstacle is not a valid mesh
   Simulation(const SceneConfig& config, std::unique_ptr<ClothEngine> cloth,
-             std::vector<TriangleMesh> more_obstacles = {});
+             std::vector<TriangleMesh> more_obstacles = {}, RigidBodySource* bodies = nullptr);
 
   /// One step of the scene's dt, in the paper's pipeline order (sec. 5): the cloth records its start
   /// positions; nozzles emit; the fluid advances alone (sub-stepping as it must); the cloth advances alone
@@ -91,6 +93,9 @@ class Simulation {
   /// The cloth, or nullptr for a scene without one.
   ClothEngine* cloth() { return m_cloth.get(); }
   const ClothEngine* cloth() const { return m_cloth.get(); }
+  /// The cloth with the obstacles and rigid bodies as the coupling sees them; null without obstacles and
+  /// bodies (the engine is the cloth itself then).
+  const ClothWithObstacles* cloth_with_obstacles() const { return m_with_obstacles.get(); }
   /// The static obstacles (the scene's, then the constructor's `more_obstacles`); empty without.
   const std::vector<TriangleMesh>& obstacles() const;
   /// The cloth and the obstacles as the coupling and the leak audit see them: the cloth's nodes first, then
@@ -148,6 +153,10 @@ class Simulation {
  private:
   /// The cloth's side of a step, after the fluid's: impulses, the engine's step, the coupling (sec. 3,
   /// 5), the leak audit, the corrections back into the engine.
+  /// The dynamic bodies' boundary particles where the bodies start the step (RigidBoundary).
+  void place_rigid_boundary();
+  /// Gives the dynamic bodies what the fluid's pressure gave their boundary particles in its step.
+  void push_rigid_bodies();
   void step_cloth_and_couple(Scalar dt, StepStatus& status);
   void remove_killed();
   /// The cloth's blow-up checks after a step: the fastest node against cloth.max_speed (RUNAWAY_NODE), the
@@ -168,11 +177,13 @@ class Simulation {
   std::int64_t m_removed = 0;
   double m_emit_seconds = 0;
   std::unique_ptr<ClothEngine> m_cloth;
-  std::unique_ptr<ClothWithObstacles> m_with_obstacles;  // only when the scene has obstacles
-  ClothEngine* m_engine = nullptr;     // what the coupled step drives: m_with_obstacles, else m_cloth
-  EffectParts m_effects;               // what the scene's `effects` built (effect_registry.hpp)
-  Vec3Array m_pending_cloth_impulses;  // M, owed to the cloth at its next step (unit: N s)
-  ImpulseLinks m_pending_links;        // the particles that gave them, carried in that step
+  std::unique_ptr<ClothWithObstacles> m_with_obstacles;  // only with obstacles or rigid bodies
+  std::unique_ptr<RigidBoundary> m_rigid_boundary;       // only with rigid bodies and "coupling"
+  ClothEngine* m_engine = nullptr;        // what the coupled step drives: m_with_obstacles, else m_cloth
+  EffectParts m_effects;                  // what the scene's `effects` built (effect_registry.hpp)
+  Vec3Array m_pending_cloth_impulses;     // M, owed to the cloth at its next step (unit: N s)
+  std::size_t m_pending_cloth_nodes = 0;  // the cloth's node count when they were owed
+  ImpulseLinks m_pending_links;           // the particles that gave them, carried in that step
   CouplingStepStats m_coupling_stats;
   LeakAuditStats m_leak_stats;
   std::uint32_t m_coupling_status = 0;

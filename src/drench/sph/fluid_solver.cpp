@@ -4,6 +4,8 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <stdexcept>
+#include <string>
 #include <utility>
 
 #include <drench/common/parallel.hpp>
@@ -102,9 +104,50 @@ FluidSolver::FluidSolver(const FluidSettings& settings, const Vec3& gravity, Bou
   m_boundary_packed.resize(points.size());
   for (std::size_t b = 0; b < points.size(); ++b)
     m_boundary_packed[b] = packed(points[b], settings.rest_density * boundary.volumes[b]);
+  m_static_boundary = points.size();
   if (with_viscosity) {
     m_viscosity = make_viscosity(settings.viscosity, speed_of_sound);
     ++m_viscosity_counter.constructed;
+  }
+}
+
+void FluidSolver::set_moving_boundary(const Vec3Array& positions, const ScalarArray& volumes) {
+  if (positions.size() != volumes.size()) {
+    throw std::invalid_argument("set_moving_boundary: " + std::to_string(positions.size()) + " points and " +
+                                std::to_string(volumes.size()) + " volumes");
+  }
+  m_moving_impulses.assign(positions.size(), Vec3::Zero());
+  if (positions.empty() && m_boundary_packed.size() == m_static_boundary) return;
+  m_boundary_packed.resize(m_static_boundary);
+  Vec3Array points(m_neighbors.boundary_points().begin(),
+                   m_neighbors.boundary_points().begin() + static_cast<long>(m_static_boundary));
+  for (std::size_t b = 0; b < positions.size(); ++b) {
+    m_boundary_packed.push_back(packed(positions[b], m_settings.rest_density * volumes[b]));
+    points.push_back(positions[b]);
+  }
+  m_neighbors.set_boundary_points(std::move(points));
+}
+
+void FluidSolver::add_moving_boundary_reactions(Scalar dt) {
+  m_pressure->boundary_pressure_factors(m_particles, m_boundary_factors);
+  const NeighborList& bn = m_neighbors.boundary();
+  const Vec3Array& points = m_neighbors.boundary_points();
+  const GradientFactorArray& factors = m_neighbors.boundary_gradient_factors();
+  // In particle order, one thread: the sums per boundary point are then the same bits for any thread count.
+  // Only particles next to a body have moving neighbors; the others cost a scan of their boundary list.
+  for (std::size_t i = 0; i < m_particles.size(); ++i) {
+    const Scalar w = m_boundary_factors[i];
+    if (w == 0.0) continue;
+    const Vec3& xi = m_particles.positions[i];
+    const Scalar scale = m_particles.masses[i] * dt * w;
+    for (std::uint32_t k = bn.offsets[i]; k < bn.offsets[i + 1]; ++k) {
+      const Index b = bn.indices[k];
+      if (b < m_static_boundary) continue;
+      // The fluid got -dt w_i Psi_b grad W_ib per unit mass (Akinci et al. 2012 eq. 10); the body the
+      // opposite.
+      m_moving_impulses[b - m_static_boundary] +=
+          (scale * m_boundary_packed[b].w * static_cast<Scalar>(factors[k])) * (xi - points[b]);
+    }
   }
 }
 
@@ -156,6 +199,7 @@ Scalar FluidSolver::cfl_limit(Scalar max_speed) const {
 
 StepStatus FluidSolver::step(Scalar dt, SubstepConstraint* constraint) {
   ScopedTimer timer(m_stats.timings_s.total);
+  std::fill(m_moving_impulses.begin(), m_moving_impulses.end(), Vec3::Zero());
   StepStatus status;
   ++m_stats.steps;
   m_particles.positions_t0 = m_particles.positions;
@@ -244,6 +288,8 @@ StepStatus FluidSolver::substep(Scalar dt, Scalar max_speed, SubstepConstraint* 
   m_stats.particle_density_error_max =
       std::max(m_stats.particle_density_error_max, pressure.max_density_error);
 
+  // At the positions the pressure was solved at, before they move.
+  if (m_boundary_packed.size() > m_static_boundary) add_moving_boundary_reactions(dt);
   StepStatus status;
   if (!pressure.converged || !divergence.converged) status.flags |= StepStatus::PRESSURE_NOT_CONVERGED;
   ScopedTimer timer(m_stats.timings_s.integrate);

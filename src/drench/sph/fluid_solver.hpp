@@ -133,6 +133,19 @@ class FluidSolver {
   /// @param constraint  optional, applied after every sub-step (must outlive the call)
   StepStatus step(Scalar dt, SubstepConstraint* constraint = nullptr);
 
+  /// Boundary particles of moving bodies (Akinci et al. 2012, as the static ones), after the static ones and
+  /// replacing the last call's: where the bodies are for the next step(). Their reaction to the fluid's
+  /// pressure is summed per particle over that step (moving_boundary_impulses), so a body takes exactly the
+  /// momentum its boundary gives the fluid.
+  /// @param positions  B points (unit: m, finite); empty removes them
+  /// @param volumes  B volumes V_b (unit: m^3), > 0; Psi_b = rest density V_b
+  /// @throws std::invalid_argument when the sizes differ
+  void set_moving_boundary(const Vec3Array& positions, const ScalarArray& volumes);
+  /// B impulses the fluid's pressure gave the moving boundary particles in the last step() (unit: N s),
+  /// sum over sub-steps and particles i of m_i dt w_i Psi_b grad W_ib (PressureSolver::
+  /// boundary_pressure_factors): the opposite of what they gave the fluid.
+  const Vec3Array& moving_boundary_impulses() const { return m_moving_impulses; }
+
   /// Fastest particle speed (unit: m/s); NaN when a velocity is NaN.
   Scalar max_speed() const;
   /// The longest step the CFL limit allows now, cfl spacing / (max_speed() + signal speed) (unit: s): step()
@@ -144,6 +157,8 @@ class FluidSolver {
   ///        the skin of a new grid search
   void update_neighbors(Scalar max_displacement);
   StepStatus substep(Scalar dt, Scalar max_speed, SubstepConstraint* constraint);
+  /// Adds to m_moving_impulses what the sub-step's pressure gave the moving boundary points.
+  void add_moving_boundary_reactions(Scalar dt);
   /// Index of the fastest particle (the first of equals); 0 when there are none.
   std::size_t fastest_particle() const;
   /// The CFL sub-step for the fastest particle moving at `max_speed` (unit: s); infinite when nothing moves.
@@ -155,6 +170,9 @@ class FluidSolver {
   ParticleSet m_particles;
   std::vector<BoundarySettings> m_guards;
   PackedPointArray m_boundary_packed;  // x_b (unit: m), w = Akinci's Psi_b = rho0 V_b (unit: kg)
+  std::size_t m_static_boundary = 0;   // the first of m_boundary_packed's points that move
+  Vec3Array m_moving_impulses;         // per moving boundary point, over the last step (unit: N s)
+  ScalarArray m_boundary_factors;      // scratch: the pressure solver's w_i
   VerletNeighborLists m_neighbors;
   PackedPointArray m_positions_mass;  // positions (unit: m), w = mass (unit: kg), for the densities
   Vec3Array m_positions_before;       // sub-step start positions, kept only for a SubstepConstraint

@@ -69,6 +69,13 @@ VerletNeighborLists::VerletNeighborLists(const CubicSplineKernel& kernel, Scalar
   if (max_skin > 0.0) m_wide_boundary.build(m_boundary_points);
 }
 
+void VerletNeighborLists::set_boundary_points(Vec3Array boundary) {
+  m_boundary_points = std::move(boundary);
+  m_exact_boundary.build(m_boundary_points);
+  if (m_wide_boundary.support_radius() > m_support) m_wide_boundary.build(m_boundary_points);
+  m_skin = 0.0;  // the kept candidates name the old points
+}
+
 bool VerletNeighborLists::moved_beyond_half_skin(const Vec3Array& positions) const {
   const Scalar max_sq = parallel_reduce(
       positions.size(), kLightChunk, Scalar(0.0),

@@ -36,9 +36,13 @@ class VerletNeighborLists {
   /// @return true when the grid search ran
   bool update(const Vec3Array& positions, const std::vector<std::uint32_t>& ids, Scalar skin);
 
+  /// Replaces the boundary points (unit: m, finite), e.g. with a moving body's at the start of a fluid step;
+  /// the next update() searches afresh.
+  void set_boundary_points(Vec3Array boundary);
+
   const NeighborList& fluid() const { return m_fluid; }
   const NeighborList& boundary() const { return m_boundary; }
-  /// The static boundary points given at construction (unit: m).
+  /// The boundary points: given at construction, or by the last set_boundary_points (unit: m).
   const Vec3Array& boundary_points() const { return m_boundary_points; }
   /// For every entry of fluid().indices, f with grad W(x_i - x_j) = f (x_i - x_j) at the positions of the
   /// last update (unit: 1/m^5), rounded to float (GradientFactorArray). Computed in the filter's pass, where

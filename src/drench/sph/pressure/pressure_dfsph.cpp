@@ -364,4 +364,10 @@ PressureStats PressureDfsph::solve(const FluidContext& ctx, const Vec3Array& vel
   return stats;
 }
 
+void PressureDfsph::boundary_pressure_factors(const ParticleSet& particles, ScalarArray& out) const {
+  out.resize(particles.size());
+  for (std::size_t i = 0; i < out.size(); ++i)
+    out[i] = m_kappa[i] + m_kappa_divergence[i];
+}
+
 }  // namespace drench

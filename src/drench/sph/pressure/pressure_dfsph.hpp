@@ -38,6 +38,7 @@ class PressureDfsph final : public PressureSolver {
   DivergenceStats correct_divergence(const FluidContext& ctx, Scalar dt) override;
   PressureStats solve(const FluidContext& ctx, const Vec3Array& velocities_adv, Scalar dt,
                       Vec3Array& accelerations) override;
+  void boundary_pressure_factors(const ParticleSet& particles, ScalarArray& out) const override;
 
  private:
   /// Brings the warm-start arrays and the factors into the order of `particles` (by id) when it changed.

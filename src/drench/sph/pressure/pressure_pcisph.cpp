@@ -154,4 +154,11 @@ PressureStats PressurePcisph::solve(const FluidContext& ctx, const Vec3Array& ve
   return stats;
 }
 
+void PressurePcisph::boundary_pressure_factors(const ParticleSet& particles, ScalarArray& out) const {
+  out.resize(particles.size());
+  for (std::size_t i = 0; i < out.size(); ++i)
+    out[i] = m_pressure_points_float.size() == out.size() ? static_cast<Scalar>(m_pressure_points_float[i].w)
+                                                          : m_pressure_points[i].w;
+}
+
 }  // namespace drench

@@ -21,6 +21,7 @@ class PressurePcisph final : public PressureSolver {
 
   PressureStats solve(const FluidContext& ctx, const Vec3Array& velocities_adv, Scalar dt,
                       Vec3Array& accelerations) override;
+  void boundary_pressure_factors(const ParticleSet& particles, ScalarArray& out) const override;
 
  private:
   PcisphSettings m_settings;

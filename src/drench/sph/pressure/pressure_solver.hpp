@@ -47,6 +47,12 @@ class PressureSolver {
   /// Preconditions: as solve(); solve() of the same sub-step follows.
   virtual DivergenceStats correct_divergence(const FluidContext& /*ctx*/, Scalar /*dt*/) { return {}; }
 
+  /// For the last solve (and, for DFSPH, the divergence solve of the same sub-step): w_i with which the
+  /// boundary particles b pushed particle i, a_i = -w_i sum_b Psi_b grad W_ib (Akinci et al. 2012 eq. 10),
+  /// so that a moving boundary can take the opposite (unit: m^5/(kg s^2)); N entries into `out`.
+  /// WCSPH p_i / rho_i^2, PCISPH p_i / rho0^2, DFSPH the sum of its kappas.
+  virtual void boundary_pressure_factors(const ParticleSet& particles, ScalarArray& out) const = 0;
+
   /// A speed the CFL condition must add to the fastest particle's (unit: m/s): the speed of sound for
   /// weakly compressible solvers, 0 for incompressible ones.
   virtual Scalar signal_speed() const { return 0.0; }

@@ -41,4 +41,10 @@ PressureStats PressureWcsph::solve(const FluidContext& ctx, const Vec3Array& /*v
   return stats;
 }
 
+void PressureWcsph::boundary_pressure_factors(const ParticleSet& particles, ScalarArray& out) const {
+  out.resize(particles.size());
+  for (std::size_t i = 0; i < out.size(); ++i)
+    out[i] = m_pressure_points[i].w;
+}
+
 }  // namespace drench

@@ -14,6 +14,7 @@ class PressureWcsph final : public PressureSolver {
 
   PressureStats solve(const FluidContext& ctx, const Vec3Array& velocities_adv, Scalar dt,
                       Vec3Array& accelerations) override;
+  void boundary_pressure_factors(const ParticleSet& particles, ScalarArray& out) const override;
   Scalar signal_speed() const override { return m_speed_of_sound; }
 
  private:

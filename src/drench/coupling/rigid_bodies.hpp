@@ -1,0 +1,54 @@
+#pragma once
+/// Rigid bodies that move: a game's boxes, balls and paddles seen by the coupling. Huber et al. 2013 sec. 5
+/// treats rigid objects as triangle meshes in the same coupling as the cloth; here those meshes move between
+/// the start and the end of a step as their bodies do, so the same repulsion (eq. 1-4), continuous handling
+/// (eq. 5-6), friction (eq. 7-8) and leak audit hold the water against them. The coupler sees their nodes
+/// with inverse mass 0 (a body does not deform); what the water gives those nodes goes to the body as one
+/// impulse and one angular impulse, so momentum passes between water and body exactly. The core knows no
+/// engine: the Bullet adapter (bullet_adapter/drench/bullet/bullet_rigid_bodies.hpp) implements
+/// RigidBodySource.
+
+#include <cstdint>
+#include <vector>
+
+#include <drench/common/types.hpp>
+
+namespace drench {
+
+/// How a rigid body moves (Bullet's and Jolt's three kinds).
+enum class RigidMotion {
+  STATIC,     ///< never moves; also holds the cloth off (ClothWithObstacles)
+  KINEMATIC,  ///< moved by the game; the water cannot push it
+  DYNAMIC,    ///< moved by its engine; takes the water's impulses
+};
+
+/// One rigid body's surface over one step.
+struct RigidSurface {
+  std::uint64_t key = 0;  ///< the same body has the same key at every step (the adapter: its address)
+  RigidMotion motion = RigidMotion::STATIC;
+  std::vector<Triangle> triangles;  ///< F, indices < M, counter-clockwise seen from outside
+  Vec3Array positions_t0;           ///< M nodes at the start of the step (unit: m)
+  Vec3Array positions_t1;           ///< M nodes at the end of the engine's step (unit: m)
+  Vec3Array velocities_t0;          ///< M node velocities at the start of the step (unit: m/s)
+};
+
+/// The rigid bodies of a world, read at every step so that bodies the game adds, removes or moves are
+/// followed. The coupled step calls begin_step, then (unless a cloth engine steps the same world) step,
+/// then end_positions, then apply_impulses for the water's impulses of that step.
+class RigidBodySource {
+ public:
+  virtual ~RigidBodySource() = default;
+  /// The bodies now: fills `surfaces` (replacing what it held) with every body that holds water, its
+  /// triangles, positions_t0 and velocities_t0, and positions_t1 = positions_t0.
+  virtual void begin_step(std::vector<RigidSurface>& surfaces) = 0;
+  /// Advances the bodies alone by dt (unit: s): used when no cloth engine steps the world they are in.
+  virtual void step(double dt) = 0;
+  /// After the world's step: positions_t1 of every surface begin_step gave, in the same order.
+  virtual void end_positions(std::vector<RigidSurface>& surfaces) = 0;
+  /// The impulses the water gave the nodes of surface `index` (unit: N s, one per node of surfaces[index]),
+  /// to be applied to its body at the nodes' end positions: the sum as a linear impulse, the sum of moments
+  /// about the centre of mass as an angular impulse. Static and kinematic bodies take nothing.
+  virtual void apply_impulses(std::size_t index, const RigidSurface& surface, const Vec3* node_impulses) = 0;
+};
+
+}  // namespace drench

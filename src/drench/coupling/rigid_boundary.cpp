@@ -1,0 +1,160 @@
+#include <drench/coupling/rigid_boundary.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <unordered_set>
+
+#include <drench/sph/cubic_spline_kernel.hpp>
+#include <drench/sph/neighbor_search.hpp>
+
+namespace drench {
+
+namespace {
+
+Vec3 outward_normal(const Vec3Array& x, const Triangle& t) {
+  const Vec3 n = (x[t[1]] - x[t[0]]).cross(x[t[2]] - x[t[0]]);
+  const Scalar length = n.norm();
+  return length > 0.0 ? Vec3(n / length) : Vec3::Zero();
+}
+
+/// How far a resting fluid lattice's first layer sits from a plane of boundary samples with Akinci et al.
+/// 2012 eq. 4's volumes, as a fraction of the spacing: where its density, fluid half-space plus samples, is
+/// the rest density (where its pressure starts). The volumes make it the same for any sample spacing; for
+/// the cubic spline it is 1.10 (a plane of lattice-cell volumes, as boundary_sampling.hpp's walls, gives 1).
+Scalar resting_distance_in_spacings() {
+  const CubicSplineKernel kernel(1.0);
+  const auto w = [&](Scalar x, Scalar y, Scalar z) { return kernel.value(std::sqrt(x * x + y * y + z * z)); };
+  Scalar plane_sum = 0.0;
+  for (int i = -3; i <= 3; ++i)
+    for (int j = -3; j <= 3; ++j)
+      plane_sum += w(i, 0, j);
+  const Scalar volume = 1.0 / plane_sum;  // eq. 4 on a plane of unit spacing
+  Scalar fluid = 0.0;                     // the first layer's own half-space, unit mass and spacing
+  for (int i = -3; i <= 3; ++i)
+    for (int j = -3; j <= 3; ++j)
+      for (int k = 0; k <= 3; ++k)
+        fluid += w(i, k, j);
+  const auto density = [&](Scalar d) {
+    Scalar boundary = 0.0;
+    for (int i = -3; i <= 3; ++i)
+      for (int j = -3; j <= 3; ++j)
+        boundary += volume * w(i, d, j);
+    return fluid + boundary;
+  };
+  Scalar lo = 0.5, hi = 2.0;  // density(lo) > 1 > density(hi)
+  for (int it = 0; it < 60; ++it) {
+    const Scalar mid = 0.5 * (lo + hi);
+    (density(mid) > 1.0 ? lo : hi) = mid;
+  }
+  return lo;
+}
+
+}  // namespace
+
+RigidBoundary::RigidBoundary(Scalar spacing) : m_spacing(spacing) {
+  if (!(spacing > 0.0) || !std::isfinite(spacing))
+    throw std::invalid_argument("RigidBoundary: the spacing must be > 0 and finite");
+  // The water's volume ends half a spacing beyond its first layer: the samples sit so far inside the face
+  // that a resting first layer lies half a spacing outside it, and the body displaces its own volume.
+  static const Scalar resting = resting_distance_in_spacings();
+  m_inset = (resting - 0.5) * spacing;
+}
+
+RigidBoundary::Body RigidBoundary::sample(const RigidSurface& surface) const {
+  Body body;
+  body.nodes = surface.positions_t0.size();
+  body.triangles = surface.triangles.size();
+  const Vec3Array& x = surface.positions_t0;
+  const Scalar inset = m_inset;
+  // Faces share their edges and corners: a sample within a quarter spacing of one kept is dropped.
+  const Scalar cell = 0.25 * m_spacing;
+  std::unordered_set<std::uint64_t> taken;
+  const auto key = [&](const Vec3& p) {
+    const Vec3 q = (p / cell).array().round();
+    return (static_cast<std::uint64_t>(static_cast<std::int64_t>(q.x()) & 0x1FFFFF) << 42) |
+           (static_cast<std::uint64_t>(static_cast<std::int64_t>(q.y()) & 0x1FFFFF) << 21) |
+           (static_cast<std::uint64_t>(static_cast<std::int64_t>(q.z()) & 0x1FFFFF));
+  };
+  Vec3Array points;
+  for (std::size_t f = 0; f < surface.triangles.size(); ++f) {
+    const Triangle& t = surface.triangles[f];
+    const Vec3 n = outward_normal(x, t);
+    if (n.squaredNorm() == 0.0) continue;
+    const Scalar longest =
+        std::max({(x[t[1]] - x[t[0]]).norm(), (x[t[2]] - x[t[1]]).norm(), (x[t[0]] - x[t[2]]).norm()});
+    const int steps = std::max(1, static_cast<int>(std::ceil(longest / m_spacing - 1e-9)));
+    for (int i = 0; i <= steps; ++i) {
+      for (int j = 0; i + j <= steps; ++j) {
+        const Vec3 w(static_cast<Scalar>(steps - i - j) / steps, static_cast<Scalar>(i) / steps,
+                     static_cast<Scalar>(j) / steps);
+        const Vec3 p = w[0] * x[t[0]] + w[1] * x[t[1]] + w[2] * x[t[2]] - inset * n;
+        if (!taken.insert(key(p)).second) continue;
+        body.samples.push_back({static_cast<Index>(f), w, 0.0});
+        points.push_back(p);
+      }
+    }
+  }
+  // Akinci et al. 2012 eq. 4: a sample where samples crowd (edges, corners) stands for less volume.
+  const CubicSplineKernel kernel(m_spacing);
+  NeighborSearch search(kernel.support_radius());
+  search.build(points);
+  NeighborList neighbors;
+  search.find(points, neighbors, /*exclude_self=*/true);
+  for (std::size_t b = 0; b < points.size(); ++b) {
+    Scalar sum = kernel.value(0.0);
+    for (const Index* k = neighbors.begin(b); k != neighbors.end(b); ++k)
+      sum += kernel.value((points[b] - points[*k]).norm());
+    body.samples[b].volume = 1.0 / sum;
+  }
+  return body;
+}
+
+void RigidBoundary::place(const std::vector<RigidSurface>& surfaces, Vec3Array& positions,
+                          ScalarArray& volumes) {
+  positions.clear();
+  volumes.clear();
+  m_placed.assign(surfaces.size(), nullptr);
+  std::unordered_set<std::uint64_t> seen;
+  for (std::size_t s = 0; s < surfaces.size(); ++s) {
+    const RigidSurface& surface = surfaces[s];
+    if (surface.motion != RigidMotion::DYNAMIC) continue;
+    seen.insert(surface.key);
+    auto it = m_bodies.find(surface.key);
+    if (it == m_bodies.end() || it->second.nodes != surface.positions_t0.size() ||
+        it->second.triangles != surface.triangles.size()) {
+      it = m_bodies.insert_or_assign(surface.key, sample(surface)).first;
+    }
+    const Body& body = it->second;
+    m_placed[s] = &body;
+    const Vec3Array& x = surface.positions_t0;
+    for (const Sample& sample : body.samples) {
+      const Triangle& t = surface.triangles[sample.triangle];
+      const Vec3 n = outward_normal(x, t);
+      positions.push_back(sample.weights[0] * x[t[0]] + sample.weights[1] * x[t[1]] +
+                          sample.weights[2] * x[t[2]] - m_inset * n);
+      volumes.push_back(sample.volume);
+    }
+  }
+  // Bodies gone from the world: a new body at the same address is sampled afresh.
+  for (auto it = m_bodies.begin(); it != m_bodies.end();) {
+    it = seen.count(it->first) ? std::next(it) : m_bodies.erase(it);
+  }
+}
+
+void RigidBoundary::spread(const std::vector<RigidSurface>& surfaces, const Vec3Array& sample_impulses,
+                           const std::vector<std::size_t>& first_node, Vec3Array& node_impulses) const {
+  std::size_t k = 0;
+  for (std::size_t s = 0; s < surfaces.size() && s < m_placed.size(); ++s) {
+    if (!m_placed[s]) continue;
+    for (const Sample& sample : m_placed[s]->samples) {
+      if (k >= sample_impulses.size()) return;
+      const Triangle& t = surfaces[s].triangles[sample.triangle];
+      for (int i = 0; i < 3; ++i)
+        node_impulses[first_node[s] + t[i]] += sample.weights[i] * sample_impulses[k];
+      ++k;
+    }
+  }
+}
+
+}  // namespace drench
