@@ -191,7 +191,6 @@ TEST(CoupledWorld, StaticTriangleMeshesOfTheWorldHoldTheFluid) {
   user.world.addRigidBody(&ground);
   {
     CoupledWorld coupled(user.world, *user.cloth, jet_scene(0.8));
-    ASSERT_EQ(coupled.simulation().obstacles().size(), 1u);
     std::uint64_t leaks = 0, contacts = 0;
     for (int n = 0; n < 200; ++n) {
       const CoupledStepReport report = coupled.step();
@@ -201,6 +200,11 @@ TEST(CoupledWorld, StaticTriangleMeshesOfTheWorldHoldTheFluid) {
     }
     EXPECT_EQ(leaks, 0u);
     EXPECT_GT(contacts, 0u) << "the jet reached the static mesh";
+    const std::vector<RigidSurface>& surfaces = coupled.rigid_surfaces();
+    ASSERT_EQ(surfaces.size(), 2u) << "the ground and the user's sphere";
+    EXPECT_EQ(surfaces[0].motion, RigidMotion::DYNAMIC) << "the sphere, added first";
+    EXPECT_EQ(surfaces[1].motion, RigidMotion::STATIC);
+    EXPECT_EQ(surfaces[1].triangles.size(), 200u);
     std::size_t on_top = 0;
     for (const Vec3& x : coupled.particles().positions) {
       if (x.x() > 0.0 && x.x() < 0.2 && x.z() > -0.3 && x.z() < -0.1) {

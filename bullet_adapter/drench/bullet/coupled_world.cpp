@@ -177,15 +177,25 @@ std::vector<TriangleMesh> static_triangle_meshes(const btCollisionWorld& world) 
   return meshes;
 }
 
-CoupledWorld::CoupledWorld(btSoftRigidDynamicsWorld& world, btSoftBody& cloth, const SceneConfig& scene)
-    : CoupledWorld(attach(world, cloth, scene), scene, static_triangle_meshes(world)) {}
+CoupledWorld::CoupledWorld(btSoftRigidDynamicsWorld& world, btSoftBody& cloth, const SceneConfig& scene,
+                           const RigidBodyOptions& bodies)
+    : CoupledWorld(attach(world, cloth, scene), scene, &world, &bodies) {}
 
-CoupledWorld::CoupledWorld(const SceneConfig& scene) : CoupledWorld(own(scene), scene, {}) {}
+CoupledWorld::CoupledWorld(const SceneConfig& scene) : CoupledWorld(own(scene), scene, nullptr, nullptr) {}
 
 CoupledWorld::CoupledWorld(std::unique_ptr<BulletCloth> cloth, const SceneConfig& scene,
-                           std::vector<TriangleMesh> static_meshes)
+                           btSoftRigidDynamicsWorld* world, const RigidBodyOptions* bodies)
     : m_cloth(cloth.get()) {
-  m_simulation = std::make_unique<Simulation>(scene, std::move(cloth), std::move(static_meshes));
+  // After the cloth's checks, so that a wrong gravity or a missing cloth is named before any shape.
+  if (world) m_bodies = std::make_unique<BulletRigidBodies>(*world, *bodies);
+  m_simulation =
+      std::make_unique<Simulation>(scene, std::move(cloth), std::vector<TriangleMesh>{}, m_bodies.get());
+}
+
+const std::vector<RigidSurface>& CoupledWorld::rigid_surfaces() const {
+  static const std::vector<RigidSurface> none;
+  const ClothWithObstacles* engine = m_simulation->cloth_with_obstacles();
+  return engine ? engine->rigid_surfaces() : none;
 }
 
 CoupledWorld::~CoupledWorld() = default;

@@ -31,6 +31,7 @@
 #include <vector>
 
 #include <drench/bullet/bullet_cloth.hpp>
+#include <drench/bullet/bullet_rigid_bodies.hpp>
 #include <drench/common/parallel.hpp>
 #include <drench/coupling/coupler.hpp>
 #include <drench/coupling/leak_audit.hpp>
@@ -82,24 +83,29 @@ struct CoupledStepReport {
 
 class CoupledWorld {
  public:
-  /// Couples a world and a cloth the caller owns (and keeps alive, and no longer steps itself). The world's
-  /// static triangle meshes (static_triangle_meshes) hold the fluid too, coupled as the scene's `obstacles`
-  /// are: a level's geometry is described once, in Bullet. They are read now; a static body added to the
-  /// world later is not seen.
+  /// Couples a world and a cloth the caller owns (and keeps alive, and no longer steps itself). Every other
+  /// collision object of the world holds the fluid too (BulletRigidBodies, read at every step: bodies added,
+  /// removed or moved later are followed): static ones as the scene's `obstacles` are, kinematic ones moved
+  /// by the game sweep it, dynamic ones are pushed and turned by it. A level is described once, in Bullet.
   /// @param world  the caller's world, holding `cloth`; its soft-body gravity (getWorldInfo().m_gravity)
   ///        must be the scene's gravity
   /// @param cloth  the caller's soft body; its settings (margin, piterations, masses, pins) are left alone
+  /// @param bodies  which objects hold the water (Bullet's collision filter) and how finely shapes become
+  ///        triangles
   /// @param scene  everything else, as a scene file gives it (docs/scenes.md) and Simulation reads it:
   ///        gravity, fluid, emitters (boxes are filled now, nozzles emit per step), static boundaries, kill
   ///        regions, time.dt (the dt of step()), coupling settings and effects ("viscosity", "coupling",
   ///        "friction", "leak_audit"; a stage the scene does not list is not built). The speed of sound is
   ///        the scene's or automatic_speed_of_sound(scene). Of scene.cloth only the blow-up limits
   ///        (max_speed, max_strain) are read: the cloth is the caller's.
+  /// @throws drench::Error naming the object when an object the water sees has a shape drench cannot use
+  ///         (BulletRigidBodies)
   /// @throws SceneError when the world's soft-body gravity differs from the scene's, the cloth is not in the
   ///         world, the scene's dt or gravity is not finite or dt <= 0, or the coupling settings are out of
   ///         range; drench::Error when the cloth's mesh is invalid (ClothMesh::validate) or a static mesh has
   ///         no face of non-zero area
-  CoupledWorld(btSoftRigidDynamicsWorld& world, btSoftBody& cloth, const SceneConfig& scene);
+  CoupledWorld(btSoftRigidDynamicsWorld& world, btSoftBody& cloth, const SceneConfig& scene,
+               const RigidBodyOptions& bodies = {});
 
   /// Owns its Bullet world and the cloth of scene.cloth in it (BulletCloth(*scene.cloth, scene.gravity)).
   /// @throws SceneError as above, when the scene has no cloth, and as BulletCloth(settings, gravity)
@@ -122,6 +128,10 @@ class CoupledWorld {
   /// The cloth as the coupling saw it in the last step (positions_t1 are the corrected end positions).
   const ClothMesh& cloth_mesh() const { return m_cloth->mesh(); }
   btSoftRigidDynamicsWorld& world() { return *m_cloth->world(); }
+  /// The world's rigid bodies as the water sees them, or nullptr for the world this class owns.
+  BulletRigidBodies* rigid_bodies() { return m_bodies.get(); }
+  /// Every rigid body's surface in the last step (world coordinates), with its motion.
+  const std::vector<RigidSurface>& rigid_surfaces() const;
   /// The coupler, or nullptr when the scene does not list "coupling".
   Coupler* coupler() { return m_simulation->coupler(); }
   /// The simulation behind this world: the same pipeline `drench run` steps (scene/simulation.hpp).
@@ -149,10 +159,11 @@ class CoupledWorld {
   static int thread_count() { return drench::thread_count(); }
 
  private:
-  CoupledWorld(std::unique_ptr<BulletCloth> cloth, const SceneConfig& scene,
-               std::vector<TriangleMesh> static_meshes);
+  CoupledWorld(std::unique_ptr<BulletCloth> cloth, const SceneConfig& scene, btSoftRigidDynamicsWorld* world,
+               const RigidBodyOptions* bodies);
 
-  BulletCloth* m_cloth;  // owned by m_simulation
+  BulletCloth* m_cloth;                         // owned by m_simulation
+  std::unique_ptr<BulletRigidBodies> m_bodies;  // null for the owned world; outlives m_simulation
   std::unique_ptr<Simulation> m_simulation;
 };
 

@@ -1,0 +1,217 @@
+#include <drench/bullet/bullet_rigid_bodies.hpp>
+
+#include <BulletCollision/BroadphaseCollision/btBroadphaseProxy.h>
+#include <BulletCollision/CollisionDispatch/btCollisionObject.h>
+#include <BulletCollision/CollisionShapes/btCollisionShape.h>
+#include <BulletDynamics/Dynamics/btDynamicsWorld.h>
+#include <BulletDynamics/Dynamics/btRigidBody.h>
+
+#include <cmath>
+#include <cstring>
+#include <utility>
+
+#include <drench/common/error.hpp>
+
+namespace drench::bullet {
+
+struct BulletRigidBodies::Tracked {
+  const btCollisionShape* shape = nullptr;
+  btVector3 scaling{1, 1, 1};
+  btScalar margin = 0;
+  bool supported = false;
+  TriangleMesh local;      // the shape's surface in the object's frame
+  bool has_end = false;    // `end` and `world_end` hold the end of the last step the object took part in
+  btTransform end;         // the object's transform then
+  Vec3Array world_end;     // `local` placed by `end` (unit: m)
+  std::uint64_t seen = 0;  // the last step (m_step) the object was in the world
+};
+
+namespace {
+
+/// `local` placed by `transform`, in double whatever Bullet's precision.
+Vec3Array place(const TriangleMesh& local, const btTransform& transform) {
+  const btMatrix3x3& basis = transform.getBasis();
+  Eigen::Matrix3d rotation;
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c)
+      rotation(r, c) = basis[r][c];
+  const Vec3 origin = to_vec3(transform.getOrigin());
+  Vec3Array world(local.positions.size());
+  for (std::size_t i = 0; i < world.size(); ++i)
+    world[i] = rotation * local.positions[i] + origin;
+  return world;
+}
+
+bool same(const btTransform& a, const btTransform& b) {
+  return a.getOrigin() == b.getOrigin() && a.getBasis()[0] == b.getBasis()[0] &&
+         a.getBasis()[1] == b.getBasis()[1] && a.getBasis()[2] == b.getBasis()[2];
+}
+
+RigidMotion motion_of(const btCollisionObject& object) {
+  if (object.isKinematicObject()) return RigidMotion::KINEMATIC;
+  const btRigidBody* body = btRigidBody::upcast(&object);
+  if (object.isStaticObject() || body == nullptr || body->getInvMass() == 0) return RigidMotion::STATIC;
+  return RigidMotion::DYNAMIC;
+}
+
+std::string describe(const btCollisionObject& object, int index) {
+  return "collision object " + std::to_string(index) + " (" + object.getCollisionShape()->getName() + ")";
+}
+
+void check_option(bool ok, const std::string& what, double value) {
+  if (!ok) throw SceneError("rigid bodies: " + what + ", got " + format_number(value));
+}
+
+}  // namespace
+
+BulletRigidBodies::BulletRigidBodies(btDynamicsWorld& world, RigidBodyOptions options)
+    : m_world(world), m_options(options) {
+  const ShapeMeshOptions& m = m_options.mesh;
+  check_option(m.max_edge > 0.0 && std::isfinite(m.max_edge), "mesh.max_edge must be > 0", m.max_edge);
+  check_option(m.plane_half_size > 0.0 && std::isfinite(m.plane_half_size),
+               "mesh.plane_half_size must be > 0", m.plane_half_size);
+  check_option(m.plane_cell > 0.0 && std::isfinite(m.plane_cell), "mesh.plane_cell must be > 0",
+               m.plane_cell);
+  // What the world holds now must all be usable: a shape the water would pass through is an error here,
+  // where the game sets up its level, not a surprise in the first splash.
+  const btCollisionObjectArray& objects = m_world.getCollisionObjectArray();
+  for (int i = 0; i < objects.size(); ++i) {
+    const btCollisionObject& object = *objects[i];
+    if (object.getInternalType() == btCollisionObject::CO_SOFT_BODY || !sees(object)) continue;
+    if (!object.getCollisionShape() || !is_supported_shape(*object.getCollisionShape())) {
+      throw Error(describe(object, i) +
+                  ": drench cannot hold water with this shape; give the water another collision filter group "
+                  "(RigidBodyOptions::water_mask) to let the water pass it, or use a supported shape "
+                  "(shape_mesh.hpp)");
+    }
+    track(object, i);
+  }
+}
+
+BulletRigidBodies::~BulletRigidBodies() = default;
+
+bool BulletRigidBodies::sees(const btCollisionObject& object) const {
+  const btBroadphaseProxy* proxy = object.getBroadphaseHandle();
+  if (proxy == nullptr) return false;  // not in a world's broad phase: Bullet collides nothing with it either
+  return (proxy->m_collisionFilterGroup & m_options.water_mask) != 0 &&
+         (m_options.water_group & proxy->m_collisionFilterMask) != 0;
+}
+
+BulletRigidBodies::Tracked* BulletRigidBodies::track(const btCollisionObject& object, int index) {
+  std::unique_ptr<Tracked>& slot = m_tracked[&object];
+  if (!slot) slot = std::make_unique<Tracked>();
+  Tracked& t = *slot;
+  t.seen = m_step;
+  const btCollisionShape* shape = object.getCollisionShape();
+  const btVector3 scaling = shape ? shape->getLocalScaling() : btVector3(1, 1, 1);
+  const btScalar margin = shape ? shape->getMargin() : btScalar(0);
+  if (shape == t.shape && scaling == t.scaling && margin == t.margin) return t.supported ? &t : nullptr;
+  t.shape = shape;
+  t.scaling = scaling;
+  t.margin = margin;
+  t.has_end = false;
+  t.supported = shape != nullptr && is_supported_shape(*shape);
+  if (!t.supported) {
+    m_warnings.push_back(describe(object, index) + ": not supported, it does not hold the water");
+    t.local = TriangleMesh();
+    return nullptr;
+  }
+  t.local = shape_mesh(*shape, m_options.mesh);
+  return &t;
+}
+
+void BulletRigidBodies::begin_step(std::vector<RigidSurface>& surfaces) {
+  ++m_step;
+  surfaces.clear();
+  m_current.clear();
+  const btCollisionObjectArray& objects = m_world.getCollisionObjectArray();
+  for (int i = 0; i < objects.size(); ++i) {
+    const btCollisionObject& object = *objects[i];
+    if (object.getInternalType() == btCollisionObject::CO_SOFT_BODY || !sees(object)) continue;
+    const bool was_there = m_tracked.count(&object) > 0 && m_tracked[&object]->seen + 1 == m_step;
+    Tracked* t = track(object, i);
+    if (t == nullptr || t->local.triangles.empty()) continue;
+    RigidSurface s;
+    s.key = reinterpret_cast<std::uintptr_t>(&object);
+    s.motion = motion_of(object);
+    s.triangles = t->local.triangles;
+    // A body the game moved between steps (a kinematic paddle, a teleport) moves within this step, from
+    // where the last step left it: the coupling sweeps the water along that motion instead of letting the
+    // body appear around particles.
+    const btTransform& now = object.getWorldTransform();
+    if (was_there && t->has_end) {
+      s.positions_t0 = t->world_end;
+    } else {
+      s.positions_t0 = place(t->local, now);
+      t->end = now;
+      t->world_end = s.positions_t0;
+      t->has_end = true;
+    }
+    s.positions_t1 = s.positions_t0;
+    s.velocities_t0.assign(s.positions_t0.size(), Vec3::Zero());
+    if (const btRigidBody* body = btRigidBody::upcast(&object)) {
+      const Vec3 v = to_vec3(body->getLinearVelocity());
+      const Vec3 w = to_vec3(body->getAngularVelocity());
+      const Vec3 centre = to_vec3(body->getCenterOfMassPosition());
+      for (std::size_t k = 0; k < s.positions_t0.size(); ++k)
+        s.velocities_t0[k] = v + w.cross(s.positions_t0[k] - centre);
+    }
+    surfaces.push_back(std::move(s));
+    m_current.push_back(t);
+  }
+  // Objects no longer in the world: a body deleted and another allocated at its address must start afresh.
+  for (auto it = m_tracked.begin(); it != m_tracked.end();) {
+    if (it->second->seen != m_step) {
+      it = m_tracked.erase(it);
+    } else {
+      ++it;
+    }
+  }
+}
+
+void BulletRigidBodies::step(double dt) {
+  // maxSubSteps 0: exactly one step of dt, as BulletCloth steps the world.
+  m_world.stepSimulation(static_cast<btScalar>(dt), 0);
+}
+
+void BulletRigidBodies::end_positions(std::vector<RigidSurface>& surfaces) {
+  for (std::size_t i = 0; i < surfaces.size() && i < m_current.size(); ++i) {
+    Tracked& t = *m_current[i];
+    const auto* object =
+        reinterpret_cast<const btCollisionObject*>(static_cast<std::uintptr_t>(surfaces[i].key));
+    const btTransform& now = object->getWorldTransform();
+    if (!(t.has_end && same(now, t.end))) {
+      t.world_end = place(t.local, now);
+      t.end = now;
+      t.has_end = true;
+    }
+    surfaces[i].positions_t1 = t.world_end;
+  }
+}
+
+void BulletRigidBodies::apply_impulses(std::size_t index, const RigidSurface& surface,
+                                       const Vec3* node_impulses) {
+  auto* object = reinterpret_cast<btCollisionObject*>(static_cast<std::uintptr_t>(surface.key));
+  btRigidBody* body = btRigidBody::upcast(object);
+  if (index >= m_current.size() || body == nullptr || body->getInvMass() == 0) return;
+  const Vec3 centre = to_vec3(body->getCenterOfMassPosition());
+  Vec3 linear = Vec3::Zero(), angular = Vec3::Zero();
+  for (std::size_t k = 0; k < surface.positions_t1.size(); ++k) {
+    linear += node_impulses[k];
+    angular += (surface.positions_t1[k] - centre).cross(node_impulses[k]);
+  }
+  const btVector3 impulse = to_bt(linear);
+  body->applyCentralImpulse(impulse);
+  body->applyTorqueImpulse(to_bt(angular));
+  // A body Bullet put to sleep would ignore the water that now lifts or pushes it.
+  body->activate(true);
+  m_impulse_given += to_vec3(impulse);
+}
+
+std::vector<std::string> BulletRigidBodies::take_warnings() {
+  std::vector<std::string> w;
+  w.swap(m_warnings);
+  return w;
+}
+
+}  // namespace drench::bullet

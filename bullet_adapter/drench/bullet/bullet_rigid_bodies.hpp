@@ -1,0 +1,78 @@
+#pragma once
+/// A Bullet world's rigid bodies as drench's RigidBodySource (coupling/rigid_bodies.hpp): every collision
+/// object that is not a soft body and that Bullet's collision filter lets the water see, as the triangle mesh
+/// of its shape (shape_mesh.hpp) where the world puts it, read at every step. Static objects hold the water
+/// (and the cloth); kinematic ones, moved by the game between steps, sweep it along; dynamic ones take the
+/// water's impulses through btRigidBody::applyCentralImpulse and applyTorqueImpulse, so the water pushes,
+/// turns and floats them (Huber et al. 2013 sec. 5: rigid objects as triangle meshes in the same coupling).
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <unordered_map>
+#include <vector>
+
+#include <LinearMath/btTransform.h>
+
+#include <drench/bullet/bullet_conversions.hpp>
+#include <drench/bullet/shape_mesh.hpp>
+#include <drench/coupling/rigid_bodies.hpp>
+
+class btCollisionObject;
+class btCollisionShape;
+class btDynamicsWorld;
+
+namespace drench::bullet {
+
+/// Which of the world's objects hold the water, and how finely.
+struct RigidBodyOptions {
+  /// How a shape becomes triangles: curved facets, a plane's square (shape_mesh.hpp).
+  ShapeMeshOptions mesh;
+  /// The water's collision filter group and mask, as a btCollisionObject's: an object holds the water when
+  /// (its group & water_mask) and (water_group & its mask) are both non-zero, as Bullet decides for two
+  /// objects. The defaults (btBroadphaseProxy::DefaultFilter, AllFilter) see every object Bullet's defaults
+  /// make.
+  int water_group = 1;
+  int water_mask = -1;
+};
+
+/// The rigid bodies of `world`, for Simulation and CoupledWorld.
+class BulletRigidBodies final : public RigidBodySource {
+ public:
+  /// @param world  the caller's world; borrowed, it must outlive this
+  /// @throws drench::Error naming the object (its index in getCollisionObjectArray) and its shape
+  ///         (getName) when an object the water sees has a shape shape_mesh does not support; SceneError
+  ///         for options out of range
+  BulletRigidBodies(btDynamicsWorld& world, RigidBodyOptions options = {});
+  ~BulletRigidBodies() override;
+
+  void begin_step(std::vector<RigidSurface>& surfaces) override;
+  /// One Bullet step of dt (stepSimulation(dt, 0)): only for a world without a cloth engine.
+  void step(double dt) override;
+  void end_positions(std::vector<RigidSurface>& surfaces) override;
+  void apply_impulses(std::size_t index, const RigidSurface& surface, const Vec3* node_impulses) override;
+
+  /// The linear impulse the water gave the dynamic bodies, summed over all steps (unit: N s): with the
+  /// fluid's momentum, what a test of momentum conservation adds up.
+  const Vec3& impulse_given() const { return m_impulse_given; }
+  /// One line per object added after construction whose shape is not supported (it does not hold the
+  /// water), each object once; taken (cleared) by the call.
+  std::vector<std::string> take_warnings();
+
+ private:
+  struct Tracked;
+  /// The cached state of `object`, its local mesh rebuilt when its shape, scaling or margin changed; null
+  /// for an unsupported shape (warned about once).
+  Tracked* track(const btCollisionObject& object, int index);
+  bool sees(const btCollisionObject& object) const;
+
+  btDynamicsWorld& m_world;
+  RigidBodyOptions m_options;
+  std::unordered_map<const btCollisionObject*, std::unique_ptr<Tracked>> m_tracked;
+  std::vector<Tracked*> m_current;  // per surface of the step, its object's state
+  std::vector<std::string> m_warnings;
+  Vec3 m_impulse_given = Vec3::Zero();
+  std::uint64_t m_step = 0;
+};
+
+}  // namespace drench::bullet

@@ -1,0 +1,497 @@
+// The rigid bodies of a Bullet world in the coupling (bullet_rigid_bodies.hpp): they hold the water, the
+// water pushes and floats the dynamic ones with momentum conserved, and a kinematic one stirs it.
+
+#include <drench/bullet/coupled_world.hpp>
+
+#include <BulletCollision/CollisionShapes/btHeightfieldTerrainShape.h>
+#include <BulletCollision/CollisionShapes/btTriangleShape.h>
+#include <BulletSoftBody/btSoftBodyHelpers.h>
+#include <BulletSoftBody/btSoftBodyRigidBodyCollisionConfiguration.h>
+#include <BulletSoftBody/btSoftRigidDynamicsWorld.h>
+#include <btBulletDynamicsCommon.h>
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <drench/sph/cubic_spline_kernel.hpp>
+#include "../assertions.hpp"
+#include "bullet_test_helpers.hpp"
+
+namespace drench::bullet {
+namespace {
+
+using test::bullet_tolerance;
+
+/// A game's world: rigid bodies the test adds, and a small pinned cloth far above everything (CoupledWorld
+/// couples one cloth; this one never meets the water).
+struct GameWorld {
+  btSoftBodyRigidBodyCollisionConfiguration configuration;
+  btCollisionDispatcher dispatcher{&configuration};
+  btDbvtBroadphase broadphase;
+  btSequentialImpulseConstraintSolver solver;
+  btSoftRigidDynamicsWorld world{&dispatcher, &broadphase, &solver, &configuration};
+  btSoftBody* cloth = nullptr;
+  std::vector<std::unique_ptr<btCollisionShape>> shapes;
+  std::vector<std::unique_ptr<btDefaultMotionState>> motions;
+  std::vector<std::unique_ptr<btRigidBody>> bodies;
+
+  explicit GameWorld(const Vec3& gravity) {
+    world.setGravity(to_bt(gravity));
+    world.getWorldInfo().m_gravity = to_bt(gravity);
+    cloth = btSoftBodyHelpers::CreatePatch(world.getWorldInfo(), btVector3(10, 10, 10),
+                                           btVector3(10.1, 10, 10), btVector3(10, 10, 10.1),
+                                           btVector3(10.1, 10, 10.1), 3, 3, 1 + 2 + 4 + 8, true);
+    cloth->setTotalMass(0.01);
+    world.addSoftBody(cloth);
+  }
+  ~GameWorld() {
+    for (auto& body : bodies)
+      world.removeRigidBody(body.get());
+    world.removeSoftBody(cloth);
+    delete cloth;
+  }
+
+  /// A box of half extents `half` (unit: m) and `mass` (kg; 0 = static) at `centre`.
+  btRigidBody& add_box(const Vec3& half, double mass, const Vec3& centre) {
+    shapes.push_back(std::make_unique<btBoxShape>(to_bt(half)));
+    btVector3 inertia(0, 0, 0);
+    if (mass > 0.0) shapes.back()->calculateLocalInertia(static_cast<btScalar>(mass), inertia);
+    motions.push_back(
+        std::make_unique<btDefaultMotionState>(btTransform(btQuaternion::getIdentity(), to_bt(centre))));
+    bodies.push_back(std::make_unique<btRigidBody>(static_cast<btScalar>(mass), motions.back().get(),
+                                                   shapes.back().get(), inertia));
+    world.addRigidBody(bodies.back().get());
+    return *bodies.back();
+  }
+};
+
+SceneConfig water_scene(double spacing, const Vec3& gravity) {
+  SceneConfig scene;
+  scene.source = "rigid body test";
+  scene.gravity = gravity;
+  scene.fluid.particle_spacing = spacing;
+  scene.time.dt = 1e-3;
+  scene.effects = {"coupling", "leak_audit"};
+  return scene;
+}
+
+EmitterSettings water_block(const Vec3& min, const Vec3& max, const Vec3& velocity = Vec3::Zero()) {
+  EmitterSettings block;
+  block.kind = EmitterSettings::Kind::BOX;
+  block.box.min = min;
+  block.box.max = max;
+  block.box.velocity = velocity;
+  return block;
+}
+
+Vec3 fluid_momentum(const CoupledWorld& coupled) {
+  const ParticleSet& p = coupled.particles();
+  Vec3 sum = Vec3::Zero();
+  for (std::size_t i = 0; i < p.size(); ++i)
+    sum += p.masses[i] * p.velocities[i];
+  return sum;
+}
+
+Vec3 body_momentum(const btRigidBody& body) {
+  return to_vec3(body.getLinearVelocity()) / static_cast<double>(body.getInvMass());
+}
+
+/// Particles strictly inside `body`'s box of half extents `half` (unit: m), with a margin `inset` (m).
+std::size_t particles_inside(const CoupledWorld& coupled, const btRigidBody& body, const Vec3& half,
+                             double inset = 0.0) {
+  const btTransform to_local = body.getWorldTransform().inverse();
+  std::size_t inside = 0;
+  for (const Vec3& x : coupled.particles().positions) {
+    const Vec3 local = to_vec3(to_local * to_bt(x)).cwiseAbs();
+    if ((local.array() < half.array() - inset).all()) ++inside;
+  }
+  return inside;
+}
+
+/// The height where the water's SPH density, sum_j m_j W(x - x_j), falls to half the rest density above
+/// (x, z): its surface as drench's reconstruction draws it (unit: m).
+double water_surface(const CoupledWorld& coupled, double x, double z) {
+  const CubicSplineKernel kernel(coupled.scene().fluid.particle_spacing);
+  const auto density = [&](double y) {
+    double sum = 0.0;
+    for (std::size_t i = 0; i < coupled.particles().size(); ++i)
+      sum += coupled.particles().masses[i] *
+             kernel.value((coupled.particles().positions[i] - Vec3(x, y, z)).norm());
+    return sum;
+  };
+  const double half = 0.5 * coupled.scene().fluid.rest_density;
+  double below = 0.0, above = 1.0;
+  for (int i = 0; i < 40; ++i) {
+    const double mid = 0.5 * (below + above);
+    (density(mid) > half ? below : above) = mid;
+  }
+  return below;
+}
+
+/// The fraction of an 8 cm box of density `box_density` (unit: kg/m^3), settled in a tank of water, that
+/// lies under the water's surface (water_surface, between the box and the walls), averaged over the last 0.3
+/// s of 1.2 s: Archimedes says box_density / rest density, however the box turned (a floating cube of half
+/// the water's density is stable on an edge, not on a face).
+double submerged_fraction(double spacing, double box_density) {
+  const Vec3 gravity(0, -9.81, 0);
+  GameWorld game(gravity);
+  const double side = 0.08, tank = 0.2, depth = 0.1;
+  // The tank's floor in Bullet too, so that a sinking box lands on it.
+  game.add_box(Vec3(0.2, 0.05, 0.2), 0.0, Vec3(0.5 * tank, -0.05, 0.5 * tank));
+  const double mass = box_density * side * side * side;
+  btRigidBody& box = game.add_box(Vec3::Constant(0.5 * side), mass,
+                                  Vec3(0.5 * tank, depth + 0.5 * side + 0.002, 0.5 * tank));
+  SceneConfig scene = water_scene(spacing, gravity);
+  BoundarySettings walls;
+  walls.min = Vec3::Zero();
+  walls.max = Vec3(tank, 0.3, tank);
+  walls.open_top = true;
+  scene.boundaries.push_back(walls);
+  scene.emitters.push_back(water_block(Vec3::Zero(), Vec3(tank, depth, tank)));
+  CoupledWorld coupled(game.world, *game.cloth, scene);
+  double fraction_sum = 0.0;
+  int samples = 0;
+  for (int n = 1; n <= 1200; ++n) {
+    const CoupledStepReport report = coupled.step();
+    EXPECT_FALSE(report.failed()) << "step " << n << ": " << report.fluid.describe();
+    if (report.failed()) return NAN;
+    if (n > 900 && n % 30 == 0) {
+      // Midway between the box and the walls, where the surface is flat.
+      const double gap = 0.25 * (tank - side);
+      const double surface =
+          0.25 * (water_surface(coupled, gap, 0.5 * tank) + water_surface(coupled, tank - gap, 0.5 * tank) +
+                  water_surface(coupled, 0.5 * tank, gap) + water_surface(coupled, 0.5 * tank, tank - gap));
+      // The box's volume below the surface, by the midpoints of 20^3 cells.
+      const btTransform& placed = box.getWorldTransform();
+      int below = 0;
+      constexpr int kCells = 20;
+      for (int i = 0; i < kCells; ++i)
+        for (int j = 0; j < kCells; ++j)
+          for (int k = 0; k < kCells; ++k) {
+            const Vec3 local =
+                side * (Vec3(i, j, k) + Vec3::Constant(0.5)) / kCells - Vec3::Constant(0.5 * side);
+            below += to_vec3(placed * to_bt(local)).y() < surface ? 1 : 0;
+          }
+      fraction_sum += static_cast<double>(below) / (kCells * kCells * kCells);
+      ++samples;
+    }
+  }
+  return fraction_sum / samples;
+}
+
+// Archimedes through the boundary particles of rigid_boundary.hpp. Without them the box sank to 0.77 of its
+// height. With them it floats too high: 0.40 of its height under water at a spacing of 1 cm, 0.42 at 8 mm
+// (0.31 and 0.52 for boxes of 300 and 700 kg/m^3 in one tank, so the error grows with depth). It shrinks
+// with the spacing, as an error of the boundary layer, a fraction of a spacing thick, should; issue 40's
+// target, 5% of the height, is not met. The test holds this accuracy (a quarter of Archimedes' answer) and
+// its convergence, so that a change that makes either worse fails.
+TEST(RigidBodies, ABoxOfHalfTheWatersDensityFloatsCloserToHalfSubmergedAsTheSpacingShrinks) {
+  const double coarse = submerged_fraction(0.01, 500.0);
+  const double fine = submerged_fraction(0.008, 500.0);
+  EXPECT_NEAR(coarse, 0.5, 0.125) << "fraction under water, spacing 1 cm";
+  EXPECT_NEAR(fine, 0.5, 0.125) << "fraction under water, spacing 8 mm";
+  EXPECT_LT(std::abs(fine - 0.5), std::abs(coarse - 0.5)) << "closer to Archimedes at the finer spacing";
+}
+
+TEST(RigidBodies, ABoxOfTwiceTheWatersDensitySinks) {
+  const double spacing = 0.01;
+  EXPECT_EQ(submerged_fraction(spacing, 2000.0), 1.0) << "under water";
+}
+
+TEST(RigidBodies, WaterAndBodiesKeepTheirMomentumInCollisions) {
+  // No gravity, no walls: the water and two boxes thrown into it from opposite sides are alone.
+  const Vec3 gravity = Vec3::Zero();
+  GameWorld game(gravity);
+  btRigidBody& left = game.add_box(Vec3::Constant(0.03), 0.3, Vec3(-0.12, 0.05, 0.05));
+  btRigidBody& right = game.add_box(Vec3(0.02, 0.04, 0.03), 0.2, Vec3(0.22, 0.05, 0.05));
+  left.setLinearVelocity(btVector3(2.0, 0.1, 0.0));
+  right.setLinearVelocity(btVector3(-1.0, 0.0, 0.3));
+  right.setAngularVelocity(btVector3(0.0, 3.0, 0.0));
+  SceneConfig scene = water_scene(0.01, gravity);
+  scene.emitters.push_back(water_block(Vec3::Zero(), Vec3(0.1, 0.1, 0.1)));
+  CoupledWorld coupled(game.world, *game.cloth, scene);
+  const Vec3 start = fluid_momentum(coupled) + body_momentum(left) + body_momentum(right);
+  std::uint64_t contacts = 0;
+  for (int n = 0; n < 1000; ++n) {
+    const CoupledStepReport report = coupled.step();
+    ASSERT_FALSE(report.failed()) << "step " << n << ": " << report.fluid.describe();
+    contacts += report.coupling_stats.contacts;
+  }
+  EXPECT_GT(contacts, 100u) << "the boxes hit the water";
+  EXPECT_GT(fluid_momentum(coupled).norm(), 0.1 * start.norm()) << "the water was pushed";
+  const Vec3 end = fluid_momentum(coupled) + body_momentum(left) + body_momentum(right);
+  EXPECT_LT((end - start).norm(), bullet_tolerance(1e-6, 1.0, 1e4) * start.norm())
+      << "start " << start.transpose() << ", end " << end.transpose();
+}
+
+TEST(RigidBodies, AWaveOfWaterPushesALightCrateOffATable) {
+  const Vec3 gravity(0, -9.81, 0);
+  GameWorld game(gravity);
+  // A table 0.4 m wide (top at y = 0.1), a 50 g crate of 6 cm on it, 0.1 m from its right edge.
+  btRigidBody& table = game.add_box(Vec3(0.2, 0.05, 0.1), 0.0, Vec3(0.0, 0.05, 0.0));
+  const Vec3 crate_half = Vec3::Constant(0.03);
+  btRigidBody& crate = game.add_box(crate_half, 0.05, Vec3(0.07, 0.13, 0.0));
+  crate.setFriction(0.5);
+  table.setFriction(0.5);
+  SceneConfig scene = water_scene(0.01, gravity);
+  // 0.6 kg of water slides along the table at 1.5 m/s into the crate.
+  scene.emitters.push_back(water_block(Vec3(-0.19, 0.102, -0.05), Vec3(-0.07, 0.152, 0.05), Vec3(1.5, 0, 0)));
+  CoupledWorld coupled(game.world, *game.cloth, scene);
+  std::uint64_t leaks = 0;
+  for (int n = 0; n < 400; ++n) {
+    const CoupledStepReport report = coupled.step();
+    ASSERT_FALSE(report.failed()) << "step " << n << ": " << report.fluid.describe();
+    leaks += report.leak_stats.leaks;
+  }
+  EXPECT_EQ(leaks, 0u);
+  EXPECT_EQ(particles_inside(coupled, table, Vec3(0.2, 0.05, 0.1)), 0u) << "no water inside the table";
+  EXPECT_EQ(particles_inside(coupled, crate, crate_half), 0u) << "no water inside the crate";
+  // Off the table: past its edge (x = 0.2) or below its top.
+  const btVector3 at = crate.getCenterOfMassPosition();
+  EXPECT_TRUE(at.x() > 0.2 || at.y() < 0.1) << "the crate is at " << at.x() << ", " << at.y();
+}
+
+TEST(RigidBodies, AKinematicPaddleMovedByTheGameStirsTheWaterWithoutLeaks) {
+  const Vec3 gravity(0, -9.81, 0);
+  GameWorld game(gravity);
+  // A paddle 1 cm thick through a tank of water, moved by the game at 0.5 m/s along x.
+  const Vec3 half(0.005, 0.06, 0.05);
+  btRigidBody& paddle = game.add_box(half, 0.0, Vec3(0.05, 0.08, 0.1));
+  paddle.setCollisionFlags(paddle.getCollisionFlags() | btCollisionObject::CF_KINEMATIC_OBJECT);
+  paddle.setActivationState(DISABLE_DEACTIVATION);
+  SceneConfig scene = water_scene(0.01, gravity);
+  BoundarySettings walls;
+  walls.min = Vec3::Zero();
+  walls.max = Vec3(0.3, 0.3, 0.2);
+  walls.open_top = true;
+  scene.boundaries.push_back(walls);
+  // Water on both sides of the paddle, none inside it.
+  scene.emitters.push_back(water_block(Vec3::Zero(), Vec3(0.04, 0.06, 0.2)));
+  scene.emitters.push_back(water_block(Vec3(0.06, 0.0, 0.0), Vec3(0.3, 0.06, 0.2)));
+  CoupledWorld coupled(game.world, *game.cloth, scene);
+  std::uint64_t leaks = 0;
+  const std::size_t water_before = coupled.particles().size();
+  double x = 0.05;
+  for (int n = 0; n < 300; ++n) {
+    x += 0.5 * scene.time.dt;
+    // The game moves a kinematic body through its motion state, which Bullet reads in its step.
+    const btTransform placed(btQuaternion::getIdentity(), btVector3(static_cast<btScalar>(x), 0.08, 0.1));
+    paddle.getMotionState()->setWorldTransform(placed);
+    const CoupledStepReport report = coupled.step();
+    ASSERT_FALSE(report.failed()) << "step " << n << ": " << report.fluid.describe();
+    leaks += report.leak_stats.leaks;
+  }
+  EXPECT_EQ(leaks, 0u);
+  EXPECT_EQ(coupled.particles().size(), water_before);
+  EXPECT_EQ(particles_inside(coupled, paddle, half), 0u) << "no water inside the paddle";
+  // The water ahead of the paddle was pushed: it moves along +x on average, and it is piled up.
+  double ahead_vx = 0.0;
+  std::size_t ahead = 0;
+  for (std::size_t i = 0; i < coupled.particles().size(); ++i) {
+    const Vec3& p = coupled.particles().positions[i];
+    if (p.x() > x + half.x() && p.x() < x + half.x() + 0.05) {
+      ahead_vx += coupled.particles().velocities[i].x();
+      ++ahead;
+    }
+  }
+  ASSERT_GT(ahead, 0u);
+  EXPECT_GT(ahead_vx / static_cast<double>(ahead), 0.1) << "mean velocity ahead of the paddle (m/s)";
+}
+
+// appended temporarily to the test file
+/// A static shape of every kind Bullet has, and where a particle would be inside it or behind it (local
+/// frame, unit: m).
+struct ShapeCase {
+  std::string name;
+  std::function<std::unique_ptr<btCollisionShape>()> make;
+  std::function<bool(const Vec3&)> inside;
+};
+
+/// How far inside a curved surface its facets may lie: the sagitta of a chord of ShapeMeshOptions::max_edge
+/// (0.02 m) on the smallest radius below (0.04 m), max_edge^2 / (8 r) (unit: m). The water is held by the
+/// facets, so a particle may rest that deep inside the analytic surface.
+constexpr double kChordDepth = 0.02 * 0.02 / (8 * 0.04);
+
+std::vector<ShapeCase> shape_cases() {
+  const auto in_box = [](const Vec3& x, const Vec3& half) {
+    return (x.cwiseAbs().array() < half.array()).all();
+  };
+  static std::vector<float> flat(11 * 11, 0.0f);
+  static btTriangleMesh square;
+  if (square.getNumTriangles() == 0) {
+    square.addTriangle(btVector3(-0.2, 0, -0.2), btVector3(-0.2, 0, 0.2), btVector3(0.2, 0, 0.2));
+    square.addTriangle(btVector3(-0.2, 0, -0.2), btVector3(0.2, 0, 0.2), btVector3(0.2, 0, -0.2));
+  }
+  return {
+      {"plane", [] { return std::make_unique<btStaticPlaneShape>(btVector3(0, 1, 0), 0); },
+       [](const Vec3& x) { return x.y() < 0.0; }},
+      {"box", [] { return std::make_unique<btBoxShape>(btVector3(0.08, 0.05, 0.06)); },
+       [=](const Vec3& x) { return in_box(x, Vec3(0.08, 0.05, 0.06)); }},
+      {"sphere", [] { return std::make_unique<btSphereShape>(0.07); },
+       [](const Vec3& x) { return x.norm() < 0.07 - kChordDepth; }},
+      {"capsule", [] { return std::make_unique<btCapsuleShapeX>(0.04, 0.1); },
+       [](const Vec3& x) {
+         return (x - Vec3(std::clamp(x.x(), -0.05, 0.05), 0, 0)).norm() < 0.04 - kChordDepth;
+       }},
+      {"cylinder", [] { return std::make_unique<btCylinderShape>(btVector3(0.06, 0.04, 0.06)); },
+       [](const Vec3& x) { return std::hypot(x.x(), x.z()) < 0.06 - kChordDepth && std::abs(x.y()) < 0.04; }},
+      {"cone", [] { return std::make_unique<btConeShape>(0.07, 0.1); },
+       [](const Vec3& x) {
+         // Apex at y = +0.05, base of radius 0.07 at y = -0.05 (the margin only grows it).
+         return std::abs(x.y()) < 0.05 &&
+                std::hypot(x.x(), x.z()) < 0.07 * (0.05 - x.y()) / 0.1 - kChordDepth;
+       }},
+      {"convex_hull",
+       [] {
+         auto hull = std::make_unique<btConvexHullShape>();
+         hull->addPoint(btVector3(-0.08, -0.04, -0.06));
+         hull->addPoint(btVector3(0.08, -0.04, -0.06));
+         hull->addPoint(btVector3(0.0, -0.04, 0.08));
+         hull->addPoint(btVector3(0.0, 0.06, 0.0));
+         return hull;
+       },
+       [](const Vec3& x) {
+         // The tetrahedron's four half-spaces (the margin only grows it).
+         const Vec3 p[4] = {Vec3(-0.08, -0.04, -0.06), Vec3(0.08, -0.04, -0.06), Vec3(0.0, -0.04, 0.08),
+                            Vec3(0.0, 0.06, 0.0)};
+         for (int f = 0; f < 4; ++f) {
+           const Vec3& a = p[(f + 1) % 4];
+           const Vec3 n = (p[(f + 2) % 4] - a).cross(p[(f + 3) % 4] - a);
+           if (n.dot(x - a) * n.dot(p[f] - a) <= 0.0) return false;
+         }
+         return true;
+       }},
+      {"compound",
+       [] {
+         auto compound = std::make_unique<btCompoundShape>();
+         static btBoxShape part(btVector3(0.1, 0.02, 0.05));
+         compound->addChildShape(btTransform(btQuaternion::getIdentity(), btVector3(0, -0.03, 0)), &part);
+         compound->addChildShape(
+             btTransform(btQuaternion(btVector3(0, 1, 0), 1.5707963), btVector3(0, 0.01, 0)), &part);
+         return compound;
+       },
+       [=](const Vec3& x) {
+         return in_box(x - Vec3(0, -0.03, 0), Vec3(0.1, 0.02, 0.05)) ||
+                in_box(x - Vec3(0, 0.01, 0), Vec3(0.05, 0.02, 0.1));
+       }},
+      {"triangle_mesh", [] { return std::make_unique<btBvhTriangleMeshShape>(&square, true); },
+       [](const Vec3& x) { return x.y() < 0.0 && std::abs(x.x()) < 0.2 && std::abs(x.z()) < 0.2; }},
+      {"heightfield",
+       [] {
+         // The float overload: Bullet's legacy (void*, PHY_FLOAT) one takes PHY_FLOAT to mean btScalar.
+         auto terrain = std::make_unique<btHeightfieldTerrainShape>(11, 11, flat.data(), -0.1, 0.1, 1, false);
+         terrain->setLocalScaling(btVector3(0.04, 1, 0.04));
+         return terrain;
+       },
+       [](const Vec3& x) { return x.y() < 0.0 && std::abs(x.x()) < 0.2 && std::abs(x.z()) < 0.2; }},
+  };
+}
+
+/// Drops a block of water on each shape at dt and counts the particles that crossed a face (the leak audit)
+/// or ended inside or behind the shape.
+void every_shape_holds_falling_water(double dt) {
+  for (const ShapeCase& shape_case : shape_cases()) {
+    SCOPED_TRACE(shape_case.name);
+    const Vec3 gravity(0, -9.81, 0);
+    GameWorld game(gravity);
+    game.shapes.push_back(shape_case.make());
+    game.motions.push_back(std::make_unique<btDefaultMotionState>(
+        btTransform(btQuaternion(btVector3(0, 0, 1), 0.2), btVector3(0.0, 0.0, 0.0))));
+    game.bodies.push_back(
+        std::make_unique<btRigidBody>(0.0, game.motions.back().get(), game.shapes.back().get()));
+    game.world.addRigidBody(game.bodies.back().get());
+    const btRigidBody& body = *game.bodies.back();
+    SceneConfig scene = water_scene(0.01, gravity);
+    scene.time.dt = dt;
+    scene.emitters.push_back(water_block(Vec3(-0.04, 0.12, -0.04), Vec3(0.04, 0.2, 0.04)));
+    CoupledWorld coupled(game.world, *game.cloth, scene);
+    std::uint64_t leaks = 0, contacts = 0;
+    const int steps = static_cast<int>(std::lround(0.4 / dt));
+    for (int n = 0; n < steps; ++n) {
+      const CoupledStepReport report = coupled.step();
+      ASSERT_TRUE(report.ok()) << "step " << n << ": " << report.fluid.describe();
+      leaks += report.leak_stats.leaks;
+      contacts += report.coupling_stats.contacts + report.coupling_stats.ccd_impacts;
+    }
+    EXPECT_EQ(leaks, 0u);
+    EXPECT_GT(contacts, 0u) << "the water reached the shape";
+    const btTransform to_local = body.getWorldTransform().inverse();
+    std::size_t inside = 0;
+    for (const Vec3& x : coupled.particles().positions)
+      inside += shape_case.inside(to_vec3(to_local * to_bt(x))) ? 1 : 0;
+    EXPECT_EQ(inside, 0u) << "particles inside or behind the shape";
+  }
+}
+
+TEST(RigidBodies, BulletsCollisionFilterSaysWhichObjectsTheWaterSees) {
+  const Vec3 gravity(0, -9.81, 0);
+  GameWorld game(gravity);
+  // Two slabs under two blocks of water; the second is in a group the water's mask leaves out (a trigger
+  // volume, say).
+  constexpr int kTriggers = 64;
+  btRigidBody& held = game.add_box(Vec3(0.06, 0.01, 0.06), 0.0, Vec3(-0.1, 0.0, 0.0));
+  btRigidBody& passed = game.add_box(Vec3(0.06, 0.01, 0.06), 0.0, Vec3(0.1, 0.0, 0.0));
+  game.world.removeRigidBody(&passed);
+  game.world.addRigidBody(&passed, kTriggers, btBroadphaseProxy::AllFilter);
+  SceneConfig scene = water_scene(0.01, gravity);
+  scene.emitters.push_back(water_block(Vec3(-0.13, 0.05, -0.03), Vec3(-0.07, 0.09, 0.03)));
+  scene.emitters.push_back(water_block(Vec3(0.07, 0.05, -0.03), Vec3(0.13, 0.09, 0.03)));
+  RigidBodyOptions options;
+  options.water_mask = btBroadphaseProxy::AllFilter & ~kTriggers;
+  CoupledWorld coupled(game.world, *game.cloth, scene, options);
+  for (int n = 0; n < 150; ++n)
+    ASSERT_TRUE(coupled.step().ok()) << "step " << n;
+  ASSERT_EQ(coupled.rigid_surfaces().size(), 1u) << "only the slab the water sees";
+  std::size_t on_held = 0, below_passed = 0;
+  for (const Vec3& x : coupled.particles().positions) {
+    if (x.x() < 0.0 && x.y() > 0.01) ++on_held;
+    if (x.x() > 0.0 && x.y() < -0.01) ++below_passed;
+  }
+  EXPECT_GT(on_held, 100u) << "the seen slab holds its water";
+  EXPECT_GT(below_passed, 100u) << "the other's water fell through it";
+  EXPECT_EQ(particles_inside(coupled, held, Vec3(0.06, 0.01, 0.06)), 0u);
+}
+
+TEST(RigidBodies, AShapeDrenchCannotUseIsNamedNeverIgnored) {
+  const Vec3 gravity(0, -9.81, 0);
+  GameWorld game(gravity);
+  btTriangleShape triangle(btVector3(0, 0, 0), btVector3(0.1, 0, 0), btVector3(0, 0, 0.1));
+  btDefaultMotionState motion;
+  btRigidBody body(0.0, &motion, &triangle);
+  const SceneConfig scene = water_scene(0.01, gravity);
+  {
+    // In the world when the coupling starts: an error naming the object and its shape.
+    game.world.addRigidBody(&body);
+    EXPECT_TRUE(
+        drench::test::throws_containing<Error>([&] { CoupledWorld coupled(game.world, *game.cloth, scene); },
+                                               {"collision object 1", triangle.getName(), "water_mask"}));
+    game.world.removeRigidBody(&body);
+  }
+  // Added later: a warning, once.
+  CoupledWorld coupled(game.world, *game.cloth, scene);
+  game.world.addRigidBody(&body);
+  coupled.step();
+  const std::vector<std::string> warnings = coupled.rigid_bodies()->take_warnings();
+  coupled.step();
+  game.world.removeRigidBody(&body);
+  ASSERT_EQ(warnings.size(), 1u);
+  EXPECT_NE(warnings[0].find(triangle.getName()), std::string::npos) << warnings[0];
+  EXPECT_TRUE(coupled.rigid_bodies()->take_warnings().empty()) << "once";
+}
+
+TEST(RigidBodies, EveryShapeHoldsAFallingBlockOfWaterAtAGamesStep) {
+  every_shape_holds_falling_water(1.0 / 60.0);
+}
+
+TEST(RigidBodies, EveryShapeHoldsAFallingBlockOfWaterAt4ms) {
+  every_shape_holds_falling_water(0.004);
+}
+
+}  // namespace
+}  // namespace drench::bullet
