@@ -36,7 +36,9 @@ class Simulation {
   explicit Simulation(const SceneConfig& config, const ClothEngineFactory& cloth_factory = {});
 
   /// With a cloth engine built by the caller (e.g. attached to a Bullet world the caller owns); config.cloth
-  /// is then not used. `cloth` may be null for a simulation without cloth. `more_obstacles` are static
+  /// then builds nothing, but when present its max_speed and max_strain limit the cloth and its
+  /// area_density weighs it for wetting (absent: the defaults' limits and the engine's dry_node_masses).
+  /// `cloth` may be null for a simulation without cloth. `more_obstacles` are static
   /// meshes besides the scene's `obstacles` (e.g. a Bullet world's static triangle meshes), coupled the same
   /// way.
   /// @throws SceneError as the other constructor; drench::Error when an obstacle is not a valid mesh
