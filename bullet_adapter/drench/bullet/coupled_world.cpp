@@ -6,9 +6,10 @@
 #include <BulletSoftBody/btSoftRigidDynamicsWorld.h>
 
 #include <algorithm>
-#include <cassert>
 #include <cmath>
 #include <cstring>
+#include <limits>
+#include <string>
 
 #include <drench/common/error.hpp>
 #include <drench/common/stopwatch.hpp>
@@ -33,35 +34,62 @@ void check_scene(const SceneConfig& scene) {
   }
 }
 
-std::unique_ptr<BulletCloth> attach(btSoftRigidDynamicsWorld& world, btSoftBody& cloth,
-                                    const SceneConfig& scene) {
-  check_scene(scene);
-  const Vec3 soft_gravity = to_vec3(world.getWorldInfo().m_gravity);
-  // Soft bodies fall with worldInfo.m_gravity, which world.setGravity does not touch (Bullet's default is
-  // (0, -10, 0)); a fluid and a cloth under different gravity would drift apart at rest.
-  // Compared as Bullet stores it: a single-precision world holds the scene's gravity rounded to float.
-  const Vec3 scene_gravity_in_bullet = to_vec3(to_bt(scene.gravity));
-  if ((soft_gravity - scene_gravity_in_bullet).norm() > 1e-12 * std::max(1.0, scene.gravity.norm())) {
-    throw SceneError("gravity " + format_vec3(scene.gravity) + " (" + scene.source +
-                     ") differs from the Bullet world's soft-body gravity getWorldInfo().m_gravity " +
-                     format_vec3(soft_gravity) +
-                     "; set world.getWorldInfo().m_gravity to the scene's gravity");
-  }
-  const btSoftBodyArray& bodies = world.getSoftBodyArray();
-  if (bodies.findLinearSearch(&cloth) == bodies.size()) {
-    throw SceneError("the cloth soft body is not in the Bullet world: call world.addSoftBody(cloth) first");
-  }
-  return std::make_unique<BulletCloth>(cloth, &world);
+/// Rounding a gravity may carry after passing through btScalar: the double build compares to 1e-12, a
+/// single-precision one to a few floats' units (relative to max(1, |g|)).
+double gravity_tolerance(const Vec3& g) {
+  return std::max(1e-12, 4.0 * std::numeric_limits<btScalar>::epsilon()) * std::max(1.0, g.norm());
 }
 
-std::unique_ptr<BulletCloth> own(const SceneConfig& scene) {
+/// Empty when the world's soft-body gravity is the scene's and its rigid-body gravity is its soft-body
+/// gravity; else what differs, for a message.
+std::string gravity_problem(const btSoftRigidDynamicsWorld& world, const SceneConfig& scene) {
+  const Vec3 soft_gravity = to_vec3(world.getWorldInfo().m_gravity);
+  const Vec3 rigid_gravity = to_vec3(world.getGravity());
+  // Soft bodies fall with worldInfo.m_gravity, which world.setGravity does not touch (Bullet's default is
+  // (0, -10, 0)); rigid bodies with getGravity(). A fluid, a cloth and a body under different gravity would
+  // drift apart at rest. Compared as Bullet stores it: a single-precision world holds the scene's gravity
+  // rounded to float.
+  const Vec3 scene_gravity_in_bullet = to_vec3(to_bt(scene.gravity));
+  if ((soft_gravity - scene_gravity_in_bullet).norm() > gravity_tolerance(scene.gravity)) {
+    return "gravity " + format_vec3(scene.gravity) + " (" + scene.source +
+           ") differs from the Bullet world's soft-body gravity getWorldInfo().m_gravity " +
+           format_vec3(soft_gravity) + "; set world.getWorldInfo().m_gravity to the scene's gravity";
+  }
+  if ((rigid_gravity - soft_gravity).norm() > gravity_tolerance(soft_gravity)) {
+    return "the Bullet world's rigid-body gravity world.getGravity() " + format_vec3(rigid_gravity) +
+           " differs from its soft-body gravity getWorldInfo().m_gravity " + format_vec3(soft_gravity) +
+           "; set world.setGravity to the scene's gravity " + format_vec3(scene.gravity) + " (" +
+           scene.source + ")";
+  }
+  return {};
+}
+
+std::unique_ptr<BulletClothSet> attach(btSoftRigidDynamicsWorld& world,
+                                       const std::vector<btSoftBody*>& cloths, const SceneConfig& scene) {
+  check_scene(scene);
+  const std::string problem = gravity_problem(world, scene);
+  if (!problem.empty()) throw SceneError(problem);
+  return std::make_unique<BulletClothSet>(world, cloths);
+}
+
+std::vector<btSoftBody*> every_soft_body(const btSoftRigidDynamicsWorld& world, const SceneConfig& scene) {
+  const btSoftBodyArray& bodies = world.getSoftBodyArray();
+  if (bodies.size() == 0)
+    throw SceneError("the Bullet world has no soft body to couple with (" + scene.source + ")");
+  std::vector<btSoftBody*> list;
+  for (int i = 0; i < bodies.size(); ++i)
+    list.push_back(bodies[i]);
+  return list;
+}
+
+std::unique_ptr<BulletClothSet> own(const SceneConfig& scene) {
   check_scene(scene);
   if (!scene.cloth) {
     throw SceneError("cloth: the scene has none, and no Bullet cloth was given to couple with (" +
                      scene.source + ")");
   }
   try {
-    return std::make_unique<BulletCloth>(*scene.cloth, scene.gravity);
+    return std::make_unique<BulletClothSet>(std::make_unique<BulletCloth>(*scene.cloth, scene.gravity));
   } catch (const SceneError& e) {
     throw SceneError(std::string(e.what()) + " (" + scene.source + ")");
   }
@@ -177,21 +205,68 @@ std::vector<TriangleMesh> static_triangle_meshes(const btCollisionWorld& world) 
   return meshes;
 }
 
+CoupledWorld::CoupledWorld(btSoftRigidDynamicsWorld& world, const std::vector<btSoftBody*>& cloths,
+                           const SceneConfig& scene)
+    : CoupledWorld(attach(world, cloths, scene), scene, static_triangle_meshes(world)) {}
+
 CoupledWorld::CoupledWorld(btSoftRigidDynamicsWorld& world, btSoftBody& cloth, const SceneConfig& scene)
-    : CoupledWorld(attach(world, cloth, scene), scene, static_triangle_meshes(world)) {}
+    : CoupledWorld(world, std::vector<btSoftBody*>{&cloth}, scene) {}
+
+CoupledWorld::CoupledWorld(btSoftRigidDynamicsWorld& world, const SceneConfig& scene)
+    : CoupledWorld(world, every_soft_body(world, scene), scene) {}
 
 CoupledWorld::CoupledWorld(const SceneConfig& scene) : CoupledWorld(own(scene), scene, {}) {}
 
-CoupledWorld::CoupledWorld(std::unique_ptr<BulletCloth> cloth, const SceneConfig& scene,
+CoupledWorld::CoupledWorld(std::unique_ptr<BulletClothSet> cloths, const SceneConfig& scene,
                            std::vector<TriangleMesh> static_meshes)
-    : m_cloth(cloth.get()) {
-  m_simulation = std::make_unique<Simulation>(scene, std::move(cloth), std::move(static_meshes));
+    : m_cloths(cloths.get()) {
+  for (std::size_t i = 0; i < m_cloths->cloth_count(); ++i)
+    m_bodies.push_back({&m_cloths->cloth(i).body(), m_cloths->node_count(i), m_cloths->triangle_count(i)});
+  m_simulation = std::make_unique<Simulation>(scene, std::move(cloths), std::move(static_meshes));
 }
 
 CoupledWorld::~CoupledWorld() = default;
 
+void CoupledWorld::check_world() const {
+  const btSoftRigidDynamicsWorld& world = m_cloths->world();
+  const btSoftBodyArray& in_world = world.getSoftBodyArray();
+  for (std::size_t i = 0; i < m_bodies.size(); ++i) {
+    // Found by its address before anything reads the body: a body the game removed (and maybe deleted) is
+    // never dereferenced.
+    const CoupledBody& coupled = m_bodies[i];
+    if (in_world.findLinearSearch(const_cast<btSoftBody*>(coupled.body)) == in_world.size()) {
+      throw Error("cloth " + std::to_string(i) +
+                  " is no longer in the Bullet world (world.removeSoftBody): drench cannot step a cloth the "
+                  "world does not; build a new CoupledWorld with the cloths that are left");
+    }
+    const btSoftBody& body = *coupled.body;
+    if (static_cast<std::size_t>(body.m_nodes.size()) != coupled.nodes ||
+        static_cast<std::size_t>(body.m_faces.size()) != coupled.faces) {
+      throw Error("cloth " + std::to_string(i) + " has " + std::to_string(body.m_nodes.size()) +
+                  " nodes and " + std::to_string(body.m_faces.size()) + " faces, but had " +
+                  std::to_string(coupled.nodes) + " and " + std::to_string(coupled.faces) +
+                  " when coupled: drench cannot follow a cloth whose nodes or faces change (torn, cut, "
+                  "refined); build a new CoupledWorld");
+    }
+  }
+  const std::string problem = gravity_problem(world, m_simulation->config());
+  if (!problem.empty()) throw Error(problem + ", or build a new CoupledWorld for the new gravity");
+}
+
+double CoupledWorld::water_held(std::size_t i) const {
+  const std::size_t first = m_cloths->first_node(i);
+  const ClothWetting* wetting = m_simulation->wetting();
+  if (!wetting) return 0.0;
+  const ScalarArray& water = wetting->water();
+  double held = 0.0;
+  for (std::size_t k = first; k < first + m_cloths->node_count(i); ++k)
+    held += water[k];
+  return held;
+}
+
 CoupledStepReport CoupledWorld::step(double dt) {
-  assert(dt > 0.0);
+  check_time_step("CoupledWorld::step", dt);
+  check_world();
   CoupledStepReport report;
   Simulation& sim = *m_simulation;
   const CouplingStepStats coupling_before = sim.coupling_stats();
@@ -207,6 +282,9 @@ CoupledStepReport CoupledWorld::step(double dt) {
     report.fluid = sim.step(dt);
   }
   report.non_finite_node = sim.non_finite_cloth_node();
+  report.non_finite_cloth_node = m_cloths->locate_node(report.non_finite_node);
+  if (report.fluid.flags & StepStatus::LEAKED)
+    report.leaked_cloth_face = m_cloths->locate_triangle(report.fluid.leaked_triangle);
   report.coupling = sim.last_coupling_status();
   report.coupling_stats = difference(sim.coupling_stats(), coupling_before);
   report.leak_stats = difference(sim.leak_stats(), leaks_before);
