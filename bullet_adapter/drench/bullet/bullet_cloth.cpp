@@ -5,6 +5,7 @@
 #include <BulletSoftBody/btSoftRigidDynamicsWorld.h>
 #include <btBulletDynamicsCommon.h>
 
+#include <algorithm>
 #include <cassert>
 #include <cmath>
 #include <stdexcept>
@@ -28,6 +29,11 @@ struct BulletCloth::OwnedWorld {
     if (body) world.removeSoftBody(body.get());
   }
 };
+
+void check_time_step(const std::string& where, double dt) {
+  if (!(dt > 0.0) || !std::isfinite(dt))
+    throw std::invalid_argument(where + ": dt must be > 0 and finite, got " + format_number(dt) + " s");
+}
 
 BulletCloth::BulletCloth(btSoftBody& body, btSoftRigidDynamicsWorld* world) : m_body(&body), m_world(world) {
   read_topology();
@@ -159,7 +165,7 @@ void BulletCloth::restore_masses() {
 }
 
 void BulletCloth::step(double dt) {
-  assert(dt > 0.0);
+  check_time_step("BulletCloth::step", dt);
   if (m_world != nullptr) {
     // maxSubSteps 0: exactly one step of the given length each time (no accumulator, no interpolation).
     for (int k = 0; k < m_substeps; ++k)
@@ -179,7 +185,7 @@ void BulletCloth::capture_end() {
 }
 
 void BulletCloth::end_step(double dt) {
-  assert(dt > 0.0);
+  check_time_step("BulletCloth::end_step", dt);
   btSoftBody& body = *m_body;
   assert(static_cast<std::size_t>(body.m_nodes.size()) == m_mesh.node_count());
   bool moved = false;
@@ -220,6 +226,43 @@ Vec3Array BulletCloth::velocities() const {
 
 double BulletCloth::total_mass() const {
   return m_body->getTotalMass();
+}
+
+ScalarArray BulletCloth::dry_node_masses() const {
+  const btSoftBody& body = *m_body;
+  const ScalarArray area_share = node_masses_from_area(body, 1.0);  // a third of each face's area (m^2)
+  const std::size_t m = area_share.size();
+  ScalarArray masses(m, 0.0);
+  double moving_mass = 0.0, moving_area = 0.0;
+  for (std::size_t i = 0; i < m; ++i) {
+    const double im = m_dry_inverse_masses.empty()
+                          ? static_cast<double>(body.m_nodes[static_cast<int>(i)].m_im)
+                          : m_dry_inverse_masses[i];
+    if (!(im > 0.0)) continue;
+    masses[i] = 1.0 / im;
+    moving_mass += masses[i];
+    moving_area += area_share[i];
+  }
+  const double density = moving_area > 0.0 ? moving_mass / moving_area : ClothSettings{}.area_density;
+  double pinned_sum = 0.0;
+  std::size_t pinned_faceless = 0;
+  for (std::size_t i = 0; i < m; ++i) {
+    if (masses[i] > 0.0) continue;
+    masses[i] = density * area_share[i];
+    if (masses[i] > 0.0) {
+      pinned_sum += masses[i];
+    } else {
+      ++pinned_faceless;
+    }
+  }
+  if (pinned_faceless > 0) {
+    // (A body without faces has no node with a share of area: its masses stay 0, which wetting refuses.)
+    const double mean =
+        (moving_mass + pinned_sum) / static_cast<double>(std::max<std::size_t>(1, m - pinned_faceless));
+    for (double& mass : masses)
+      if (!(mass > 0.0)) mass = mean;
+  }
+  return masses;
 }
 
 std::unique_ptr<ClothEngine> make_bullet_cloth_engine(const ClothSettings& settings, const Vec3& gravity) {

@@ -22,6 +22,7 @@
 
 #include <cstdint>
 #include <memory>
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -34,14 +35,17 @@ class btSoftRigidDynamicsWorld;
 
 namespace drench::bullet {
 
+/// Throws std::invalid_argument "<where>: dt must be > 0 and finite, got <dt> s" unless dt (unit: s) is
+/// both: the check of every adapter call that takes a step's length.
+void check_time_step(const std::string& where, double dt);
+
 class BulletCloth final : public ClothEngine {
  public:
   /// Attaches to a soft body the caller owns and keeps alive for this object's lifetime (it is not copied).
   /// Nothing of the body is changed here: its margin, iterations and masses stay the caller's.
   /// @param world  the world the body lives in, stepped by step(dt); or nullptr when the caller steps the
-  /// world
-  ///               itself between begin_step() and capture_end() (then step(dt) only captures). Several
-  ///               cloths in one world: give the world to one of them only, or it is stepped once per cloth.
+  ///        world itself between begin_step() and capture_end() (then step(dt) only captures). Several
+  ///        cloths in one world: BulletClothSet (bullet_cloth_set.hpp) steps the world once for all of them.
   explicit BulletCloth(btSoftBody& body, btSoftRigidDynamicsWorld* world = nullptr);
 
   /// Builds its own btSoftRigidDynamicsWorld (collision configuration, dispatcher, broadphase, solver) with
@@ -84,7 +88,8 @@ class BulletCloth final : public ClothEngine {
   /// cloth's ClothSettings::substeps, an attached one 1), which steps every body in
   /// that world, then capture_end(). Without one: capture_end() only; the caller has stepped the world by dt
   /// since begin_step().
-  /// @param dt  (unit: s), > 0
+  /// @param dt  (unit: s), > 0 and finite
+  /// @throws std::invalid_argument naming dt otherwise, before anything is changed
   void step(double dt) override;
 
   /// positions_t1 = current node positions, remembered as Bullet's prediction for end_step; the node masses
@@ -104,8 +109,17 @@ class BulletCloth final : public ClothEngine {
   /// - a non-finite positions_t1: ignored the same way and counted in non_finite_corrections(); NaN never
   ///   reaches Bullet.
   /// Normals are recomputed when a node moved (Bullet updates them only at the end of its step).
-  /// @param dt  the step's length (unit: s), > 0
+  /// @param dt  the step's length (unit: s), > 0 and finite
+  /// @throws std::invalid_argument naming dt otherwise, before anything is changed
   void end_step(double dt) override;
+
+  /// The dry cloth's node masses (unit: kg), M entries, > 0: Bullet's, 1 / m_im, for the nodes it moves (as
+  /// they were before the first set_water_masses); a pinned node (m_im = 0) gets the mass its faces' area
+  /// would have at the cloth's mean area density (the moving nodes' mass over their share of the faces'
+  /// area, a third of each face's area to each of its nodes, at the current positions). A cloth whose every
+  /// node is pinned takes ClothSettings' default density (0.2 kg/m^2); a pinned node in no face (it can
+  /// take no water) the cloth's mean node mass.
+  ScalarArray dry_node_masses() const override;
 
   /// m_v of every node (unit: m/s), M entries.
   Vec3Array velocities() const override;

@@ -1,15 +1,16 @@
 #include <drench/bullet/coupled_world.hpp>
 
 #include <BulletCollision/CollisionShapes/btBvhTriangleMeshShape.h>
-#include <BulletCollision/CollisionShapes/btStridingMeshInterface.h>
 #include <BulletSoftBody/btSoftBody.h>
 #include <BulletSoftBody/btSoftRigidDynamicsWorld.h>
 
 #include <algorithm>
-#include <cassert>
 #include <cmath>
 #include <cstring>
+#include <limits>
+#include <string>
 
+#include <drench/bullet/shape_mesh.hpp>
 #include <drench/common/error.hpp>
 #include <drench/common/stopwatch.hpp>
 #include <drench/scene/simulation.hpp>
@@ -33,35 +34,62 @@ void check_scene(const SceneConfig& scene) {
   }
 }
 
-std::unique_ptr<BulletCloth> attach(btSoftRigidDynamicsWorld& world, btSoftBody& cloth,
-                                    const SceneConfig& scene) {
-  check_scene(scene);
-  const Vec3 soft_gravity = to_vec3(world.getWorldInfo().m_gravity);
-  // Soft bodies fall with worldInfo.m_gravity, which world.setGravity does not touch (Bullet's default is
-  // (0, -10, 0)); a fluid and a cloth under different gravity would drift apart at rest.
-  // Compared as Bullet stores it: a single-precision world holds the scene's gravity rounded to float.
-  const Vec3 scene_gravity_in_bullet = to_vec3(to_bt(scene.gravity));
-  if ((soft_gravity - scene_gravity_in_bullet).norm() > 1e-12 * std::max(1.0, scene.gravity.norm())) {
-    throw SceneError("gravity " + format_vec3(scene.gravity) + " (" + scene.source +
-                     ") differs from the Bullet world's soft-body gravity getWorldInfo().m_gravity " +
-                     format_vec3(soft_gravity) +
-                     "; set world.getWorldInfo().m_gravity to the scene's gravity");
-  }
-  const btSoftBodyArray& bodies = world.getSoftBodyArray();
-  if (bodies.findLinearSearch(&cloth) == bodies.size()) {
-    throw SceneError("the cloth soft body is not in the Bullet world: call world.addSoftBody(cloth) first");
-  }
-  return std::make_unique<BulletCloth>(cloth, &world);
+/// Rounding a gravity may carry after passing through btScalar: the double build compares to 1e-12, a
+/// single-precision one to a few floats' units (relative to max(1, |g|)).
+double gravity_tolerance(const Vec3& g) {
+  return std::max(1e-12, 4.0 * std::numeric_limits<btScalar>::epsilon()) * std::max(1.0, g.norm());
 }
 
-std::unique_ptr<BulletCloth> own(const SceneConfig& scene) {
+/// Empty when the world's soft-body gravity is the scene's and its rigid-body gravity is its soft-body
+/// gravity; else what differs, for a message.
+std::string gravity_problem(const btSoftRigidDynamicsWorld& world, const SceneConfig& scene) {
+  const Vec3 soft_gravity = to_vec3(world.getWorldInfo().m_gravity);
+  const Vec3 rigid_gravity = to_vec3(world.getGravity());
+  // Soft bodies fall with worldInfo.m_gravity, which world.setGravity does not touch (Bullet's default is
+  // (0, -10, 0)); rigid bodies with getGravity(). A fluid, a cloth and a body under different gravity would
+  // drift apart at rest. Compared as Bullet stores it: a single-precision world holds the scene's gravity
+  // rounded to float.
+  const Vec3 scene_gravity_in_bullet = to_vec3(to_bt(scene.gravity));
+  if ((soft_gravity - scene_gravity_in_bullet).norm() > gravity_tolerance(scene.gravity)) {
+    return "gravity " + format_vec3(scene.gravity) + " (" + scene.source +
+           ") differs from the Bullet world's soft-body gravity getWorldInfo().m_gravity " +
+           format_vec3(soft_gravity) + "; set world.getWorldInfo().m_gravity to the scene's gravity";
+  }
+  if ((rigid_gravity - soft_gravity).norm() > gravity_tolerance(soft_gravity)) {
+    return "the Bullet world's rigid-body gravity world.getGravity() " + format_vec3(rigid_gravity) +
+           " differs from its soft-body gravity getWorldInfo().m_gravity " + format_vec3(soft_gravity) +
+           "; set world.setGravity to the scene's gravity " + format_vec3(scene.gravity) + " (" +
+           scene.source + ")";
+  }
+  return {};
+}
+
+std::unique_ptr<BulletClothSet> attach(btSoftRigidDynamicsWorld& world,
+                                       const std::vector<btSoftBody*>& cloths, const SceneConfig& scene) {
+  check_scene(scene);
+  const std::string problem = gravity_problem(world, scene);
+  if (!problem.empty()) throw SceneError(problem);
+  return std::make_unique<BulletClothSet>(world, cloths);
+}
+
+std::vector<btSoftBody*> every_soft_body(const btSoftRigidDynamicsWorld& world, const SceneConfig& scene) {
+  const btSoftBodyArray& bodies = world.getSoftBodyArray();
+  if (bodies.size() == 0)
+    throw SceneError("the Bullet world has no soft body to couple with (" + scene.source + ")");
+  std::vector<btSoftBody*> list;
+  for (int i = 0; i < bodies.size(); ++i)
+    list.push_back(bodies[i]);
+  return list;
+}
+
+std::unique_ptr<BulletClothSet> own(const SceneConfig& scene) {
   check_scene(scene);
   if (!scene.cloth) {
     throw SceneError("cloth: the scene has none, and no Bullet cloth was given to couple with (" +
                      scene.source + ")");
   }
   try {
-    return std::make_unique<BulletCloth>(*scene.cloth, scene.gravity);
+    return std::make_unique<BulletClothSet>(std::make_unique<BulletCloth>(*scene.cloth, scene.gravity));
   } catch (const SceneError& e) {
     throw SceneError(std::string(e.what()) + " (" + scene.source + ")");
   }
@@ -97,70 +125,6 @@ LeakAuditStats difference(const LeakAuditStats& a, const LeakAuditStats& b) {
   return d;
 }
 
-/// Coordinate k of vertex v of a striding mesh's vertex base, stored as float or double.
-double vertex_coordinate(const unsigned char* base, int stride, PHY_ScalarType type, int v, int k) {
-  const unsigned char* at = base + static_cast<std::ptrdiff_t>(v) * stride;
-  if (type == PHY_DOUBLE) {
-    double x;
-    std::memcpy(&x, at + k * sizeof(double), sizeof x);
-    return x;
-  }
-  float x;
-  std::memcpy(&x, at + k * sizeof(float), sizeof x);
-  return x;
-}
-
-/// Index k of face f of a striding mesh's index base (32-, 16- or 8-bit).
-Index face_index(const unsigned char* base, int stride, PHY_ScalarType type, int f, int k) {
-  const unsigned char* at = base + static_cast<std::ptrdiff_t>(f) * stride;
-  if (type == PHY_SHORT) {
-    unsigned short i;
-    std::memcpy(&i, at + k * sizeof i, sizeof i);
-    return i;
-  }
-  if (type == PHY_UCHAR) return at[k];
-  unsigned int i;
-  std::memcpy(&i, at + k * sizeof i, sizeof i);
-  return i;
-}
-
-/// One static body's triangle mesh in world coordinates: every subpart, its vertices shared by index as the
-/// game stored them (a face that repeats a vertex or has no area, which Bullet tolerates, is dropped).
-TriangleMesh world_mesh(const btCollisionObject& body, const btBvhTriangleMeshShape& shape) {
-  const btStridingMeshInterface& striding = *shape.getMeshInterface();
-  const btVector3 scaling = striding.getScaling();
-  const btTransform& transform = body.getWorldTransform();
-  TriangleMesh mesh;
-  for (int part = 0; part < striding.getNumSubParts(); ++part) {
-    const unsigned char* vertices = nullptr;
-    const unsigned char* indices = nullptr;
-    int vertex_count = 0, vertex_stride = 0, index_stride = 0, face_count = 0;
-    PHY_ScalarType vertex_type = PHY_FLOAT, index_type = PHY_INTEGER;
-    striding.getLockedReadOnlyVertexIndexBase(&vertices, vertex_count, vertex_type, vertex_stride, &indices,
-                                              index_stride, face_count, index_type, part);
-    const auto first = static_cast<Index>(mesh.positions.size());
-    for (int v = 0; v < vertex_count; ++v) {
-      const btVector3 local(
-          static_cast<btScalar>(vertex_coordinate(vertices, vertex_stride, vertex_type, v, 0)),
-          static_cast<btScalar>(vertex_coordinate(vertices, vertex_stride, vertex_type, v, 1)),
-          static_cast<btScalar>(vertex_coordinate(vertices, vertex_stride, vertex_type, v, 2)));
-      mesh.positions.push_back(to_vec3(transform * (local * scaling)));
-    }
-    for (int f = 0; f < face_count; ++f) {
-      Triangle t;
-      for (int k = 0; k < 3; ++k)
-        t[k] = first + face_index(indices, index_stride, index_type, f, k);
-      const Vec3& a = mesh.positions[t[0]];
-      const bool degenerate =
-          t[0] == t[1] || t[1] == t[2] || t[0] == t[2] ||
-          !((mesh.positions[t[1]] - a).cross(mesh.positions[t[2]] - a).squaredNorm() > 0.0);
-      if (!degenerate) mesh.triangles.push_back(t);
-    }
-    striding.unLockReadOnlyVertexBase(part);
-  }
-  return mesh;
-}
-
 }  // namespace
 
 std::vector<TriangleMesh> static_triangle_meshes(const btCollisionWorld& world) {
@@ -171,25 +135,37 @@ std::vector<TriangleMesh> static_triangle_meshes(const btCollisionWorld& world) 
     if (!body.isStaticObject() || body.isKinematicObject()) continue;
     const btCollisionShape* shape = body.getCollisionShape();
     if (!shape || shape->getShapeType() != TRIANGLE_MESH_SHAPE_PROXYTYPE) continue;
-    TriangleMesh mesh = world_mesh(body, *static_cast<const btBvhTriangleMeshShape*>(shape));
+    TriangleMesh mesh = shape_mesh(*shape);
+    for (Vec3& x : mesh.positions)
+      x = to_vec3(body.getWorldTransform() * to_bt(x));
     if (!mesh.triangles.empty()) meshes.push_back(std::move(mesh));
   }
   return meshes;
 }
 
+CoupledWorld::CoupledWorld(btSoftRigidDynamicsWorld& world, const std::vector<btSoftBody*>& cloths,
+                           const SceneConfig& scene, const RigidBodyOptions& bodies)
+    : CoupledWorld(attach(world, cloths, scene), scene, &world, &bodies) {}
+
 CoupledWorld::CoupledWorld(btSoftRigidDynamicsWorld& world, btSoftBody& cloth, const SceneConfig& scene,
                            const RigidBodyOptions& bodies)
-    : CoupledWorld(attach(world, cloth, scene), scene, &world, &bodies) {}
+    : CoupledWorld(world, std::vector<btSoftBody*>{&cloth}, scene, bodies) {}
+
+CoupledWorld::CoupledWorld(btSoftRigidDynamicsWorld& world, const SceneConfig& scene,
+                           const RigidBodyOptions& bodies)
+    : CoupledWorld(world, every_soft_body(world, scene), scene, bodies) {}
 
 CoupledWorld::CoupledWorld(const SceneConfig& scene) : CoupledWorld(own(scene), scene, nullptr, nullptr) {}
 
-CoupledWorld::CoupledWorld(std::unique_ptr<BulletCloth> cloth, const SceneConfig& scene,
+CoupledWorld::CoupledWorld(std::unique_ptr<BulletClothSet> cloths, const SceneConfig& scene,
                            btSoftRigidDynamicsWorld* world, const RigidBodyOptions* bodies)
-    : m_cloth(cloth.get()) {
-  // After the cloth's checks, so that a wrong gravity or a missing cloth is named before any shape.
-  if (world) m_bodies = std::make_unique<BulletRigidBodies>(*world, *bodies);
+    : m_cloths(cloths.get()) {
+  for (std::size_t i = 0; i < m_cloths->cloth_count(); ++i)
+    m_bodies.push_back({&m_cloths->cloth(i).body(), m_cloths->node_count(i), m_cloths->triangle_count(i)});
+  // After the cloths' checks, so that a wrong gravity or a missing cloth is named before any shape.
+  if (world) m_rigid = std::make_unique<BulletRigidBodies>(*world, *bodies);
   m_simulation =
-      std::make_unique<Simulation>(scene, std::move(cloth), std::vector<TriangleMesh>{}, m_bodies.get());
+      std::make_unique<Simulation>(scene, std::move(cloths), std::vector<TriangleMesh>{}, m_rigid.get());
 }
 
 const std::vector<RigidSurface>& CoupledWorld::rigid_surfaces() const {
@@ -200,8 +176,46 @@ const std::vector<RigidSurface>& CoupledWorld::rigid_surfaces() const {
 
 CoupledWorld::~CoupledWorld() = default;
 
+void CoupledWorld::check_world() const {
+  const btSoftRigidDynamicsWorld& world = m_cloths->world();
+  const btSoftBodyArray& in_world = world.getSoftBodyArray();
+  for (std::size_t i = 0; i < m_bodies.size(); ++i) {
+    // Found by its address before anything reads the body: a body the game removed (and maybe deleted) is
+    // never dereferenced.
+    const CoupledBody& coupled = m_bodies[i];
+    if (in_world.findLinearSearch(const_cast<btSoftBody*>(coupled.body)) == in_world.size()) {
+      throw Error("cloth " + std::to_string(i) +
+                  " is no longer in the Bullet world (world.removeSoftBody): drench cannot step a cloth the "
+                  "world does not; build a new CoupledWorld with the cloths that are left");
+    }
+    const btSoftBody& body = *coupled.body;
+    if (static_cast<std::size_t>(body.m_nodes.size()) != coupled.nodes ||
+        static_cast<std::size_t>(body.m_faces.size()) != coupled.faces) {
+      throw Error("cloth " + std::to_string(i) + " has " + std::to_string(body.m_nodes.size()) +
+                  " nodes and " + std::to_string(body.m_faces.size()) + " faces, but had " +
+                  std::to_string(coupled.nodes) + " and " + std::to_string(coupled.faces) +
+                  " when coupled: drench cannot follow a cloth whose nodes or faces change (torn, cut, "
+                  "refined); build a new CoupledWorld");
+    }
+  }
+  const std::string problem = gravity_problem(world, m_simulation->config());
+  if (!problem.empty()) throw Error(problem + ", or build a new CoupledWorld for the new gravity");
+}
+
+double CoupledWorld::water_held(std::size_t i) const {
+  const std::size_t first = m_cloths->first_node(i);
+  const ClothWetting* wetting = m_simulation->wetting();
+  if (!wetting) return 0.0;
+  const ScalarArray& water = wetting->water();
+  double held = 0.0;
+  for (std::size_t k = first; k < first + m_cloths->node_count(i); ++k)
+    held += water[k];
+  return held;
+}
+
 CoupledStepReport CoupledWorld::step(double dt) {
-  assert(dt > 0.0);
+  check_time_step("CoupledWorld::step", dt);
+  check_world();
   CoupledStepReport report;
   Simulation& sim = *m_simulation;
   const CouplingStepStats coupling_before = sim.coupling_stats();
@@ -217,6 +231,9 @@ CoupledStepReport CoupledWorld::step(double dt) {
     report.fluid = sim.step(dt);
   }
   report.non_finite_node = sim.non_finite_cloth_node();
+  report.non_finite_cloth_node = m_cloths->locate_node(report.non_finite_node);
+  if (report.fluid.flags & StepStatus::LEAKED)
+    report.leaked_cloth_face = m_cloths->locate_triangle(report.fluid.leaked_triangle);
   report.coupling = sim.last_coupling_status();
   report.coupling_stats = difference(sim.coupling_stats(), coupling_before);
   report.leak_stats = difference(sim.leak_stats(), leaks_before);

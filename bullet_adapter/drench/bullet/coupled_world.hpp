@@ -2,7 +2,10 @@
 /// A Bullet world, a drench fluid and the cloth-fluid coupling, stepped together (Huber et al. 2013 sec. 5:
 /// each engine advances alone, then the coupler corrects both from their start and end positions).
 ///
-/// One coupled step of dt is one Simulation::step (scene/simulation.hpp, the same stages `drench run` steps):
+/// Every cloth of the coupling is one engine to the step (BulletClothSet: the cloths' nodes and faces in one
+/// mesh), so the stages below run once per step whatever the number of cloths. One coupled step of dt is
+/// the checks of CoupledWorld::step, then one Simulation::step (scene/simulation.hpp, the same stages
+/// `drench run` steps):
 ///   1. nozzles emit          layers due in (t, t + dt], placed for the start of the step
 ///   2. cloth.begin_step()    node positions at the start of the step (positions_t0)
 ///   3. fluid.step(dt)        SPH alone; records positions_t0; with "coupling" the start-of-step cloth stops
@@ -11,26 +14,31 @@
 ///                            node mass for Bullet's step (BulletCloth::set_carried_masses)
 ///   5. cloth.apply_impulses  into m_v before Bullet's step, so that Bullet's links carry the load within the
 ///                            step: what the last step's coupling owes the cloth, and the obstacle's impulses
-///   6. world stepSimulation  dt / substeps, substeps times (ClothSettings::substeps, default 1): the cloth
-///                            (and the user's rigid bodies) alone; then the node end positions, the masses
-///                            restored, and the carried water's share of the velocity change handed back
+///   6. world stepSimulation  once, stepSimulation(dt, 0), for every cloth (an owned world: dt / substeps,
+///                            ClothSettings::substeps times): the cloths (and the user's rigid bodies) alone;
+///                            then the node end positions, the masses restored, and the carried water's share
+///                            of the velocity change handed back
 ///   7. coupler.step(...)     effect "coupling": repulsion (eq. 1-4), friction (eq. 7-8), continuous handling
 ///                            (eq. 5-6) correct the particles; the cloth's share is kept for step 5 of the
 ///                            next step ("carried_water") or moves the node end positions ("impulses")
-///   8. audit_leaks(...)      effect "leak_audit": particles that crossed the cloth in the final motion
+///   8. audit_leaks(...)      effect "leak_audit": particles that crossed a cloth in the final motion
 ///   9. cloth.end_step(dt)    corrected node positions into m_x, velocity changes into m_v
-///  10. kill regions          particles that left the region of interest are removed
+///  10. wetting               effect "wetting": each cloth absorbs, spreads and drips water, and Bullet
+///  weighs
+///                            each node with its water (BulletCloth::set_water_masses)
+///  11. kill regions          particles that left the region of interest are removed
 ///
-/// Call CoupledWorld::step instead of world->stepSimulation. The coupling needs the cloth's start and end of
+/// Call CoupledWorld::step instead of world->stepSimulation. The coupling needs the cloths' start and end of
 /// exactly the step the fluid took: stepSimulation(dt) with its default fixed sub-step of 1/60 s would take
 /// zero, one or several Bullet steps per call, and a step taken outside this class has no fluid step beside
-/// it. Bullet's rigid bodies in the same world are stepped by stage 5 as usual.
+/// it. Bullet's rigid bodies in the same world are stepped by stage 6 as usual.
 
 #include <cstdint>
 #include <memory>
 #include <vector>
 
 #include <drench/bullet/bullet_cloth.hpp>
+#include <drench/bullet/bullet_cloth_set.hpp>
 #include <drench/bullet/bullet_rigid_bodies.hpp>
 #include <drench/common/parallel.hpp>
 #include <drench/coupling/coupler.hpp>
@@ -49,8 +57,9 @@ namespace drench::bullet {
 /// The triangle meshes of the world's static rigid bodies (a btBvhTriangleMeshShape on a body of mass 0, not
 /// kinematic), in world coordinates with the shape's scaling, in the world's order; Huber et al. 2013 sec. 5
 /// treats rigid objects as such meshes. Vertices keep the game's indexing (faces sharing an edge share its
-/// nodes, so the coupling sees no crack); faces that repeat a vertex or have no area are dropped. Other
-/// shapes (boxes, spheres, convex hulls) are not read: a scene's `boundaries` describe those for the fluid.
+/// nodes, so the coupling sees no crack); faces that repeat a vertex or have no area are dropped
+/// (shape_mesh). A snapshot for a caller's own use: CoupledWorld reads every shape itself, at every step
+/// (BulletRigidBodies).
 std::vector<TriangleMesh> static_triangle_meshes(const btCollisionWorld& world);
 
 /// What one coupled step did.
@@ -62,10 +71,15 @@ struct CoupledStepReport {
   std::uint32_t coupling = COUPLING_OK;  ///< COUPLING_* flags of coupler.step
   CouplingStepStats coupling_stats;      ///< contacts, impacts, impulses of this step
   LeakAuditStats leak_stats;             ///< crossings of the cloth in this step (effect "leak_audit")
-  /// Index of the first cloth node with a non-finite position after Bullet's step, or -1. The coupling is
-  /// then skipped (the state is no longer meaningful: lower dt, raise piterations, check stiffness and
-  /// masses).
+  /// Index of the first cloth node with a non-finite position after Bullet's step, or -1, in cloth_mesh()
+  /// (non_finite_cloth_node: which cloth's, and its index in its body). The coupling is then skipped (the
+  /// state is no longer meaningful: lower dt, raise piterations, check stiffness and masses).
   std::int64_t non_finite_node = -1;
+  ClothElement non_finite_cloth_node;
+  /// With LEAKED: the cloth whose face the particle fluid.leaked_particle crossed and the face's index in
+  /// its body's m_faces; cloth -1 when the face is a static mesh's (fluid.leaked_triangle, in the contact
+  /// mesh, where the static meshes' faces follow the cloths').
+  ClothElement leaked_cloth_face;
   /// The coupler ran: the scene lists "coupling" and neither the fluid nor the cloth went non-finite.
   bool coupled = false;
   std::size_t emitted = 0;  ///< particles the nozzles added
@@ -83,31 +97,55 @@ struct CoupledStepReport {
 
 class CoupledWorld {
  public:
-  /// Couples a world and a cloth the caller owns (and keeps alive, and no longer steps itself). Every other
-  /// collision object of the world holds the fluid too (BulletRigidBodies, read at every step: bodies added,
-  /// removed or moved later are followed): static ones as the scene's `obstacles` are, kinematic ones moved
-  /// by the game sweep it, dynamic ones are pushed and turned by it. A level is described once, in Bullet.
-  /// @param world  the caller's world, holding `cloth`; its soft-body gravity (getWorldInfo().m_gravity)
-  ///        must be the scene's gravity
-  /// @param cloth  the caller's soft body; its settings (margin, piterations, masses, pins) are left alone
-  /// @param bodies  which objects hold the water (Bullet's collision filter) and how finely shapes become
-  ///        triangles
-  /// @param scene  everything else, as a scene file gives it (docs/scenes.md) and Simulation reads it:
-  ///        gravity, fluid, emitters (boxes are filled now, nozzles emit per step), static boundaries, kill
-  ///        regions, time.dt (the dt of step()), coupling settings and effects ("viscosity", "coupling",
-  ///        "friction", "leak_audit"; a stage the scene does not list is not built). The speed of sound is
-  ///        the scene's or automatic_speed_of_sound(scene). Of scene.cloth only the blow-up limits
-  ///        (max_speed, max_strain) are read: the cloth is the caller's.
-  /// @throws drench::Error naming the object when an object the water sees has a shape drench cannot use
-  ///         (BulletRigidBodies)
-  /// @throws SceneError when the world's soft-body gravity differs from the scene's, the cloth is not in the
-  ///         world, the scene's dt or gravity is not finite or dt <= 0, or the coupling settings are out of
-  ///         range; drench::Error when the cloth's mesh is invalid (ClothMesh::validate) or a static mesh has
-  ///         no face of non-zero area
+  /// Couples a world and the cloths the caller owns (and keeps alive, and no longer steps itself): one
+  /// fluid, every cloth in one mesh (BulletClothSet), one world step per step(). Every other collision
+  /// object of the world holds the fluid too (BulletRigidBodies, read at every step: bodies added, removed
+  /// or moved later are followed): static ones as the scene's `obstacles` are, kinematic ones moved by the
+  /// game sweep it, dynamic ones are pushed, turned and floated by it. A level is described once, in
+  /// Bullet.
+  ///
+  /// What is read of `scene` (docs/scenes.md; the rest is not read):
+  /// - gravity: must be the world's soft-body gravity (getWorldInfo().m_gravity) and its rigid-body gravity
+  ///   (getGravity()), here and at every step;
+  /// - fluid, emitters (boxes are filled now, nozzles emit per step), boundaries, kill_regions, obstacles,
+  ///   coupling, wetting, effects ("viscosity", "coupling", "friction", "leak_audit", "wetting"; a stage the
+  ///   scene does not list is not built), time.dt (the dt of step()), source (in messages). The speed of
+  ///   sound is fluid.wcsph's or automatic_speed_of_sound(scene). Not read: time's other fields (the caller
+  ///   decides when to stop), surface, camera;
+  /// - cloth: the cloths are the caller's, so its mesh, placement, pins, iterations, stiffnesses and
+  ///   substeps are not read. Absent (the default): the blow-up limits are ClothSettings' defaults and the
+  ///   wetting weighs each node with its own Bullet mass (BulletCloth::dry_node_masses: 1 / m_im, a pinned
+  ///   node from its faces' area at its cloth's mean area density). Present: its max_speed and max_strain
+  ///   are the limits, and its area_density weighs every cloth's nodes for wetting instead (a third of each
+  ///   face's area to each node), as for a scene's own cloth: giving `cloth` is how a scene sets the area
+  ///   density explicitly. (A patch `cloth`'s extent also enters the automatic speed of sound.)
+  /// @param world  the caller's world, holding every cloth
+  /// @param cloths  soft bodies with faces, each once; their settings (margin, piterations, masses, pins)
+  ///        are left alone, and wetting changes their node masses (BulletCloth::set_water_masses)
+  /// @param bodies  which rigid objects hold the water (Bullet's collision filter) and how finely their
+  ///        shapes become triangles
+  /// @throws SceneError when the scene's dt or gravity is not finite or dt <= 0, the world's soft-body
+  ///         gravity differs from the scene's or its rigid-body gravity from its soft-body gravity, a cloth
+  ///         is null, repeated, not in the world or has no faces (a rope; the message names its index in
+  ///         `cloths`), the list is empty, or the coupling settings are out of range; drench::Error when a
+  ///         cloth's mesh is invalid (ClothMesh::validate), or naming the object when an object the water
+  ///         sees has a shape drench cannot use (BulletRigidBodies)
+  CoupledWorld(btSoftRigidDynamicsWorld& world, const std::vector<btSoftBody*>& cloths,
+               const SceneConfig& scene, const RigidBodyOptions& bodies = {});
+
+  /// One cloth: CoupledWorld(world, {&cloth}, scene, bodies).
   CoupledWorld(btSoftRigidDynamicsWorld& world, btSoftBody& cloth, const SceneConfig& scene,
                const RigidBodyOptions& bodies = {});
 
-  /// Owns its Bullet world and the cloth of scene.cloth in it (BulletCloth(*scene.cloth, scene.gravity)).
+  /// Every soft body of the world, in the order of world.getSoftBodyArray() (cloth i is its element i): the
+  /// list constructor with that list. A soft body without faces (a rope) is refused, naming its index in
+  /// that array: pass the list of cloths to leave it out (the water then passes through it).
+  /// @throws SceneError as the list constructor, and when the world has no soft body
+  CoupledWorld(btSoftRigidDynamicsWorld& world, const SceneConfig& scene,
+               const RigidBodyOptions& bodies = {});
+
+  /// Owns its Bullet world and the cloth of scene.cloth in it (BulletCloth(*scene.cloth, scene.gravity)),
+  /// stepped in cloth.substeps.
   /// @throws SceneError as above, when the scene has no cloth, and as BulletCloth(settings, gravity)
   explicit CoupledWorld(const SceneConfig& scene);
 
@@ -115,27 +153,52 @@ class CoupledWorld {
   CoupledWorld(const CoupledWorld&) = delete;
   CoupledWorld& operator=(const CoupledWorld&) = delete;
 
-  /// One coupled step of dt (unit: s, > 0), in the order of this file's header. Never throws for numerical
-  /// trouble: see the report.
+  /// One coupled step of dt (unit: s), in the order of this file's header. First checks the call and the
+  /// world, and throws before anything changes (time, steps, particles, nodes, masses) when:
+  /// - dt is not > 0 and finite: std::invalid_argument "CoupledWorld::step: dt must be > 0 and finite, got
+  ///   <dt> s";
+  /// - a cloth is no longer in the world's soft body array (the game called world.removeSoftBody, perhaps
+  ///   to delete it) or its node or face count changed (torn, cut, refined: the coupling's edges and the
+  ///   wetting's nodes would no longer match): drench::Error naming the cloth's index. A removed cloth is
+  ///   never dereferenced, so deleting it after removeSoftBody is safe; deleting a body still in the world
+  ///   breaks Bullet's own next step, which no check here can see;
+  /// - the world's rigid-body or soft-body gravity is no longer the scene's (world.setGravity or
+  ///   getWorldInfo().m_gravity changed since): drench::Error naming both values.
+  /// Then never throws for numerical trouble: see the report.
   CoupledStepReport step(double dt);
   /// One coupled step of the scene's time.dt.
   CoupledStepReport step() { return step(m_simulation->config().time.dt); }
 
   const ParticleSet& particles() const { return m_simulation->particles(); }
   FluidSolver& fluid() { return m_simulation->fluid(); }
-  BulletCloth& cloth() { return *m_cloth; }
-  const BulletCloth& cloth() const { return *m_cloth; }
-  /// The cloth as the coupling saw it in the last step (positions_t1 are the corrected end positions).
-  const ClothMesh& cloth_mesh() const { return m_cloth->mesh(); }
-  btSoftRigidDynamicsWorld& world() { return *m_cloth->world(); }
+  /// The cloths, in the order given (or of the world's soft body array).
+  std::size_t cloth_count() const { return m_cloths->cloth_count(); }
+  /// Cloth i. @throws std::out_of_range naming i and the count
+  BulletCloth& cloth(std::size_t i) { return m_cloths->cloth(i); }
+  const BulletCloth& cloth(std::size_t i) const { return m_cloths->cloth(i); }
+  /// Cloth 0 (the one cloth of the one-cloth constructors).
+  BulletCloth& cloth() { return cloth(0); }
+  const BulletCloth& cloth() const { return cloth(0); }
+  /// All cloths as the one engine the coupling steps: which node or face of cloth_mesh() is whose
+  /// (BulletClothSet::locate_node, locate_triangle, first_node).
+  BulletClothSet& cloths() { return *m_cloths; }
+  const BulletClothSet& cloths() const { return *m_cloths; }
+  /// The cloths as the coupling saw them in the last step, cloth 0's nodes and faces first
+  /// (positions_t1 are the corrected end positions); without the world's static meshes.
+  const ClothMesh& cloth_mesh() const { return m_cloths->mesh(); }
+  btSoftRigidDynamicsWorld& world() { return m_cloths->world(); }
+  /// Water held by cloth i (unit: kg): the wetting's, summed over its nodes; 0 without "wetting".
+  /// @throws std::out_of_range naming i and the count
+  double water_held(std::size_t i) const;
   /// The world's rigid bodies as the water sees them, or nullptr for the world this class owns.
-  BulletRigidBodies* rigid_bodies() { return m_bodies.get(); }
+  BulletRigidBodies* rigid_bodies() { return m_rigid.get(); }
   /// Every rigid body's surface in the last step (world coordinates), with its motion.
   const std::vector<RigidSurface>& rigid_surfaces() const;
   /// The coupler, or nullptr when the scene does not list "coupling".
   Coupler* coupler() { return m_simulation->coupler(); }
   /// The simulation behind this world: the same pipeline `drench run` steps (scene/simulation.hpp).
   Simulation& simulation() { return *m_simulation; }
+  const Simulation& simulation() const { return *m_simulation; }
   const SceneConfig& scene() const { return m_simulation->config(); }
 
   /// The speed of sound in use (unit: m/s): the scene's, or the automatic one.
@@ -159,11 +222,18 @@ class CoupledWorld {
   static int thread_count() { return drench::thread_count(); }
 
  private:
-  CoupledWorld(std::unique_ptr<BulletCloth> cloth, const SceneConfig& scene, btSoftRigidDynamicsWorld* world,
-               const RigidBodyOptions* bodies);
+  CoupledWorld(std::unique_ptr<BulletClothSet> cloths, const SceneConfig& scene,
+               btSoftRigidDynamicsWorld* world, const RigidBodyOptions* bodies);
+  /// Throws drench::Error when a cloth left the world or changed its counts, or a gravity changed.
+  void check_world() const;
 
-  BulletCloth* m_cloth;                         // owned by m_simulation
-  std::unique_ptr<BulletRigidBodies> m_bodies;  // null for the owned world; outlives m_simulation
+  BulletClothSet* m_cloths;  // owned by m_simulation
+  struct CoupledBody {
+    const btSoftBody* body;    // compared with the world's soft bodies before it is read
+    std::size_t nodes, faces;  // when coupled
+  };
+  std::vector<CoupledBody> m_bodies;           // one per cloth
+  std::unique_ptr<BulletRigidBodies> m_rigid;  // null for the owned world; outlives m_simulation
   std::unique_ptr<Simulation> m_simulation;
 };
 

@@ -87,6 +87,11 @@ class ClothEngine {
   /// dt. Leaves in positions_t1 what the engine now holds (an engine that stores floats rounds), since the
   /// leak audit after it checks that cloth.
   virtual void end_step(double dt) = 0;
+  /// The node masses of the dry cloth as the engine holds them (unit: kg), M entries, > 0 and finite, nodes
+  /// the engine pins included (they hold water too: the engine gives them a mass of their own, and says
+  /// how); empty when the engine cannot tell (this default). The wetting's capacities when the scene
+  /// describes no cloth of its own (effect_registry.cpp, build_wetting).
+  virtual ScalarArray dry_node_masses() const { return {}; }
   /// Current node velocities (unit: m/s), M entries; for output and statistics.
   virtual Vec3Array velocities() const = 0;
   /// Total mass of the cloth (unit: kg).

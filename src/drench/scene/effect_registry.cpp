@@ -30,16 +30,22 @@ void build_leak_audit(const EffectSite& site, EffectParts& parts) {
 void build_wetting(const EffectSite& site, EffectParts& parts) {
   // The water comes from the coupling's contacts: without a coupler there is none to absorb.
   if (!site.cloth_mesh || !parts.coupler) return;
-  // The dry node masses from the cloth's area, pinned nodes included (they hold water too); a cloth made in
-  // code without scene settings has the default area density.
+  // The dry node masses, pinned nodes included (they hold water too). A scene that describes its cloth
+  // (a `cloth` section) sets them: its area_density over each node's third of its faces' area. Without one
+  // (a game's cloths, embedded) they are the engine's own, or, from an engine that cannot tell, the default
+  // area density's.
   const ClothMesh& nodes = *site.cloth_mesh;
-  const double area_density = (site.config.cloth ? *site.config.cloth : ClothSettings{}).area_density;
-  ScalarArray dry(nodes.node_count(), 0.0);
-  for (const Triangle& t : nodes.triangles) {
-    const Vec3& a = nodes.positions_t0[t[0]];
-    const double area = 0.5 * (nodes.positions_t0[t[1]] - a).cross(nodes.positions_t0[t[2]] - a).norm();
-    for (const Index i : t)
-      dry[i] += area_density * area / 3.0;
+  ScalarArray dry;
+  if (!site.config.cloth && site.cloth) dry = site.cloth->dry_node_masses();
+  if (dry.empty()) {
+    const double area_density = (site.config.cloth ? *site.config.cloth : ClothSettings{}).area_density;
+    dry.assign(nodes.node_count(), 0.0);
+    for (const Triangle& t : nodes.triangles) {
+      const Vec3& a = nodes.positions_t0[t[0]];
+      const double area = 0.5 * (nodes.positions_t0[t[1]] - a).cross(nodes.positions_t0[t[2]] - a).norm();
+      for (const Index i : t)
+        dry[i] += area_density * area / 3.0;
+    }
   }
   parts.wetting =
       std::make_unique<ClothWetting>(site.config.wetting, nodes.triangles, nodes.positions_t0, dry);

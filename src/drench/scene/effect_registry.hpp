@@ -29,6 +29,8 @@ struct EffectSite {
   const ClothMesh* contact_mesh = nullptr;
   /// The cloth alone (its nodes at rest), or nullptr for a scene without one.
   const ClothMesh* cloth_mesh = nullptr;
+  /// The cloth's engine, or nullptr: its dry node masses (ClothEngine::dry_node_masses).
+  const ClothEngine* cloth = nullptr;
 };
 
 /// The optional parts of one Simulation, filled by the build functions of the effects its scene lists and

@@ -163,8 +163,8 @@ Simulation::Simulation(const SceneConfig& config, std::unique_ptr<ClothEngine> c
         m_config.source + ")");
   }
   // Before the fluid, which builds the viscosity force itself when the effects say so.
-  m_effects =
-      build_effects({m_config, m_engine ? &m_engine->mesh() : nullptr, m_cloth ? &m_cloth->mesh() : nullptr});
+  m_effects = build_effects({m_config, m_engine ? &m_engine->mesh() : nullptr,
+                             m_cloth ? &m_cloth->mesh() : nullptr, m_cloth.get()});
   m_fluid = std::make_unique<FluidSolver>(m_config.fluid, m_config.gravity, sample_boundaries(m_config),
                                           m_config.boundaries, m_effects.viscosity, m_speed_of_sound);
   m_total_steps = std::max<std::int64_t>(1, std::llround(m_config.time.duration / m_config.time.dt));

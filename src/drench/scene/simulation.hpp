@@ -37,7 +37,9 @@ class Simulation {
   explicit Simulation(const SceneConfig& config, const ClothEngineFactory& cloth_factory = {});
 
   /// With a cloth engine built by the caller (e.g. attached to a Bullet world the caller owns); config.cloth
-  /// is then not used. `cloth` may be null for a simulation without cloth. `more_obstacles` are static
+  /// then builds nothing, but when present its max_speed and max_strain limit the cloth and its
+  /// area_density weighs it for wetting (absent: the defaults' limits and the engine's dry_node_masses).
+  /// `cloth` may be null for a simulation without cloth. `more_obstacles` are static
   /// meshes besides the scene's `obstacles` (e.g. a Bullet world's static triangle meshes), coupled the same
   /// way. `bodies` (borrowed, or null) are the moving rigid bodies of the world the cloth is in, read at
   /// every step (coupling/rigid_bodies.hpp); without a cloth, they step their world themselves.
