@@ -191,8 +191,9 @@ function(drench_check_bullet_precision)
     string(SUBSTRING "${fixes}" 0 1 first_letter)
     string(TOUPPER "${first_letter}" first_letter)
     string(SUBSTRING "${fixes}" 1 -1 fixes)
-    string(CONCAT message "drench: target '${target}' links ${adapter}, drench's ${adapter_precision}-precision "
-                          "Bullet adapter (DRENCH_BULLET_PRECISION=${adapter_precision}), ${problem} "
+    string(CONCAT message "drench: target '${target}' links ${adapter}, drench's "
+                          "${adapter_precision}-precision Bullet adapter "
+                          "(DRENCH_BULLET_PRECISION=${adapter_precision}), ${problem} "
                           "${first_letter}${fixes}.")
     message(SEND_ERROR "${message}")
   endforeach()
