@@ -1,12 +1,17 @@
 # `cmake --install build --prefix P`: the libraries, the public headers under P/include/drench/,
-# P/lib/cmake/drench/drenchConfig.cmake (targets drench::core and drench::bullet) and P/lib/pkgconfig/drench.pc
-# (drench-bullet.pc for the adapter). tests/consumer/ builds a program against the result.
+# P/lib/cmake/drench/drenchConfig.cmake (targets drench::core, drench::bullet and the adapter in each Bullet
+# precision built, drench::bullet_double and drench::bullet_single) and P/lib/pkgconfig/drench.pc
+# (drench-bullet.pc, drench-bullet-double.pc and drench-bullet-single.pc for the adapters).
+# tests/consumer/ builds programs against the result.
 include(GNUInstallDirs)
 include(CMakePackageConfigHelpers)
 
 set(drench_install_targets drench_core)
 if(TARGET drench_bullet)
   list(APPEND drench_install_targets drench_bullet)
+  foreach(precision IN LISTS DRENCH_BULLET_PRECISIONS)
+    list(APPEND drench_install_targets drench_bullet_${precision})
+  endforeach()
 endif()
 install(TARGETS ${drench_install_targets} EXPORT drenchTargets
         ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR}
@@ -23,6 +28,12 @@ install(DIRECTORY ${PROJECT_SOURCE_DIR}/src/drench DESTINATION ${CMAKE_INSTALL_I
 if(TARGET drench_bullet)
   install(DIRECTORY ${PROJECT_SOURCE_DIR}/bullet_adapter/drench DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}
           FILES_MATCHING PATTERN "*.hpp")
+  # The link guards go where drenchConfig.cmake and the .pc files find them, whatever DRENCH_BULLET_LINK_GUARD
+  # was here: the user of the package decides.
+  foreach(precision IN LISTS DRENCH_BULLET_PRECISIONS)
+    install(FILES ${PROJECT_SOURCE_DIR}/bullet_adapter/bullet_link_guard/drench_bullet_${precision}.ld
+            DESTINATION ${CMAKE_INSTALL_LIBDIR}/drench)
+  endforeach()
 endif()
 
 set(drench_config_dir ${CMAKE_INSTALL_LIBDIR}/cmake/drench)
@@ -34,15 +45,12 @@ set(DRENCH_HAS_BULLET OFF)
 if(TARGET drench_bullet)
   set(DRENCH_HAS_BULLET ON)
 endif()
-set(DRENCH_BULLET_DOUBLE_VALUE 0)
-if(DRENCH_BULLET_PRECISION STREQUAL "double")
-  set(DRENCH_BULLET_DOUBLE_VALUE 1)
-endif()
 configure_package_config_file(${CMAKE_CURRENT_LIST_DIR}/drenchConfig.cmake.in
                               ${PROJECT_BINARY_DIR}/drenchConfig.cmake INSTALL_DESTINATION ${drench_config_dir})
 write_basic_package_version_file(${PROJECT_BINARY_DIR}/drenchConfigVersion.cmake
                                  COMPATIBILITY SameMajorVersion)
 install(FILES ${PROJECT_BINARY_DIR}/drenchConfig.cmake ${PROJECT_BINARY_DIR}/drenchConfigVersion.cmake
+              ${CMAKE_CURRENT_LIST_DIR}/bullet_precision_check.cmake
         DESTINATION ${drench_config_dir})
 
 # pkg-config, for builds without CMake. A static drench needs its private dependencies at link time too.
@@ -60,6 +68,23 @@ set(drench_pc_prefix "\${pcfiledir}/${drench_pc_up}")
 configure_file(${CMAKE_CURRENT_LIST_DIR}/drench.pc.in ${PROJECT_BINARY_DIR}/drench.pc @ONLY)
 install(FILES ${PROJECT_BINARY_DIR}/drench.pc DESTINATION ${CMAKE_INSTALL_LIBDIR}/pkgconfig)
 if(TARGET drench_bullet)
+  # drench-bullet.pc is the adapter of DRENCH_BULLET_PRECISION, as drench::bullet.
+  foreach(precision IN LISTS DRENCH_BULLET_PRECISIONS)
+    set(drench_pc_precision ${precision})
+    set(drench_pc_bullet_module ${DRENCH_BULLET_MODULE_${precision}})
+    set(drench_pc_double 0)
+    if(precision STREQUAL "double")
+      set(drench_pc_double 1)
+    endif()
+    set(drench_pc_link_guard "")
+    if(CMAKE_SYSTEM_NAME STREQUAL "Linux")
+      set(drench_pc_link_guard "\${libdir}/drench/drench_bullet_${precision}.ld")
+    endif()
+    configure_file(${CMAKE_CURRENT_LIST_DIR}/drench-bullet-precision.pc.in
+                   ${PROJECT_BINARY_DIR}/drench-bullet-${precision}.pc @ONLY)
+    install(FILES ${PROJECT_BINARY_DIR}/drench-bullet-${precision}.pc
+            DESTINATION ${CMAKE_INSTALL_LIBDIR}/pkgconfig)
+  endforeach()
   configure_file(${CMAKE_CURRENT_LIST_DIR}/drench-bullet.pc.in ${PROJECT_BINARY_DIR}/drench-bullet.pc @ONLY)
   install(FILES ${PROJECT_BINARY_DIR}/drench-bullet.pc DESTINATION ${CMAKE_INSTALL_LIBDIR}/pkgconfig)
 endif()

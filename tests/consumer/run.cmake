@@ -1,10 +1,12 @@
 # Builds and runs tests/consumer/ against drench one way, as a user's project would:
 #   cmake -DMODE=package|pkgconfig|fetchcontent|subdirectory -DDRENCH_SOURCE_DIR=<checkout> -DDRENCH_BUILD_DIR=<build>
-#         -DWORK_DIR=<scratch> [-DCONSUMER_ARGS=<-D...;-D...>] [-DEXPECT_CONFIGURE_ERROR=<regex>] -P run.cmake
+#         -DWORK_DIR=<scratch> [-DCONSUMER_ARGS=<-D...;-D...>] [-DEXPECT_CONFIGURE_ERROR=<regex>]
+#         [-DPKG_MODULES=<module;module>] [-DEXPECT_BUILD_ERROR=<regex>] -P run.cmake
 # package and pkgconfig install DRENCH_BUILD_DIR into WORK_DIR/prefix first (pkgconfig then compiles with the
-# flags of `pkg-config --static drench-bullet`, as a build without CMake would); fetchcontent clones the
-# checkout's HEAD.
-# With EXPECT_CONFIGURE_ERROR the consumer must fail to configure with a message matching it.
+# flags of `pkg-config --static` of PKG_MODULES, drench-bullet by default, in that order, as a build without
+# CMake would); fetchcontent clones the checkout's HEAD.
+# With EXPECT_CONFIGURE_ERROR the consumer must fail to configure with a message matching it; with
+# EXPECT_BUILD_ERROR (pkgconfig) fail to build with one.
 cmake_minimum_required(VERSION 3.22)
 
 foreach(var MODE DRENCH_SOURCE_DIR WORK_DIR)
@@ -34,8 +36,25 @@ if(MODE STREQUAL "package" OR MODE STREQUAL "pkgconfig")
 endif()
 if(MODE STREQUAL "pkgconfig")
   set(ENV{PKG_CONFIG_PATH} "${WORK_DIR}/prefix/lib/pkgconfig")
-  run_step("pkg-config" pkg-config --cflags --libs --static drench-bullet)
+  if(NOT DEFINED PKG_MODULES)
+    set(PKG_MODULES drench-bullet)
+  endif()
+  run_step("pkg-config" pkg-config --cflags --libs --static ${PKG_MODULES})
   separate_arguments(flags UNIX_COMMAND "${step_output}")
+  if(DEFINED EXPECT_BUILD_ERROR)
+    execute_process(COMMAND c++ -std=c++17 -O2 "${CMAKE_CURRENT_LIST_DIR}/jet_on_pinned_cloth.cpp" ${flags} -o
+                            "${WORK_DIR}/jet_on_pinned_cloth"
+                    RESULT_VARIABLE code OUTPUT_VARIABLE out ERROR_VARIABLE err)
+    if(code EQUAL 0)
+      message(FATAL_ERROR "consumer (${MODE}): built, but should have failed with '${EXPECT_BUILD_ERROR}'")
+    endif()
+    string(REGEX REPLACE "[ \t\r\n]+" " " flat "${out} ${err}")
+    if(NOT flat MATCHES "${EXPECT_BUILD_ERROR}")
+      message(FATAL_ERROR "consumer (${MODE}): failed to build, but not with '${EXPECT_BUILD_ERROR}':\n${err}")
+    endif()
+    message(STATUS "consumer (${MODE}): refused as expected")
+    return()
+  endif()
   run_step("build" c++ -std=c++17 -O2 "${CMAKE_CURRENT_LIST_DIR}/jet_on_pinned_cloth.cpp" ${flags} -o
            "${WORK_DIR}/jet_on_pinned_cloth")
   run_step("run" "${WORK_DIR}/jet_on_pinned_cloth")

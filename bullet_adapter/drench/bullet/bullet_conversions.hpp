@@ -1,8 +1,11 @@
 #pragma once
 /// Bullet's vectors to drench's and back, and the check that Bullet's headers are compiled in the precision
-/// drench::bullet was built with. Every header of the adapter includes this one, so a translation unit that
+/// the linked adapter was built with (drench::bullet_double or drench::bullet_single; drench::bullet is the
+/// one of DRENCH_BULLET_PRECISION). Every header of the adapter includes this one, so a translation unit that
 /// sees Bullet's headers in the other precision fails to compile instead of linking silently against
-/// libraries whose btScalar differs.
+/// libraries whose btScalar differs. A program compiled in the right precision can still link the other
+/// Bullet's libraries too (FindBullet's BULLET_LIBRARIES beside drench::bullet): the configure
+/// (cmake/bullet_precision_check.cmake) and the link (bullet_adapter/bullet_link_guard/) refuse that.
 
 #include <LinearMath/btScalar.h>
 #include <LinearMath/btVector3.h>
@@ -16,15 +19,14 @@
 #if DRENCH_BULLET_DOUBLE
 static_assert(
     sizeof(btScalar) == sizeof(double),
-    "drench::bullet was built with double-precision Bullet (DRENCH_BULLET_PRECISION=double), but "
-    "Bullet's headers are compiled here in single precision: add -DBT_USE_DOUBLE_PRECISION (linking "
-    "drench::bullet, or pkg-config bullet-float64, does), or rebuild drench with "
-    "-DDRENCH_BULLET_PRECISION=single");
+    "drench::bullet_double (DRENCH_BULLET_PRECISION=double) is linked, but Bullet's headers are "
+    "compiled here in single precision: add -DBT_USE_DOUBLE_PRECISION (linking drench::bullet_double, "
+    "or pkg-config bullet-float64, does), or link drench::bullet_single (drench-bullet-single.pc)");
 #else
 static_assert(sizeof(btScalar) == sizeof(float),
-              "drench::bullet was built with single-precision Bullet (DRENCH_BULLET_PRECISION=single), but "
-              "Bullet's headers are compiled here with BT_USE_DOUBLE_PRECISION: drop that define, or rebuild "
-              "drench with -DDRENCH_BULLET_PRECISION=double");
+              "drench::bullet_single (DRENCH_BULLET_PRECISION=single) is linked, but Bullet's headers are "
+              "compiled here with BT_USE_DOUBLE_PRECISION: drop that define, or link drench::bullet_double "
+              "(drench-bullet-double.pc)");
 #endif
 
 namespace drench::bullet {
