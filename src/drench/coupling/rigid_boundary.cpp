@@ -111,9 +111,10 @@ RigidBoundary::Body RigidBoundary::sample(const RigidSurface& surface) const {
 }
 
 void RigidBoundary::place(const std::vector<RigidSurface>& surfaces, Vec3Array& positions,
-                          ScalarArray& volumes) {
+                          ScalarArray& volumes, Vec3Array& normals) {
   positions.clear();
   volumes.clear();
+  normals.clear();
   m_placed.assign(surfaces.size(), nullptr);
   std::unordered_set<std::uint64_t> seen;
   for (std::size_t s = 0; s < surfaces.size(); ++s) {
@@ -134,6 +135,7 @@ void RigidBoundary::place(const std::vector<RigidSurface>& surfaces, Vec3Array& 
       positions.push_back(sample.weights[0] * x[t[0]] + sample.weights[1] * x[t[1]] +
                           sample.weights[2] * x[t[2]] - m_inset * n);
       volumes.push_back(sample.volume);
+      normals.push_back(n);
     }
   }
   // Bodies gone from the world: a new body at the same address is sampled afresh.

@@ -27,8 +27,10 @@ class RigidBoundary {
   /// volume
   /// V_b = 1 / sum_k W_bk over the body's own samples. A body seen for the first time (or whose mesh
   /// changed) is sampled now; its samples are kept by key, in barycentric weights, since the body is rigid.
-  /// @param positions, volumes  out: B points (unit: m) and volumes (unit: m^3)
-  void place(const std::vector<RigidSurface>& surfaces, Vec3Array& positions, ScalarArray& volumes);
+  /// @param positions, volumes, normals  out: B points (unit: m), volumes (unit: m^3) and the outward unit
+  ///        normals of their faces
+  void place(const std::vector<RigidSurface>& surfaces, Vec3Array& positions, ScalarArray& volumes,
+             Vec3Array& normals);
 
   /// Adds the impulses on the samples of the last place() (B entries, unit: N s) to the nodes of their faces
   /// by the samples' barycentric weights: node_impulses[first_node[s] + node] for surface s.

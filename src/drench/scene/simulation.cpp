@@ -1,9 +1,9 @@
 #include <drench/scene/simulation.hpp>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
-#include <cmath>
 #include <functional>
 #include <limits>
 #include <stdexcept>
@@ -343,10 +343,10 @@ StepStatus Simulation::step(Scalar dt) {
 }
 
 void Simulation::place_rigid_boundary() {
-  Vec3Array positions;
+  Vec3Array positions, normals;
   ScalarArray volumes;
-  m_rigid_boundary->place(m_with_obstacles->rigid_surfaces(), positions, volumes);
-  m_fluid->set_moving_boundary(positions, volumes);
+  m_rigid_boundary->place(m_with_obstacles->rigid_surfaces(), positions, volumes, normals);
+  m_fluid->set_moving_boundary(positions, volumes, normals);
 }
 
 void Simulation::push_rigid_bodies() {

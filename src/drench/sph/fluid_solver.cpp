@@ -111,12 +111,15 @@ FluidSolver::FluidSolver(const FluidSettings& settings, const Vec3& gravity, Bou
   }
 }
 
-void FluidSolver::set_moving_boundary(const Vec3Array& positions, const ScalarArray& volumes) {
-  if (positions.size() != volumes.size()) {
-    throw std::invalid_argument("set_moving_boundary: " + std::to_string(positions.size()) + " points and " +
-                                std::to_string(volumes.size()) + " volumes");
+void FluidSolver::set_moving_boundary(const Vec3Array& positions, const ScalarArray& volumes,
+                                      const Vec3Array& normals) {
+  if (positions.size() != volumes.size() || positions.size() != normals.size()) {
+    throw std::invalid_argument("set_moving_boundary: " + std::to_string(positions.size()) + " points, " +
+                                std::to_string(volumes.size()) + " volumes and " +
+                                std::to_string(normals.size()) + " normals");
   }
   m_moving_impulses.assign(positions.size(), Vec3::Zero());
+  m_moving_normals = normals;
   if (positions.empty() && m_boundary_packed.size() == m_static_boundary) return;
   m_boundary_packed.resize(m_static_boundary);
   Vec3Array points(m_neighbors.boundary_points().begin(),
@@ -140,14 +143,21 @@ void FluidSolver::add_moving_boundary_reactions(Scalar dt) {
     if (w == 0.0) continue;
     const Vec3& xi = m_particles.positions[i];
     const Scalar scale = m_particles.masses[i] * dt * w;
+    Vec3 along_faces = Vec3::Zero();
+    bool moving = false;
     for (std::uint32_t k = bn.offsets[i]; k < bn.offsets[i + 1]; ++k) {
       const Index b = bn.indices[k];
       if (b < m_static_boundary) continue;
-      // The fluid got -dt w_i Psi_b grad W_ib per unit mass (Akinci et al. 2012 eq. 10); the body the
-      // opposite.
-      m_moving_impulses[b - m_static_boundary] +=
-          (scale * m_boundary_packed[b].w * static_cast<Scalar>(factors[k])) * (xi - points[b]);
+      // The fluid got -dt w_i Psi_b grad W_ib per unit mass (Akinci et al. 2012 eq. 10); the body takes the
+      // opposite of its normal part, and the fluid gives back the rest.
+      const Vec3 push = (scale * m_boundary_packed[b].w * static_cast<Scalar>(factors[k])) * (xi - points[b]);
+      const Vec3& n = m_moving_normals[b - m_static_boundary];
+      const Vec3 normal_part = push.dot(n) * n;
+      m_moving_impulses[b - m_static_boundary] += normal_part;
+      along_faces += push - normal_part;
+      moving = true;
     }
+    if (moving) m_pressure_accelerations[i] += along_faces / (m_particles.masses[i] * dt);
   }
 }
 

@@ -134,13 +134,17 @@ class FluidSolver {
   StepStatus step(Scalar dt, SubstepConstraint* constraint = nullptr);
 
   /// Boundary particles of moving bodies (Akinci et al. 2012, as the static ones), after the static ones and
-  /// replacing the last call's: where the bodies are for the next step(). Their reaction to the fluid's
-  /// pressure is summed per particle over that step (moving_boundary_impulses), so a body takes exactly the
-  /// momentum its boundary gives the fluid.
+  /// replacing the last call's: where the bodies are for the next step(). Each pushes the fluid only along
+  /// its face's normal (the part of Akinci's force along the face is taken back from the fluid in the same
+  /// sub-step): pressure acts normal to a surface, and the part along a body's side faces, which the vertical
+  /// pressure gradient makes, lifted a floating box as if its sides were 0.7 spacings thick. The reaction is
+  /// summed per particle over that step (moving_boundary_impulses), so a body takes exactly the momentum its
+  /// boundary gives the fluid.
   /// @param positions  B points (unit: m, finite); empty removes them
   /// @param volumes  B volumes V_b (unit: m^3), > 0; Psi_b = rest density V_b
+  /// @param normals  B unit normals of the faces the points stand for, outward from the body
   /// @throws std::invalid_argument when the sizes differ
-  void set_moving_boundary(const Vec3Array& positions, const ScalarArray& volumes);
+  void set_moving_boundary(const Vec3Array& positions, const ScalarArray& volumes, const Vec3Array& normals);
   /// B impulses the fluid's pressure gave the moving boundary particles in the last step() (unit: N s),
   /// sum over sub-steps and particles i of m_i dt w_i Psi_b grad W_ib (PressureSolver::
   /// boundary_pressure_factors): the opposite of what they gave the fluid.
@@ -157,7 +161,8 @@ class FluidSolver {
   ///        the skin of a new grid search
   void update_neighbors(Scalar max_displacement);
   StepStatus substep(Scalar dt, Scalar max_speed, SubstepConstraint* constraint);
-  /// Adds to m_moving_impulses what the sub-step's pressure gave the moving boundary points.
+  /// Adds to m_moving_impulses what the sub-step's pressure gave the moving boundary points along their
+  /// normals, and takes the rest of their push on the fluid back from m_pressure_accelerations.
   void add_moving_boundary_reactions(Scalar dt);
   /// Index of the fastest particle (the first of equals); 0 when there are none.
   std::size_t fastest_particle() const;
@@ -172,6 +177,7 @@ class FluidSolver {
   PackedPointArray m_boundary_packed;  // x_b (unit: m), w = Akinci's Psi_b = rho0 V_b (unit: kg)
   std::size_t m_static_boundary = 0;   // the first of m_boundary_packed's points that move
   Vec3Array m_moving_impulses;         // per moving boundary point, over the last step (unit: N s)
+  Vec3Array m_moving_normals;          // per moving boundary point, its face's outward unit normal
   ScalarArray m_boundary_factors;      // scratch: the pressure solver's w_i
   VerletNeighborLists m_neighbors;
   PackedPointArray m_positions_mass;  // positions (unit: m), w = mass (unit: kg), for the densities
