@@ -41,6 +41,69 @@ TEST(LeakAudit, CountsEveryParticleThatCrosses) {
     EXPECT_EQ(leaked[static_cast<std::size_t>(i)], i % 2) << i;
 }
 
+// A cloth of small faces beside one face a hundred times larger (a table's top): the audit's grid files the
+// large face in every cell it meets, and each (particle, face) pair is examined once. Every particle that
+// crosses is counted once, pairs are the brute-force count of overlapping boxes, and a face over 4,096 cells
+// is still seen.
+TEST(LeakAudit, SmallAndHugeFacesTogetherAreEachAuditedOnce) {
+  ClothMesh mesh = grid_mesh(11, 0.1, 0.0, 0.0);  // 200 faces of 1 cm
+  const auto add_face = [&](const Vec3& a, const Vec3& b, const Vec3& c) {
+    const auto first = static_cast<Index>(mesh.positions_t0.size());
+    for (const Vec3& x : {a, b, c}) {
+      mesh.positions_t0.push_back(x);
+      mesh.positions_t1.push_back(x);
+      mesh.inverse_masses.push_back(0.0);
+    }
+    mesh.triangles.push_back({first, first + 1, first + 2});
+  };
+  add_face(Vec3(0.2, 0.0, 0.0), Vec3(0.2, 0.0, 1.0), Vec3(1.2, 0.0, 0.0));   // 1 m: 100 x 100 cells
+  add_face(Vec3(-50, -0.5, -50), Vec3(-50, -0.5, 50), Vec3(50, -0.5, -50));  // 100 m: past 4,096 cells
+  Vec3Array x0, x1;
+  for (int i = 0; i < 40; ++i) {
+    const double x = 0.005 + 0.03 * i;  // over the small faces, then over the large one
+    x0.emplace_back(x, 0.004, 0.013 + 0.001 * i);
+    x1.emplace_back(x, i % 3 == 0 ? -0.004 : 0.002, 0.013 + 0.001 * i);  // every third crosses
+  }
+  x0.emplace_back(-3.0, -0.4, -3.0);  // through the huge face only
+  x1.emplace_back(-3.0, -0.6, -3.0);
+  LeakAuditStats stats;
+  std::vector<std::uint8_t> leaked;
+  const std::uint64_t leaks = audit_leaks(x0, x1, mesh, stats, &leaked);
+  std::uint64_t expected_leaks = 0;
+  for (std::size_t p = 0; p < x0.size(); ++p) {
+    // Over a face: the small grid (x < 0.1) or the large face (x - 0.2 + z < 1 beyond x = 0.2).
+    const double x = x0[p].x(), z = x0[p].z();
+    const bool over = x < 0.1 || (x > 0.2 && x - 0.2 + z < 1.0);
+    const bool crossing = p == 40 || (p % 3 == 0 && over);
+    EXPECT_EQ(leaked[p], crossing ? 1 : 0) << "particle " << p;
+    expected_leaks += crossing ? 1 : 0;
+  }
+  EXPECT_EQ(leaks, expected_leaks);
+  // The audit stops a particle's search at its first crossing, so only the particles that do not cross
+  // give their full pair count; compare those.
+  LeakAuditStats quiet;
+  Vec3Array y0, y1;
+  for (std::size_t p = 0; p < x0.size(); ++p) {
+    if (leaked[p]) continue;
+    y0.push_back(x0[p]);
+    y1.push_back(x1[p]);
+  }
+  std::uint64_t quiet_pairs = 0;
+  for (std::size_t p = 0; p < y0.size(); ++p) {
+    const Vec3 lo = y0[p].cwiseMin(y1[p]), hi = y0[p].cwiseMax(y1[p]);
+    for (const Triangle& t : mesh.triangles) {
+      Vec3 tlo = mesh.positions_t0[t[0]], thi = tlo;
+      for (const Index v : t) {
+        tlo = tlo.cwiseMin(mesh.positions_t0[v]);
+        thi = thi.cwiseMax(mesh.positions_t0[v]);
+      }
+      quiet_pairs += (hi.array() >= tlo.array()).all() && (thi.array() >= lo.array()).all() ? 1 : 0;
+    }
+  }
+  EXPECT_EQ(audit_leaks(y0, y1, mesh, quiet), 0u);
+  EXPECT_EQ(quiet.pairs, quiet_pairs) << "each overlapping pair examined once";
+}
+
 TEST(LeakAudit, DoesNotCountTouchingTheCloth) {
   // Ends exactly on the triangle, then (next step) starts on it and goes back up.
   const ClothMesh mesh = grid_mesh(2, 1.0, 0.0, 0.0);
