@@ -8,6 +8,7 @@
 /// (cmake/bullet_precision_check.cmake) and the link (bullet_adapter/bullet_link_guard/) refuse that.
 
 #include <LinearMath/btScalar.h>
+#include <LinearMath/btMatrix3x3.h>
 #include <LinearMath/btVector3.h>
 
 #include <drench/common/types.hpp>
@@ -34,6 +35,15 @@ namespace drench::bullet {
 /// Exact in both precisions: a float widens to a double without rounding.
 inline Vec3 to_vec3(const btVector3& v) {
   return Vec3(v.x(), v.y(), v.z());
+}
+
+/// A Bullet rotation (a transform's basis) as Eigen's, exact in both precisions.
+inline Eigen::Matrix3d to_matrix3(const btMatrix3x3& m) {
+  Eigen::Matrix3d out;
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c)
+      out(r, c) = m[r][c];
+  return out;
 }
 
 /// Exact with double Bullet; with float Bullet each coordinate rounds to the nearest float (a relative error

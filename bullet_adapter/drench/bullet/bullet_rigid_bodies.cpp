@@ -30,11 +30,7 @@ namespace {
 
 /// `local` placed by `transform`, in double whatever Bullet's precision.
 Vec3Array place(const TriangleMesh& local, const btTransform& transform) {
-  const btMatrix3x3& basis = transform.getBasis();
-  Eigen::Matrix3d rotation;
-  for (int r = 0; r < 3; ++r)
-    for (int c = 0; c < 3; ++c)
-      rotation(r, c) = basis[r][c];
+  const Eigen::Matrix3d rotation = to_matrix3(transform.getBasis());
   const Vec3 origin = to_vec3(transform.getOrigin());
   Vec3Array world(local.positions.size());
   for (std::size_t i = 0; i < world.size(); ++i)
@@ -56,6 +52,32 @@ RigidMotion motion_of(const btCollisionObject& object) {
 
 std::string describe(const btCollisionObject& object, int index) {
   return "collision object " + std::to_string(index) + " (" + object.getCollisionShape()->getName() + ")";
+}
+
+/// Why `mesh` cannot be the surface of `shape`, or "": no face (but for a btEmptyShape), or a vertex that is
+/// not finite or lies outside the shape's own bounding box. Corrupt shape data does that (a heightfield built
+/// with Bullet's legacy constructor, which takes PHY_FLOAT to mean btScalar, reads doubles from floats:
+/// Bullet then culls every triangle, or hands out absurd vertices), and the coupling's broad phase must never
+/// see such boxes: FCL's tree crashes on them.
+std::string mesh_problem(const btCollisionShape& shape, const TriangleMesh& mesh) {
+  if (mesh.triangles.empty() && shape.getShapeType() != EMPTY_SHAPE_PROXYTYPE)
+    return "its mesh has no face: its data is corrupt or degenerate";
+  btTransform identity;
+  identity.setIdentity();
+  btVector3 lo, hi;
+  shape.getAabb(identity, lo, hi);
+  const Vec3 low = to_vec3(lo), high = to_vec3(hi);
+  const double slack = 1e-6 * (high - low).cwiseAbs().maxCoeff() + 1e-9;
+  for (std::size_t v = 0; v < mesh.positions.size(); ++v) {
+    const Vec3& x = mesh.positions[v];
+    if (!x.allFinite() || (x.array() < low.array() - slack).any() ||
+        (x.array() > high.array() + slack).any()) {
+      return "vertex " + std::to_string(v) + " of its mesh (" + format_number(x.x()) + ", " +
+             format_number(x.y()) + ", " + format_number(x.z()) +
+             ") lies outside the shape's bounding box: its data is corrupt";
+    }
+  }
+  return "";
 }
 
 void check_option(bool ok, const std::string& what, double value) {
@@ -117,6 +139,16 @@ BulletRigidBodies::Tracked* BulletRigidBodies::track(const btCollisionObject& ob
     return nullptr;
   }
   t.local = shape_mesh(*shape, m_options.mesh);
+  const std::string problem = mesh_problem(*shape, t.local);
+  if (!problem.empty()) {
+    // At construction the game is setting its level up: an error. Later a warning, and the object is left
+    // out.
+    if (m_step == 0) throw Error(describe(object, index) + ": " + problem);
+    m_warnings.push_back(describe(object, index) + ": " + problem + "; it does not hold the water");
+    t.supported = false;
+    t.local = TriangleMesh();
+    return nullptr;
+  }
   return &t;
 }
 

@@ -81,11 +81,7 @@ std::string max_edge_text(double max_edge) {
 
 /// Appends `part` to `mesh`, its vertices through `transform` (rotation and translation, in double).
 void append(TriangleMesh& mesh, const TriangleMesh& part, const btTransform& transform) {
-  const btMatrix3x3& basis = transform.getBasis();
-  Eigen::Matrix3d rotation;
-  for (int r = 0; r < 3; ++r)
-    for (int c = 0; c < 3; ++c)
-      rotation(r, c) = basis[r][c];
+  const Eigen::Matrix3d rotation = to_matrix3(transform.getBasis());
   const Vec3 origin = to_vec3(transform.getOrigin());
   const auto first = static_cast<Index>(mesh.positions.size());
   for (const Vec3& p : part.positions)
