@@ -1,6 +1,6 @@
 # Layers only look down (docs/architecture.md): common <- {sph, ccd, io} <- coupling <- {surface, wetting}
 # <- scene; the renderer (render/, drench_render) sits above the core, which never includes it; and only
-# bullet_adapter/ (with its tests, the consumer test and the embedding demo, its users) includes
+# bullet_adapter/ (with its tests, the consumer test and the embedding demos, its users) includes
 # Bullet. Run by ctest as `cmake -DSOURCE_DIR=<repo> -P check_layers.cmake`; fails naming each file and
 # include that breaks a rule.
 
@@ -54,13 +54,14 @@ foreach(file IN LISTS core_files)
   endforeach()
 endforeach()
 
-# Outside src/: only the adapter, its tests and the embedding demo include Bullet.
+# Outside src/: only the adapter, its tests and the embedding demos (embed_in_bullet, bullet_playground)
+# include Bullet.
 file(GLOB_RECURSE other_files RELATIVE "${SOURCE_DIR}" "${SOURCE_DIR}/render/*.cpp" "${SOURCE_DIR}/render/*.hpp"
      "${SOURCE_DIR}/demos/*.cpp" "${SOURCE_DIR}/demos/*.hpp"
      "${SOURCE_DIR}/tests/*.cpp" "${SOURCE_DIR}/tests/*.hpp" "${SOURCE_DIR}/bench/*.cpp" "${SOURCE_DIR}/bench/*.hpp"
      "${SOURCE_DIR}/fuzz/*.cpp" "${SOURCE_DIR}/fuzz/*.hpp")
 foreach(file IN LISTS other_files)
-  if(file MATCHES "^tests/(bullet_adapter|consumer)/" OR file STREQUAL "demos/embed_in_bullet.cpp")
+  if(file MATCHES "^tests/(bullet_adapter|consumer)/" OR file MATCHES "^demos/(embed_in_bullet|bullet_playground)")
     continue()
   endif()
   file(STRINGS "${SOURCE_DIR}/${file}" includes REGEX "${bullet_header_regex}")

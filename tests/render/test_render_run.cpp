@@ -190,6 +190,50 @@ testing::AssertionResult fails_writing_nothing(const RenderOptions& options, con
   return testing::AssertionFailure() << "did not throw";
 }
 
+/// A cube of half side `half` about `centre` (unit: m), 12 triangles wound outwards.
+void write_box_ply(const fs::path& path, const Vec3& centre, double half) {
+  Vec3Array corners;
+  for (int k = 0; k < 8; ++k)
+    corners.push_back(centre + half * Vec3(k & 1 ? 1 : -1, k & 2 ? 1 : -1, k & 4 ? 1 : -1));
+  const std::vector<Triangle> faces = {{0, 2, 1}, {1, 2, 3}, {4, 5, 6}, {5, 7, 6}, {0, 1, 4}, {1, 5, 4},
+                                       {2, 6, 3}, {3, 6, 7}, {0, 4, 2}, {2, 4, 6}, {1, 3, 5}, {3, 7, 5}};
+  write_mesh_ply(path.string(), "bodies", corners, faces);
+}
+
+/// The largest difference of a channel between the pixels `point` projects to in two images.
+int pixel_difference(const Image& a, const Image& b, const Camera& camera, const Vec3& point) {
+  const auto pixel = project_to_pixel(camera, a.width, a.height, point);
+  if (!pixel) return -1;
+  const auto pa = a.at(static_cast<int>(pixel->x()), static_cast<int>(pixel->y()));
+  const auto pb = b.at(static_cast<int>(pixel->x()), static_cast<int>(pixel->y()));
+  int most = 0;
+  for (int c = 0; c < 3; ++c)
+    most = std::max(most, std::abs(int(pa[c]) - int(pb[c])));
+  return most;
+}
+
+TEST(RenderRun, DrawsEachFramesMovingBodiesWhereThatFrameHasThem) {
+  // demos/bullet_playground's balls and crate: a box in empty space, moved between the two frames.
+  TempDir dir;
+  write_hand_made_run(dir.path(), hand_made_scene(true));
+  const Vec3 there_first = kEmptyPoint, there_then(0.15, 0.25, 0.0);
+  write_box_ply(dir.path() / "frames/bodies_0000.ply", there_first, 0.03);
+  write_box_ply(dir.path() / "frames/bodies_0001.ply", there_then, 0.03);
+  const RenderResult result = render_run(small_render(dir.path()));
+  const Image first = read_png((dir.path() / "render/frame_0000.png").string());
+  const Image then = read_png((dir.path() / "render/frame_0001.png").string());
+  // Where the box is not, the backdrop; where it is, a pixel unlike that backdrop.
+  EXPECT_TRUE(shows(then, result.camera, there_first, ColourClass::BACKDROP));
+  EXPECT_TRUE(shows(first, result.camera, there_then, ColourClass::BACKDROP));
+  EXPECT_GT(pixel_difference(first, then, result.camera, there_first), 20);
+  EXPECT_GT(pixel_difference(then, first, result.camera, there_then), 20);
+
+  // A frame without the bodies the others have is refused, naming its file.
+  fs::remove_all(dir.path() / "render");
+  fs::remove(dir.path() / "frames/bodies_0001.ply");
+  EXPECT_TRUE(fails_writing_nothing<IoError>(small_render(dir.path()), "bodies_0001.ply: missing"));
+}
+
 TEST(RenderRun, BadInputIsNamedAndWritesNothing) {
   TempDir dir;
   write_hand_made_run(dir.path(), hand_made_scene(true));

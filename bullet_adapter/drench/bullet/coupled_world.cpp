@@ -225,6 +225,7 @@ CoupledStepReport CoupledWorld::step(double dt) {
   const double emit_before = sim.emit_seconds();
   const double fluid_before = sim.fluid().statistics().timings_s.total;
   const double cloth_before = sim.cloth_seconds();
+  const double rigid_before = sim.rigid_seconds();
   const double coupling_before_s = sim.coupling_seconds() + leaks_before.seconds;
   {
     ScopedTimer total(report.seconds.total);
@@ -243,6 +244,7 @@ CoupledStepReport CoupledWorld::step(double dt) {
   report.seconds.emit = sim.emit_seconds() - emit_before;
   report.seconds.fluid = sim.fluid().statistics().timings_s.total - fluid_before;
   report.seconds.cloth = sim.cloth_seconds() - cloth_before;
+  report.seconds.rigid = sim.rigid_seconds() - rigid_before;
   report.seconds.coupling = sim.coupling_seconds() + sim.leak_stats().seconds - coupling_before_s;
   return report;
 }

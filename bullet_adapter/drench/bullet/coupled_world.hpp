@@ -84,9 +84,20 @@ struct CoupledStepReport {
   bool coupled = false;
   std::size_t emitted = 0;  ///< particles the nozzles added
   std::size_t removed = 0;  ///< particles the kill regions removed
+  /// Wall time per stage (unit: s), no stage inside another; total is the whole Simulation::step, so total
+  /// less the stages is what none names (the cloths' start positions, the carried water, wetting, the
+  /// blow-up checks).
+  /// - emit: nozzles and kill regions; fluid: the SPH step with its sub-steps;
+  /// - cloth: Bullet's world step (the cloths, and Bullet's own rigid-body dynamics and contacts) and the
+  ///   corrected node positions written back to the cloths;
+  /// - rigid: the rigid bodies' own work: reading them from the world at the start and the end of the step,
+  ///   placing their boundary particles, handing them the water's impulses and pressure
+  ///   (Simulation::rigid_seconds). The coupler sees the cloths' and the bodies' faces as one mesh, so its
+  ///   pass over the bodies is in coupling, and their boundary particles' share of SPH is in fluid;
+  /// - coupling: the coupler (repulsion, friction, CCD, for cloths and bodies together) and the leak audit.
   struct Seconds {
-    double emit = 0, fluid = 0, cloth = 0, coupling = 0, total = 0;
-  } seconds;  ///< wall time per stage (unit: s); coupling includes the leak audit
+    double emit = 0, fluid = 0, cloth = 0, rigid = 0, coupling = 0, total = 0;
+  } seconds;
 
   /// False when the fluid or the cloth became non-finite or blew up (a particle or node over its speed
   /// limit, an edge over its strain limit): the state is no longer worth stepping.

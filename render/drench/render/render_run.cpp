@@ -33,10 +33,10 @@ namespace fs = std::filesystem;
 struct FrameFiles {
   std::int64_t number = 0;
   std::string digits;  ///< NNNN as the run wrote it, reused in frame_NNNN.png
-  fs::path fluid, cloth, surface;
+  fs::path fluid, cloth, surface, bodies;
 };
 
-/// The frames in `frames_dir` in frame order: every NNNN of a fluid_, cloth_ or surface_ file.
+/// The frames in `frames_dir` in frame order: every NNNN of a fluid_, cloth_, surface_ or bodies_ file.
 std::vector<FrameFiles> list_frames(const fs::path& frames_dir) {
   std::error_code ec;
   if (!fs::is_directory(frames_dir, ec)) {
@@ -47,12 +47,24 @@ std::vector<FrameFiles> list_frames(const fs::path& frames_dir) {
   for (const fs::directory_entry& entry : fs::directory_iterator(frames_dir, ec)) {
     const std::string name = entry.path().filename().string();
     std::string digits;
-    for (const char* prefix : {"fluid_", "cloth_", "surface_"}) {
+    for (const char* prefix : {"fluid_", "cloth_", "surface_", "bodies_"}) {
       if (!frame_number(name, prefix, digits)) continue;
       FrameFiles& frame = frames[std::stoll(digits)];
       frame.number = std::stoll(digits);
       frame.digits = digits;
-      (prefix[0] == 'f' ? frame.fluid : prefix[0] == 'c' ? frame.cloth : frame.surface) = entry.path();
+      switch (prefix[0]) {
+        case 'f':
+          frame.fluid = entry.path();
+          break;
+        case 'c':
+          frame.cloth = entry.path();
+          break;
+        case 's':
+          frame.surface = entry.path();
+          break;
+        default:
+          frame.bodies = entry.path();
+      }
     }
   }
   if (ec) throw IoError(frames_dir.string() + ": cannot list: " + ec.message());
@@ -73,14 +85,16 @@ std::string frame_file_name(const char* prefix, std::int64_t number) {
 
 /// Refuses a frame set a run cannot have left whole: frames not numbered 0, 1, 2, ... without a gap, or a
 /// frame without a part the run saved for every frame (the fluid always; the cloth when the scene has one or
-/// any frame does; the surface with the `surface` effect). Drawn anyway, such a frame would show the water
-/// without its cloth, or a video would end at the gap.
+/// any frame does; the surface with the `surface` effect; the moving bodies when any frame has them). Drawn
+/// anyway, such a frame would show the water without its cloth, or a video would end at the gap.
 /// @throws IoError naming the first missing file.
 void check_frames_complete(const std::vector<FrameFiles>& frames, const fs::path& frames_dir,
                            const SceneConfig& config) {
-  bool cloth = config.cloth.has_value();
-  for (const FrameFiles& frame : frames)
+  bool cloth = config.cloth.has_value(), bodies = false;
+  for (const FrameFiles& frame : frames) {
     cloth = cloth || !frame.cloth.empty();
+    bodies = bodies || !frame.bodies.empty();
+  }
   const bool surface = config.has_effect("surface");
   std::int64_t expected = 0;
   for (const FrameFiles& frame : frames) {
@@ -96,6 +110,8 @@ void check_frames_complete(const std::vector<FrameFiles>& frames, const fs::path
     }
     if (frame.fluid.empty()) throw missing("fluid_", frame.number, "while other files of the frame exist");
     if (cloth && frame.cloth.empty()) throw missing("cloth_", frame.number, "while the run has a cloth");
+    if (bodies && frame.bodies.empty())
+      throw missing("bodies_", frame.number, "while other frames have moving bodies");
     if (surface && frame.surface.empty())
       throw missing("surface_", frame.number, "while the run has the `surface` effect");
     ++expected;
@@ -111,7 +127,7 @@ TriangleMesh read_mesh(const fs::path& path) {
 
 /// One frame's geometry as read from its files.
 struct LoadedFrame {
-  TriangleMesh cloth, surface;
+  TriangleMesh cloth, surface, bodies;
   PlyData fluid;
 };
 
@@ -119,6 +135,7 @@ LoadedFrame load_frame(const FrameFiles& files) {
   LoadedFrame frame;
   if (!files.cloth.empty()) frame.cloth = read_mesh(files.cloth);
   if (!files.surface.empty()) frame.surface = read_mesh(files.surface);
+  if (!files.bodies.empty()) frame.bodies = read_mesh(files.bodies);
   if (!files.fluid.empty()) frame.fluid = read_ply(files.fluid.string());
   return frame;
 }
@@ -206,6 +223,7 @@ RenderResult render_run(const RenderOptions& options) {
     for (const FrameFiles& files : frames) {
       const LoadedFrame frame = load_frame(files);
       stage.extend(points_box(frame.cloth.positions));
+      stage.extend(points_box(frame.bodies.positions));
       fluid_box.extend(quantile_box(frame.fluid.positions, 0.01, 0.99));
       if (frame.fluid.positions.empty()) fluid_box.extend(quantile_box(frame.surface.positions, 0.01, 0.99));
       speed_scale = std::max(speed_scale, speed_quantile(frame.fluid, 0.99));
@@ -244,7 +262,19 @@ RenderResult render_run(const RenderOptions& options) {
     FrameGeometry geometry;
     geometry.bounds = depth_bounds;
     if (!files.cloth.empty()) geometry.cloth = &frame.cloth;
-    if (has_obstacles) geometry.obstacles = &obstacles;
+    // The moving bodies of the frame are drawn as obstacles are, with the static ones.
+    TriangleMesh solids;
+    if (!files.bodies.empty()) {
+      solids = obstacles;
+      const auto offset = static_cast<Index>(solids.positions.size());
+      solids.positions.insert(solids.positions.end(), frame.bodies.positions.begin(),
+                              frame.bodies.positions.end());
+      for (const Triangle& t : frame.bodies.triangles)
+        solids.triangles.push_back({t[0] + offset, t[1] + offset, t[2] + offset});
+      geometry.obstacles = &solids;
+    } else if (has_obstacles) {
+      geometry.obstacles = &obstacles;
+    }
     if (!files.surface.empty()) geometry.surface = &frame.surface;
     geometry.particles = &frame.fluid.positions;
     if (!frame.fluid.velocities.empty()) geometry.velocities = &frame.fluid.velocities;

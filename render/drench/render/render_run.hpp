@@ -39,7 +39,8 @@ void parse_image_size(const std::string& text, int& width, int& height);
 
 /// Draws every frame a run saved into `out_dir`/frame_NNNN.png (NNNN as in frames/): the cloth
 /// (cloth_NNNN.ply), the fluid as its surface when surface_NNNN.ply exists, else as particles
-/// (fluid_NNNN.ply) coloured by speed, and obstacles.ply. Every frame is drawn with one camera: the
+/// (fluid_NNNN.ply) coloured by speed, obstacles.ply and the moving bodies of the frame (bodies_NNNN.ply,
+/// drawn as the obstacles are; written by demos/bullet_playground). Every frame is drawn with one camera: the
 /// `camera_json` or else the scene's `camera` key when they give a position, else one framing the run's
 /// stage (camera.hpp): the cloth over all frames, the obstacles and the emitters, or in a scene without cloth
 /// and obstacles the middle 98 % of the fluid over all frames. With
@@ -47,9 +48,9 @@ void parse_image_size(const std::string& text, int& width, int& height);
 /// without ffmpeg, `video_note` says so and the PNGs stand.
 ///
 /// The frames must be whole (numbered from 0 without a gap; each with its fluid, its cloth when the run has a
-/// cloth, its surface with the `surface` effect), else nothing is drawn. Everything is read and checked, and
-/// the OpenGL context made, before anything is written: bad input writes nothing. Each PNG (and the MP4) is
-/// written under a temporary name and renamed.
+/// cloth, its surface with the `surface` effect, its bodies when any frame has them), else nothing is drawn.
+/// Everything is read and checked, and the OpenGL context made, before anything is written: bad input writes
+/// nothing. Each PNG (and the MP4) is written under a temporary name and renamed.
 /// @throws drench::Error for a size < 1; SceneError for a bad scene.json, a malformed `camera_json` or an
 ///         unknown camera key (naming camera.<key>); IoError naming the file when scene.json or the frames
 ///         are missing, a frame's file is missing (the first such), a frame is malformed, a file cannot be

@@ -6,6 +6,7 @@
 #include <stdexcept>
 
 #include <drench/common/error.hpp>
+#include <drench/common/stopwatch.hpp>
 
 namespace drench {
 
@@ -208,11 +209,15 @@ void ClothWithObstacles::pull() {
 
 void ClothWithObstacles::begin_step() {
   if (m_cloth) m_cloth->begin_step();
-  if (m_bodies) m_bodies->begin_step(m_surfaces);
+  if (m_bodies) {
+    ScopedTimer timer(m_body_seconds);
+    m_bodies->begin_step(m_surfaces);
+  }
   pull();
 }
 
 void ClothWithObstacles::give_bodies(const Vec3Array& impulses) {
+  ScopedTimer timer(m_body_seconds);
   for (std::size_t i = 0; i < m_surfaces.size(); ++i) {
     if (m_surfaces[i].motion != RigidMotion::DYNAMIC) continue;
     const Vec3* first = impulses.data() + m_surface_first[i];
@@ -258,6 +263,7 @@ void ClothWithObstacles::step(double dt) {
     m_bodies->step(dt);
   }
   if (m_bodies) {
+    ScopedTimer timer(m_body_seconds);
     m_bodies->end_positions(m_surfaces);
     for (std::size_t i = 0; i < m_surfaces.size(); ++i) {
       const Vec3Array& t1 = m_surfaces[i].positions_t1;

@@ -90,6 +90,11 @@ class ClothWithObstacles final : public ClothEngine {
   /// What holding the cloth off the obstacles did, summed over steps: `contacts` node-face pairs within the
   /// clearance, `ccd_impacts` nodes stopped before a face.
   const CouplingStepStats& cloth_contact_stats() const { return m_hold_stats; }
+  /// Wall time spent in the bodies' own calls, summed over steps (unit: s): RigidBodySource::begin_step,
+  /// end_positions (with the copy of their end positions into mesh()) and apply_impulses. A caller that
+  /// times step() or apply_body_impulses as another stage takes this share out of it (Simulation's rigid
+  /// stage).
+  double body_seconds() const { return m_body_seconds; }
 
  private:
   /// Copies the cloth's and the bodies' parts of mesh(); rebuilds the whole mesh if its layout changed.
@@ -113,6 +118,7 @@ class ClothWithObstacles final : public ClothEngine {
   ClothMesh m_rigid;                  // the static obstacles and bodies, for the cloth's nodes to meet
   std::unique_ptr<Coupler> m_holder;  // couples the cloth's nodes, as particles, with m_rigid
   CouplingStepStats m_hold_stats;
+  double m_body_seconds = 0;
 };
 
 }  // namespace drench

@@ -342,7 +342,16 @@ StepStatus Simulation::step(Scalar dt) {
   return status;
 }
 
+double Simulation::body_seconds() const {
+  return m_with_obstacles ? m_with_obstacles->body_seconds() : 0.0;
+}
+
+double Simulation::rigid_seconds() const {
+  return m_rigid_seconds + body_seconds();
+}
+
 void Simulation::place_rigid_boundary() {
+  ScopedTimer timer(m_rigid_seconds);
   Vec3Array positions, normals;
   ScalarArray volumes;
   m_rigid_boundary->place(m_with_obstacles->rigid_surfaces(), positions, volumes, normals);
@@ -352,12 +361,16 @@ void Simulation::place_rigid_boundary() {
 void Simulation::push_rigid_bodies() {
   const Vec3Array& on_boundary = m_fluid->moving_boundary_impulses();
   if (on_boundary.empty()) return;
-  const std::vector<RigidSurface>& surfaces = m_with_obstacles->rigid_surfaces();
-  std::vector<std::size_t> first(surfaces.size());
-  for (std::size_t s = 0; s < surfaces.size(); ++s)
-    first[s] = m_with_obstacles->rigid_surface_first_node(s);
-  Vec3Array nodes(m_engine->mesh().node_count(), Vec3::Zero());
-  m_rigid_boundary->spread(surfaces, on_boundary, first, nodes);
+  Vec3Array nodes;
+  {
+    ScopedTimer timer(m_rigid_seconds);  // apply_body_impulses times itself (body_seconds)
+    const std::vector<RigidSurface>& surfaces = m_with_obstacles->rigid_surfaces();
+    std::vector<std::size_t> first(surfaces.size());
+    for (std::size_t s = 0; s < surfaces.size(); ++s)
+      first[s] = m_with_obstacles->rigid_surface_first_node(s);
+    nodes.assign(m_engine->mesh().node_count(), Vec3::Zero());
+    m_rigid_boundary->spread(surfaces, on_boundary, first, nodes);
+  }
   // Before the bodies' step: the water's pressure moves them in it.
   m_with_obstacles->apply_body_impulses(nodes);
 }
@@ -410,10 +423,13 @@ void Simulation::step_cloth_and_couple(Scalar dt, StepStatus& status) {
       impulses[i] -= (carried[i] * dt) * m_config.gravity;
   }
   m_engine->apply_impulses(impulses);
+  const double bodies_before = body_seconds();
   {
     ScopedTimer timer(m_cloth_seconds);
     m_engine->step(dt);
   }
+  // The engine's step also reads where it put the bodies: that share is the rigid stage's.
+  m_cloth_seconds -= body_seconds() - bodies_before;
   m_non_finite_node = -1;
   for (std::size_t i = 0; i < mesh.node_count(); ++i) {
     if (!mesh.positions_t1[i].allFinite()) {
@@ -450,8 +466,6 @@ void Simulation::step_cloth_and_couple(Scalar dt, StepStatus& status) {
     } else {
       m_last_coupling_status = m_effects.coupler->step(view, mesh, dt, m_coupling_stats);
     }
-    // A dynamic body takes what the water gave its nodes now: its engine has already stepped it.
-    if (m_with_obstacles) m_with_obstacles->apply_body_impulses(m_effects.coupler->node_impulses());
     m_coupling_status |= m_last_coupling_status;
     if (m_last_coupling_status & COUPLING_UNRESOLVED) {
       // A collision the coupler could not resolve: a crossing may remain, audited or not.
@@ -461,6 +475,9 @@ void Simulation::step_cloth_and_couple(Scalar dt, StepStatus& status) {
       status.leaked_triangle = triangle;
     }
   }
+  // A dynamic body takes what the water gave its nodes now: its engine has already stepped it. Outside the
+  // coupling's timer: handing the bodies their impulses is the rigid stage's (body_seconds).
+  if (coupled && m_with_obstacles) m_with_obstacles->apply_body_impulses(m_effects.coupler->node_impulses());
   {
     ScopedTimer timer(m_cloth_seconds);
     m_engine->end_step(dt);

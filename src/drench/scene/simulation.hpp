@@ -112,9 +112,16 @@ class Simulation {
   }
   /// Leak audit figures summed over all steps (zero without the "leak_audit" effect).
   const LeakAuditStats& leak_stats() const { return m_leak_stats; }
-  /// Wall time of the cloth's own steps and of the whole coupling stage (unit: s).
+  /// Wall time of the cloth's own steps and of the whole coupling stage (unit: s), without the rigid
+  /// bodies' own work (rigid_seconds).
   double cloth_seconds() const { return m_cloth_seconds; }
   double coupling_seconds() const { return m_coupling_seconds; }
+  /// Wall time of the rigid bodies' own work (unit: s): reading them from their engine at the start and the
+  /// end of each step, placing their boundary particles, handing them the water's impulses and pressure;
+  /// 0 without bodies. The coupler sees the cloth's and the bodies' faces as one mesh, so its pass
+  /// (repulsion, CCD, friction) and the leak audit stay in coupling_seconds for both; the boundary
+  /// particles' share of the fluid's step stays in the fluid's time.
+  double rigid_seconds() const;
   /// COUPLING_* flags raised so far.
   std::uint32_t coupling_status() const { return m_coupling_status; }
   /// COUPLING_* flags of the last step.
@@ -155,6 +162,8 @@ class Simulation {
  private:
   /// The cloth's side of a step, after the fluid's: impulses, the engine's step, the coupling (sec. 3,
   /// 5), the leak audit, the corrections back into the engine.
+  /// ClothWithObstacles::body_seconds, 0 without obstacles.
+  double body_seconds() const;
   /// The dynamic bodies' boundary particles where the bodies start the step (RigidBoundary).
   void place_rigid_boundary();
   /// Gives the dynamic bodies what the fluid's pressure gave their boundary particles in its step.
@@ -194,6 +203,8 @@ class Simulation {
   Scalar m_time = 0;
   double m_cloth_seconds = 0;
   double m_coupling_seconds = 0;
+  double m_rigid_seconds =
+      0;  // boundary particles placed and their pressure spread; the rest is the engine's
   WettingStepStats m_wetting_stats;
   double m_emitted_mass = 0;
   double m_killed_mass = 0;
