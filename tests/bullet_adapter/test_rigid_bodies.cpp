@@ -202,6 +202,52 @@ TEST(RigidBodies, ABallOfTwiceTheWatersDensitySinks) {
   EXPECT_EQ(settled_draft(0.01, 2000.0), 1.0) << "under water";
 }
 
+TEST(RigidBodies, ABallDroppedIntoATankSlowsInTheWaterAndSplashesIt) {
+  const Vec3 gravity(0, -9.81, 0);
+  GameWorld game(gravity);
+  const double radius = 0.03, tank = 0.2, depth = 0.12, drop = 0.12;
+  game.add_box(Vec3(0.2, 0.05, 0.2), 0.0, Vec3(0.5 * tank, -0.05, 0.5 * tank));
+  game.shapes.push_back(std::make_unique<btSphereShape>(radius));
+  const double mass = 2000.0 * 4.0 / 3.0 * 3.14159265358979323846 * radius * radius * radius;
+  btVector3 inertia;
+  game.shapes.back()->calculateLocalInertia(static_cast<btScalar>(mass), inertia);
+  const double start = depth + drop;
+  game.motions.push_back(std::make_unique<btDefaultMotionState>(
+      btTransform(btQuaternion::getIdentity(), btVector3(0.5 * tank, start, 0.5 * tank))));
+  game.bodies.push_back(
+      std::make_unique<btRigidBody>(mass, game.motions.back().get(), game.shapes.back().get(), inertia));
+  game.world.addRigidBody(game.bodies.back().get());
+  const btRigidBody& ball = *game.bodies.back();
+  SceneConfig scene = water_scene(0.01, gravity);
+  BoundarySettings walls;
+  walls.min = Vec3::Zero();
+  walls.max = Vec3(tank, 0.4, tank);
+  walls.open_top = true;
+  scene.boundaries.push_back(walls);
+  scene.emitters.push_back(water_block(Vec3::Zero(), Vec3(tank, depth, tank)));
+  CoupledWorld coupled(game.world, *game.cloth, scene);
+  double fastest_up = 0.0, entry_speed = 0.0, braked = 1.0;
+  for (int n = 0; n < 250; ++n) {
+    const CoupledStepReport report = coupled.step();
+    ASSERT_FALSE(report.failed()) << "step " << n << ": " << report.fluid.describe();
+    const double y = ball.getCenterOfMassPosition().y();
+    const double speed = -ball.getLinearVelocity().y();
+    // Falling freely until its lowest point meets the water; under water, against what free fall from its
+    // start would give it at that height (buoyancy alone, half its weight, would give 0.92 there).
+    if (y - radius > depth) entry_speed = speed;
+    if (y + radius < depth - 0.01 && y - radius > 0.01) braked = speed / std::sqrt(2.0 * 9.81 * (start - y));
+    for (const Vec3& v : coupled.particles().velocities)
+      fastest_up = std::max(fastest_up, v.y());
+  }
+  const double free_fall = std::sqrt(2.0 * 9.81 * (drop - radius));
+  EXPECT_NEAR(entry_speed, free_fall, 0.1 * free_fall) << "falls freely through the air (m/s)";
+  std::printf("entry %.3f m/s (free fall %.3f), under water at %.3f of free fall, splash up to %.2f m/s\n",
+              entry_speed, free_fall, braked, fastest_up);
+  EXPECT_LT(braked, 0.85) << "the water brakes it: speed / free fall's, fully under water";
+  EXPECT_GT(fastest_up, 0.3) << "the splash throws water up (m/s)";
+  EXPECT_EQ(particles_inside(coupled, ball, Vec3::Constant(radius / std::sqrt(3.0))), 0u);
+}
+
 TEST(RigidBodies, WaterAndBodiesKeepTheirMomentumInCollisions) {
   // No gravity, no walls: the water and two boxes thrown into it from opposite sides are alone.
   const Vec3 gravity = Vec3::Zero();
