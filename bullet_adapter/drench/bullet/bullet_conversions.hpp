@@ -7,8 +7,8 @@
 /// Bullet's libraries too (FindBullet's BULLET_LIBRARIES beside drench::bullet): the configure
 /// (cmake/bullet_precision_check.cmake) and the link (bullet_adapter/bullet_link_guard/) refuse that.
 
-#include <LinearMath/btScalar.h>
 #include <LinearMath/btMatrix3x3.h>
+#include <LinearMath/btScalar.h>
 #include <LinearMath/btVector3.h>
 
 #include <drench/common/types.hpp>
