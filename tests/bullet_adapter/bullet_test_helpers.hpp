@@ -1,6 +1,9 @@
 #pragma once
 // Shared by the adapter tests: settings of small patches, OBJ files in a temporary folder, error checks.
 
+#include <BulletSoftBody/btSoftBodyRigidBodyCollisionConfiguration.h>
+#include <BulletSoftBody/btSoftRigidDynamicsWorld.h>
+#include <btBulletDynamicsCommon.h>
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -34,6 +37,16 @@ inline Vec3 as_bullet(const Vec3& v) {
 inline double bullet_tolerance(double double_tolerance, double magnitude, double ulps = 4.0) {
   return std::max(double_tolerance, ulps * kBulletEpsilon * magnitude);
 }
+
+/// A btSoftRigidDynamicsWorld with Bullet's usual parts, as a game builds one; the tests' worlds add their
+/// bodies to it.
+struct SoftRigidWorld {
+  btSoftBodyRigidBodyCollisionConfiguration configuration;
+  btCollisionDispatcher dispatcher{&configuration};
+  btDbvtBroadphase broadphase;
+  btSequentialImpulseConstraintSolver solver;
+  btSoftRigidDynamicsWorld world{&dispatcher, &broadphase, &solver, &configuration};
+};
 
 inline ClothSettings patch_settings(int nodes_x, int nodes_z, const std::string& pinned = "corners") {
   ClothSettings s;

@@ -76,12 +76,7 @@ void step_under_load(BulletCloth& cloth, const Vec3Array& impulses, int steps) {
 }
 
 /// A world the way a user builds it, for attach mode.
-struct UserWorld {
-  btSoftBodyRigidBodyCollisionConfiguration configuration;
-  btCollisionDispatcher dispatcher{&configuration};
-  btDbvtBroadphase broadphase;
-  btSequentialImpulseConstraintSolver solver;
-  btSoftRigidDynamicsWorld world{&dispatcher, &broadphase, &solver, &configuration};
+struct UserWorld : test::SoftRigidWorld {
   btSoftBody* cloth = nullptr;
 
   UserWorld() {

@@ -52,12 +52,7 @@ SceneConfig two_jets() {
 
 /// A game's world with two square patches side by side, corners pinned, of total masses `mass[0]` and
 /// `mass[1]` (unit: kg), a free rigid sphere far away, and a count of the world's steps.
-struct TwoClothWorld {
-  btSoftBodyRigidBodyCollisionConfiguration configuration;
-  btCollisionDispatcher dispatcher{&configuration};
-  btDbvtBroadphase broadphase;
-  btSequentialImpulseConstraintSolver solver;
-  btSoftRigidDynamicsWorld world{&dispatcher, &broadphase, &solver, &configuration};
+struct TwoClothWorld : test::SoftRigidWorld {
   btSphereShape sphere_shape{0.05};
   btDefaultMotionState motion_state{btTransform(btQuaternion::getIdentity(), btVector3(2, 5, 2))};
   btRigidBody sphere{1.0, &motion_state, &sphere_shape, btVector3(0.001, 0.001, 0.001)};
@@ -335,11 +330,8 @@ TEST(CoupledCloths, ARopeAndOtherBadListsAreRefusedNamingTheIndex) {
 }
 
 TEST(CoupledCloths, AnEmptyWorldHasNoClothToCouple) {
-  btSoftBodyRigidBodyCollisionConfiguration configuration;
-  btCollisionDispatcher dispatcher(&configuration);
-  btDbvtBroadphase broadphase;
-  btSequentialImpulseConstraintSolver solver;
-  btSoftRigidDynamicsWorld world(&dispatcher, &broadphase, &solver, &configuration);
+  test::SoftRigidWorld bullet;
+  btSoftRigidDynamicsWorld& world = bullet.world;
   world.setGravity(btVector3(0, -9.81, 0));
   world.getWorldInfo().m_gravity = btVector3(0, -9.81, 0);
   expect_scene_error([&] { CoupledWorld{world, two_jets()}; }, {"has no soft body", "two jets"});

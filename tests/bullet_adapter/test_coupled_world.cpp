@@ -42,12 +42,7 @@ SceneConfig jet_scene(double nozzle_height = 0.8) {
 }
 
 /// A user's world with a patch (corners pinned) and a free-falling rigid sphere, and a count of its steps.
-struct UserWorld {
-  btSoftBodyRigidBodyCollisionConfiguration configuration;
-  btCollisionDispatcher dispatcher{&configuration};
-  btDbvtBroadphase broadphase;
-  btSequentialImpulseConstraintSolver solver;
-  btSoftRigidDynamicsWorld world{&dispatcher, &broadphase, &solver, &configuration};
+struct UserWorld : test::SoftRigidWorld {
   btSphereShape sphere_shape{0.05};
   btDefaultMotionState motion_state{btTransform(btQuaternion::getIdentity(), btVector3(2, 5, 2))};
   btRigidBody sphere{1.0, &motion_state, &sphere_shape, btVector3(0.001, 0.001, 0.001)};

@@ -30,12 +30,7 @@ using test::bullet_tolerance;
 
 /// A game's world: rigid bodies the test adds, and a small pinned cloth far above everything (CoupledWorld
 /// couples one cloth; this one never meets the water).
-struct GameWorld {
-  btSoftBodyRigidBodyCollisionConfiguration configuration;
-  btCollisionDispatcher dispatcher{&configuration};
-  btDbvtBroadphase broadphase;
-  btSequentialImpulseConstraintSolver solver;
-  btSoftRigidDynamicsWorld world{&dispatcher, &broadphase, &solver, &configuration};
+struct GameWorld : test::SoftRigidWorld {
   btSoftBody* cloth = nullptr;
   std::vector<std::unique_ptr<btCollisionShape>> shapes;
   std::vector<std::unique_ptr<btDefaultMotionState>> motions;
@@ -69,6 +64,20 @@ struct GameWorld {
     world.addRigidBody(bodies.back().get());
     return *bodies.back();
   }
+
+  /// A ball of `radius` (unit: m) and `density` (kg/m^3) at `centre`.
+  btRigidBody& add_ball(double radius, double density, const Vec3& centre) {
+    shapes.push_back(std::make_unique<btSphereShape>(static_cast<btScalar>(radius)));
+    const double mass = density * 4.0 / 3.0 * 3.14159265358979323846 * radius * radius * radius;
+    btVector3 inertia;
+    shapes.back()->calculateLocalInertia(static_cast<btScalar>(mass), inertia);
+    motions.push_back(
+        std::make_unique<btDefaultMotionState>(btTransform(btQuaternion::getIdentity(), to_bt(centre))));
+    bodies.push_back(std::make_unique<btRigidBody>(static_cast<btScalar>(mass), motions.back().get(),
+                                                   shapes.back().get(), inertia));
+    world.addRigidBody(bodies.back().get());
+    return *bodies.back();
+  }
 };
 
 SceneConfig water_scene(double spacing, const Vec3& gravity) {
@@ -88,6 +97,18 @@ EmitterSettings water_block(const Vec3& min, const Vec3& max, const Vec3& veloci
   block.box.max = max;
   block.box.velocity = velocity;
   return block;
+}
+
+/// Water `depth` deep (unit: m) in an open tank of side `tank` and walls `height` high, its floor at y = 0.
+SceneConfig tank_scene(double spacing, const Vec3& gravity, double tank, double depth, double height) {
+  SceneConfig scene = water_scene(spacing, gravity);
+  BoundarySettings walls;
+  walls.min = Vec3::Zero();
+  walls.max = Vec3(tank, height, tank);
+  walls.open_top = true;
+  scene.boundaries.push_back(walls);
+  scene.emitters.push_back(water_block(Vec3::Zero(), Vec3(tank, depth, tank)));
+  return scene;
 }
 
 Vec3 fluid_momentum(const CoupledWorld& coupled) {
@@ -145,24 +166,9 @@ double settled_draft(double spacing, double density) {
   const double radius = 0.05, tank = 0.2, depth = 0.1;
   // The tank's floor in Bullet too, so that a sinking ball lands on it.
   game.add_box(Vec3(0.2, 0.05, 0.2), 0.0, Vec3(0.5 * tank, -0.05, 0.5 * tank));
-  constexpr double kPi = 3.14159265358979323846;
-  const double volume = 4.0 / 3.0 * kPi * radius * radius * radius;
-  game.shapes.push_back(std::make_unique<btSphereShape>(radius));
-  btVector3 inertia;
-  game.shapes.back()->calculateLocalInertia(static_cast<btScalar>(density * volume), inertia);
-  game.motions.push_back(std::make_unique<btDefaultMotionState>(
-      btTransform(btQuaternion::getIdentity(), btVector3(0.5 * tank, depth + radius + 0.002, 0.5 * tank))));
-  game.bodies.push_back(std::make_unique<btRigidBody>(density * volume, game.motions.back().get(),
-                                                      game.shapes.back().get(), inertia));
-  game.world.addRigidBody(game.bodies.back().get());
-  const btRigidBody& ball = *game.bodies.back();
-  SceneConfig scene = water_scene(spacing, gravity);
-  BoundarySettings walls;
-  walls.min = Vec3::Zero();
-  walls.max = Vec3(tank, 0.3, tank);
-  walls.open_top = true;
-  scene.boundaries.push_back(walls);
-  scene.emitters.push_back(water_block(Vec3::Zero(), Vec3(tank, depth, tank)));
+  const btRigidBody& ball =
+      game.add_ball(radius, density, Vec3(0.5 * tank, depth + radius + 0.002, 0.5 * tank));
+  const SceneConfig scene = tank_scene(spacing, gravity, tank, depth, 0.3);
   // Facets of 1 cm: the faceted ball's volume is within 0.3% of the sphere's (test_shape_mesh.cpp).
   RigidBodyOptions options;
   options.mesh.max_edge = 0.01;
@@ -207,24 +213,9 @@ TEST(RigidBodies, ABallDroppedIntoATankSlowsInTheWaterAndSplashesIt) {
   GameWorld game(gravity);
   const double radius = 0.03, tank = 0.2, depth = 0.12, drop = 0.12;
   game.add_box(Vec3(0.2, 0.05, 0.2), 0.0, Vec3(0.5 * tank, -0.05, 0.5 * tank));
-  game.shapes.push_back(std::make_unique<btSphereShape>(radius));
-  const double mass = 2000.0 * 4.0 / 3.0 * 3.14159265358979323846 * radius * radius * radius;
-  btVector3 inertia;
-  game.shapes.back()->calculateLocalInertia(static_cast<btScalar>(mass), inertia);
   const double start = depth + drop;
-  game.motions.push_back(std::make_unique<btDefaultMotionState>(
-      btTransform(btQuaternion::getIdentity(), btVector3(0.5 * tank, start, 0.5 * tank))));
-  game.bodies.push_back(
-      std::make_unique<btRigidBody>(mass, game.motions.back().get(), game.shapes.back().get(), inertia));
-  game.world.addRigidBody(game.bodies.back().get());
-  const btRigidBody& ball = *game.bodies.back();
-  SceneConfig scene = water_scene(0.01, gravity);
-  BoundarySettings walls;
-  walls.min = Vec3::Zero();
-  walls.max = Vec3(tank, 0.4, tank);
-  walls.open_top = true;
-  scene.boundaries.push_back(walls);
-  scene.emitters.push_back(water_block(Vec3::Zero(), Vec3(tank, depth, tank)));
+  const btRigidBody& ball = game.add_ball(radius, 2000.0, Vec3(0.5 * tank, start, 0.5 * tank));
+  const SceneConfig scene = tank_scene(0.01, gravity, tank, depth, 0.4);
   CoupledWorld coupled(game.world, *game.cloth, scene);
   double fastest_up = 0.0, entry_speed = 0.0, braked = 1.0;
   for (int n = 0; n < 250; ++n) {
