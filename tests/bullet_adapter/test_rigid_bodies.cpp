@@ -54,25 +54,22 @@ struct GameWorld : test::SoftRigidWorld {
 
   /// A box of half extents `half` (unit: m) and `mass` (kg; 0 = static) at `centre`.
   btRigidBody& add_box(const Vec3& half, double mass, const Vec3& centre) {
-    shapes.push_back(std::make_unique<btBoxShape>(to_bt(half)));
-    btVector3 inertia(0, 0, 0);
-    if (mass > 0.0) shapes.back()->calculateLocalInertia(static_cast<btScalar>(mass), inertia);
-    motions.push_back(
-        std::make_unique<btDefaultMotionState>(btTransform(btQuaternion::getIdentity(), to_bt(centre))));
-    bodies.push_back(std::make_unique<btRigidBody>(static_cast<btScalar>(mass), motions.back().get(),
-                                                   shapes.back().get(), inertia));
-    world.addRigidBody(bodies.back().get());
-    return *bodies.back();
+    return add(std::make_unique<btBoxShape>(to_bt(half)), mass, centre);
   }
 
   /// A ball of `radius` (unit: m) and `density` (kg/m^3) at `centre`.
   btRigidBody& add_ball(double radius, double density, const Vec3& centre) {
-    shapes.push_back(std::make_unique<btSphereShape>(static_cast<btScalar>(radius)));
     const double mass = density * 4.0 / 3.0 * 3.14159265358979323846 * radius * radius * radius;
-    btVector3 inertia;
-    shapes.back()->calculateLocalInertia(static_cast<btScalar>(mass), inertia);
-    motions.push_back(
-        std::make_unique<btDefaultMotionState>(btTransform(btQuaternion::getIdentity(), to_bt(centre))));
+    return add(std::make_unique<btSphereShape>(static_cast<btScalar>(radius)), mass, centre);
+  }
+
+  /// A body of `shape`, `mass` (kg; 0 = static) and `rotation` at `centre`, added to the world.
+  btRigidBody& add(std::unique_ptr<btCollisionShape> shape, double mass, const Vec3& centre,
+                   const btQuaternion& rotation = btQuaternion::getIdentity()) {
+    shapes.push_back(std::move(shape));
+    btVector3 inertia(0, 0, 0);
+    if (mass > 0.0) shapes.back()->calculateLocalInertia(static_cast<btScalar>(mass), inertia);
+    motions.push_back(std::make_unique<btDefaultMotionState>(btTransform(rotation, to_bt(centre))));
     bodies.push_back(std::make_unique<btRigidBody>(static_cast<btScalar>(mass), motions.back().get(),
                                                    shapes.back().get(), inertia));
     world.addRigidBody(bodies.back().get());
@@ -435,13 +432,8 @@ void every_shape_holds_falling_water(double dt) {
     SCOPED_TRACE(shape_case.name);
     const Vec3 gravity(0, -9.81, 0);
     GameWorld game(gravity);
-    game.shapes.push_back(shape_case.make());
-    game.motions.push_back(std::make_unique<btDefaultMotionState>(
-        btTransform(btQuaternion(btVector3(0, 0, 1), 0.2), btVector3(0.0, 0.0, 0.0))));
-    game.bodies.push_back(
-        std::make_unique<btRigidBody>(0.0, game.motions.back().get(), game.shapes.back().get()));
-    game.world.addRigidBody(game.bodies.back().get());
-    const btRigidBody& body = *game.bodies.back();
+    const btRigidBody& body =
+        game.add(shape_case.make(), 0.0, Vec3::Zero(), btQuaternion(btVector3(0, 0, 1), 0.2));
     SceneConfig scene = water_scene(0.01, gravity);
     scene.time.dt = dt;
     scene.emitters.push_back(water_block(Vec3(-0.04, 0.12, -0.04), Vec3(0.04, 0.2, 0.04)));

@@ -79,7 +79,7 @@ std::uint64_t audit_leaks(const Vec3Array& particles_t0, const Vec3Array& partic
 
   // Triangles filed in every cell their box meets, cells the median triangle's size: one large face (a
   // table's top beside a cloth's small ones) then does not make every cell large, which made every particle
-  // near a body test all its faces (the leak audit was 45% of a floating ball's step). A pair is examined
+  // near a body test all its faces (test RigidBodies.ABallOfTwiceTheWatersDensitySinks). A pair is examined
   // only in the cell of its boxes' overlap's lower corner, so once. A triangle over 4,096 cells is tested
   // by every particle instead.
   std::vector<Bounds> boxes;

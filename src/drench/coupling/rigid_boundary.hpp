@@ -3,8 +3,8 @@
 /// coupling for incompressible SPH"), beside the coupling's impulses: the impulses keep the water out (eq.
 /// 1-6, no leaks at any step), the boundary particles give the water next to a body its full density, so that
 /// its pressure there is the hydrostatic one and the body floats by Archimedes. Without them the water under
-/// a body lacks neighbours, is compressed as at a free surface, and a box of half the water's density sank to
-/// 0.77 of its height instead of 0.5 (tests/bullet_adapter/test_rigid_bodies.cpp).
+/// a body lacks neighbours and is compressed as at a free surface, so bodies float far too deep
+/// (test RigidBodies.ABallOfHalfTheWatersDensityFloatsHalfSubmergedAtTwoSpacings).
 
 #include <cstdint>
 #include <unordered_map>

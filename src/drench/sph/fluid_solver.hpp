@@ -137,9 +137,9 @@ class FluidSolver {
   /// replacing the last call's: where the bodies are for the next step(). Each pushes the fluid only along
   /// its face's normal (the part of Akinci's force along the face is taken back from the fluid in the same
   /// sub-step): pressure acts normal to a surface, and the part along a body's side faces, which the vertical
-  /// pressure gradient makes, lifted a floating box as if its sides were 0.7 spacings thick. The reaction is
-  /// summed per particle over that step (moving_boundary_impulses), so a body takes exactly the momentum its
-  /// boundary gives the fluid.
+  /// pressure gradient makes, lifts a floating body as if its sides were thicker than they are. The reaction
+  /// is summed per particle over that step (moving_boundary_impulses), so a body takes exactly the momentum
+  /// its boundary gives the fluid.
   /// @param positions  B points (unit: m, finite); empty removes them
   /// @param volumes  B volumes V_b (unit: m^3), > 0; Psi_b = rest density V_b
   /// @param normals  B unit normals of the faces the points stand for, outward from the body
