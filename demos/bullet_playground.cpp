@@ -28,6 +28,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <cstdlib>
 #include <exception>
 #include <filesystem>
 #include <string>
@@ -39,6 +40,7 @@
 #include <drench/bullet/bullet_conversions.hpp>
 #include <drench/bullet/coupled_world.hpp>
 #include <drench/bullet/shape_mesh.hpp>
+#include <drench/common/parallel.hpp>
 #include <drench/io/atomic_file.hpp>
 #include <drench/scene/frame_files.hpp>
 #include <drench/scene/output_folder.hpp>
@@ -287,13 +289,23 @@ int main(int argc, char** argv) {
   CLI::App app{"water in a game's Bullet world: a hammock, a curtain, balls and a crate under two jets"};
   app.add_option("--out", options.out,
                  "folder for the frames drench render draws (new or empty); none: no files");
-  app.add_option("--seconds", options.seconds, "simulated time (unit: s)")->check(CLI::PositiveNumber);
+  // CLI::PositiveNumber would name its range as 0 to a 309-digit number.
+  app.add_option("--seconds", options.seconds, "simulated time (unit: s)")
+      ->check(CLI::Validator(
+          [](std::string& text) -> std::string {
+            char* end = nullptr;
+            const double value = std::strtod(text.c_str(), &end);
+            return !text.empty() && *end == '\0' && std::isfinite(value) && value > 0.0
+                       ? ""
+                       : "must be a finite number > 0, got '" + text + "'";
+          },
+          "NUMBER > 0"));
   app.add_option("--threads", options.threads, "threads of drench's loops (default: the CPUs)")
-      ->check(CLI::PositiveNumber);
+      ->check(CLI::Range(1, drench::kMaxThreadCount));
   app.add_flag("--no-rigid", options.no_rigid,
                "leave out the balls and the crate (the ground and table stay)");
   app.add_option("--frames-every", options.frames_every, "write a frame every N steps")
-      ->check(CLI::PositiveNumber);
+      ->check(CLI::Range(1, 1000000));
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
