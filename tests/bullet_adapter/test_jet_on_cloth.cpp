@@ -131,6 +131,15 @@ TEST(JetOnCloth, NeverLeaksWithContinuousHandlingAtALargeStepDfsph) {
   expect_sound_jet(run(config), "dfsph_dt_4ms");
 }
 
+// A game's step (issue 41): PBF at 1/60 s in its fixed sub-steps, the cloth in 16 of its own (about 1 ms,
+// its stable step under this jet); the exact CCD (eq. 5-6) holds the water at any step.
+TEST(JetOnCloth, NeverLeaksAtAGamesStepPbf) {
+  SceneConfig config = reduced_jet_on_cloth(1.0 / 60.0, true);
+  config.cloth->substeps = 16;
+  config.fluid.pressure_solver = PressureSolverKind::PBF;
+  expect_sound_jet(run(config), "pbf_dt_60hz");
+}
+
 // WCSPH turns the coupling's compression into pressure through the Tait equation's seventh power; its
 // max_compression bounds that push; without it this run exceeds its speed bound (docs/accuracy.md, the
 // largest step that holds, for the full scene).

@@ -260,7 +260,7 @@ TEST(SceneLoader, RejectsMisspeltFluidKeyListingKnownKeys) {
   EXPECT_TRUE(
       scene_error(R"({"fluid": {"visocsity": {}}})",
                   "fluid.visocsity is not a known key (x.json); known: rest_density, particle_spacing, "
-                  "pressure_solver, wcsph, pcisph, dfsph, viscosity, cfl, max_speed, sort_interval"));
+                  "pressure_solver, wcsph, pcisph, dfsph, pbf, viscosity, cfl, max_speed, sort_interval"));
 }
 
 TEST(SceneLoader, RejectsNonFiniteNumberInDocumentBuiltInCode) {
@@ -306,9 +306,9 @@ TEST(SceneLoader, RejectsZeroRestDensity) {
 }
 
 TEST(SceneLoader, RejectsUnknownPressureSolverListingChoices) {
-  EXPECT_TRUE(scene_error(
-      R"({"fluid": {"pressure_solver": "iisph"}})",
-      "fluid.pressure_solver must be one of \"pcisph\", \"wcsph\", \"dfsph\", got \"iisph\" (x.json)"));
+  EXPECT_TRUE(scene_error(R"({"fluid": {"pressure_solver": "iisph"}})",
+                          "fluid.pressure_solver must be one of \"pcisph\", \"wcsph\", \"dfsph\", \"pbf\", "
+                          "got \"iisph\" (x.json)"));
 }
 
 TEST(SceneLoader, RejectsUnknownPcisphPrecisionListingChoices) {
@@ -318,9 +318,9 @@ TEST(SceneLoader, RejectsUnknownPcisphPrecisionListingChoices) {
 }
 
 TEST(SceneLoader, RejectsPressureSolverThatIsNotAString) {
-  EXPECT_TRUE(
-      scene_error(R"({"fluid": {"pressure_solver": 1}})",
-                  "fluid.pressure_solver must be one of \"pcisph\", \"wcsph\", \"dfsph\", got 1 (x.json)"));
+  EXPECT_TRUE(scene_error(
+      R"({"fluid": {"pressure_solver": 1}})",
+      "fluid.pressure_solver must be one of \"pcisph\", \"wcsph\", \"dfsph\", \"pbf\", got 1 (x.json)"));
 }
 
 TEST(SceneLoader, ReadsDfsphWithItsSettings) {
@@ -349,6 +349,38 @@ TEST(SceneLoader, DfsphDefaultsAndNullUnsetsTheReliefLimit) {
             IterationPrecision::DOUBLE);
   EXPECT_FALSE(
       parse(R"({"fluid": {"dfsph": {"max_relief_per_substep": null}}})").fluid.dfsph.max_relief_per_substep);
+}
+
+TEST(SceneLoader, ReadsPbfWithItsSettingsAndDefaults) {
+  const PbfSettings d = parse(R"({"fluid": {"pressure_solver": "pbf"}})").fluid.pbf;
+  EXPECT_EQ(d.substeps, 4);
+  EXPECT_EQ(d.iterations, 4);
+  EXPECT_DOUBLE_EQ(d.relaxation, 1e-6);
+  EXPECT_DOUBLE_EQ(d.scorr_k, 0.1);
+  EXPECT_EQ(d.scorr_n, 4);
+  EXPECT_DOUBLE_EQ(d.scorr_dq, 0.2);
+  const SceneConfig c = parse(R"({"fluid": {"pressure_solver": "pbf", "pbf": {"substeps": 2, "iterations": 6,
+      "relaxation": 0.5, "scorr_k": 0, "scorr_n": 2, "scorr_dq": 0.3}}})");
+  EXPECT_EQ(c.fluid.pressure_solver, PressureSolverKind::PBF);
+  EXPECT_EQ(c.fluid.pbf.substeps, 2);
+  EXPECT_EQ(c.fluid.pbf.iterations, 6);
+  EXPECT_DOUBLE_EQ(c.fluid.pbf.relaxation, 0.5);
+  EXPECT_DOUBLE_EQ(c.fluid.pbf.scorr_k, 0.0);
+  EXPECT_EQ(c.fluid.pbf.scorr_n, 2);
+  EXPECT_DOUBLE_EQ(c.fluid.pbf.scorr_dq, 0.3);
+}
+
+TEST(SceneLoader, RejectsBadPbfSettingsNamingTheKey) {
+  EXPECT_TRUE(scene_error(R"({"fluid": {"pbf": {"substeps": 0}}})",
+                          "fluid.pbf.substeps must be >= 1, got 0 (x.json)"));
+  EXPECT_TRUE(scene_error(R"({"fluid": {"pbf": {"iterations": 2.5}}})", "fluid.pbf.iterations"));
+  EXPECT_TRUE(scene_error(R"({"fluid": {"pbf": {"relaxation": -1}}})",
+                          "fluid.pbf.relaxation must be >= 0, got -1 (x.json)"));
+  EXPECT_TRUE(scene_error(R"({"fluid": {"pbf": {"scorr_dq": 1}}})",
+                          "fluid.pbf.scorr_dq must be in (0, 1), got 1 (x.json)"));
+  EXPECT_TRUE(scene_error(R"({"fluid": {"pbf": {"sub_steps": 2}}})",
+                          "fluid.pbf.sub_steps is not a known key (x.json); known: substeps, iterations, "
+                          "relaxation, scorr_k, scorr_n, scorr_dq"));
 }
 
 TEST(SceneLoader, RejectsBadDfsphSettingsNamingTheKey) {

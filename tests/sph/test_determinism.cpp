@@ -47,5 +47,11 @@ TEST(Determinism, DfsphGivesBitIdenticalStatesOnOneAndTwoThreads) {
   EXPECT_TRUE(bitwise_equal(run_dam_break(1, 60, "dfsph"), run_dam_break(2, 60, "dfsph")));
 }
 
+TEST(Determinism, PbfGivesBitIdenticalStatesOnRepeatedRunsAndOneAndTwoThreads) {
+  const ParticleSet two = run_dam_break(2, 60, "pbf");
+  EXPECT_TRUE(bitwise_equal(two, run_dam_break(2, 60, "pbf")));
+  EXPECT_TRUE(bitwise_equal(run_dam_break(1, 60, "pbf"), two));
+}
+
 }  // namespace
 }  // namespace drench

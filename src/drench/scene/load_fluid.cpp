@@ -10,13 +10,14 @@ namespace drench::loader {
 FluidSettings read_fluid(const Node& node) {
   FluidSettings fluid;
   const ObjectReader r(node, {"rest_density", "particle_spacing", "pressure_solver", "wcsph", "pcisph",
-                              "dfsph", "viscosity", "cfl", "max_speed", "sort_interval"});
+                              "dfsph", "pbf", "viscosity", "cfl", "max_speed", "sort_interval"});
   r.read("rest_density", fluid.rest_density, kPositive);
   r.read("particle_spacing", fluid.particle_spacing, kPositive);
   r.read_choice("pressure_solver", fluid.pressure_solver,
                 Choices<PressureSolverKind>{{"pcisph", PressureSolverKind::PCISPH},
                                             {"wcsph", PressureSolverKind::WCSPH},
-                                            {"dfsph", PressureSolverKind::DFSPH}});
+                                            {"dfsph", PressureSolverKind::DFSPH},
+                                            {"pbf", PressureSolverKind::PBF}});
   r.read("cfl", fluid.cfl, Range{0.0, true, 1.0, false});
   r.read("sort_interval", fluid.sort_interval, kAtLeastOne);
   // null is "no limit", so that --set fluid.max_speed=null can undo the default.
@@ -54,6 +55,15 @@ FluidSettings read_fluid(const Node& node) {
                                                 {"double", IterationPrecision::DOUBLE}});
   dfsph.require_order("min_iterations", fluid.dfsph.min_iterations, "max_iterations",
                       fluid.dfsph.max_iterations);
+
+  const ObjectReader pbf(r["pbf"],
+                         {"substeps", "iterations", "relaxation", "scorr_k", "scorr_n", "scorr_dq"});
+  pbf.read("substeps", fluid.pbf.substeps, kAtLeastOne);
+  pbf.read("iterations", fluid.pbf.iterations, kAtLeastOne);
+  pbf.read("relaxation", fluid.pbf.relaxation, kNonNegative);
+  pbf.read("scorr_k", fluid.pbf.scorr_k, kNonNegative);
+  pbf.read("scorr_n", fluid.pbf.scorr_n, kAtLeastOne);
+  pbf.read("scorr_dq", fluid.pbf.scorr_dq, Range{0.0, true, 1.0, true});
 
   // null is "no limit" (the published WCSPH, PCISPH and DFSPH), so that --set can undo the default.
   for (auto [reader, key, limit] :

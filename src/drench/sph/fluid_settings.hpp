@@ -10,9 +10,9 @@
 namespace drench {
 
 /// Which pressure solver runs. Selected by name in the scene (`fluid.pressure_solver`).
-enum class PressureSolverKind { WCSPH, PCISPH, DFSPH };
+enum class PressureSolverKind { WCSPH, PCISPH, DFSPH, PBF };
 
-/// The name a scene gives `kind` ("wcsph", "pcisph", "dfsph"), as summary.json reports it.
+/// The name a scene gives `kind` ("wcsph", "pcisph", "dfsph", "pbf"), as summary.json reports it.
 inline const char* pressure_solver_name(PressureSolverKind kind) {
   switch (kind) {
     case PressureSolverKind::WCSPH:
@@ -21,6 +21,8 @@ inline const char* pressure_solver_name(PressureSolverKind kind) {
       return "pcisph";
     case PressureSolverKind::DFSPH:
       return "dfsph";
+    case PressureSolverKind::PBF:
+      return "pbf";
   }
   return "";
 }
@@ -114,6 +116,33 @@ struct DfsphSettings {
   IterationPrecision precision = IterationPrecision::SINGLE;
 };
 
+/// Position Based Fluids, Macklin & Mueller 2013 (ACM TOG 32(4)): the density constraint
+/// C_i = max(rho_i / rho0 - 1, 0) solved on positions by Jacobi iterations (their eq. 1-12), what games run
+/// (NVIDIA FleX, PhysX 5 particles). A fixed count of sub-steps and iterations makes every frame cost the
+/// same; its density error is larger than PCISPH's or DFSPH's at the same step, the price of that
+/// (docs/accuracy.md).
+struct PbfSettings {
+  /// Fluid sub-steps per scene step, >= 1: fixed, not cut by the CFL limit, so that a game's frame costs the
+  /// same every frame. Macklin & Mueller ran 2-4 sub-steps per 1/60 s frame; at 1/60 s the hydrostatic tank
+  /// without viscosity blows up with 2 and holds its rest density within 1% with 4 (tests/sph/test_pbf.cpp).
+  int substeps = 4;
+  /// Jacobi iterations per sub-step, >= 1. Macklin & Mueller's examples ran 2-4 (their sec. 7); 4 holds a
+  /// resting tank within 1% of the rest density (tests/sph/test_pbf.cpp).
+  int iterations = 4;
+  /// The relaxation epsilon of their eq. 11 (constraint force mixing), as a fraction of sum_k |grad_k C|^2
+  /// of a particle in a filled lattice (dimensionless), >= 0. They state epsilon in their scenes' units;
+  /// relative to the lattice it means the same at every spacing. 1e-6 only keeps the division finite, as
+  /// SPlisHSPlasH's epsilon does; larger values soften the constraint.
+  Scalar relaxation = 1e-6;
+  /// k of the artificial pressure s_corr = -k (W(r) / W(dq))^n (their eq. 13), in units of the constraint
+  /// (a fraction of rest density, dimensionless), >= 0; 0 turns it off. Their k = 0.1 is in their scenes'
+  /// units; here k = 0.1 pushes a pair at dq apart as a compression of 10% would.
+  Scalar scorr_k = 0.1;
+  int scorr_n = 4;  ///< n of s_corr, >= 1 (theirs: 4)
+  Scalar scorr_dq =
+      0.2;  ///< |dq| of s_corr as a fraction of the kernel support radius, in (0, 1) (theirs: 0.1-0.3)
+};
+
 /// Viscosity method. Constructed only when the scene's `effects` lists "viscosity".
 enum class ViscosityKind {
   XSPH,       ///< velocity smoothing v_i += c sum_j m_j / rho_j (v_j - v_i) W_ij (Monaghan 1989)
@@ -135,9 +164,11 @@ struct FluidSettings {
   WcsphSettings wcsph;
   PcisphSettings pcisph;
   DfsphSettings dfsph;
+  PbfSettings pbf;
   ViscositySettings viscosity;
   /// CFL factor lambda (dimensionless), in (0, 1]: a fluid sub-step never exceeds lambda spacing / v_max,
-  /// with v_max the fastest particle (plus the speed of sound for WCSPH).
+  /// with v_max the fastest particle (plus the speed of sound for WCSPH). PBF ignores it (PbfSettings::
+  /// substeps).
   Scalar cfl = 0.4;
   /// A particle faster than this stops the run with RUNAWAY_PARTICLE (unit: m/s), > 0; nullopt: no limit.
   /// Far above any flow of water, so only a blow-up reaches it, which would otherwise crawl: the CFL limit

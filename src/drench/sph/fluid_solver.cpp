@@ -100,6 +100,8 @@ FluidSolver::FluidSolver(const FluidSettings& settings, const Vec3& gravity, Bou
       m_guards(std::move(guards)),
       m_neighbors(m_kernel, kSkinOfSupport * m_kernel.support_radius(), std::move(boundary.positions)),
       m_pressure(make_pressure_solver(settings, speed_of_sound)) {
+  if (settings.pressure_solver == PressureSolverKind::PBF)
+    m_pbf = static_cast<PressurePbf*>(m_pressure.get());
   const Vec3Array& points = m_neighbors.boundary_points();
   m_boundary_packed.resize(points.size());
   for (std::size_t b = 0; b < points.size(); ++b)
@@ -166,17 +168,34 @@ Scalar FluidSolver::particle_mass() const {
   return m_settings.rest_density * s * s * s;
 }
 
-void FluidSolver::update_neighbors(Scalar max_displacement) {
-  ScopedTimer timer(m_stats.timings_s.neighbors);
+void FluidSolver::sort_particles() {
   if (m_stats.substeps % m_settings.sort_interval == 0) {
+    ScopedTimer timer(m_stats.timings_s.neighbors);
     m_particles.permute(m_neighbors.z_order(m_particles.positions));
   }
+}
+
+void FluidSolver::update_neighbors(Scalar max_displacement) {
+  ScopedTimer timer(m_stats.timings_s.neighbors);
   // A search with a skin pays for (1 + kSkinOfSupport)^3 more candidates, so it is made only when its lists
   // can serve at least two sub-steps (the fastest particle moving less than a quarter of the skin per
   // sub-step): WCSPH's short sub-steps; PCISPH's long ones search exactly to the support every time.
   const Scalar skin = kSkinOfSupport * m_kernel.support_radius();
   if (m_neighbors.update(m_particles.positions, m_particles.ids, 4.0 * max_displacement <= skin ? skin : 0.0))
     ++m_stats.neighbor_searches;
+}
+
+void FluidSolver::compute_densities(const FluidContext& ctx) {
+  ScopedTimer timer(m_stats.timings_s.density);
+  const std::size_t n = m_particles.size();
+  m_positions_mass.resize(n);
+  parallel_for(n, kLightChunk, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t i = begin; i < end; ++i)
+      m_positions_mass[i] = packed(m_particles.positions[i], m_particles.masses[i]);
+  });
+  for_each_chunk(n, [&](std::size_t begin, std::size_t end) {
+    sph_densities(ctx, m_positions_mass, begin, end, &m_particles.densities[begin]);
+  });
 }
 
 Scalar FluidSolver::max_speed() const {
@@ -202,6 +221,7 @@ std::size_t FluidSolver::fastest_particle() const {
 }
 
 Scalar FluidSolver::cfl_limit(Scalar max_speed) const {
+  if (m_pbf) return std::numeric_limits<Scalar>::infinity();
   const Scalar speed = max_speed + m_pressure->signal_speed();
   if (!(speed > 0.0)) return std::numeric_limits<Scalar>::infinity();
   return m_settings.cfl * m_settings.particle_spacing / speed;
@@ -227,6 +247,16 @@ StepStatus FluidSolver::step(Scalar dt, SubstepConstraint* constraint) {
       status.runaway_speed = speed;
       break;
     }
+    if (m_pbf) {
+      // A fixed count of equal sub-steps: a game's frame costs the same every frame (PbfSettings).
+      const int left = m_settings.pbf.substeps - count;
+      const Scalar sub = left == 1 ? remaining : remaining / left;
+      status |= substep_pbf(sub, speed, constraint);
+      ++count;
+      if (left == 1 || !status.ok()) break;
+      remaining -= sub;
+      continue;
+    }
     const Scalar limit = cfl_limit(speed);
     // A NaN limit means a NaN velocity: take one sub-step so that the check below names the particle.
     const Scalar wanted = std::isfinite(limit) ? std::ceil(remaining / limit) : 1.0;
@@ -241,31 +271,26 @@ StepStatus FluidSolver::step(Scalar dt, SubstepConstraint* constraint) {
   return status;
 }
 
+FluidContext FluidSolver::context() {
+  return FluidContext{m_kernel,
+                      m_particles,
+                      m_neighbors.fluid(),
+                      m_neighbors.boundary(),
+                      m_boundary_packed,
+                      m_settings.rest_density,
+                      m_settings.particle_spacing,
+                      m_neighbors.fluid_gradient_factors(),
+                      m_neighbors.boundary_gradient_factors(),
+                      m_particles.common_mass()};
+}
+
 StepStatus FluidSolver::substep(Scalar dt, Scalar max_speed, SubstepConstraint* constraint) {
+  sort_particles();
   update_neighbors(max_speed * dt);
   ++m_stats.substeps;
   const std::size_t n = m_particles.size();
-  const FluidContext ctx{m_kernel,
-                         m_particles,
-                         m_neighbors.fluid(),
-                         m_neighbors.boundary(),
-                         m_boundary_packed,
-                         m_settings.rest_density,
-                         m_settings.particle_spacing,
-                         m_neighbors.fluid_gradient_factors(),
-                         m_neighbors.boundary_gradient_factors(),
-                         m_particles.common_mass()};
-  {
-    ScopedTimer timer(m_stats.timings_s.density);
-    m_positions_mass.resize(n);
-    parallel_for(n, kLightChunk, [&](std::size_t begin, std::size_t end) {
-      for (std::size_t i = begin; i < end; ++i)
-        m_positions_mass[i] = packed(m_particles.positions[i], m_particles.masses[i]);
-    });
-    for_each_chunk(n, [&](std::size_t begin, std::size_t end) {
-      sph_densities(ctx, m_positions_mass, begin, end, &m_particles.densities[begin]);
-    });
-  }
+  const FluidContext ctx = context();
+  compute_densities(ctx);
   DivergenceStats divergence;
   {
     ScopedTimer timer(m_stats.timings_s.pressure);
@@ -291,12 +316,7 @@ StepStatus FluidSolver::substep(Scalar dt, Scalar max_speed, SubstepConstraint* 
     ScopedTimer timer(m_stats.timings_s.pressure);
     pressure = m_pressure->solve(ctx, m_velocities_adv, dt, m_pressure_accelerations);
   }
-  m_stats.pressure_iterations += pressure.iterations;
-  m_stats.max_pressure_iterations = std::max(m_stats.max_pressure_iterations, pressure.iterations);
-  m_stats.density_error_sum += pressure.average_density_error;
-  m_stats.density_error_max = std::max(m_stats.density_error_max, pressure.average_density_error);
-  m_stats.particle_density_error_max =
-      std::max(m_stats.particle_density_error_max, pressure.max_density_error);
+  record(pressure);
 
   // At the positions the pressure was solved at, before they move.
   if (m_boundary_packed.size() > m_static_boundary) add_moving_boundary_reactions(dt);
@@ -304,6 +324,75 @@ StepStatus FluidSolver::substep(Scalar dt, Scalar max_speed, SubstepConstraint* 
   if (!pressure.converged || !divergence.converged) status.flags |= StepStatus::PRESSURE_NOT_CONVERGED;
   ScopedTimer timer(m_stats.timings_s.integrate);
   if (constraint) m_positions_before = m_particles.positions;
+  status |= finish_substep(dt, constraint, true);
+  return status;
+}
+
+StepStatus FluidSolver::substep_pbf(Scalar dt, Scalar max_speed, SubstepConstraint* constraint) {
+  sort_particles();
+  ++m_stats.substeps;
+  const std::size_t n = m_particles.size();
+  {
+    // Macklin & Mueller's prediction: external forces only; the viscosity acts after the solve.
+    ScopedTimer timer(m_stats.timings_s.integrate);
+    m_positions_before = m_particles.positions;
+    parallel_for(n, kLightChunk, [&](std::size_t begin, std::size_t end) {
+      for (std::size_t i = begin; i < end; ++i) {
+        m_particles.velocities[i] += dt * m_gravity;
+        m_particles.positions[i] += dt * m_particles.velocities[i];
+      }
+    });
+  }
+  // Searched at the prediction, as theirs, so that a fast jet needs no skin of its own displacement; the
+  // iterations' moves are small beside the support.
+  update_neighbors(max_speed * dt);
+  const FluidContext ctx = context();
+  PressureStats pressure;
+  {
+    ScopedTimer timer(m_stats.timings_s.pressure);
+    pressure = m_pbf->project(ctx, dt);
+  }
+  record(pressure);
+  {
+    ScopedTimer timer(m_stats.timings_s.integrate);
+    parallel_for(n, kLightChunk, [&](std::size_t begin, std::size_t end) {
+      for (std::size_t i = begin; i < end; ++i)
+        m_particles.velocities[i] = (m_particles.positions[i] - m_positions_before[i]) / dt;
+    });
+  }
+  if (m_viscosity || m_boundary_packed.size() > m_static_boundary) {
+    ScopedTimer timer(m_stats.timings_s.forces);
+    m_accelerations.assign(n, Vec3::Zero());
+    if (m_viscosity) {
+      m_viscosity->add_accelerations(ctx, dt, m_accelerations);
+      ++m_viscosity_counter.passes;
+    }
+    m_pressure_accelerations.assign(n, Vec3::Zero());
+    if (m_boundary_packed.size() > m_static_boundary) add_moving_boundary_reactions(dt);
+    // The viscosity changes velocities only (their Algorithm 1, line 22); what a moving body gives back
+    // along its faces moves the particle as a pressure acceleration would.
+    parallel_for(n, kLightChunk, [&](std::size_t begin, std::size_t end) {
+      for (std::size_t i = begin; i < end; ++i) {
+        m_particles.velocities[i] += dt * (m_accelerations[i] + m_pressure_accelerations[i]);
+        m_particles.positions[i] += (dt * dt) * m_pressure_accelerations[i];
+      }
+    });
+  }
+  ScopedTimer timer(m_stats.timings_s.integrate);
+  return finish_substep(dt, constraint, false);
+}
+
+void FluidSolver::record(const PressureStats& pressure) {
+  m_stats.pressure_iterations += pressure.iterations;
+  m_stats.max_pressure_iterations = std::max(m_stats.max_pressure_iterations, pressure.iterations);
+  m_stats.density_error_sum += pressure.average_density_error;
+  m_stats.density_error_max = std::max(m_stats.density_error_max, pressure.average_density_error);
+  m_stats.particle_density_error_max =
+      std::max(m_stats.particle_density_error_max, pressure.max_density_error);
+}
+
+StepStatus FluidSolver::finish_substep(Scalar dt, SubstepConstraint* constraint, bool integrate) {
+  const std::size_t n = m_particles.size();
   // (first non-finite particle, particles the guards moved): a min and an integer sum, so any deal.
   using Tally = std::pair<std::size_t, std::int64_t>;
   const auto [first_bad, guarded] = parallel_reduce(
@@ -313,9 +402,14 @@ StepStatus FluidSolver::substep(Scalar dt, Scalar max_speed, SubstepConstraint* 
         for (std::size_t i = begin; i < end; ++i) {
           Vec3& v = m_particles.velocities[i];
           Vec3& x = m_particles.positions[i];
-          v = m_velocities_adv[i] + dt * m_pressure_accelerations[i];
-          const Vec3 x_t0 = x;
-          x += dt * v;
+          Vec3 x_t0;
+          if (integrate) {
+            v = m_velocities_adv[i] + dt * m_pressure_accelerations[i];
+            x_t0 = x;
+            x += dt * v;
+          } else {
+            x_t0 = m_positions_before[i];
+          }
           for (const BoundarySettings& guard : m_guards)
             t.second += enforce_boundary(guard, x_t0, x, v) ? 1 : 0;
           if (!v.allFinite() || !x.allFinite()) t.first = std::min(t.first, i);
@@ -325,6 +419,7 @@ StepStatus FluidSolver::substep(Scalar dt, Scalar max_speed, SubstepConstraint* 
       [](const Tally& a, const Tally& b) { return Tally(std::min(a.first, b.first), a.second + b.second); });
   m_stats.boundary_guards += guarded;
   if (constraint) constraint->apply(m_positions_before, m_particles, dt);
+  StepStatus status;
   if (first_bad < n) {
     status.flags |= StepStatus::NON_FINITE_STATE;
     status.non_finite_particle = m_particles.ids[first_bad];

@@ -13,6 +13,7 @@
 #include <drench/sph/fluid_settings.hpp>
 #include <drench/sph/forces/viscosity.hpp>
 #include <drench/sph/particle_set.hpp>
+#include <drench/sph/pressure/pressure_pbf.hpp>
 #include <drench/sph/pressure/pressure_solver.hpp>
 #include <drench/sph/verlet_neighbor_lists.hpp>
 
@@ -128,8 +129,9 @@ class FluidSolver {
   /// Mass of one particle, rest_density * spacing^3 (unit: kg).
   Scalar particle_mass() const;
 
-  /// Advances the fluid by dt (unit: s, > 0), in as many equal-ish sub-steps as the CFL limit asks. Stops
-  /// before a sub-step with RUNAWAY_PARTICLE when a particle is faster than settings().max_speed.
+  /// Advances the fluid by dt (unit: s, > 0), in as many equal-ish sub-steps as the CFL limit asks (PBF: in
+  /// settings().pbf.substeps equal ones). Stops before a sub-step with RUNAWAY_PARTICLE when a particle is
+  /// faster than settings().max_speed.
   /// @param constraint  optional, applied after every sub-step (must outlive the call)
   StepStatus step(Scalar dt, SubstepConstraint* constraint = nullptr);
 
@@ -153,7 +155,8 @@ class FluidSolver {
   /// Fastest particle speed (unit: m/s); NaN when a velocity is NaN.
   Scalar max_speed() const;
   /// The longest step the CFL limit allows now, cfl spacing / (max_speed() + signal speed) (unit: s): step()
-  /// takes one sub-step for any dt up to it. Infinite when nothing moves (and WCSPH's signal speed is 0).
+  /// takes one sub-step for any dt up to it. Infinite when nothing moves (and WCSPH's signal speed is 0), and
+  /// for PBF, whose sub-steps are fixed.
   Scalar cfl_step() const { return cfl_limit(max_speed()); }
 
  private:
@@ -161,6 +164,21 @@ class FluidSolver {
   ///        the skin of a new grid search
   void update_neighbors(Scalar max_displacement);
   StepStatus substep(Scalar dt, Scalar max_speed, SubstepConstraint* constraint);
+  /// PBF's sub-step (Macklin & Mueller 2013, Algorithm 1): predicts positions with gravity, searches
+  /// neighbors there, projects them (PressurePbf::project), takes v = (x* - x) / dt, then the viscosity
+  /// (XSPH after the solve, as theirs) and the guards.
+  StepStatus substep_pbf(Scalar dt, Scalar max_speed, SubstepConstraint* constraint);
+  /// Re-sorts the particles along the z-order curve every settings().sort_interval sub-steps.
+  void sort_particles();
+  /// The densities (into particles().densities) at the current positions, with their neighbor lists.
+  void compute_densities(const FluidContext& ctx);
+  /// The end of a sub-step: with `integrate`, v = v_adv + dt a_pressure and x += dt v (else the positions
+  /// moved already, from m_positions_before); then the guards, the non-finite check and the constraint.
+  StepStatus finish_substep(Scalar dt, SubstepConstraint* constraint, bool integrate);
+  /// Adds a pressure solve's iterations and errors to the statistics.
+  void record(const PressureStats& pressure);
+  /// The solvers' view of this sub-step, with the neighbor lists of the last update.
+  FluidContext context();
   /// Adds to m_moving_impulses what the sub-step's pressure gave the moving boundary points along their
   /// normals, and takes the rest of their push on the fluid back from m_pressure_accelerations.
   void add_moving_boundary_reactions(Scalar dt);
@@ -183,6 +201,7 @@ class FluidSolver {
   PackedPointArray m_positions_mass;  // positions (unit: m), w = mass (unit: kg), for the densities
   Vec3Array m_positions_before;       // sub-step start positions, kept only for a SubstepConstraint
   std::unique_ptr<PressureSolver> m_pressure;
+  PressurePbf* m_pbf = nullptr;  // m_pressure when the scene's solver is PBF
   std::unique_ptr<NonPressureForce> m_viscosity;
   EffectCounter m_viscosity_counter;
   Vec3Array m_accelerations;

@@ -120,6 +120,16 @@ template <class Points, class V>
     w[l] = k.value(std::sqrt(r2[l]));
 }
 
+/// f[l] with grad W(x_i - x_l) = f[l] (x_i - x_l) for the points of `p` (unit: 1/m^5), as kernel_at.
+template <class Points, class V>
+[[gnu::always_inline]] inline void gradient_factor_at(const CubicSplineKernel& k, const PackedPoint& xi,
+                                                      const Points& p, V& f) {
+  const V dx = xi.x - p.x, dy = xi.y - p.y, dz = xi.z - p.z;
+  const V r2 = dx * dx + dy * dy + dz * dz;
+  for (std::uint32_t l = 0; l < sizeof(V) / sizeof(Scalar); ++l)
+    f[l] = k.gradient_factor(r2[l]);
+}
+
 /// What the eight-lane double groups share: lane count, kernel, record and sum types (for_each_group,
 /// kernel_sum).
 struct EightDoubleLanes {
@@ -147,6 +157,10 @@ struct WideGroup : EightDoubleLanes {
                                             const Points& p, Vec& w) {
     kernel_at(k, xi, p, w);
   }
+  [[gnu::always_inline]] static void gradient_factor(const CubicSplineKernel& k, const PackedPoint& xi,
+                                                     const Points& p, Vec& f) {
+    gradient_factor_at(k, xi, p, f);
+  }
   /// out = v in the active lanes, 0 in the others.
   [[gnu::always_inline]] static void select(const Mask& active, const Vec& v, Vec& out) {
     out = active ? v : Vec{};
@@ -168,6 +182,10 @@ template <class V>
 template <class V, class S>
 [[gnu::always_inline]] inline LanePair<V> operator*(S a, const LanePair<V>& b) {
   return {a * b.lo, a * b.hi};
+}
+template <class V>
+[[gnu::always_inline]] inline LanePair<V> operator+(const LanePair<V>& a, const LanePair<V>& b) {
+  return {a.lo + b.lo, a.hi + b.hi};
 }
 template <class V, class S>
 [[gnu::always_inline]] inline LanePair<V> operator+(S a, const LanePair<V>& b) {
@@ -221,6 +239,11 @@ struct HalvesGroup : EightDoubleLanes {
                                             const Points& p, Vec& w) {
     kernel_at(k, xi, FourPoints{p.x.lo, p.y.lo, p.z.lo, p.w.lo}, w.lo);
     kernel_at(k, xi, FourPoints{p.x.hi, p.y.hi, p.z.hi, p.w.hi}, w.hi);
+  }
+  [[gnu::always_inline]] static void gradient_factor(const CubicSplineKernel& k, const PackedPoint& xi,
+                                                     const Points& p, Vec& f) {
+    gradient_factor_at(k, xi, FourPoints{p.x.lo, p.y.lo, p.z.lo, p.w.lo}, f.lo);
+    gradient_factor_at(k, xi, FourPoints{p.x.hi, p.y.hi, p.z.hi, p.w.hi}, f.hi);
   }
   [[gnu::always_inline]] static void select(const Mask& active, const Vec& v, Vec& out) {
     out = {active.lo ? v.lo : Lanes{}, active.hi ? v.hi : Lanes{}};
@@ -313,6 +336,31 @@ template <class Group>
             sx += s * (v.x - vi.x);
             sy += s * (v.y - vi.y);
             sz += s * (v.z - vi.z);
+          });
+  return Vec3(Group::sum(sx), Group::sum(sy), Group::sum(sz));
+}
+
+/// sum over the neighbors j of i in `list` of scale (alpha + w_j) grad W(x_i - x_j), the kernel's gradient
+/// taken at the points' positions (no stored factors), for `sources` packed with their w_j. Eight neighbors
+/// at a time as kernel_sum. PBF's move (pressure/pressure_pbf.cpp): its iterations move the particles too far
+/// for the gradient factors of the neighbor search.
+template <class Group>
+[[gnu::always_inline]] inline Vec3 gradient_sum(const CubicSplineKernel& k, const NeighborList& list,
+                                                std::size_t i, const PackedPoint& xi,
+                                                const PackedPoint* sources, Scalar alpha, Scalar scale) {
+  typename Group::Vec sx = {}, sy = {}, sz = {};
+  for_each_group<Group>(
+      list, i, nullptr,
+      [&](const Index* group, const float*, const typename Group::Mask& active)
+          __attribute__((always_inline)) {
+            typename Group::Points p;
+            Group::load(sources, group, p);
+            typename Group::Vec f, s;
+            Group::gradient_factor(k, xi, p, f);
+            Group::select(active, scale * ((alpha + p.w) * f), s);
+            sx += s * (xi.x - p.x);
+            sy += s * (xi.y - p.y);
+            sz += s * (xi.z - p.z);
           });
   return Vec3(Group::sum(sx), Group::sum(sy), Group::sum(sz));
 }

@@ -6,6 +6,7 @@
 
 #include <drench/common/parallel.hpp>
 #include <drench/sph/pressure/pressure_dfsph.hpp>
+#include <drench/sph/pressure/pressure_pbf.hpp>
 #include <drench/sph/pressure/pressure_pcisph.hpp>
 #include <drench/sph/pressure/pressure_wcsph.hpp>
 
@@ -51,6 +52,8 @@ std::unique_ptr<PressureSolver> make_pressure_solver(const FluidSettings& settin
       return std::make_unique<PressurePcisph>(settings);
     case PressureSolverKind::DFSPH:
       return std::make_unique<PressureDfsph>(settings);
+    case PressureSolverKind::PBF:
+      return std::make_unique<PressurePbf>(settings);
   }
   return nullptr;
 }

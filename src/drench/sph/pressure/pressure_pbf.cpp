@@ -1,0 +1,229 @@
+#include <drench/sph/pressure/pressure_pbf.hpp>
+
+#include <algorithm>
+#include <cmath>
+
+#include <drench/common/parallel.hpp>
+#include <drench/sph/packed_lanes.hpp>
+
+namespace drench {
+namespace {
+
+/// dp_i of eq. 12 for the particles [begin, end): -sum_j m_j (w_i + w_j) grad W_ij - w_i sum_b Psi_b
+/// grad W_ib, with w = -lambda / rho0 in `x_w` and the gradients at its positions. Compiled per CPU as the
+/// other pair loops (sph/packed_lanes.hpp), eight neighbors at a time in a fixed order.
+/// @param mass  every particle's mass (unit: kg), > 0 (FluidContext::uniform_mass)
+DRENCH_SIMD_CLONES void pbf_moves(const FluidContext& ctx, const PackedPointArray& x_w, Scalar mass,
+                                  std::size_t begin, std::size_t end, Vec3* out) {
+  with_group_of_copy<HalvesGroup, WideGroup>([&](auto lanes) __attribute__((always_inline)) {
+    using Group = decltype(lanes);
+    for (std::size_t i = begin; i < end; ++i) {
+      const PackedPoint& pi = x_w[i];
+      Vec3 move = -gradient_sum<Group>(ctx.kernel, ctx.fluid_neighbors, i, pi, x_w.data(), pi.w, mass);
+      if (pi.w != 0.0)
+        move -=
+            gradient_sum<Group>(ctx.kernel, ctx.boundary_neighbors, i, pi, ctx.boundary.data(), 0.0, pi.w);
+      out[i - begin] = move;
+    }
+  });
+}
+
+/// For the particles [begin, end) at the positions of `x_mass` (w = mass): sum_k |grad_k C_i|^2 of eq. 11
+/// (unit: 1/m^2) into `denominators`, and the artificial pressure's move sum_j (m_j / rho0) s_corr_ij grad
+/// W_ij (eq. 13-14, unit: m) into `scorr_moves`, with s_corr = -scorr_scale (W / W(dq))^n. As pbf_moves,
+/// compiled per CPU.
+DRENCH_SIMD_CLONES void pbf_gradients(const FluidContext& ctx, const PackedPointArray& x_mass,
+                                      Scalar inv_rho0, Scalar scorr_scale, Scalar inv_w_dq, int scorr_n,
+                                      std::size_t begin, std::size_t end, Scalar* denominators,
+                                      Vec3* scorr_moves) {
+  with_group_of_copy<HalvesGroup, WideGroup>([&](auto lanes) __attribute__((always_inline)) {
+    using Group = decltype(lanes);
+    using V = typename Group::Vec;
+    for (std::size_t i = begin; i < end; ++i) {
+      const PackedPoint& xi = x_mass[i];
+      V gx = {}, gy = {}, gz = {}, squares = {}, sx = {}, sy = {}, sz = {};
+      for_each_group<Group>(
+          ctx.fluid_neighbors, i, nullptr,
+          [&](const Index* group, const float*, const typename Group::Mask& active)
+              __attribute__((always_inline)) {
+                typename Group::Points p;
+                Group::load(x_mass.data(), group, p);
+                V f, c;
+                Group::gradient_factor(ctx.kernel, xi, p, f);
+                Group::select(active, inv_rho0 * (p.w * f), c);
+                const V dx = xi.x - p.x, dy = xi.y - p.y, dz = xi.z - p.z;
+                gx += c * dx;
+                gy += c * dy;
+                gz += c * dz;
+                squares += (c * c) * (dx * dx + dy * dy + dz * dz);
+                if (scorr_scale > 0.0) {
+                  V w;
+                  Group::kernel(ctx.kernel, xi, p, w);
+                  const V ratio = inv_w_dq * w;
+                  V power = ratio;
+                  for (int k = 1; k < scorr_n; ++k)
+                    power = power * ratio;
+                  const V t = c * power;
+                  sx += t * dx;
+                  sy += t * dy;
+                  sz += t * dz;
+                }
+              });
+      const Vec3 gradient =
+          Vec3(Group::sum(gx), Group::sum(gy), Group::sum(gz)) +
+          gradient_sum<Group>(ctx.kernel, ctx.boundary_neighbors, i, xi, ctx.boundary.data(), 0.0, inv_rho0);
+      denominators[i - begin] = Group::sum(squares) + gradient.squaredNorm();
+      scorr_moves[i - begin] = -scorr_scale * Vec3(Group::sum(sx), Group::sum(sy), Group::sum(sz));
+    }
+  });
+}
+
+}  // namespace
+
+PressurePbf::PressurePbf(const FluidSettings& settings)
+    : m_settings(settings.pbf), m_rest_density(settings.rest_density) {
+  const Scalar s = settings.particle_spacing;
+  const CubicSplineKernel kernel(s);
+  // sum_k |grad_k C|^2 of a particle in a filled lattice: (m / rho0)^2 = s^6 times sum_j |grad W_ij|^2 (the
+  // neighbors' part; the particle's own, |sum_j grad W_ij|^2, vanishes by symmetry).
+  Scalar sum_squared = 0.0;
+  for (int k = -2; k <= 2; ++k) {
+    for (int j = -2; j <= 2; ++j) {
+      for (int i = -2; i <= 2; ++i)
+        sum_squared += kernel.gradient(-s * Vec3(i, j, k)).squaredNorm();
+    }
+  }
+  const Scalar lattice = std::pow(s, 6) * sum_squared;
+  m_epsilon = m_settings.relaxation * lattice;
+  m_scorr_scale = m_settings.scorr_k / lattice;
+  m_inv_w_dq = 1.0 / kernel.value(m_settings.scorr_dq * kernel.support_radius());
+}
+
+PressureStats PressurePbf::project(const FluidContext& ctx, Scalar dt) {
+  ParticleSet& particles = ctx.particles;
+  const std::size_t n = particles.size();
+  const Scalar rho0 = ctx.rest_density;
+  const Scalar inv_rho0 = 1.0 / rho0;
+  const CubicSplineKernel& kernel = ctx.kernel;
+  const NeighborList& fn = ctx.fluid_neighbors;
+  const NeighborList& bn = ctx.boundary_neighbors;
+  m_last_dt = dt;
+  m_points.resize(n);
+  m_lambda_points.resize(n);
+  m_denominator.resize(n);
+  m_scorr_moves.resize(n);
+  m_lambda_sum.assign(n, 0.0);
+  m_moves.resize(n);
+  m_chunk_errors.resize((n + kParticleChunk - 1) / kParticleChunk);
+  PressureStats stats;
+  if (n == 0) return stats;
+  // Once per sub-step, at the prediction the lists were searched at: the denominator of lambda (eq. 11, the
+  // constraint's gradients of eq. 8; boundary points have zero inverse mass, so they enter only the
+  // particle's own gradient) and the artificial pressure's move (eq. 13-14). Both only scale and nudge the
+  // iterations' moves; the densities and the moves themselves are taken at the current positions.
+  parallel_for(n, kLightChunk, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t i = begin; i < end; ++i) {
+      m_points[i] = packed(particles.positions[i], particles.masses[i]);
+      m_lambda_points[i] = packed(particles.positions[i], 0.0);
+    }
+  });
+  for_each_chunk(n, [&](std::size_t begin, std::size_t end) {
+    pbf_gradients(ctx, m_points, inv_rho0, m_scorr_scale, m_inv_w_dq, m_settings.scorr_n, begin, end,
+                  &m_denominator[begin], &m_scorr_moves[begin]);
+    for (std::size_t i = begin; i < end; ++i)
+      m_denominator[i] += m_epsilon;
+  });
+  for (int iteration = 0; iteration < m_settings.iterations; ++iteration) {
+    // lambda_i at the current prediction (eq. 11), only for compression.
+    for_each_chunk(n, [&](std::size_t begin, std::size_t end) {
+      sph_densities(ctx, m_points, begin, end, &particles.densities[begin]);
+      ChunkErrors errors;
+      for (std::size_t i = begin; i < end; ++i) {
+        const Scalar violation = std::max(particles.densities[i] * inv_rho0 - 1.0, 0.0);
+        const Scalar lambda = -violation / m_denominator[i];
+        m_lambda_sum[i] += lambda;
+        // dp_i = -sum_j m_j (w_i + w_j) grad W_ij - w_i sum_b Psi_b grad W_ib with w = -lambda / rho0.
+        m_lambda_points[i].w = -lambda * inv_rho0;
+        errors.sum += violation;
+        errors.max = std::max(errors.max, violation);
+      }
+      m_chunk_errors[begin / kParticleChunk] = errors;
+    });
+    // dp_i (eq. 12) with the kernel's gradient at the current positions: factors frozen at the prediction,
+    // as PCISPH's pressure loop uses them, made the hydrostatic tank blow up within 0.1 s at every sub-step
+    // count and relaxation tried, since PBF's iterations move particles by a large part of a spacing.
+    for_each_chunk(n, [&](std::size_t begin, std::size_t end) {
+      if (ctx.uniform_mass > 0.0) {
+        pbf_moves(ctx, m_lambda_points, ctx.uniform_mass, begin, end, &m_moves[begin]);
+        return;
+      }
+      for (std::size_t i = begin; i < end; ++i) {
+        const PackedPoint& pi = m_lambda_points[i];
+        const Vec3 xi(pi.x, pi.y, pi.z);
+        Vec3 move = Vec3::Zero();
+        for (std::uint32_t k = fn.offsets[i]; k < fn.offsets[i + 1]; ++k) {
+          const Index j = fn.indices[k];
+          const PackedPoint& pj = m_lambda_points[j];
+          const Vec3 d = xi - Vec3(pj.x, pj.y, pj.z);
+          move -= (m_points[j].w * (pi.w + pj.w) * kernel.gradient_factor(d.squaredNorm())) * d;
+        }
+        if (pi.w != 0.0) {
+          for (std::uint32_t k = bn.offsets[i]; k < bn.offsets[i + 1]; ++k) {
+            const PackedPoint& pb = ctx.boundary[bn.indices[k]];
+            const Vec3 d = xi - Vec3(pb.x, pb.y, pb.z);
+            move -= (pi.w * pb.w * kernel.gradient_factor(d.squaredNorm())) * d;
+          }
+        }
+        m_moves[i] = move;
+      }
+    });
+    // Jacobi: every move from the same prediction, then applied.
+    parallel_for(n, kLightChunk, [&](std::size_t begin, std::size_t end) {
+      for (std::size_t i = begin; i < end; ++i) {
+        const Vec3 move = m_moves[i] + m_scorr_moves[i];
+        for (PackedPoint* p : {&m_points[i], &m_lambda_points[i]}) {
+          p->x += move.x();
+          p->y += move.y();
+          p->z += move.z();
+        }
+      }
+    });
+    ++stats.iterations;
+  }
+  ChunkErrors total;
+  for (const ChunkErrors& errors : m_chunk_errors) {
+    total.sum += errors.sum;
+    total.max = std::max(total.max, errors.max);
+  }
+  stats.average_density_error = total.sum / static_cast<Scalar>(n);
+  stats.max_density_error = total.max;
+  parallel_for(n, kLightChunk, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t i = begin; i < end; ++i)
+      particles.positions[i] = Vec3(m_points[i].x, m_points[i].y, m_points[i].z);
+  });
+  return stats;
+}
+
+PressureStats PressurePbf::solve(const FluidContext& ctx, const Vec3Array& velocities_adv, Scalar dt,
+                                 Vec3Array& accelerations) {
+  Vec3Array& x = ctx.particles.positions;
+  const Vec3Array start = x;
+  for (std::size_t i = 0; i < x.size(); ++i)
+    x[i] += dt * velocities_adv[i];
+  const PressureStats stats = project(ctx, dt);
+  accelerations.resize(x.size());
+  for (std::size_t i = 0; i < x.size(); ++i)
+    accelerations[i] = (x[i] - start[i] - dt * velocities_adv[i]) / (dt * dt);
+  x = start;
+  return stats;
+}
+
+void PressurePbf::boundary_pressure_factors(const ParticleSet& particles, ScalarArray& out) const {
+  out.assign(particles.size(), 0.0);
+  if (m_lambda_sum.size() != out.size() || m_last_dt <= 0.0) return;
+  const Scalar scale = -1.0 / (m_rest_density * m_last_dt * m_last_dt);
+  for (std::size_t i = 0; i < out.size(); ++i)
+    out[i] = scale * m_lambda_sum[i];
+}
+
+}  // namespace drench

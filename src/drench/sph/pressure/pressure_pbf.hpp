@@ -1,0 +1,57 @@
+#pragma once
+
+#include <drench/sph/pressure/pressure_solver.hpp>
+
+namespace drench {
+
+/// Position Based Fluids, Macklin & Mueller 2013: Jacobi iterations of the density constraint
+/// C_i = max(rho_i / rho0 - 1, 0) on predicted positions. Each iteration computes at the current prediction
+/// rho_i, lambda_i = -C_i / (sum_k |grad_k C_i|^2 + epsilon) (their eq. 9-11) and moves every particle by
+/// dp_i = sum_j (m_j / rho0) (lambda_i + lambda_j + s_corr_ij) grad W_ij + lambda_i sum_b (Psi_b / rho0)
+/// grad W_ib (their eq. 12-14, with Akinci et al. 2012's boundary particles as neighbors of zero inverse
+/// mass, as SPlisHSPlasH's PBF). Only compression is a violation, as SPlisHSPlasH's: a free-surface particle
+/// lacks neighbours, and pulling it in clusters the surface. FluidSolver drives it with project() from
+/// positions already predicted and neighbor lists searched there (their Algorithm 1); PbfSettings has the
+/// sources of the defaults.
+class PressurePbf final : public PressureSolver {
+ public:
+  explicit PressurePbf(const FluidSettings& settings);
+
+  /// Moves ctx.particles.positions, the predicted positions x* (unit: m), by settings.pbf.iterations Jacobi
+  /// iterations; ctx.particles.densities end as the densities of the last iteration's positions before its
+  /// move (unit: kg/m^3), and the stats report their error, as PCISPH's.
+  /// @param dt  the sub-step (unit: s), > 0: only scales boundary_pressure_factors
+  /// Preconditions: ctx's neighbor lists were searched at the predicted positions.
+  PressureStats project(const FluidContext& ctx, Scalar dt);
+
+  /// The PressureSolver contract: predicts x + dt v_adv, projects it, and returns the acceleration that
+  /// lands there, (x* - x - dt v_adv) / dt^2; ctx.particles.positions are unchanged. ctx's neighbor lists
+  /// must hold every pair within the support at the predicted positions (a skin of dt max|v_adv| or more).
+  PressureStats solve(const FluidContext& ctx, const Vec3Array& velocities_adv, Scalar dt,
+                      Vec3Array& accelerations) override;
+
+  /// -sum over the last projection's iterations of lambda_i / (rho0 dt^2): its boundary move as Akinci's
+  /// -w_i sum_b Psi_b grad W_ib over dt^2, with the gradients at the first prediction (the later iterations'
+  /// moves are small, so a moving body takes that share approximately).
+  void boundary_pressure_factors(const ParticleSet& particles, ScalarArray& out) const override;
+
+ private:
+  PbfSettings m_settings;
+  Scalar m_rest_density;      // rho0 (unit: kg/m^3)
+  Scalar m_epsilon;           // relaxation times the lattice's sum_k |grad_k C|^2 (unit: 1/m^2)
+  Scalar m_scorr_scale;       // k / (the lattice's sum_k |grad_k C|^2): s_corr in lambda's unit (unit: m^2)
+  Scalar m_inv_w_dq;          // 1 / W(dq) (unit: m^3)
+  Scalar m_last_dt = 0;       // the sub-step of the last projection (unit: s)
+  PackedPointArray m_points;  // N: the current prediction (unit: m), w = mass (unit: kg)
+  PackedPointArray m_lambda_points;  // N: the same positions, w = -lambda_i / rho0 (unit: m^5/kg)
+  ScalarArray m_denominator;         // N: sum_k |grad_k C_i|^2 + epsilon at the prediction (unit: 1/m^2)
+  Vec3Array m_scorr_moves;           // N: the artificial pressure's move per iteration (unit: m)
+  ScalarArray m_lambda_sum;          // N: lambda_i summed over the projection's iterations (unit: m^2)
+  Vec3Array m_moves;                 // N: this iteration's dp_i without s_corr (unit: m)
+  struct ChunkErrors {
+    Scalar sum = 0.0, max = 0.0;
+  };
+  std::vector<ChunkErrors> m_chunk_errors;
+};
+
+}  // namespace drench
