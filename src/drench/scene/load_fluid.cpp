@@ -56,8 +56,8 @@ FluidSettings read_fluid(const Node& node) {
   dfsph.require_order("min_iterations", fluid.dfsph.min_iterations, "max_iterations",
                       fluid.dfsph.max_iterations);
 
-  const ObjectReader pbf(r["pbf"],
-                         {"substeps", "iterations", "relaxation", "scorr_k", "scorr_n", "scorr_dq"});
+  const ObjectReader pbf(r["pbf"], {"substeps", "iterations", "relaxation", "scorr_k", "scorr_n", "scorr_dq",
+                                    "max_compression_per_iteration"});
   pbf.read("substeps", fluid.pbf.substeps, kAtLeastOne);
   pbf.read("iterations", fluid.pbf.iterations, kAtLeastOne);
   pbf.read("relaxation", fluid.pbf.relaxation, kNonNegative);
@@ -70,7 +70,8 @@ FluidSettings read_fluid(const Node& node) {
        {std::tuple{&wcsph, "max_compression", &fluid.wcsph.max_compression},
         std::tuple{&pcisph, "max_compression_per_iteration", &fluid.pcisph.max_compression_per_iteration},
         std::tuple{&pcisph, "max_relief_per_substep", &fluid.pcisph.max_relief_per_substep},
-        std::tuple{&dfsph, "max_relief_per_substep", &fluid.dfsph.max_relief_per_substep}}) {
+        std::tuple{&dfsph, "max_relief_per_substep", &fluid.dfsph.max_relief_per_substep},
+        std::tuple{&pbf, "max_compression_per_iteration", &fluid.pbf.max_compression_per_iteration}}) {
     if (const Node c = (*reader)[key]; c.present()) {
       if (c.value().is_null()) {
         limit->reset();

@@ -138,6 +138,13 @@ struct PbfSettings {
   /// (a fraction of rest density, dimensionless), >= 0; 0 turns it off. Their k = 0.1 is in their scenes'
   /// units; here k = 0.1 pushes a pair at dq apart as a compression of 10% would.
   Scalar scorr_k = 0.1;
+  /// The largest compression (fraction of rest density, > 0) one iteration corrects for one particle; unset =
+  /// none, as published. A drench addition, as PcisphSettings::max_compression_per_iteration and for the
+  /// same reason: a dynamic body moves its boundary particles several spacings into the water in one 1/60 s
+  /// step, and projecting that compression away in one iteration turns it into a velocity of compression x
+  /// spacing / sub-step; the game-like scene of demos/bullet_playground threw particles at 1,400 m/s without
+  /// it. A resting or smoothly moving fluid stays below it.
+  std::optional<Scalar> max_compression_per_iteration = 0.05;
   int scorr_n = 4;  ///< n of s_corr, >= 1 (theirs: 4)
   Scalar scorr_dq =
       0.2;  ///< |dq| of s_corr as a fraction of the kernel support radius, in (0, 1) (theirs: 0.1-0.3)

@@ -133,7 +133,7 @@ void FluidSolver::set_moving_boundary(const Vec3Array& positions, const ScalarAr
   m_neighbors.set_boundary_points(std::move(points));
 }
 
-void FluidSolver::add_moving_boundary_reactions(Scalar dt) {
+void FluidSolver::add_moving_boundary_reactions(Scalar dt, const Vec3Array& positions) {
   m_pressure->boundary_pressure_factors(m_particles, m_boundary_factors);
   const NeighborList& bn = m_neighbors.boundary();
   const Vec3Array& points = m_neighbors.boundary_points();
@@ -143,7 +143,7 @@ void FluidSolver::add_moving_boundary_reactions(Scalar dt) {
   for (std::size_t i = 0; i < m_particles.size(); ++i) {
     const Scalar w = m_boundary_factors[i];
     if (w == 0.0) continue;
-    const Vec3& xi = m_particles.positions[i];
+    const Vec3& xi = positions[i];
     const Scalar scale = m_particles.masses[i] * dt * w;
     Vec3 along_faces = Vec3::Zero();
     bool moving = false;
@@ -319,7 +319,7 @@ StepStatus FluidSolver::substep(Scalar dt, Scalar max_speed, SubstepConstraint* 
   record(pressure);
 
   // At the positions the pressure was solved at, before they move.
-  if (m_boundary_packed.size() > m_static_boundary) add_moving_boundary_reactions(dt);
+  if (m_boundary_packed.size() > m_static_boundary) add_moving_boundary_reactions(dt, m_particles.positions);
   StepStatus status;
   if (!pressure.converged || !divergence.converged) status.flags |= StepStatus::PRESSURE_NOT_CONVERGED;
   ScopedTimer timer(m_stats.timings_s.integrate);
@@ -346,6 +346,10 @@ StepStatus FluidSolver::substep_pbf(Scalar dt, Scalar max_speed, SubstepConstrai
   // Searched at the prediction, as theirs, so that a fast jet needs no skin of its own displacement; the
   // iterations' moves are small beside the support.
   update_neighbors(max_speed * dt);
+  // Where the lists' gradient factors hold: a moving body's reaction is taken there (the projection may move
+  // a particle pressed by a body far from it, and factor times distance would then grow without bound: the
+  // game-like scene threw particles at 31,000 m/s).
+  if (m_boundary_packed.size() > m_static_boundary) m_predicted = m_particles.positions;
   const FluidContext ctx = context();
   PressureStats pressure;
   {
@@ -368,7 +372,7 @@ StepStatus FluidSolver::substep_pbf(Scalar dt, Scalar max_speed, SubstepConstrai
       ++m_viscosity_counter.passes;
     }
     m_pressure_accelerations.assign(n, Vec3::Zero());
-    if (m_boundary_packed.size() > m_static_boundary) add_moving_boundary_reactions(dt);
+    if (m_boundary_packed.size() > m_static_boundary) add_moving_boundary_reactions(dt, m_predicted);
     // The viscosity changes velocities only (their Algorithm 1, line 22); what a moving body gives back
     // along its faces moves the particle as a pressure acceleration would.
     parallel_for(n, kLightChunk, [&](std::size_t begin, std::size_t end) {

@@ -181,7 +181,8 @@ class FluidSolver {
   FluidContext context();
   /// Adds to m_moving_impulses what the sub-step's pressure gave the moving boundary points along their
   /// normals, and takes the rest of their push on the fluid back from m_pressure_accelerations.
-  void add_moving_boundary_reactions(Scalar dt);
+  /// @param positions  N particle positions at which the neighbor lists' gradient factors were computed
+  void add_moving_boundary_reactions(Scalar dt, const Vec3Array& positions);
   /// Index of the fastest particle (the first of equals); 0 when there are none.
   std::size_t fastest_particle() const;
   /// The CFL sub-step for the fastest particle moving at `max_speed` (unit: s); infinite when nothing moves.
@@ -199,7 +200,8 @@ class FluidSolver {
   ScalarArray m_boundary_factors;      // scratch: the pressure solver's w_i
   VerletNeighborLists m_neighbors;
   PackedPointArray m_positions_mass;  // positions (unit: m), w = mass (unit: kg), for the densities
-  Vec3Array m_positions_before;       // sub-step start positions, kept only for a SubstepConstraint
+  Vec3Array m_positions_before;       // sub-step start positions, kept only for a SubstepConstraint (and PBF)
+  Vec3Array m_predicted;              // PBF's prediction, kept only when a body moves
   std::unique_ptr<PressureSolver> m_pressure;
   PressurePbf* m_pbf = nullptr;  // m_pressure when the scene's solver is PBF
   std::unique_ptr<NonPressureForce> m_viscosity;

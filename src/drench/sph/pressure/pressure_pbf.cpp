@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include <drench/common/parallel.hpp>
 #include <drench/sph/packed_lanes.hpp>
@@ -133,6 +134,9 @@ PressureStats PressurePbf::project(const FluidContext& ctx, Scalar dt) {
     for (std::size_t i = begin; i < end; ++i)
       m_denominator[i] += m_epsilon;
   });
+  const Scalar max_correction = m_settings.max_compression_per_iteration
+                                    ? *m_settings.max_compression_per_iteration
+                                    : std::numeric_limits<Scalar>::infinity();
   for (int iteration = 0; iteration < m_settings.iterations; ++iteration) {
     // lambda_i at the current prediction (eq. 11), only for compression.
     for_each_chunk(n, [&](std::size_t begin, std::size_t end) {
@@ -140,7 +144,7 @@ PressureStats PressurePbf::project(const FluidContext& ctx, Scalar dt) {
       ChunkErrors errors;
       for (std::size_t i = begin; i < end; ++i) {
         const Scalar violation = std::max(particles.densities[i] * inv_rho0 - 1.0, 0.0);
-        const Scalar lambda = -violation / m_denominator[i];
+        const Scalar lambda = -std::min(violation, max_correction) / m_denominator[i];
         m_lambda_sum[i] += lambda;
         // dp_i = -sum_j m_j (w_i + w_j) grad W_ij - w_i sum_b Psi_b grad W_ib with w = -lambda / rho0.
         m_lambda_points[i].w = -lambda * inv_rho0;
