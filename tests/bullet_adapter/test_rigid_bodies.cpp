@@ -188,6 +188,79 @@ TEST(RigidBodies, WaterAndBodiesKeepTheirMomentumInCollisions) {
       << "start " << start.transpose() << ", end " << end.transpose();
 }
 
+// Issue 40's closed box: static walls would take momentum from the water, so the container is a dynamic body
+// itself (six walls in one btCompoundShape), floating free without gravity with the water and two boxes
+// thrown about inside it. Everything that takes an impulse is counted: fluid, boxes and container.
+TEST(RigidBodies, WaterAndBodiesInAFloatingClosedBoxKeepTheirMomentum) {
+  const Vec3 gravity = Vec3::Zero();
+  GameWorld game(gravity);
+  // Inside: x in [-0.15, 0.25], y and z in [-0.05, 0.15]; walls 2 cm thick (the boundary particles sit 6 mm
+  // inside a wall's faces), 1.5 kg in all.
+  const Vec3 centre(0.05, 0.05, 0.05), inner(0.2, 0.1, 0.1);
+  constexpr double kWall = 0.02;
+  auto container_shape = std::make_unique<btCompoundShape>();
+  for (int axis = 0; axis < 3; ++axis) {
+    for (const double side : {-1.0, 1.0}) {
+      Vec3 half = inner + Vec3::Constant(kWall);  // the walls overlap at the edges: no gap to leak through
+      half[axis] = 0.5 * kWall;
+      Vec3 offset = Vec3::Zero();
+      offset[axis] = side * (inner[axis] + 0.5 * kWall);
+      game.shapes.push_back(std::make_unique<btBoxShape>(to_bt(half)));
+      container_shape->addChildShape(btTransform(btQuaternion::getIdentity(), to_bt(offset)),
+                                     game.shapes.back().get());
+    }
+  }
+  btRigidBody& container = game.add(std::move(container_shape), 1.5, centre);
+  btRigidBody& left = game.add_box(Vec3::Constant(0.03), 0.3, Vec3(-0.1, 0.05, 0.05));
+  btRigidBody& right = game.add_box(Vec3(0.02, 0.04, 0.03), 0.2, Vec3(0.2, 0.05, 0.05));
+  left.setLinearVelocity(btVector3(2.0, 0.1, 0.0));
+  right.setLinearVelocity(btVector3(-1.0, 0.0, 0.3));
+  right.setAngularVelocity(btVector3(0.0, 3.0, 0.0));
+  container.setLinearVelocity(btVector3(0.0, 0.0, -0.2));
+  // Bullet puts a slow body to sleep by zeroing its velocity, which would take its momentum away.
+  for (btRigidBody* body : {&container, &left, &right})
+    body->setActivationState(DISABLE_DEACTIVATION);
+  SceneConfig scene = water_scene(0.01, gravity);
+  scene.emitters.push_back(water_block(Vec3::Zero(), Vec3(0.1, 0.1, 0.1)));
+  CoupledWorld coupled(game.world, *game.cloth, scene);
+  const auto momentum = [&]() -> Vec3 {
+    return fluid_momentum(coupled) + body_momentum(left) + body_momentum(right) + body_momentum(container);
+  };
+  const Vec3 start = momentum();
+  const Vec3 container_start = body_momentum(container);
+  const std::size_t water = coupled.particles().size();
+  std::uint64_t contacts = 0, leaks = 0;
+  std::size_t outside = 0;
+  double drift = 0.0;
+  for (int n = 1; n <= 1000; ++n) {
+    const CoupledStepReport report = coupled.step();
+    ASSERT_FALSE(report.failed()) << "step " << n << ": " << report.fluid.describe();
+    contacts += report.coupling_stats.contacts;
+    leaks += report.leak_stats.leaks;
+    drift = std::max(drift, (momentum() - start).norm());
+    if (n % 50 == 0) {
+      // Every particle inside the container's hollow, in its own frame.
+      const btTransform to_local = container.getWorldTransform().inverse();
+      for (const Vec3& x : coupled.particles().positions)
+        outside += (to_vec3(to_local * to_bt(x)).cwiseAbs().array() < inner.array()).all() ? 0 : 1;
+    }
+  }
+  const Vec3 end = momentum();
+  const double container_change = (body_momentum(container) - container_start).norm();
+  std::printf(
+      "closed box: %llu contacts, momentum %.6g -> %.6g kg m/s, largest drift %.3g, the container's "
+      "changed by %.3g\n",
+      static_cast<unsigned long long>(contacts), start.norm(), end.norm(), drift, container_change);
+  EXPECT_GT(contacts, 100u) << "the water met the boxes and the walls";
+  EXPECT_GT(fluid_momentum(coupled).norm(), 0.1 * start.norm()) << "the water was pushed";
+  EXPECT_GT(container_change, 0.1 * start.norm()) << "the walls were hit (kg m/s)";
+  EXPECT_EQ(leaks, 0u);
+  EXPECT_EQ(coupled.particles().size(), water);
+  EXPECT_EQ(outside, 0u) << "particle samples outside the container's hollow (every 50 steps)";
+  EXPECT_LT(drift, bullet_tolerance(1e-6, 1.0, 1e4) * start.norm())
+      << "start " << start.transpose() << ", end " << end.transpose();
+}
+
 TEST(RigidBodies, AWaveOfWaterPushesALightCrateOffATable) {
   const Vec3 gravity(0, -9.81, 0);
   GameWorld game(gravity);
