@@ -127,6 +127,25 @@ TEST(RigidBodies, ABallOfHalfTheWatersDensityFloatsHalfSubmergedAtTwoSpacings) {
   EXPECT_NEAR(fine.mean, 0.5, 0.05) << "draft / height, spacing 8 mm";
 }
 
+// The water's pressure on a ball acts along its faces' normals, nearly through its centre, and nothing in the
+// tank turns it: a steady torque would spin it up with nothing to stop it (there is no viscosity here), walk
+// it off sideways and, in a longer run, out of the tank. Boundary samples on the faces' shared corners, each
+// pushing along the normal of one face only, spun this ball to 7.8 rad/s in 0.3 s.
+TEST(RigidBodies, AFloatingBallDoesNotSpinUp) {
+  buoyancy::TankWorld game(500.0);
+  RigidBodyOptions options;
+  options.mesh.max_edge = buoyancy::kFacetEdge;
+  CoupledWorld coupled(game.world, *game.cloth, buoyancy::tank_scene(0.01), options);
+  double fastest = 0.0;
+  for (int n = 1; n <= 300; ++n) {
+    const CoupledStepReport report = coupled.step();
+    ASSERT_FALSE(report.failed()) << "step " << n << ": " << report.fluid.describe();
+    fastest = std::max(fastest, static_cast<double>(game.ball->getAngularVelocity().length()));
+  }
+  std::printf("fastest spin %.3f rad/s\n", fastest);
+  EXPECT_LT(fastest, 1.0) << "rad/s";
+}
+
 TEST(RigidBodies, ABallOfTwiceTheWatersDensitySinks) {
   const buoyancy::Draft draft = buoyancy::settled_draft(0.01, 2000.0);
   EXPECT_EQ(draft.failure, "") << "step " << draft.failed_step;
