@@ -19,7 +19,7 @@
 #include <string>
 #include <vector>
 
-#include <drench/sph/cubic_spline_kernel.hpp>
+#include "../../demos/buoyancy_tank.hpp"
 #include "../assertions.hpp"
 #include "bullet_test_helpers.hpp"
 
@@ -57,12 +57,6 @@ struct GameWorld : test::SoftRigidWorld {
     return add(std::make_unique<btBoxShape>(to_bt(half)), mass, centre);
   }
 
-  /// A ball of `radius` (unit: m) and `density` (kg/m^3) at `centre`.
-  btRigidBody& add_ball(double radius, double density, const Vec3& centre) {
-    const double mass = density * 4.0 / 3.0 * 3.14159265358979323846 * radius * radius * radius;
-    return add(std::make_unique<btSphereShape>(static_cast<btScalar>(radius)), mass, centre);
-  }
-
   /// A body of `shape`, `mass` (kg; 0 = static) and `rotation` at `centre`, added to the world.
   btRigidBody& add(std::unique_ptr<btCollisionShape> shape, double mass, const Vec3& centre,
                    const btQuaternion& rotation = btQuaternion::getIdentity()) {
@@ -96,18 +90,6 @@ EmitterSettings water_block(const Vec3& min, const Vec3& max, const Vec3& veloci
   return block;
 }
 
-/// Water `depth` deep (unit: m) in an open tank of side `tank` and walls `height` high, its floor at y = 0.
-SceneConfig tank_scene(double spacing, const Vec3& gravity, double tank, double depth, double height) {
-  SceneConfig scene = water_scene(spacing, gravity);
-  BoundarySettings walls;
-  walls.min = Vec3::Zero();
-  walls.max = Vec3(tank, height, tank);
-  walls.open_top = true;
-  scene.boundaries.push_back(walls);
-  scene.emitters.push_back(water_block(Vec3::Zero(), Vec3(tank, depth, tank)));
-  return scene;
-}
-
 Vec3 fluid_momentum(const CoupledWorld& coupled) {
   const ParticleSet& p = coupled.particles();
   Vec3 sum = Vec3::Zero();
@@ -132,87 +114,50 @@ std::size_t particles_inside(const CoupledWorld& coupled, const btRigidBody& bod
   return inside;
 }
 
-/// The height where the water's SPH density, sum_j m_j W(x - x_j), falls to half the rest density above
-/// (x, z): its surface as drench's reconstruction draws it (unit: m).
-double water_surface(const CoupledWorld& coupled, double x, double z) {
-  const CubicSplineKernel kernel(coupled.scene().fluid.particle_spacing);
-  const auto density = [&](double y) {
-    double sum = 0.0;
-    for (std::size_t i = 0; i < coupled.particles().size(); ++i)
-      sum += coupled.particles().masses[i] *
-             kernel.value((coupled.particles().positions[i] - Vec3(x, y, z)).norm());
-    return sum;
-  };
-  const double half = 0.5 * coupled.scene().fluid.rest_density;
-  double below = 0.0, above = 1.0;
-  for (int i = 0; i < 40; ++i) {
-    const double mid = 0.5 * (below + above);
-    (density(mid) > half ? below : above) = mid;
-  }
-  return below;
-}
-
-/// The draft of a ball of 5 cm radius and density `density` (unit: kg/m^3) settled in a tank of water, as a
-/// fraction of its height: the water's surface (water_surface, between the ball and the walls) less the
-/// ball's lowest point, over its diameter, averaged over the last 0.3 s of 1.2 s. Archimedes says 0.5 for
-/// half the water's density (by symmetry) and 1 for a ball that sinks. A ball, not a cube: a floating cube
-/// of half the water's density turns onto an edge, and rocks there for longer than the test runs.
-double settled_draft(double spacing, double density) {
-  const Vec3 gravity(0, -9.81, 0);
-  GameWorld game(gravity);
-  const double radius = 0.05, tank = 0.2, depth = 0.1;
-  // The tank's floor in Bullet too, so that a sinking ball lands on it.
-  game.add_box(Vec3(0.2, 0.05, 0.2), 0.0, Vec3(0.5 * tank, -0.05, 0.5 * tank));
-  const btRigidBody& ball =
-      game.add_ball(radius, density, Vec3(0.5 * tank, depth + radius + 0.002, 0.5 * tank));
-  const SceneConfig scene = tank_scene(spacing, gravity, tank, depth, 0.3);
-  // Facets of 1 cm: the faceted ball's volume is within 0.3% of the sphere's (test_shape_mesh.cpp).
-  RigidBodyOptions options;
-  options.mesh.max_edge = 0.01;
-  CoupledWorld coupled(game.world, *game.cloth, scene, options);
-  double draft_sum = 0.0;
-  int samples = 0;
-  for (int n = 1; n <= 1200; ++n) {
-    const CoupledStepReport report = coupled.step();
-    EXPECT_FALSE(report.failed()) << "step " << n << ": " << report.fluid.describe();
-    if (report.failed()) return NAN;
-    if (n > 900 && n % 30 == 0) {
-      // Midway between the ball and the walls, where the surface is flat.
-      const double gap = 0.25 * (tank - 2.0 * radius);
-      const double surface =
-          0.25 * (water_surface(coupled, gap, 0.5 * tank) + water_surface(coupled, tank - gap, 0.5 * tank) +
-                  water_surface(coupled, 0.5 * tank, gap) + water_surface(coupled, 0.5 * tank, tank - gap));
-      const double lowest = ball.getCenterOfMassPosition().y() - radius;
-      draft_sum += std::clamp(surface - lowest, 0.0, 2.0 * radius) / (2.0 * radius);
-      ++samples;
-    }
-  }
-  return draft_sum / samples;
-}
-
 // Archimedes through the boundary particles of rigid_boundary.hpp, at two spacings: issue 40's target, the
 // draft within 5% of the height whatever the resolution. Without the boundary particles the water under a
 // body compressed as at a free surface (a cube of half the water's density sank to 0.77 of its height).
 TEST(RigidBodies, ABallOfHalfTheWatersDensityFloatsHalfSubmergedAtTwoSpacings) {
-  const double coarse = settled_draft(0.01, 500.0);
-  const double fine = settled_draft(0.008, 500.0);
-  std::printf("draft: %.4f of the ball's height at 1 cm, %.4f at 8 mm\n", coarse, fine);
-  EXPECT_NEAR(coarse, 0.5, 0.05) << "draft / height, spacing 1 cm";
-  EXPECT_NEAR(fine, 0.5, 0.05) << "draft / height, spacing 8 mm";
+  const buoyancy::Draft coarse = buoyancy::settled_draft(0.01, 500.0);
+  const buoyancy::Draft fine = buoyancy::settled_draft(0.008, 500.0);
+  EXPECT_EQ(coarse.failure, "") << "step " << coarse.failed_step << ", spacing 1 cm";
+  EXPECT_EQ(fine.failure, "") << "step " << fine.failed_step << ", spacing 8 mm";
+  std::printf("draft: %.4f of the ball's height at 1 cm, %.4f at 8 mm\n", coarse.mean, fine.mean);
+  EXPECT_NEAR(coarse.mean, 0.5, 0.05) << "draft / height, spacing 1 cm";
+  EXPECT_NEAR(fine.mean, 0.5, 0.05) << "draft / height, spacing 8 mm";
+}
+
+// The water's pressure on a ball acts along its faces' normals, nearly through its centre, and nothing in the
+// tank turns it: a steady torque would spin it up with nothing to stop it (there is no viscosity here), walk
+// it off sideways and, in a longer run, out of the tank. Boundary samples on the faces' shared corners, each
+// pushing along the normal of one face only, spun this ball to 7.8 rad/s in 0.3 s.
+TEST(RigidBodies, AFloatingBallDoesNotSpinUp) {
+  buoyancy::TankWorld game(500.0);
+  RigidBodyOptions options;
+  options.mesh.max_edge = buoyancy::kFacetEdge;
+  CoupledWorld coupled(game.world, *game.cloth, buoyancy::tank_scene(0.01), options);
+  double fastest = 0.0;
+  for (int n = 1; n <= 300; ++n) {
+    const CoupledStepReport report = coupled.step();
+    ASSERT_FALSE(report.failed()) << "step " << n << ": " << report.fluid.describe();
+    fastest = std::max(fastest, static_cast<double>(game.ball->getAngularVelocity().length()));
+  }
+  std::printf("fastest spin %.3f rad/s\n", fastest);
+  EXPECT_LT(fastest, 1.0) << "rad/s";
 }
 
 TEST(RigidBodies, ABallOfTwiceTheWatersDensitySinks) {
-  EXPECT_EQ(settled_draft(0.01, 2000.0), 1.0) << "under water";
+  const buoyancy::Draft draft = buoyancy::settled_draft(0.01, 2000.0);
+  EXPECT_EQ(draft.failure, "") << "step " << draft.failed_step;
+  EXPECT_EQ(draft.mean, 1.0) << "under water";
 }
 
 TEST(RigidBodies, ABallDroppedIntoATankSlowsInTheWaterAndSplashesIt) {
-  const Vec3 gravity(0, -9.81, 0);
-  GameWorld game(gravity);
-  const double radius = 0.03, tank = 0.2, depth = 0.12, drop = 0.12;
-  game.add_box(Vec3(0.2, 0.05, 0.2), 0.0, Vec3(0.5 * tank, -0.05, 0.5 * tank));
+  const double radius = 0.03, tank = buoyancy::kTank, depth = 0.12, drop = 0.12;
   const double start = depth + drop;
-  const btRigidBody& ball = game.add_ball(radius, 2000.0, Vec3(0.5 * tank, start, 0.5 * tank));
-  const SceneConfig scene = tank_scene(0.01, gravity, tank, depth, 0.4);
+  buoyancy::TankWorld game(2000.0, radius, drop - radius, tank, depth);
+  const btRigidBody& ball = *game.ball;
+  const SceneConfig scene = buoyancy::tank_scene(0.01, tank, depth, 0.4);
   CoupledWorld coupled(game.world, *game.cloth, scene);
   double fastest_up = 0.0, entry_speed = 0.0, braked = 1.0;
   for (int n = 0; n < 250; ++n) {
@@ -259,6 +204,79 @@ TEST(RigidBodies, WaterAndBodiesKeepTheirMomentumInCollisions) {
   EXPECT_GT(fluid_momentum(coupled).norm(), 0.1 * start.norm()) << "the water was pushed";
   const Vec3 end = fluid_momentum(coupled) + body_momentum(left) + body_momentum(right);
   EXPECT_LT((end - start).norm(), bullet_tolerance(1e-6, 1.0, 1e4) * start.norm())
+      << "start " << start.transpose() << ", end " << end.transpose();
+}
+
+// Issue 40's closed box: static walls would take momentum from the water, so the container is a dynamic body
+// itself (six walls in one btCompoundShape), floating free without gravity with the water and two boxes
+// thrown about inside it. Everything that takes an impulse is counted: fluid, boxes and container.
+TEST(RigidBodies, WaterAndBodiesInAFloatingClosedBoxKeepTheirMomentum) {
+  const Vec3 gravity = Vec3::Zero();
+  GameWorld game(gravity);
+  // Inside: x in [-0.15, 0.25], y and z in [-0.05, 0.15]; walls 2 cm thick (the boundary particles sit 6 mm
+  // inside a wall's faces), 1.5 kg in all.
+  const Vec3 centre(0.05, 0.05, 0.05), inner(0.2, 0.1, 0.1);
+  constexpr double kWall = 0.02;
+  auto container_shape = std::make_unique<btCompoundShape>();
+  for (int axis = 0; axis < 3; ++axis) {
+    for (const double side : {-1.0, 1.0}) {
+      Vec3 half = inner + Vec3::Constant(kWall);  // the walls overlap at the edges: no gap to leak through
+      half[axis] = 0.5 * kWall;
+      Vec3 offset = Vec3::Zero();
+      offset[axis] = side * (inner[axis] + 0.5 * kWall);
+      game.shapes.push_back(std::make_unique<btBoxShape>(to_bt(half)));
+      container_shape->addChildShape(btTransform(btQuaternion::getIdentity(), to_bt(offset)),
+                                     game.shapes.back().get());
+    }
+  }
+  btRigidBody& container = game.add(std::move(container_shape), 1.5, centre);
+  btRigidBody& left = game.add_box(Vec3::Constant(0.03), 0.3, Vec3(-0.1, 0.05, 0.05));
+  btRigidBody& right = game.add_box(Vec3(0.02, 0.04, 0.03), 0.2, Vec3(0.2, 0.05, 0.05));
+  left.setLinearVelocity(btVector3(2.0, 0.1, 0.0));
+  right.setLinearVelocity(btVector3(-1.0, 0.0, 0.3));
+  right.setAngularVelocity(btVector3(0.0, 3.0, 0.0));
+  container.setLinearVelocity(btVector3(0.0, 0.0, -0.2));
+  // Bullet puts a slow body to sleep by zeroing its velocity, which would take its momentum away.
+  for (btRigidBody* body : {&container, &left, &right})
+    body->setActivationState(DISABLE_DEACTIVATION);
+  SceneConfig scene = water_scene(0.01, gravity);
+  scene.emitters.push_back(water_block(Vec3::Zero(), Vec3(0.1, 0.1, 0.1)));
+  CoupledWorld coupled(game.world, *game.cloth, scene);
+  const auto momentum = [&]() -> Vec3 {
+    return fluid_momentum(coupled) + body_momentum(left) + body_momentum(right) + body_momentum(container);
+  };
+  const Vec3 start = momentum();
+  const Vec3 container_start = body_momentum(container);
+  const std::size_t water = coupled.particles().size();
+  std::uint64_t contacts = 0, leaks = 0;
+  std::size_t outside = 0;
+  double drift = 0.0;
+  for (int n = 1; n <= 1000; ++n) {
+    const CoupledStepReport report = coupled.step();
+    ASSERT_FALSE(report.failed()) << "step " << n << ": " << report.fluid.describe();
+    contacts += report.coupling_stats.contacts;
+    leaks += report.leak_stats.leaks;
+    drift = std::max(drift, (momentum() - start).norm());
+    if (n % 50 == 0) {
+      // Every particle inside the container's hollow, in its own frame.
+      const btTransform to_local = container.getWorldTransform().inverse();
+      for (const Vec3& x : coupled.particles().positions)
+        outside += (to_vec3(to_local * to_bt(x)).cwiseAbs().array() < inner.array()).all() ? 0 : 1;
+    }
+  }
+  const Vec3 end = momentum();
+  const double container_change = (body_momentum(container) - container_start).norm();
+  std::printf(
+      "closed box: %llu contacts, momentum %.6g -> %.6g kg m/s, largest drift %.3g, the container's "
+      "changed by %.3g\n",
+      static_cast<unsigned long long>(contacts), start.norm(), end.norm(), drift, container_change);
+  EXPECT_GT(contacts, 100u) << "the water met the boxes and the walls";
+  EXPECT_GT(fluid_momentum(coupled).norm(), 0.1 * start.norm()) << "the water was pushed";
+  EXPECT_GT(container_change, 0.1 * start.norm()) << "the walls were hit (kg m/s)";
+  EXPECT_EQ(leaks, 0u);
+  EXPECT_EQ(coupled.particles().size(), water);
+  EXPECT_EQ(outside, 0u) << "particle samples outside the container's hollow (every 50 steps)";
+  EXPECT_LT(drift, bullet_tolerance(1e-6, 1.0, 1e4) * start.norm())
       << "start " << start.transpose() << ", end " << end.transpose();
 }
 

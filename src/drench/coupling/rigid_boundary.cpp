@@ -66,16 +66,10 @@ RigidBoundary::Body RigidBoundary::sample(const RigidSurface& surface) const {
   body.nodes = surface.positions_t0.size();
   body.triangles = surface.triangles.size();
   const Vec3Array& x = surface.positions_t0;
-  const Scalar inset = m_inset;
-  // Faces share their edges and corners: a sample within a quarter spacing of one kept is dropped.
-  const Scalar cell = 0.25 * m_spacing;
-  std::unordered_set<std::uint64_t> taken;
-  const auto key = [&](const Vec3& p) {
-    const Vec3 q = (p / cell).array().round();
-    return (static_cast<std::uint64_t>(static_cast<std::int64_t>(q.x()) & 0x1FFFFF) << 42) |
-           (static_cast<std::uint64_t>(static_cast<std::int64_t>(q.y()) & 0x1FFFFF) << 21) |
-           (static_cast<std::uint64_t>(static_cast<std::int64_t>(q.z()) & 0x1FFFFF));
-  };
+  // Samples inside each face only, at the centroids of its steps^2 sub-triangles: a sample on a shared edge
+  // or corner would push along the normal of whichever face claimed it first, off the line through the other
+  // faces' pressure, and on a floating ball such pushes added up to a steady torque that spun it up (7.8
+  // rad/s in 0.3 s at 1 cm, 500 kg/m^3; test RigidBodies.AFloatingBallDoesNotSpinUp).
   Vec3Array points;
   for (std::size_t f = 0; f < surface.triangles.size(); ++f) {
     const Triangle& t = surface.triangles[f];
@@ -84,14 +78,16 @@ RigidBoundary::Body RigidBoundary::sample(const RigidSurface& surface) const {
     const Scalar longest =
         std::max({(x[t[1]] - x[t[0]]).norm(), (x[t[2]] - x[t[1]]).norm(), (x[t[0]] - x[t[2]]).norm()});
     const int steps = std::max(1, static_cast<int>(std::ceil(longest / m_spacing - 1e-9)));
-    for (int i = 0; i <= steps; ++i) {
-      for (int j = 0; i + j <= steps; ++j) {
-        const Vec3 w(static_cast<Scalar>(steps - i - j) / steps, static_cast<Scalar>(i) / steps,
-                     static_cast<Scalar>(j) / steps);
-        const Vec3 p = w[0] * x[t[0]] + w[1] * x[t[1]] + w[2] * x[t[2]] - inset * n;
-        if (!taken.insert(key(p)).second) continue;
-        body.samples.push_back({static_cast<Index>(f), w, 0.0});
-        points.push_back(p);
+    for (int i = 0; i < steps; ++i) {
+      for (int j = 0; i + j < steps; ++j) {
+        // The sub-triangle pointing like the face, then (where there is one) the one pointing the other way.
+        for (const Scalar third : {Scalar(1.0 / 3.0), Scalar(2.0 / 3.0)}) {
+          if (third > 0.5 && i + j + 2 > steps) continue;
+          const Scalar a = (i + third) / steps, b = (j + third) / steps;
+          const Vec3 w(1.0 - a - b, a, b);
+          body.samples.push_back({static_cast<Index>(f), w, 0.0});
+          points.push_back(w[0] * x[t[0]] + w[1] * x[t[1]] + w[2] * x[t[2]] - m_inset * n);
+        }
       }
     }
   }

@@ -22,11 +22,12 @@ class RigidBoundary {
   ///        kernel of their volumes
   explicit RigidBoundary(Scalar spacing);
 
-  /// The samples of every DYNAMIC surface at its positions_t0: on each face, a lattice of the spacing, set
-  /// inside the body by inset() so that the water's volume ends at the face, with Akinci et al. 2012 eq. 4's
-  /// volume
-  /// V_b = 1 / sum_k W_bk over the body's own samples. A body seen for the first time (or whose mesh
-  /// changed) is sampled now; its samples are kept by key, in barycentric weights, since the body is rigid.
+  /// The samples of every DYNAMIC surface at its positions_t0: on each face, the centroids of its
+  /// sub-triangles of about the spacing (inside the face, none on its edges or corners, so that each pushes
+  /// along its own face's normal), set inside the body by inset() so that the water's volume ends at the
+  /// face, with Akinci et al. 2012 eq. 4's volume V_b = 1 / sum_k W_bk over the body's own samples. A body
+  /// seen for the first time (or whose mesh changed) is sampled now; its samples are kept by key, in
+  /// barycentric weights, since the body is rigid.
   /// @param positions, volumes, normals  out: B points (unit: m), volumes (unit: m^3) and the outward unit
   ///        normals of their faces
   void place(const std::vector<RigidSurface>& surfaces, Vec3Array& positions, ScalarArray& volumes,
