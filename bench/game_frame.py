@@ -1,0 +1,89 @@
+#!/usr/bin/env python3
+"""Issue 41's frame budget: ms per frame by stage of the game-like level at 1/60 s, per solver, alone and busy.
+
+    python3 bench/game_frame.py --bench build-bench/bench/bench_game_frame \
+        --out bench/results/debian12-2core/game_frame.csv [--frames 600] [--warmup 60] [--solvers dfsph,pcisph]
+
+Runs bench/bench_game_frame.cpp once (Google Benchmark, JSON output): demos/bullet_playground's level (a hammock,
+a curtain, two balls, a crate, two jets of 1 cm particles, wetting), one coupled step of 1/60 s per frame, for
+each solver with drench on 1 thread and on its default (the CPUs), alone and beside one busy thread per CPU.
+Each row: the median and 99th percentile ms per frame of each stage (CoupledStepReport::seconds: emit, fluid,
+cloth, rigid, coupling, other, total) over the timed frames, the leaks of the whole run (target 0), the fastest
+particle, the fluid's sub-steps per frame. The benchmarks run one after another, in the order solver, threads,
+condition; the machine's load before and after goes into the CSV's notes.
+"""
+
+import argparse
+import json
+import os
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+
+sys.path.insert(0, str(ROOT / "bench"))
+from bench_surface import commit, cpu_model, write_csv  # noqa: E402  (the same provenance lines as the other CSVs)
+
+STAGES = ["emit", "fluid", "cloth", "rigid", "coupling", "other", "total"]
+DEFAULTS = {"frames": 600, "warmup": 60, "solvers": "dfsph,pcisph"}
+
+
+def row_of(benchmark):
+    """One CSV row from a benchmark of the JSON output, named game_frame/<solver>/threads:<n>/<alone|busy:<n>>."""
+    name = benchmark["run_name"]
+    _, solver, threads, condition = name.split("/")[:4]
+    if benchmark.get("error_occurred"):
+        return {"solver": solver, "threads": threads.split(":")[1], "condition": condition,
+                "status": benchmark.get("error_message", "error")}
+    row = {"solver": solver, "threads": int(benchmark["drench_threads"]), "condition": condition,
+           "busy_threads": int(benchmark["busy_threads"]), "status": "ok",
+           "frames": int(benchmark["frames"]), "warmup_frames": int(benchmark["warmup_frames"]),
+           "particles_max": int(benchmark["particles_max"]), "particles_end": int(benchmark["particles"]),
+           "leaks": int(benchmark["leaks"]), "failed_frames": int(benchmark["failed_frames"]),
+           "fastest_particle_mps": round(benchmark["fastest_particle_mps"], 3),
+           "fastest_node_mps": round(benchmark["fastest_node_mps"], 3),
+           "fluid_substeps_per_frame": round(benchmark["fluid_substeps_per_frame"], 2),
+           "density_error_mean": float(f"{benchmark['density_error_mean']:.3g}"),
+           "mean_ms": round(benchmark["real_time"], 3)}
+    for stage in STAGES:
+        row[f"{stage}_ms_median"] = round(benchmark[f"{stage}_ms_median"], 3)
+        row[f"{stage}_ms_p99"] = round(benchmark[f"{stage}_ms_p99"], 3)
+    return row
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--bench", default=str(ROOT / "build-bench" / "bench" / "bench_game_frame"))
+    parser.add_argument("--frames", type=int, default=DEFAULTS["frames"], help="timed frames per benchmark")
+    parser.add_argument("--warmup", type=int, default=DEFAULTS["warmup"], help="untimed frames before them")
+    parser.add_argument("--solvers", default=DEFAULTS["solvers"], help="comma-separated scene names")
+    parser.add_argument("--filter", help="--benchmark_filter for the binary (a regex over the names)")
+    parser.add_argument("--out", required=True, help="CSV to write")
+    args = parser.parse_args()
+    load_before = " ".join(f"{x:.2f}" for x in os.getloadavg())
+    with tempfile.TemporaryDirectory() as scratch:
+        out = Path(scratch) / "game_frame.json"
+        command = [args.bench, "--frames", str(args.frames), "--warmup", str(args.warmup), "--solvers",
+                   args.solvers, f"--benchmark_out={out}", "--benchmark_out_format=json"]
+        if args.filter:
+            command.append(f"--benchmark_filter={args.filter}")
+        # Google Benchmark's console table goes to stderr, so that the run can be followed.
+        subprocess.run(command, check=True, stdout=sys.stderr)
+        report = json.loads(out.read_text())
+    load_after = " ".join(f"{x:.2f}" for x in os.getloadavg())
+    rows = [row_of(b) for b in report["benchmarks"]]
+    if not rows:
+        raise SystemExit(f"{' '.join(command)}: no benchmark ran (filter {args.filter!r}?)")
+    keys = list(max(rows, key=len))  # a failed benchmark's row has fewer keys; its other cells stay empty
+    rows = [{key: r.get(key, "") for key in keys} for r in rows]
+    options = "".join(f" --{key} {getattr(args, key)}" for key in DEFAULTS if getattr(args, key) != DEFAULTS[key])
+    if args.filter:
+        options += f" --filter '{args.filter}'"
+    write_csv(args.out, rows, [f"command: python3 bench/game_frame.py{options}", f"commit: {commit()}",
+                               f"cpu: {cpu_model()}", f"load_before: {load_before}", f"load_after: {load_after}"])
+
+
+if __name__ == "__main__":
+    main()
