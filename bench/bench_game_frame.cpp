@@ -90,9 +90,9 @@ double quantile(std::vector<double> values, double q) {
 /// fluid, cloth, rigid, coupling, other = total less the named ones, total); leaks over the whole run
 /// (warm-up included; the target is 0); the fastest particle and node at the end of any step of the run
 /// (unit: m/s); particles at the end and at most; the fluid's CFL sub-steps per frame and mean density error
-/// over the timed frames.
-void game_frame(benchmark::State& state, drench::PressureSolverKind solver, int threads, int busy,
-                long warmup) {
+/// over the timed frames; the time of a blow-up (0: none), after which nothing more is stepped.
+void game_frame(benchmark::State& state, const std::string& name, drench::PressureSolverKind solver,
+                int threads, int busy, long warmup) {
   drench::set_thread_count(threads);
   const auto frames = static_cast<long>(state.max_iterations);
   playground::World game;
@@ -108,17 +108,28 @@ void game_frame(benchmark::State& state, drench::PressureSolverKind solver, int 
     if (report.failed()) ++failed_frames;
     return report;
   };
-  for (long n = 0; n < warmup; ++n) {
-    if (!checked_step().ok()) {
-      state.SkipWithError(("the fluid or a cloth blew up in warm-up frame " + std::to_string(n + 1)).c_str());
-      return;
-    }
+  // A blow-up stops the stepping: the iterations left pass without a step, with time 0, so that the
+  // counters keep how far it got and what its frames cost until then (Google Benchmark drops an errored
+  // run's counters). blew_up_at_s > 0 marks it; the mean time per iteration is then not a frame's.
+  double blew_up_at = 0.0;
+  const auto blow_up = [&](const drench::bullet::CoupledStepReport& report) {
+    blew_up_at = coupled.time();
+    std::fprintf(stderr, "%s: the fluid or a cloth blew up at t = %.4f s: %s\n", name.c_str(), blew_up_at,
+                 report.fluid.describe().c_str());
+  };
+  for (long n = 0; n < warmup && blew_up_at == 0.0; ++n) {
+    const drench::bullet::CoupledStepReport report = checked_step();
+    if (!report.ok()) blow_up(report);
   }
 
   const drench::FluidStatistics fluid_before = coupled.simulation().fluid().statistics();
   std::vector<std::vector<double>> stages(7);
   std::size_t particles_max = 0;
   for (auto _ : state) {
+    if (blew_up_at > 0.0) {
+      state.SetIterationTime(0.0);
+      continue;
+    }
     const auto start = std::chrono::steady_clock::now();
     const drench::bullet::CoupledStepReport report = checked_step();
     state.SetIterationTime(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
@@ -128,12 +139,7 @@ void game_frame(benchmark::State& state, drench::PressureSolverKind solver, int 
     for (std::size_t k = 0; k < stages.size(); ++k)
       stages[k].push_back(values[k]);
     particles_max = std::max(particles_max, coupled.particles().size());
-    if (!report.ok()) {
-      state.SkipWithError(("the fluid or a cloth blew up at t = " + std::to_string(coupled.time()) +
-                           " s: " + report.fluid.describe())
-                              .c_str());
-      break;
-    }
+    if (!report.ok()) blow_up(report);
   }
 
   const char* names[] = {"emit", "fluid", "cloth", "rigid", "coupling", "other", "total"};
@@ -150,6 +156,7 @@ void game_frame(benchmark::State& state, drench::PressureSolverKind solver, int 
   state.counters["busy_threads"] = busy;
   state.counters["leaks"] = static_cast<double>(leaks);
   state.counters["failed_frames"] = static_cast<double>(failed_frames);
+  state.counters["blew_up_at_s"] = blew_up_at;
   state.counters["fastest_particle_mps"] = sim.max_particle_speed();
   state.counters["fastest_node_mps"] = sim.max_node_speed();
   state.counters["particles"] = static_cast<double>(coupled.particles().size());
@@ -226,7 +233,7 @@ int main(int argc, char** argv) {
         const std::string name = std::string("game_frame/") + drench::pressure_solver_name(solver) +
                                  "/threads:" + std::to_string(threads) +
                                  (busy == 0 ? "/alone" : "/busy:" + std::to_string(busy));
-        benchmark::RegisterBenchmark(name.c_str(), game_frame, solver, threads, busy, options.warmup)
+        benchmark::RegisterBenchmark(name.c_str(), game_frame, name, solver, threads, busy, options.warmup)
             ->Iterations(options.frames)
             ->UseManualTime()
             ->Unit(benchmark::kMillisecond);

@@ -30,15 +30,20 @@ STAGES = ["emit", "fluid", "cloth", "rigid", "coupling", "other", "total"]
 DEFAULTS = {"frames": 600, "warmup": 60, "solvers": "dfsph,pcisph"}
 
 
-def row_of(benchmark):
-    """One CSV row from a benchmark of the JSON output, named game_frame/<solver>/threads:<n>/<alone|busy:<n>>."""
+def row_of(benchmark, blow_ups):
+    """One CSV row from a benchmark of the JSON output, named game_frame/<solver>/threads:<n>/<alone|busy:<n>>;
+    blow_ups: the binary's lines on the runs that blew up, by benchmark name."""
     name = benchmark["run_name"]
     _, solver, threads, condition = name.split("/")[:4]
-    if benchmark.get("error_occurred"):
-        return {"solver": solver, "threads": threads.split(":")[1], "condition": condition,
-                "status": benchmark.get("error_message", "error")}
+    status = benchmark.get("error_message", "error") if benchmark.get("error_occurred") else "ok"
+    if benchmark.get("blew_up_at_s", 0) > 0:
+        status = blow_ups.get(name.split("/iterations:")[0], f"blew up at t = {benchmark['blew_up_at_s']:.4f} s")
+    if "frames" not in benchmark:  # an error without counters
+        return {"solver": solver, "threads": threads.split(":")[1], "condition": condition, "status": status}
+    # A blow-up keeps its counters: the frames until then.
     row = {"solver": solver, "threads": int(benchmark["drench_threads"]), "condition": condition,
-           "busy_threads": int(benchmark["busy_threads"]), "status": "ok",
+           "busy_threads": int(benchmark["busy_threads"]), "status": status,
+           "blew_up_at_s": round(benchmark["blew_up_at_s"], 4),
            "frames": int(benchmark["frames"]), "warmup_frames": int(benchmark["warmup_frames"]),
            "particles_max": int(benchmark["particles_max"]), "particles_end": int(benchmark["particles"]),
            "leaks": int(benchmark["leaks"]), "failed_frames": int(benchmark["failed_frames"]),
@@ -69,11 +74,20 @@ def main():
                    args.solvers, f"--benchmark_out={out}", "--benchmark_out_format=json"]
         if args.filter:
             command.append(f"--benchmark_filter={args.filter}")
-        # Google Benchmark's console table goes to stderr, so that the run can be followed.
-        subprocess.run(command, check=True, stdout=sys.stderr)
+        # Google Benchmark's console table and the binary's own lines go to stderr, so that the run can be
+        # followed; the lines on blow-ups ("<name>: the fluid or a cloth blew up at ...") are kept for the CSV.
+        blow_ups = {}
+        with subprocess.Popen(command, stdout=sys.stderr, stderr=subprocess.PIPE, text=True) as process:
+            for line in process.stderr:
+                sys.stderr.write(line)
+                name, _, what = line.rstrip("\n").partition(": ")
+                if what.startswith("the fluid or a cloth blew up"):
+                    blow_ups[name] = what.replace("the fluid or a cloth ", "")
+        if process.returncode != 0:
+            raise SystemExit(f"{' '.join(command)}: exit {process.returncode}")
         report = json.loads(out.read_text())
     load_after = " ".join(f"{x:.2f}" for x in os.getloadavg())
-    rows = [row_of(b) for b in report["benchmarks"]]
+    rows = [row_of(b, blow_ups) for b in report["benchmarks"]]
     if not rows:
         raise SystemExit(f"{' '.join(command)}: no benchmark ran (filter {args.filter!r}?)")
     keys = list(max(rows, key=len))  # a failed benchmark's row has fewer keys; its other cells stay empty
