@@ -4,7 +4,7 @@
 // drench on 1 thread and on its default (the CPUs), alone and beside one busy thread per CPU (std::threads
 // spinning from before the warm-up to the end of the run, as a game's or a renderer's threads would).
 //
-//   build-bench/bench/bench_game_frame [--frames 600] [--warmup 60] [--solvers dfsph,pcisph]
+//   build-bench/bench/bench_game_frame [--frames 600] [--warmup 60] [--solvers dfsph,pcisph] [--busy N]
 //       [--benchmark_filter=...] --benchmark_out=game_frame.json --benchmark_out_format=json
 // bench/game_frame.py runs it and writes bench/results/<machine>/game_frame.csv.
 //
@@ -46,6 +46,7 @@ constexpr drench::PressureSolverKind kKnownSolvers[] = {
 struct Options {
   long frames = 600;  // timed frames per benchmark
   long warmup = 60;   // frames stepped before them, untimed
+  int busy = 0;       // spinning threads of the busy condition; 0: one per CPU
   std::vector<drench::PressureSolverKind> solvers = {drench::PressureSolverKind::DFSPH,
                                                      drench::PressureSolverKind::PCISPH};
 };
@@ -173,7 +174,7 @@ void game_frame(benchmark::State& state, const std::string& name, drench::Pressu
     known += std::string(known.empty() ? "" : ", ") + drench::pressure_solver_name(kind);
   std::fprintf(stderr,
                "%s: %s\nusage: %s [--frames N (600)] [--warmup N (60)] [--solvers NAME,... (dfsph,pcisph; "
-               "known: %s)] [Google Benchmark flags]\n",
+               "known: %s)] [--busy N (one per CPU)] [Google Benchmark flags]\n",
                program, problem.c_str(), program, known.c_str());
   std::exit(1);
 }
@@ -197,6 +198,8 @@ Options parse(int argc, char** argv) {
       options.frames = count_option(argv[0], "--frames", value, 1);
     } else if (flag == "--warmup") {
       options.warmup = count_option(argv[0], "--warmup", value, 0);
+    } else if (flag == "--busy") {
+      options.busy = static_cast<int>(count_option(argv[0], "--busy", value, 1));
     } else if (flag == "--solvers") {
       options.solvers.clear();
       std::string list = value;
@@ -229,7 +232,7 @@ int main(int argc, char** argv) {
   if (default_threads != 1) thread_counts.push_back(default_threads);
   for (drench::PressureSolverKind solver : options.solvers) {
     for (int threads : thread_counts) {
-      for (int busy : {0, cpus}) {
+      for (int busy : {0, options.busy > 0 ? options.busy : cpus}) {
         const std::string name = std::string("game_frame/") + drench::pressure_solver_name(solver) +
                                  "/threads:" + std::to_string(threads) +
                                  (busy == 0 ? "/alone" : "/busy:" + std::to_string(busy));

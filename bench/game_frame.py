@@ -3,10 +3,12 @@
 
     python3 bench/game_frame.py --bench build-bench/bench/bench_game_frame \
         --out bench/results/debian12-2core/game_frame.csv [--frames 600] [--warmup 60] [--solvers dfsph,pcisph]
+        [--busy N]
 
 Runs bench/bench_game_frame.cpp once (Google Benchmark, JSON output): demos/bullet_playground's level (a hammock,
 a curtain, two balls, a crate, two jets of 1 cm particles, wetting), one coupled step of 1/60 s per frame, for
-each solver with drench on 1 thread and on its default (the CPUs), alone and beside one busy thread per CPU.
+each solver with drench on 1 thread and on its default (the CPUs), alone and beside one busy thread per CPU
+(--busy: that many instead).
 Each row: the median and 99th percentile ms per frame of each stage (CoupledStepReport::seconds: emit, fluid,
 cloth, rigid, coupling, other, total) over the timed frames, the leaks of the whole run (target 0), the fastest
 particle, the fluid's sub-steps per frame. The benchmarks run one after another, in the order solver, threads,
@@ -27,7 +29,7 @@ sys.path.insert(0, str(ROOT / "bench"))
 from bench_surface import commit, cpu_model, write_csv  # noqa: E402  (the same provenance lines as the other CSVs)
 
 STAGES = ["emit", "fluid", "cloth", "rigid", "coupling", "other", "total"]
-DEFAULTS = {"frames": 600, "warmup": 60, "solvers": "dfsph,pcisph"}
+DEFAULTS = {"frames": 600, "warmup": 60, "solvers": "dfsph,pcisph", "busy": 0}
 
 
 def row_of(benchmark, blow_ups):
@@ -51,7 +53,10 @@ def row_of(benchmark, blow_ups):
            "fastest_node_mps": round(benchmark["fastest_node_mps"], 3),
            "fluid_substeps_per_frame": round(benchmark["fluid_substeps_per_frame"], 2),
            "density_error_mean": float(f"{benchmark['density_error_mean']:.3g}"),
-           "mean_ms": round(benchmark["real_time"], 3)}
+           "mean_ms": round(benchmark["real_time"], 3),
+           # The calling thread's CPU time per frame: beside other load, a frame's wall time over it tells how
+           # much of a core drench's first thread got (about 1 for one thread on a quiet machine).
+           "cpu_ms_mean": round(benchmark["cpu_time"], 3)}
     for stage in STAGES:
         row[f"{stage}_ms_median"] = round(benchmark[f"{stage}_ms_median"], 3)
         row[f"{stage}_ms_p99"] = round(benchmark[f"{stage}_ms_p99"], 3)
@@ -64,6 +69,8 @@ def main():
     parser.add_argument("--frames", type=int, default=DEFAULTS["frames"], help="timed frames per benchmark")
     parser.add_argument("--warmup", type=int, default=DEFAULTS["warmup"], help="untimed frames before them")
     parser.add_argument("--solvers", default=DEFAULTS["solvers"], help="comma-separated scene names")
+    parser.add_argument("--busy", type=int, default=DEFAULTS["busy"],
+                        help="spinning threads beside drench in the busy condition (0: one per CPU)")
     parser.add_argument("--filter", help="--benchmark_filter for the binary (a regex over the names)")
     parser.add_argument("--out", required=True, help="CSV to write")
     args = parser.parse_args()
@@ -72,6 +79,8 @@ def main():
         out = Path(scratch) / "game_frame.json"
         command = [args.bench, "--frames", str(args.frames), "--warmup", str(args.warmup), "--solvers",
                    args.solvers, f"--benchmark_out={out}", "--benchmark_out_format=json"]
+        if args.busy:
+            command += ["--busy", str(args.busy)]
         if args.filter:
             command.append(f"--benchmark_filter={args.filter}")
         # Google Benchmark's console table and the binary's own lines go to stderr, so that the run can be
