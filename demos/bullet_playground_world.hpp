@@ -178,11 +178,15 @@ class World {
 /// audit on; the game's step. Water that runs off the stage (3.2 x 2.4 m about the table and the hammock) is
 /// removed: it would spread over the ground's whole square and cost without being seen.
 /// @param duration  simulated time (unit: s), > 0, e.g. for a frame count
-inline drench::SceneConfig scene(double duration) {
+/// @param solver  the fluid's pressure solver (`fluid.pressure_solver`), the scenes' default unless given:
+///                bench/bench_game_frame.cpp times the same level with each
+inline drench::SceneConfig scene(
+    double duration, drench::PressureSolverKind solver = drench::FluidSettings{}.pressure_solver) {
   drench::SceneConfig s;
   s.source = "bullet_playground";
   s.gravity = drench::Vec3(0, kGravity, 0);  // must equal the world's (checked by CoupledWorld)
   s.fluid.particle_spacing = 0.01;
+  s.fluid.pressure_solver = solver;
   s.time.dt = kDt;
   s.time.duration = duration;
   drench::EmitterSettings jet;

@@ -1,0 +1,248 @@
+// bench_game_frame: issue 41's frame budget. The game-like level of demos/bullet_playground (its world,
+// demos/bullet_playground_world.hpp: a hammock, a curtain, two balls, a crate, two jets of 1 cm particles,
+// wetting) stepped as a game steps it, one coupled step of 1/60 s per frame, for each pressure solver, with
+// drench on 1 thread and on its default (the CPUs), alone and beside one busy thread per CPU (std::threads
+// spinning from before the warm-up to the end of the run, as a game's or a renderer's threads would).
+//
+//   build-bench/bench/bench_game_frame [--frames 600] [--warmup 60] [--solvers dfsph,pcisph] [--busy N]
+//       [--benchmark_filter=...] --benchmark_out=game_frame.json --benchmark_out_format=json
+// bench/game_frame.py runs it and writes bench/results/<machine>/game_frame.csv.
+//
+// One benchmark iteration is one frame (Iterations(frames), UseManualTime with the frame's wall time): the
+// frame count is fixed, not chosen by Google Benchmark, the world is built and warmed up outside the timed
+// loop, and the reported time is the mean ms per frame; the median and the 99th percentile per stage, which
+// Google Benchmark cannot compute over iterations, are counters. The warm-up (60 frames, 1 s, by default)
+// lets the jets' water reach the hammock and the curtain, so that the timed frames are the level in play, not
+// its empty first second; the jets run out (4,000 particles each) at about 3-4 s, and the water then drains,
+// so the 600 frames (t = 1 ... 11 s) hold the jets, the pooled water and its run-off.
+
+#include <benchmark/benchmark.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include <drench/bullet/coupled_world.hpp>
+#include <drench/common/parallel.hpp>
+#include <drench/sph/fluid_settings.hpp>
+#include "../demos/bullet_playground_world.hpp"
+
+namespace {
+
+// The solvers --solvers may name, by their scene name (drench::pressure_solver_name). PBF is one more entry.
+constexpr drench::PressureSolverKind kKnownSolvers[] = {
+    drench::PressureSolverKind::DFSPH,
+    drench::PressureSolverKind::PCISPH,
+    drench::PressureSolverKind::WCSPH,
+};
+
+struct Options {
+  long frames = 600;  // timed frames per benchmark
+  long warmup = 60;   // frames stepped before them, untimed
+  int busy = 0;       // spinning threads of the busy condition; 0: one per CPU
+  std::vector<drench::PressureSolverKind> solvers = {drench::PressureSolverKind::DFSPH,
+                                                     drench::PressureSolverKind::PCISPH};
+};
+
+/// Threads that spin until destroyed, one per CPU of the condition "beside busy threads": each keeps a core
+/// busy as a game's own thread does, so that drench's threads must share the cores with them.
+class BusyThreads {
+ public:
+  explicit BusyThreads(int n) {
+    for (int i = 0; i < n; ++i)
+      m_threads.emplace_back([this] {
+        while (!m_stop.load(std::memory_order_relaxed)) {
+        }
+      });
+  }
+  ~BusyThreads() {
+    m_stop.store(true);
+    for (std::thread& t : m_threads)
+      t.join();
+  }
+  BusyThreads(const BusyThreads&) = delete;
+  BusyThreads& operator=(const BusyThreads&) = delete;
+
+ private:
+  std::atomic<bool> m_stop{false};
+  std::vector<std::thread> m_threads;
+};
+
+/// The q-quantile of `values` by the nearest rank (q = 0.5: the median), as demos/bullet_playground.cpp
+/// reports its frames.
+double quantile(std::vector<double> values, double q) {
+  if (values.empty()) return 0.0;
+  const auto rank = static_cast<std::size_t>(std::ceil(q * static_cast<double>(values.size())));
+  const std::size_t at = std::min(values.size(), std::max<std::size_t>(rank, 1)) - 1;
+  std::nth_element(values.begin(), values.begin() + static_cast<long>(at), values.end());
+  return values[at];
+}
+
+/// Steps the level `warmup` frames, then one frame per benchmark iteration, with `solver`, drench on
+/// `threads` threads and `busy` spinning threads beside it. Counters (ms per frame, median and p99 over the
+/// timed frames): <stage>_ms_median, <stage>_ms_p99 for the stages of CoupledStepReport::seconds (emit,
+/// fluid, cloth, rigid, coupling, other = total less the named ones, total); leaks over the whole run
+/// (warm-up included; the target is 0); the fastest particle and node at the end of any step of the run
+/// (unit: m/s); particles at the end and at most; the fluid's CFL sub-steps per frame and mean density error
+/// over the timed frames; the time of a blow-up (0: none), after which nothing more is stepped.
+void game_frame(benchmark::State& state, const std::string& name, drench::PressureSolverKind solver,
+                int threads, int busy, long warmup) {
+  drench::set_thread_count(threads);
+  const auto frames = static_cast<long>(state.max_iterations);
+  playground::World game;
+  const drench::SceneConfig scene =
+      playground::scene(static_cast<double>(warmup + frames) * playground::kDt, solver);
+  drench::bullet::CoupledWorld coupled(game.world, game.cloths(), scene);
+  const BusyThreads spinning(busy);
+
+  std::uint64_t leaks = 0, failed_frames = 0;
+  const auto checked_step = [&]() {
+    drench::bullet::CoupledStepReport report = coupled.step();
+    leaks += report.leak_stats.leaks;
+    if (report.failed()) ++failed_frames;
+    return report;
+  };
+  // A blow-up stops the stepping: the iterations left pass without a step, with time 0, so that the
+  // counters keep how far it got and what its frames cost until then (Google Benchmark drops an errored
+  // run's counters). blew_up_at_s > 0 marks it; the mean time per iteration is then not a frame's.
+  double blew_up_at = 0.0;
+  const auto blow_up = [&](const drench::bullet::CoupledStepReport& report) {
+    blew_up_at = coupled.time();
+    std::fprintf(stderr, "%s: the fluid or a cloth blew up at t = %.4f s: %s\n", name.c_str(), blew_up_at,
+                 report.fluid.describe().c_str());
+  };
+  for (long n = 0; n < warmup && blew_up_at == 0.0; ++n) {
+    const drench::bullet::CoupledStepReport report = checked_step();
+    if (!report.ok()) blow_up(report);
+  }
+
+  const drench::FluidStatistics fluid_before = coupled.simulation().fluid().statistics();
+  std::vector<std::vector<double>> stages(7);
+  std::size_t particles_max = 0;
+  for (auto _ : state) {
+    if (blew_up_at > 0.0) {
+      state.SetIterationTime(0.0);
+      continue;
+    }
+    const auto start = std::chrono::steady_clock::now();
+    const drench::bullet::CoupledStepReport report = checked_step();
+    state.SetIterationTime(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+    const auto& s = report.seconds;
+    const double other = s.total - (s.emit + s.fluid + s.cloth + s.rigid + s.coupling);
+    const double values[] = {s.emit, s.fluid, s.cloth, s.rigid, s.coupling, other, s.total};
+    for (std::size_t k = 0; k < stages.size(); ++k)
+      stages[k].push_back(values[k]);
+    particles_max = std::max(particles_max, coupled.particles().size());
+    if (!report.ok()) blow_up(report);
+  }
+
+  const char* names[] = {"emit", "fluid", "cloth", "rigid", "coupling", "other", "total"};
+  for (std::size_t k = 0; k < stages.size(); ++k) {
+    state.counters[std::string(names[k]) + "_ms_median"] = 1e3 * quantile(stages[k], 0.5);
+    state.counters[std::string(names[k]) + "_ms_p99"] = 1e3 * quantile(stages[k], 0.99);
+  }
+  const drench::Simulation& sim = coupled.simulation();
+  const drench::FluidStatistics& fluid = sim.fluid().statistics();
+  const auto substeps = static_cast<double>(fluid.substeps - fluid_before.substeps);
+  state.counters["frames"] = static_cast<double>(stages[0].size());
+  state.counters["warmup_frames"] = static_cast<double>(warmup);
+  state.counters["drench_threads"] = drench::thread_count();
+  state.counters["busy_threads"] = busy;
+  state.counters["leaks"] = static_cast<double>(leaks);
+  state.counters["failed_frames"] = static_cast<double>(failed_frames);
+  state.counters["blew_up_at_s"] = blew_up_at;
+  state.counters["fastest_particle_mps"] = sim.max_particle_speed();
+  state.counters["fastest_node_mps"] = sim.max_node_speed();
+  state.counters["particles"] = static_cast<double>(coupled.particles().size());
+  state.counters["particles_max"] = static_cast<double>(particles_max);
+  state.counters["fluid_substeps_per_frame"] =
+      substeps / static_cast<double>(std::max<std::size_t>(1, stages[0].size()));
+  state.counters["density_error_mean"] =
+      substeps > 0 ? (fluid.density_error_sum - fluid_before.density_error_sum) / substeps : 0.0;
+}
+
+[[noreturn]] void usage(const char* program, const std::string& problem) {
+  std::string known;
+  for (drench::PressureSolverKind kind : kKnownSolvers)
+    known += std::string(known.empty() ? "" : ", ") + drench::pressure_solver_name(kind);
+  std::fprintf(stderr,
+               "%s: %s\nusage: %s [--frames N (600)] [--warmup N (60)] [--solvers NAME,... (dfsph,pcisph; "
+               "known: %s)] [--busy N (one per CPU)] [Google Benchmark flags]\n",
+               program, problem.c_str(), program, known.c_str());
+  std::exit(1);
+}
+
+long count_option(const char* program, const char* flag, const char* text, long least) {
+  char* end = nullptr;
+  const long value = std::strtol(text, &end, 10);
+  if (*text == '\0' || *end != '\0' || value < least || value > 1000000)
+    usage(program, std::string(flag) + " must be an integer in [" + std::to_string(least) +
+                       ", 1000000], got '" + text + "'");
+  return value;
+}
+
+Options parse(int argc, char** argv) {
+  Options options;
+  for (int i = 1; i < argc; ++i) {
+    const std::string flag = argv[i];
+    if (i + 1 >= argc) usage(argv[0], "unknown argument or missing value: '" + flag + "'");
+    const char* value = argv[++i];
+    if (flag == "--frames") {
+      options.frames = count_option(argv[0], "--frames", value, 1);
+    } else if (flag == "--warmup") {
+      options.warmup = count_option(argv[0], "--warmup", value, 0);
+    } else if (flag == "--busy") {
+      options.busy = static_cast<int>(count_option(argv[0], "--busy", value, 1));
+    } else if (flag == "--solvers") {
+      options.solvers.clear();
+      std::string list = value;
+      for (std::size_t from = 0; from <= list.size();) {
+        const std::size_t to = std::min(list.find(',', from), list.size());
+        const std::string name = list.substr(from, to - from);
+        const auto* kind = std::find_if(std::begin(kKnownSolvers), std::end(kKnownSolvers),
+                                        [&](auto k) { return name == drench::pressure_solver_name(k); });
+        if (kind == std::end(kKnownSolvers)) usage(argv[0], "--solvers: unknown solver '" + name + "'");
+        options.solvers.push_back(*kind);
+        from = to + 1;
+      }
+    } else {
+      usage(argv[0], "unknown argument '" + flag + "'");
+    }
+  }
+  return options;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  // Before any set_thread_count: the count drench takes by itself (the CPUs, or OMP_NUM_THREADS).
+  const int default_threads = drench::thread_count();
+  const int cpus = std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
+  benchmark::Initialize(&argc, argv);
+  const Options options = parse(argc, argv);
+
+  std::vector<int> thread_counts = {1};
+  if (default_threads != 1) thread_counts.push_back(default_threads);
+  for (drench::PressureSolverKind solver : options.solvers) {
+    for (int threads : thread_counts) {
+      for (int busy : {0, options.busy > 0 ? options.busy : cpus}) {
+        const std::string name = std::string("game_frame/") + drench::pressure_solver_name(solver) +
+                                 "/threads:" + std::to_string(threads) +
+                                 (busy == 0 ? "/alone" : "/busy:" + std::to_string(busy));
+        benchmark::RegisterBenchmark(name.c_str(), game_frame, name, solver, threads, busy, options.warmup)
+            ->Iterations(options.frames)
+            ->UseManualTime()
+            ->Unit(benchmark::kMillisecond);
+      }
+    }
+  }
+  benchmark::RunSpecifiedBenchmarks();
+  benchmark::Shutdown();
+  return 0;
+}
