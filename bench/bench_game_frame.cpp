@@ -4,7 +4,7 @@
 // drench on 1 thread and on its default (the CPUs), alone and beside one busy thread per CPU (std::threads
 // spinning from before the warm-up to the end of the run, as a game's or a renderer's threads would).
 //
-//   build-bench/bench/bench_game_frame [--frames 600] [--warmup 60] [--solvers dfsph,pcisph] [--busy N]
+//   build-bench/bench/bench_game_frame [--frames 600] [--warmup 60] [--solvers dfsph,pcisph,pbf] [--busy N]
 //       [--benchmark_filter=...] --benchmark_out=game_frame.json --benchmark_out_format=json
 // bench/game_frame.py runs it and writes bench/results/<machine>/game_frame.csv.
 //
@@ -40,14 +40,15 @@ constexpr drench::PressureSolverKind kKnownSolvers[] = {
     drench::PressureSolverKind::DFSPH,
     drench::PressureSolverKind::PCISPH,
     drench::PressureSolverKind::WCSPH,
+    drench::PressureSolverKind::PBF,
 };
 
 struct Options {
   long frames = 600;  // timed frames per benchmark
   long warmup = 60;   // frames stepped before them, untimed
   int busy = 0;       // spinning threads of the busy condition; 0: one per CPU
-  std::vector<drench::PressureSolverKind> solvers = {drench::PressureSolverKind::DFSPH,
-                                                     drench::PressureSolverKind::PCISPH};
+  std::vector<drench::PressureSolverKind> solvers = {
+      drench::PressureSolverKind::DFSPH, drench::PressureSolverKind::PCISPH, drench::PressureSolverKind::PBF};
 };
 
 /// Threads that spin until destroyed, one per CPU of the condition "beside busy threads": each keeps a core
@@ -171,10 +172,11 @@ void game_frame(benchmark::State& state, const std::string& name, drench::Pressu
   std::string known;
   for (drench::PressureSolverKind kind : kKnownSolvers)
     known += std::string(known.empty() ? "" : ", ") + drench::pressure_solver_name(kind);
-  std::fprintf(stderr,
-               "%s: %s\nusage: %s [--frames N (600)] [--warmup N (60)] [--solvers NAME,... (dfsph,pcisph; "
-               "known: %s)] [--busy N (one per CPU)] [Google Benchmark flags]\n",
-               program, problem.c_str(), program, known.c_str());
+  std::fprintf(
+      stderr,
+      "%s: %s\nusage: %s [--frames N (600)] [--warmup N (60)] [--solvers NAME,... (dfsph,pcisph,pbf; "
+      "known: %s)] [--busy N (one per CPU)] [Google Benchmark flags]\n",
+      program, problem.c_str(), program, known.c_str());
   std::exit(1);
 }
 

@@ -2,7 +2,7 @@
 """Issue 41's frame budget: ms per frame by stage of the game-like level at 1/60 s, per solver, alone and busy.
 
     python3 bench/game_frame.py --bench build-bench/bench/bench_game_frame \
-        --out bench/results/debian12-2core/game_frame.csv [--frames 600] [--warmup 60] [--solvers dfsph,pcisph]
+        --out bench/results/debian12-2core/game_frame.csv [--frames 600] [--warmup 60] [--solvers dfsph,pcisph,pbf]
         [--busy N]
 
 Runs bench/bench_game_frame.cpp once (Google Benchmark, JSON output): demos/bullet_playground's level (a hammock,
@@ -29,7 +29,7 @@ sys.path.insert(0, str(ROOT / "bench"))
 from bench_surface import commit, cpu_model, write_csv  # noqa: E402  (the same provenance lines as the other CSVs)
 
 STAGES = ["emit", "fluid", "cloth", "rigid", "coupling", "other", "total"]
-DEFAULTS = {"frames": 600, "warmup": 60, "solvers": "dfsph,pcisph", "busy": 0}
+DEFAULTS = {"frames": 600, "warmup": 60, "solvers": "dfsph,pcisph,pbf", "busy": 0}
 
 
 def row_of(benchmark, blow_ups):
