@@ -45,9 +45,14 @@ CLI::Validator finite_positive() {
 int main(int argc, char** argv) {
   double spacing = 0.01, density = 500.0;
   int threads = 1;
+  std::string solver = "pcisph";
+  double dt = buoyancy::kDt;
   CLI::App app{"a ball settling in a tank of water: its draft against Archimedes'"};
   app.add_option("--spacing", spacing, "the water's particle spacing (unit: m)")->check(finite_positive());
   app.add_option("--density", density, "the ball's density (unit: kg/m^3)")->check(finite_positive());
+  app.add_option("--solver", solver, "the water's pressure solver")
+      ->check(CLI::IsMember({"wcsph", "pcisph", "dfsph", "pbf"}));
+  app.add_option("--dt", dt, "the step (unit: s), at most 0.03")->check(CLI::Range(1e-6, 0.03));
   app.add_option("--threads", threads, "threads of drench's loops")
       ->check(CLI::Range(1, drench::kMaxThreadCount));
   try {
@@ -58,11 +63,17 @@ int main(int argc, char** argv) {
   try {
     drench::set_thread_count(threads);
     const auto start = std::chrono::steady_clock::now();
-    const buoyancy::Draft draft = buoyancy::settled_draft(spacing, density);
+    drench::PressureSolverKind kind = drench::PressureSolverKind::PCISPH;
+    for (auto k : {drench::PressureSolverKind::WCSPH, drench::PressureSolverKind::PCISPH,
+                   drench::PressureSolverKind::DFSPH, drench::PressureSolverKind::PBF})
+      if (solver == drench::pressure_solver_name(k)) kind = k;
+    const buoyancy::Draft draft = buoyancy::settled_draft(spacing, density, kind, dt);
     const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     const nlohmann::json out = {
         {"spacing_m", spacing},
         {"density_kg_m3", density},
+        {"solver", solver},
+        {"dt_s", dt},
         {"rest_density_kg_m3", draft.rest_density},
         // NaN is not JSON: a failed run's mean is null.
         {"draft", std::isfinite(draft.mean) ? nlohmann::json(draft.mean) : nlohmann::json()},

@@ -46,8 +46,9 @@ def expected_draft(submerged):
     return 0.5 * (low + high)
 
 
-def run(bench, spacing, density):
-    command = [bench, "--spacing", f"{spacing:g}", "--density", f"{density:g}", "--threads", "1"]
+def run(bench, spacing, density, solver, dt):
+    command = [bench, "--spacing", f"{spacing:g}", "--density", f"{density:g}", "--threads", "1", "--solver",
+               solver, "--dt", repr(dt)]
     result = subprocess.run(command, capture_output=True, text=True)
     if not result.stdout.strip():
         raise SystemExit(f"{' '.join(command)} printed nothing (exit {result.returncode}): {result.stderr.strip()}")
@@ -55,7 +56,7 @@ def run(bench, spacing, density):
     expected = expected_draft(density / out["rest_density_kg_m3"])
     draft = out["draft"]
     return {
-        "spacing_m": spacing, "density_kg_m3": density, "particles": out["particles"],
+        "solver": solver, "dt_s": dt, "spacing_m": spacing, "density_kg_m3": density, "particles": out["particles"],
         "draft": "" if draft is None else round(draft, 4), "expected_draft": round(expected, 4),
         "error": "" if draft is None else round(draft - expected, 4),
         "draft_min": round(out["draft_min"], 4), "draft_max": round(out["draft_max"], 4),
@@ -69,13 +70,15 @@ def main():
     parser.add_argument("--bench", default=str(ROOT / "build" / "bench" / "bench_buoyancy"))
     parser.add_argument("--spacings", type=float, nargs="+", default=SPACINGS, help="unit: m")
     parser.add_argument("--densities", type=float, nargs="+", default=DENSITIES, help="the ball's (unit: kg/m^3)")
+    parser.add_argument("--solver", default="pcisph", help="the water's pressure solver (scene name)")
+    parser.add_argument("--dt", type=float, default=0.001, help="the step (unit: s)")
     parser.add_argument("--out", required=True, help="CSV to write")
     args = parser.parse_args()
     load_before = " ".join(f"{x:.2f}" for x in os.getloadavg())
     rows = []
     for spacing in args.spacings:
         for density in args.densities:
-            row = run(args.bench, spacing, density)
+            row = run(args.bench, spacing, density, args.solver, args.dt)
             print(f"spacing {spacing * 1000:g} mm, density {density:g}: draft {row['draft']} (expected "
                   f"{row['expected_draft']}), {row['particles']} particles, {row['wall_s']} s", file=sys.stderr)
             rows.append(row)
@@ -85,6 +88,10 @@ def main():
         command += " --spacings " + " ".join(f"{s:g}" for s in args.spacings)
     if args.densities != DENSITIES:
         command += " --densities " + " ".join(f"{d:g}" for d in args.densities)
+    if args.solver != "pcisph":
+        command += f" --solver {args.solver}"
+    if args.dt != 0.001:
+        command += f" --dt {args.dt!r}"
     write_csv(args.out, rows, [f"command: {command}", f"commit: {commit()}", f"cpu: {cpu_model()}", "threads: 1",
                                f"load_before: {load_before}", f"load_after: {load_after}"])
 

@@ -167,9 +167,18 @@ struct Draft {
 /// symmetry) and 1 for a ball that sinks. A ball, not a cube: a floating cube of half the water's density
 /// turns onto an edge, and rocks there for longer than this runs. Stops at the first failed step
 /// (Draft::failure; the mean is then NaN).
-inline Draft settled_draft(double spacing, double density) {
+/// @param solver  the water's pressure solver
+/// @param dt  the step (unit: s), > 0, at most 0.03 s; the samples are taken at the same times for any step
+inline Draft settled_draft(double spacing, double density,
+                           drench::PressureSolverKind solver = drench::PressureSolverKind::PCISPH,
+                           double dt = kDt) {
   TankWorld game(density);
-  const drench::SceneConfig scene = tank_scene(spacing);
+  drench::SceneConfig scene = tank_scene(spacing);
+  scene.fluid.pressure_solver = solver;
+  scene.time.dt = dt;
+  const int steps = static_cast<int>(std::lround(kSteps * kDt / dt));
+  const int first_sample = static_cast<int>(std::lround(kFirstSample * kDt / dt));
+  const int sample_every = std::max(1, static_cast<int>(std::lround(kSampleEvery * kDt / dt)));
   drench::bullet::RigidBodyOptions options;
   options.mesh.max_edge = kFacetEdge;
   drench::bullet::CoupledWorld coupled(game.world, *game.cloth, scene, options);
@@ -177,14 +186,14 @@ inline Draft settled_draft(double spacing, double density) {
   draft.rest_density = scene.fluid.rest_density;
   draft.min = 1.0;
   double sum = 0.0;
-  for (int n = 1; n <= kSteps; ++n) {
+  for (int n = 1; n <= steps; ++n) {
     const drench::bullet::CoupledStepReport report = coupled.step();
     if (report.failed()) {
       draft.failed_step = n;
       draft.failure = report.fluid.describe();
       break;
     }
-    if (n > kFirstSample && n % kSampleEvery == 0) {
+    if (n > first_sample && n % sample_every == 0) {
       const double gap = 0.25 * (kTank - 2.0 * kRadius);
       const double surface =
           0.25 *
