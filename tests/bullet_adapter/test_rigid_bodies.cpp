@@ -146,6 +146,17 @@ TEST(RigidBodies, AFloatingBallDoesNotSpinUp) {
   EXPECT_LT(fastest, 1.0) << "rad/s";
 }
 
+// PBF at a game's step (issue 41): the body's reaction is taken at the sub-step's prediction
+// (PressurePbf::boundary_pressure_factors), and the draft still follows Archimedes (bench/buoyancy.py
+// --solver pbf: 0.326, 0.533 and 0.671 for 250, 500 and 750 kg/m^3 at 1 cm).
+TEST(RigidBodies, ABallOfHalfTheWatersDensityFloatsHalfSubmergedWithPbfAtAGamesStep) {
+  const buoyancy::Draft draft = buoyancy::settled_draft(0.01, 500.0, PressureSolverKind::PBF, 1.0 / 60.0);
+  EXPECT_EQ(draft.failure, "") << "step " << draft.failed_step;
+  EXPECT_GE(draft.samples, 8);
+  std::printf("PBF at 1/60 s: draft %.4f of the ball's height\n", draft.mean);
+  EXPECT_NEAR(draft.mean, 0.5, 0.05) << "draft / height";
+}
+
 TEST(RigidBodies, ABallOfTwiceTheWatersDensitySinks) {
   const buoyancy::Draft draft = buoyancy::settled_draft(0.01, 2000.0);
   EXPECT_EQ(draft.failure, "") << "step " << draft.failed_step;
