@@ -54,14 +54,14 @@ foreach(file IN LISTS core_files)
   endforeach()
 endforeach()
 
-# Outside src/: only the adapter, its tests and the embedding demos (embed_in_bullet, bullet_playground)
-# include Bullet.
+# Outside src/: only the adapter, its tests and the embedding demos (embed_in_bullet, bullet_playground, and
+# buoyancy_tank, the tank world the buoyancy test and bench share) include Bullet.
 file(GLOB_RECURSE other_files RELATIVE "${SOURCE_DIR}" "${SOURCE_DIR}/render/*.cpp" "${SOURCE_DIR}/render/*.hpp"
      "${SOURCE_DIR}/demos/*.cpp" "${SOURCE_DIR}/demos/*.hpp"
      "${SOURCE_DIR}/tests/*.cpp" "${SOURCE_DIR}/tests/*.hpp" "${SOURCE_DIR}/bench/*.cpp" "${SOURCE_DIR}/bench/*.hpp"
      "${SOURCE_DIR}/fuzz/*.cpp" "${SOURCE_DIR}/fuzz/*.hpp")
 foreach(file IN LISTS other_files)
-  if(file MATCHES "^tests/(bullet_adapter|consumer)/" OR file MATCHES "^demos/(embed_in_bullet|bullet_playground)")
+  if(file MATCHES "^tests/(bullet_adapter|consumer)/" OR file MATCHES "^demos/(embed_in_bullet|bullet_playground|buoyancy_tank)")
     continue()
   endif()
   file(STRINGS "${SOURCE_DIR}/${file}" includes REGEX "${bullet_header_regex}")
