@@ -602,9 +602,9 @@ int dispatch(int argc, char** argv) {
                     "with --reference: x of a water-height gauge (m, repeatable), e.g. for the dam break");
   sweep
       ->add_option("--cell-size", sweep_options.comparison.cell_size,
-                   "with --reference: edge of the mass grid's cells (m)")
-      ->check(CLI::PositiveNumber)
-      ->capture_default_str();
+                   "with --reference: edge of the mass grid's cells (m; default: four of the reference's "
+                   "particle spacings)")
+      ->check(CLI::PositiveNumber);
   sweep->add_option("--set", sweep_options.overrides, "override a scene value in every run (repeatable)");
   sweep->add_flag("--overwrite", sweep_options.overwrite,
                   "replace an earlier sweep in --out (only the files its drench_run.json lists)");

@@ -135,9 +135,9 @@ TEST(RunComparison, OneNodeMovedGivesItsDistanceAsLargestAndItsShareAsRms) {
   EXPECT_NEAR(observable(c, "cloth_rms_m").per_frame[0], 0.0, kRounding);
 }
 
-// Two blocks of 8 particles, one moved by one 2-cm cell in x: its 8 particles leave one cell and fill
-// another, L1 = 2 x 8 x 0.125 g = 2 g, over 16 particles' 2 g of water: relative error 1. Moved by half a
-// cell, half of its particles change cell: 1 g.
+// Two blocks of 8 particles, one moved by one 2-cm cell (the default: four 5-mm spacings) in x: its 8
+// particles leave one cell and fill another, L1 = 2 x 8 x 0.125 g = 2 g, over 16 particles' 2 g of water:
+// relative error 1. Moved by half a cell, half of its particles change cell: 1 g.
 TEST(RunComparison, BlockMovedByOneCellGivesTheL1MassDifferenceByHand) {
   const test::TempDir dir;
   const Vec3Array still = block(Vec3(0.1, 0.0, 0.0));
@@ -213,6 +213,26 @@ TEST(RunComparison, WaterHeldAndPastTheEdgesAreCountedByTheirDefinitions) {
   EXPECT_NEAR(c.worst_relative, 0.0, 1e-12) << "a run against itself";
 }
 
+// A run that stopped after two of three frames is measured against the whole reference's sag (0.1 m in its
+// last frame), not the 1 cm of the frames it has: a short run's error is not inflated into a large one.
+TEST(RunComparison, AShortRunIsNormalisedByTheWholeReference) {
+  const test::TempDir dir;
+  const std::vector<Triangle> triangles = patch_triangles(5);
+  const std::vector<Vec3Array> reference_cloth = {patch(5, 0.0), patch(5, 0.0, -0.01), patch(5, 0.0, -0.1)};
+  const std::vector<Vec3Array> run_cloth = {shifted(reference_cloth[0], Vec3(0.001, 0, 0)),
+                                            shifted(reference_cloth[1], Vec3(0.001, 0, 0))};
+  const Vec3Array water = block(Vec3(0, 0.02, 0));
+  ComparisonSettings allow;
+  allow.allow_shorter = true;
+  const RunComparison c =
+      compare_runs(write_frames(dir, "run", {water, water}, run_cloth, triangles),
+                   write_frames(dir, "reference", {water, water, water}, reference_cloth, triangles), allow);
+  EXPECT_EQ(c.frames, 2u);
+  EXPECT_NEAR(observable(c, "cloth_rms_m").normaliser, 0.1, kRounding);
+  EXPECT_NEAR(observable(c, "cloth_rms_m").relative, 0.01, 1e-4);
+  EXPECT_EQ(c.reference_series[0].size(), 3u) << "the reference's sag over all its frames";
+}
+
 TEST(RunComparison, RunsThatCannotBeComparedAreErrorsNamingTheFile) {
   const test::TempDir dir;
   const std::vector<Triangle> triangles = patch_triangles(5);
@@ -246,9 +266,9 @@ TEST(RunComparison, RunsThatCannotBeComparedAreErrorsNamingTheFile) {
   EXPECT_TRUE(test::throws_containing<IoError>([&] { compare_runs(missing, reference, {}); },
                                                {missing.fluid_files[1]}));
   ComparisonSettings bad;
-  bad.cell_size = 0;
+  bad.cell_size = -0.02;
   EXPECT_TRUE(test::throws_containing<SceneError>([&] { compare_runs(reference, reference, bad); },
-                                                  {"cell_size", "> 0"}));
+                                                  {"cell_size", ">= 0", "-0.02"}));
 }
 
 // A run folder as drench run writes it: scene.json and frames/; its frames' times follow the steps.

@@ -208,8 +208,8 @@ const std::vector<std::string>& observable_names() {
 
 RunComparison compare_runs(const RunFrames& run, const RunFrames& reference,
                            const ComparisonSettings& settings) {
-  if (!(settings.cell_size > 0))
-    throw SceneError("comparison cell_size must be > 0, got " + format_number(settings.cell_size));
+  if (!(settings.cell_size >= 0))
+    throw SceneError("comparison cell_size must be >= 0, got " + format_number(settings.cell_size));
   if (!(settings.held_band > 0))
     throw SceneError("comparison held_band must be > 0, got " + format_number(settings.held_band));
   if (!(settings.gauge_width >= 0))
@@ -239,6 +239,7 @@ RunComparison compare_runs(const RunFrames& run, const RunFrames& reference,
   }
   const bool cloth = !run.cloth_files.empty();
   const double gauge_width = settings.gauge_width > 0 ? settings.gauge_width : reference.particle_spacing;
+  const double cell = settings.cell_size > 0 ? settings.cell_size : 4 * reference.particle_spacing;
 
   // The reference's frame 0 fixes the centre node and the gauges' floor, for both runs.
   const Frame reference_first = read_frame(reference, 0);
@@ -264,10 +265,14 @@ RunComparison compare_runs(const RunFrames& run, const RunFrames& reference,
 
   const std::vector<std::string>& names = observable_names();
   std::vector<std::vector<double>> diff(names.size());
+  // Every frame of the reference, so that the normalisers are the whole reference's even when a run that
+  // stopped has fewer frames.
   std::vector<FrameSeries> run_s, ref_s;
-  for (std::size_t n = 0; n < frames; ++n) {
-    const Frame a = read_frame(run, n);
+  for (std::size_t n = 0; n < reference_frames; ++n) {
     const Frame b = n == 0 ? reference_first : read_frame(reference, n);
+    ref_s.push_back(frame_series(b, reference, settings, centre_node, gauge_width, gauge_floor));
+    if (n >= frames) continue;
+    const Frame a = read_frame(run, n);
     if (cloth) {
       const Vec3Array& pa = a.cloth.positions;
       const Vec3Array& pb = b.cloth.positions;
@@ -286,21 +291,16 @@ RunComparison compare_runs(const RunFrames& run, const RunFrames& reference,
       diff[1].push_back(std::sqrt(largest));
     }
     run_s.push_back(frame_series(a, run, settings, centre_node, gauge_width, gauge_floor));
-    ref_s.push_back(frame_series(b, reference, settings, centre_node, gauge_width, gauge_floor));
-    diff[5].push_back(
-        l1_difference(mass_grid(a.fluid.positions, run.particle_mass, settings.cell_size),
-                      mass_grid(b.fluid.positions, reference.particle_mass, settings.cell_size)));
+    diff[5].push_back(l1_difference(mass_grid(a.fluid.positions, run.particle_mass, cell),
+                                    mass_grid(b.fluid.positions, reference.particle_mass, cell)));
   }
 
-  // Normalisers from the reference over the frames compared.
-  double largest_sag = 0, largest_mass = 0, largest_gauge = 0;
   for (std::size_t n = 0; n < frames; ++n) {
     const FrameSeries& r = ref_s[n];
     const FrameSeries& s = run_s[n];
     if (cloth) {
       const double sag_run = run_s[0].centre_y - s.centre_y, sag_ref = ref_s[0].centre_y - r.centre_y;
       diff[2].push_back(std::abs(sag_run - sag_ref));
-      largest_sag = std::max(largest_sag, std::abs(sag_ref));
       diff[3].push_back(std::abs(s.held - r.held));
       diff[4].push_back(std::abs(s.past_edges - r.past_edges));
     } else {
@@ -311,23 +311,20 @@ RunComparison compare_runs(const RunFrames& run, const RunFrames& reference,
     }
     if (!settings.gauges_x.empty()) {
       double worst = 0;
-      for (std::size_t g = 0; g < settings.gauges_x.size(); ++g) {
+      for (std::size_t g = 0; g < settings.gauges_x.size(); ++g)
         worst = std::max(worst, std::abs(s.gauges[g] - r.gauges[g]));
-        largest_gauge = std::max(largest_gauge, r.gauges[g]);
-      }
       diff[7].push_back(worst);
     }
+  }
+  // The normalisers, from the whole reference.
+  double largest_sag = 0, largest_mass = 0, largest_gauge = 0;
+  for (const FrameSeries& r : ref_s) {
+    if (cloth) largest_sag = std::max(largest_sag, std::abs(ref_s[0].centre_y - r.centre_y));
     largest_mass = std::max(largest_mass, r.fluid);
+    for (const double h : r.gauges)
+      largest_gauge = std::max(largest_gauge, h);
   }
-  // The front's travel over the whole reference, not only the frames a short run has.
-  double travel = kNaN;
-  if (!cloth) {
-    const FrameSeries last = frames == reference_frames
-                                 ? ref_s.back()
-                                 : frame_series(read_frame(reference, reference_frames - 1), reference,
-                                                settings, 0, gauge_width, gauge_floor);
-    travel = last.front - ref_s[0].front;
-  }
+  const double travel = cloth ? kNaN : ref_s.back().front - ref_s[0].front;
   const double normalisers[] = {largest_sag,  largest_sag,  largest_sag, largest_mass,
                                 largest_mass, largest_mass, travel,      largest_gauge};
 

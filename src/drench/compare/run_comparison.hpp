@@ -23,7 +23,10 @@ struct RunFrames {
 
 /// What is compared, and how coarsely.
 struct ComparisonSettings {
-  Scalar cell_size = 0.02;  ///< edge of the cubic cells of the mass grid (unit: m), > 0
+  /// Edge of the cubic cells of the mass grid (unit: m), >= 0; 0: four of the reference's particle spacings
+  /// (2 cm for the jet's 5 mm particles). Cells must hold several particles, or the L1 difference only says
+  /// that no two particles sit in the same place.
+  Scalar cell_size = 0;
   /// Water counts as held by the cloth when it is above the cloth, seen along -y, by at most this (unit: m),
   /// > 0. The default, 2 cm, is a few particles' depth at the jet's 5 mm spacing: a puddle, not a splash.
   Scalar held_band = 0.02;
@@ -53,8 +56,9 @@ struct RunComparison {
   std::vector<ObservableError> observables;  ///< those the two runs have, in observable_names() order
   std::string worst;          ///< the name of the one with the largest relative error; "" when none has one
   double worst_relative = 0;  ///< its relative error; NaN when none has one
-  /// The observables of each compared frame, the run's then the reference's, for plots over time (unit: as
-  /// named): "centre_sag_m", "held_kg", "past_edges_kg", "fluid_kg", "front_m".
+  /// Observables over time (unit: as named): the run's over the frames compared, the reference's over all of
+  /// its frames; "centre_sag_m", "held_kg", "past_edges_kg", "fluid_kg", "front_m" (NaN where the scene has
+  /// no such thing).
   std::vector<std::vector<double>> run_series, reference_series;
   std::vector<std::string> series_names;
 };
@@ -68,9 +72,11 @@ struct RunComparison {
 /// largest x of a particle) and with gauges the water heights (the highest particle in a column of
 /// `gauge_width` around each gauge, above the reference's lowest particle of frame 0; 0 for an empty column),
 /// the largest difference over the gauges.
-/// Normalisers: cloth distances and sag by the reference's largest centre sag; masses by the reference's
-/// largest fluid mass over the frames; the front by its travel (last minus first frame); gauge heights by
-/// the reference's largest gauge height. Particles a kill region removed are in no frame and no mass.
+/// Normalisers, from all of the reference's frames (a run that stopped early is not measured against the
+/// small motion of the start): cloth distances and sag by the reference's largest centre sag; masses by the
+/// reference's largest fluid mass over the frames; the front by its travel (last minus first frame); gauge
+/// heights by the reference's largest gauge height. Particles a kill region removed are in no frame and no
+/// mass.
 const std::vector<std::string>& observable_names();
 
 /// Compares `run` with `reference` frame by frame.
@@ -78,7 +84,7 @@ const std::vector<std::string>& observable_names();
 ///         errors), a run with more frames than the reference, or fewer when not `allow_shorter`, a frame
 ///         whose time differs from the reference's by over `time_tolerance` (both times named), a cloth in
 ///         one run and not the other, or cloths whose node counts differ (both files named).
-/// @throws SceneError for settings out of range (cell_size or held_band <= 0, gauge_width < 0).
+/// @throws SceneError for settings out of range (cell_size < 0, held_band <= 0, gauge_width < 0).
 RunComparison compare_runs(const RunFrames& run, const RunFrames& reference,
                            const ComparisonSettings& settings);
 
