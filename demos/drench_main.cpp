@@ -4,7 +4,8 @@
 //   drench render DIR [--camera JSON] [--size WxH] [--out DIR] [--video]   a run's frames as PNG (and MP4)
 //   drench view SCENE.json [--set ...] [--size WxH] [--frames N --screenshot FILE] [--keys SEQ]   live window
 //   drench ccd FILE_OR_DIR... [--list]      point-triangle CCD against labelled queries (*.vf.txt)
-//   drench sweep SCENE.json --vary key=v1,v2 ... --out DIR [--overwrite]   the scene over settings
+//   drench sweep SCENE.json --vary key=v1,v2 ... --out DIR [--overwrite] [--reference REF]   over settings
+//   drench reference SCENE.json --out REF [--set ...]   the scene far past its settings, to compare with
 // Exit status: 0 success; 1 bad input (scene, file, arguments, an --out folder that is not drench's to
 // write), out of memory or another error before the simulation started, or, for `ccd`, a missed collision;
 // 2 the simulation became non-finite, blew up or leaked, or failed after it started, or, for `sweep`, a run
@@ -32,12 +33,14 @@
 #include <drench/common/error.hpp>
 #include <drench/common/parallel.hpp>
 #include <drench/common/program.hpp>
+#include <drench/io/atomic_file.hpp>
 #include <drench/render/render_run.hpp>
 #ifdef DRENCH_HAVE_VIEWER
 #include <drench/render/viewer.hpp>
 #endif
 #include <drench/scene/output_folder.hpp>
 #include <drench/scene/reconstruct_run.hpp>
+#include <drench/scene/run_frames.hpp>
 #include <drench/scene/scene_loader.hpp>
 #include <drench/scene/scene_resources.hpp>
 #include <drench/scene/scene_runner.hpp>
@@ -126,6 +129,54 @@ int run_command(const std::string& scene_path, const std::string& out_dir,
     std::fprintf(stderr, "drench: simulation failed: %s\n", result.status.describe().c_str());
     return 2;
   }
+  return 0;
+}
+
+/// `drench reference`: the scene run with reference_overrides() on top of the user's, then reference.json
+/// beside its files (docs/output.md), written only when the run ended "ok": a reference that blew up or
+/// leaked is none.
+int reference_command(const std::string& scene_path, const std::string& out_dir,
+                      const std::vector<std::string>& overrides,
+                      const drench::ReferenceRefinement& refinement, bool quiet, bool overwrite,
+                      double max_output, const std::string& command_line) {
+  drench::check_output_folder(out_dir, "--out", overwrite);
+  g_activity = "reading the scene";
+  const nlohmann::json scene = drench::read_scene_document(scene_path, overrides);
+  drench::parse_scene(scene, drench::scene_source(scene_path, overrides));
+  const std::vector<std::string> refined = drench::reference_overrides(scene, refinement);
+  std::vector<std::string> all = overrides;
+  all.insert(all.end(), refined.begin(), refined.end());
+  if (!quiet) {
+    std::string list;
+    for (const std::string& assignment : refined)
+      list += " --set " + assignment;
+    std::fprintf(stderr, "drench reference: the scene with%s\n", list.c_str());
+  }
+  const int status = run_command(scene_path, out_dir, all, -1, quiet, overwrite, max_output);
+  if (status != 0) {
+    std::fprintf(stderr, "drench: reference: the run did not end \"ok\", so %s has no reference.json\n",
+                 out_dir.c_str());
+    return status;
+  }
+  nlohmann::json record;
+  record["command"] = command_line;
+  record["scene"] = scene_path;
+  record["overrides"] = overrides;
+  // What a sweep of the same scene and --set's hashes: `drench sweep --reference` checks it.
+  record["scene_sha256"] = drench::sha256_hex(drench::canonical_scene_text(scene));
+  record["refinement"] = {{"dt_divisor", refinement.dt_divisor},
+                          {"eta_divisor", refinement.eta_divisor},
+                          {"cloth_substeps_factor", refinement.cloth_substeps_factor},
+                          {"double_precision", refinement.double_precision}};
+  record["reference_overrides"] = refined;
+  nlohmann::json effective = scene;
+  for (const std::string& assignment : refined)
+    drench::apply_override(effective, assignment);
+  record["run_scene_sha256"] = drench::sha256_hex(drench::canonical_scene_text(effective));
+  record["version"] = DRENCH_VERSION;
+  drench::write_file_atomic((std::filesystem::path(out_dir) / "reference.json").string(),
+                            record.dump(2) + "\n");
+  std::printf("reference: %s/reference.json\n", out_dir.c_str());
   return 0;
 }
 
@@ -484,6 +535,33 @@ int dispatch(int argc, char** argv) {
       ->required();
   ccd->add_flag("--list", ccd_list, "also print the ids of missed collisions and false positives");
 
+  drench::ReferenceRefinement refinement;
+  CLI::App* reference = app.add_subcommand(
+      "reference",
+      "run a scene far past its settings (dt / 8, eta / 10, 4x cloth sub-steps, double sums) as the answer "
+      "`drench sweep --reference` measures errors against; reference.json in --out");
+  reference->add_option("scene", scene_path, "scene file (JSON, SI units; see docs/scenes.md)")->required();
+  reference->add_option("--out", out_dir, "output folder (frames/, summary.json, reference.json)")
+      ->required();
+  reference->add_option("--set", overrides, "override a scene value before it is refined (repeatable)");
+  reference
+      ->add_option("--threads", threads,
+                   "threads (default: OMP_NUM_THREADS, else the CPUs this process may use)")
+      ->check(whole_number(1, kMaxThreads));
+  reference->add_option("--dt-divisor", refinement.dt_divisor, "time.dt divided by this")
+      ->check(CLI::Range(1.0, 1e6))
+      ->capture_default_str();
+  reference->add_option("--eta-divisor", refinement.eta_divisor, "PCISPH's and DFSPH's eta divided by this")
+      ->check(CLI::Range(1.0, 1e6))
+      ->capture_default_str();
+  reference
+      ->add_option("--substeps-factor", refinement.cloth_substeps_factor, "cloth.substeps multiplied by this")
+      ->check(CLI::Range(1.0, 1000.0))
+      ->capture_default_str();
+  reference->add_flag("--overwrite", overwrite,
+                      "replace an earlier drench run in --out (only the files its drench_run.json lists)");
+  reference->add_flag("--quiet", quiet, "no banner and no progress line");
+
   drench::SweepOptions sweep_options;
   std::vector<std::string> vary, cases;
   CLI::App* sweep = app.add_subcommand(
@@ -514,10 +592,19 @@ int dispatch(int argc, char** argv) {
       ->add_option("--timeout", sweep_options.timeout_s,
                    "stop a run after this many seconds of wall time; its row says so (default: no limit)")
       ->check(non_negative_number());
+  sweep->add_option(
+      "--error", sweep_options.error_key,
+      "the sweep.csv column pareto.png plots against wall time (default: density_error_mean; with "
+      "--reference cloth_rms_m, or front_m without a cloth)");
+  sweep->add_option("--reference", sweep_options.reference_dir,
+                    "a `drench reference` folder: each run's frames are compared with it (docs/output.md)");
+  sweep->add_option("--gauge", sweep_options.comparison.gauges_x,
+                    "with --reference: x of a water-height gauge (m, repeatable), e.g. for the dam break");
   sweep
-      ->add_option("--error", sweep_options.error_key,
-                   "the summary figure pareto.png plots against wall time")
-      ->capture_default_str();
+      ->add_option("--cell-size", sweep_options.comparison.cell_size,
+                   "with --reference: edge of the mass grid's cells (m; default: four of the reference's "
+                   "particle spacings)")
+      ->check(CLI::PositiveNumber);
   sweep->add_option("--set", sweep_options.overrides, "override a scene value in every run (repeatable)");
   sweep->add_flag("--overwrite", sweep_options.overwrite,
                   "replace an earlier sweep in --out (only the files its drench_run.json lists)");
@@ -542,6 +629,13 @@ int dispatch(int argc, char** argv) {
     if (view->parsed())
       return view_command(scene_path, overrides, view_size, view_frames, view_screenshot, view_keys);
     if (ccd->parsed()) return ccd_command(ccd_paths, ccd_list);
+    if (reference->parsed()) {
+      std::string command_line;
+      for (int i = 0; i < argc; ++i)
+        command_line += (i ? " " : "drench") + (i ? std::string(argv[i]) : std::string());
+      return reference_command(scene_path, out_dir, overrides, refinement, quiet, overwrite, max_output,
+                               command_line);
+    }
     if (sweep->parsed()) {
       for (const std::string& argument : vary)
         sweep_options.axes.push_back(drench::parse_sweep_axis(argument));

@@ -16,6 +16,7 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <optional>
 #include <sstream>
 #include <thread>
 
@@ -24,6 +25,7 @@
 #include <drench/common/program.hpp>
 #include <drench/io/atomic_file.hpp>
 #include <drench/scene/output_folder.hpp>
+#include <drench/scene/run_frames.hpp>
 #include <drench/scene/scene_loader.hpp>
 #include <drench/scene/scene_resources.hpp>
 
@@ -127,8 +129,70 @@ struct SettingPoint {
   std::string setting;
   double time = 0, error = 0;
   int runs = 0, failed = 0;
-  bool leaked = false;  ///< a run of it leaked through the cloth: not a solution, whatever its error
+  /// Why it is drawn apart and never on the front, e.g. "leaked", "RUNAWAY_NODE", "timed out"; "" when every
+  /// run of it ended "ok" without a leak. A run that leaked, blew up or stopped is no solution, however small
+  /// its error over the frames it has.
+  std::string apart;
 };
+
+/// A status's first words, for a label: "RUNAWAY_NODE: cloth node 3 ..." -> "RUNAWAY_NODE".
+std::string short_status(const std::string& status) {
+  std::string text = status.substr(0, status.find_first_of(":;"));
+  if (text.size() > 30) text = text.substr(0, 30);
+  return text;
+}
+
+/// The axis label of an error column: the density error is the pressure solver's residual, not how right
+/// the result is (issue 42), and says so.
+std::string error_label(const std::string& key) {
+  if (key.rfind("density_error", 0) == 0) return key + " (solver residual, fraction of rest density)";
+  return key;
+}
+
+/// DIR/reference.json of a `drench reference` folder. @throws IoError naming the file
+nlohmann::json read_reference_record(const std::string& dir) {
+  const fs::path file = fs::path(dir) / "reference.json";
+  std::ifstream in(file);
+  if (!in)
+    throw IoError("--reference " + file.string() +
+                  ": missing or unreadable; make the folder with `drench reference SCENE --out " + dir + "`");
+  try {
+    nlohmann::json record = nlohmann::json::parse(in);
+    if (!record.contains("scene_sha256") || !record["scene_sha256"].is_string())
+      throw IoError("--reference " + file.string() + ": has no scene_sha256");
+    return record;
+  } catch (const nlohmann::json::exception& e) {
+    throw IoError("--reference " + file.string() + ": not JSON: " + e.what());
+  }
+}
+
+/// The comparison as JSON for runs/NNN.comparison.json: each observable's per-frame differences and the
+/// series of both runs over time.
+nlohmann::json comparison_json(const RunComparison& c, const RunFrames& reference) {
+  nlohmann::json out;
+  out["frames"] = c.frames;
+  out["times_s"] = std::vector<double>(reference.times.begin(), reference.times.begin() + c.frames);
+  out["worst_observable"] = c.worst;
+  out["worst_relative_error"] = std::isfinite(c.worst_relative) ? nlohmann::json(c.worst_relative) : nullptr;
+  auto numbers = [](const std::vector<double>& values) {
+    nlohmann::json list = nlohmann::json::array();
+    for (const double v : values)
+      list.push_back(std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr));
+    return list;
+  };
+  for (const ObservableError& e : c.observables) {
+    out["observables"][e.name] = {
+        {"largest", std::isfinite(e.largest) ? nlohmann::json(e.largest) : nullptr},
+        {"normaliser", std::isfinite(e.normaliser) ? nlohmann::json(e.normaliser) : nullptr},
+        {"relative", std::isfinite(e.relative) ? nlohmann::json(e.relative) : nullptr},
+        {"per_frame", numbers(e.per_frame)}};
+  }
+  for (std::size_t k = 0; k < c.series_names.size(); ++k) {
+    out["series"]["run"][c.series_names[k]] = numbers(c.run_series[k]);
+    out["series"]["reference"][c.series_names[k]] = numbers(c.reference_series[k]);
+  }
+  return out;
+}
 
 std::string gnuplot_label(std::string text) {
   std::replace(text.begin(), text.end(), '"', '\'');
@@ -141,13 +205,15 @@ std::string plot_pareto(const fs::path& dir, const std::vector<SettingPoint>& po
   const std::string gnuplot = find_program("gnuplot");
   if (gnuplot.empty())
     return "no pareto.png: gnuplot is not installed (Debian: sudo apt-get install gnuplot-nox)";
-  std::ostringstream all, best, leaked;
+  std::ostringstream all, best, apart;
   bool positive = true;
   double low = INFINITY, high = 0;
   for (const SettingPoint& p : points) {
     if (!std::isfinite(p.time) || !std::isfinite(p.error)) continue;
-    (p.leaked ? leaked : all) << format(p.time, "%.9g") << ' ' << format(p.error, "%.9g") << ' '
-                              << gnuplot_label(p.setting) << '\n';
+    (p.apart.empty() ? all : apart) << format(p.time, "%.9g") << ' ' << format(p.error, "%.9g") << ' '
+                                    << gnuplot_label(p.apart.empty() ? p.setting
+                                                                     : p.setting + " (" + p.apart + ")")
+                                    << '\n';
     positive = positive && p.error > 0;
     low = std::min(low, p.error);
     high = std::max(high, p.error);
@@ -156,26 +222,26 @@ std::string plot_pareto(const fs::path& dir, const std::vector<SettingPoint>& po
     best << format(points[i].time, "%.9g") << ' ' << format(points[i].error, "%.9g") << ' '
          << gnuplot_label(points[i].setting) << '\n';
   write_file_atomic((dir / "pareto_all.dat").string(), all.str());
-  write_file_atomic((dir / "pareto_leaked.dat").string(), leaked.str());
+  write_file_atomic((dir / "pareto_apart.dat").string(), apart.str());
   write_file_atomic((dir / "pareto_front.dat").string(), best.str());
   const std::string temporary = (dir / ("pareto.png.tmp-" + std::to_string(::getpid()))).string();
   std::ostringstream script;
   script << "set terminal pngcairo size 1100,700 font ',10' noenhanced\n"
          << "set output '" << temporary << "'\n"
          << "set xlabel 'wall time of the run (s)'\n"
-         << "set ylabel '" << error_key << "'\n"
+         << "set ylabel '" << error_label(error_key) << "'\n"
          << "set grid\nset key top right\n"
          << "set title 'Each setting (median of its runs); the Pareto front: no other setting is both faster "
             "and more accurate'\n"
          << (positive && high > 20 * low ? "set logscale y\n" : "") << "plot '"
          << (dir / "pareto_all.dat").string()
          << "' using 1:2 with points pt 7 ps 1.1 lc rgb '#999999' title 'settings', \\\n"
-         << (leaked.str().empty()
+         << (apart.str().empty()
                  ? ""
-                 : "  '" + (dir / "pareto_leaked.dat").string() +
+                 : "  '" + (dir / "pareto_apart.dat").string() +
                        "' using 1:2 with points pt 2 ps 1.4 lw 2 lc rgb '#c0392b' title "
-                       "'leaked (never on the front)', \\\n  '' using 1:2:3 with labels left "
-                       "offset 0.8,0.6 font ',9' tc rgb '#c0392b' notitle, \\\n")
+                       "'not ok: leaked, blew up or stopped (never on the front)', \\\n  '' using 1:2:3 with "
+                       "labels left offset 0.8,0.6 font ',9' tc rgb '#c0392b' notitle, \\\n")
          << "  '" << (dir / "pareto_front.dat").string()
          << "' using 1:2 with linespoints pt 7 ps 1.4 lw 2 lc rgb '#1f5fa8' title 'Pareto front', \\\n"
          << "  '' using 1:2:3 with labels left offset 0.8,0.6 font ',9' notitle\n";
@@ -192,13 +258,29 @@ std::string plot_pareto(const fs::path& dir, const std::vector<SettingPoint>& po
 }  // namespace
 
 int run_sweep(const SweepOptions& options) {
-  const std::vector<std::string>& columns = sweep_columns();
-  const auto error_column = std::find(columns.begin(), columns.end(), options.error_key);
-  if (error_column == columns.end() || options.error_key == "status") {
+  // The reference first: the columns and the error's default depend on it.
+  const bool with_reference = !options.reference_dir.empty();
+  nlohmann::json reference_record;
+  RunFrames reference;
+  if (with_reference) {
+    reference_record = read_reference_record(options.reference_dir);
+    reference = read_run_frames(options.reference_dir);
+  }
+  std::vector<std::string> columns = sweep_columns();
+  if (with_reference) columns.insert(columns.end(), reference_columns().begin(), reference_columns().end());
+  std::string error_key = options.error_key;
+  if (error_key.empty())
+    error_key = !with_reference                 ? "density_error_mean"
+                : reference.cloth_files.empty() ? "front_m"
+                                                : "cloth_rms_m";
+  const auto error_column = std::find(columns.begin(), columns.end(), error_key);
+  if (error_column == columns.end() || error_key == "status" || error_key == "worst_observable") {
     std::string known;
     for (std::size_t c = 1; c < columns.size(); ++c)
-      known += (c > 1 ? ", " : "") + columns[c];
-    throw SceneError("--error " + options.error_key + ": not a column; one of " + known);
+      if (columns[c] != "worst_observable") known += (c > 1 ? ", " : "") + columns[c];
+    throw SceneError("--error " + error_key + ": not a column" +
+                     (with_reference ? "" : " (the errors against a reference need --reference)") +
+                     "; one of " + known);
   }
   if (options.jobs < 1) throw SceneError("--jobs must be >= 1");
   check_output_folder(options.out_dir, "--out", options.overwrite);
@@ -206,6 +288,16 @@ int run_sweep(const SweepOptions& options) {
   // Every setting is validated as `drench run` would before anything is written or started.
   const nlohmann::json scene = read_scene_document(options.scene_path, options.overrides);
   parse_scene(scene, scene_source(options.scene_path, options.overrides));
+  if (with_reference) {
+    // A reference of another scene (or of other --set's) would measure the difference of two scenes.
+    const std::string sha = sha256_hex(canonical_scene_text(scene));
+    if (reference_record["scene_sha256"] != sha) {
+      throw SceneError("--reference " + options.reference_dir + ": made of a scene whose scene_sha256 is " +
+                       reference_record["scene_sha256"].get<std::string>() +
+                       ", the sweep's scene with its --set's has " + sha +
+                       "; make the reference with the same scene file and --set's as the sweep");
+    }
+  }
   const std::vector<SweepRun> runs =
       plan_sweep(scene, options.axes, options.cases, options.one_at_a_time, options.repeats);
   // And each run's resources, as `drench run` checks them: the runs side by side share the memory, and
@@ -220,6 +312,19 @@ int run_sweep(const SweepOptions& options) {
     for (const std::string& assignment : run.assignments)
       apply_override(document, assignment);
     const SceneConfig config = parse_scene(document, scene_source(options.scene_path, all));
+    // Each setting's frames must be at the reference's times: else the error measured includes the flow's
+    // motion between the two instants.
+    for (std::size_t n = 0; with_reference && n < reference.times.size(); ++n) {
+      const double t =
+          config.time.frame_rate > 0 ? frame_time(config.time, static_cast<std::int64_t>(n)) : NAN;
+      if (!(std::abs(t - reference.times[n]) <= options.comparison.time_tolerance)) {
+        throw SceneError("sweep: setting " + run.label + ": its frame " + std::to_string(n) +
+                         " would be at t = " + format_number(t) + " s, the reference's is at " +
+                         format_number(reference.times[n]) +
+                         " s; choose time.frame_rate so that every frame's time is a whole number of every "
+                         "setting's time.dt (e.g. 50 frames/s for dt 1, 2 and 4 ms)");
+      }
+    }
     const ResourceEstimate estimate = estimate_resources(config);
     check_resources(config, estimate, limits);
     output_bytes += estimate.output_bytes.value;
@@ -375,6 +480,22 @@ int run_sweep(const SweepOptions& options) {
       }
     }
     rows[i] = sweep_row(have_summary ? &summary : nullptr, failure);
+    if (with_reference) {
+      std::optional<RunComparison> comparison;
+      try {
+        ComparisonSettings settings = options.comparison;
+        // A run that stopped (a blow-up, a timeout) is compared over the frames it has; it is drawn apart.
+        settings.allow_shorter = rows[i][0] != "ok";
+        comparison = compare_runs(read_run_frames(out.string()), reference, settings);
+        write_file_atomic(out.string() + ".comparison.json",
+                          comparison_json(*comparison, reference).dump(1) + "\n");
+      } catch (const Error& e) {
+        rows[i][0] =
+            (rows[i][0] == "ok" ? "" : rows[i][0] + "; ") + "not compared with the reference: " + e.what();
+      }
+      const std::vector<std::string> extra = reference_row(comparison ? &*comparison : nullptr);
+      rows[i].insert(rows[i].end(), extra.begin(), extra.end());
+    }
     done[i] = true;
     ++finished;
     if (rows[i][0] != "ok") ++failures;
@@ -384,7 +505,7 @@ int run_sweep(const SweepOptions& options) {
           std::chrono::duration<double>(std::chrono::steady_clock::now() - sweep_start).count();
       const double eta = elapsed / finished * static_cast<double>(runs.size() - finished);
       std::fprintf(stderr, "sweep [%zu/%zu] %s: %s in %.1f s, %s %s; ETA %.0f s\n", finished, runs.size(),
-                   setting_of(runs[i]).c_str(), rows[i][0].c_str(), seconds, options.error_key.c_str(),
+                   setting_of(runs[i]).c_str(), rows[i][0].c_str(), seconds, error_key.c_str(),
                    rows[i][error_column - columns.begin()].empty()
                        ? "-"
                        : rows[i][error_column - columns.begin()].c_str(),
@@ -405,17 +526,17 @@ int run_sweep(const SweepOptions& options) {
     const std::string setting = setting_of(runs[i]);
     if (!point_of.count(setting)) {
       point_of[setting] = points.size();
-      points.push_back({setting, 0, 0, 0, 0});
+      points.push_back({setting, 0, 0, 0, 0, ""});
     }
     SettingPoint& p = points[point_of[setting]];
     ++p.runs;
     if (rows[i][0] != "ok") {
       ++p.failed;
-      continue;
+      if (p.apart.empty()) p.apart = short_status(rows[i][0]);
     }
-    if (sweep_number(rows[i][leaks_index]) > 0) p.leaked = true;
+    if (sweep_number(rows[i][leaks_index]) > 0 && p.apart.empty()) p.apart = "leaked";
     double e = sweep_number(rows[i][error_index]);
-    if (options.error_key == "energy_drift") e = std::abs(e);
+    if (error_key == "energy_drift") e = std::abs(e);
     times[setting].push_back(sweep_number(rows[i][wall_index]));
     errors[setting].push_back(e);
   }
@@ -423,11 +544,12 @@ int run_sweep(const SweepOptions& options) {
   for (SettingPoint& p : points) {
     p.time = median(times[p.setting]);
     p.error = median(errors[p.setting]);
-    // Water through the cloth is the failure drench exists to prevent: such a setting is never on the front.
-    xy.emplace_back(p.leaked ? std::nan("") : p.time, p.error);
+    // Water through the cloth is the failure drench exists to prevent, and a run that blew up or stopped
+    // has no answer: such a setting is drawn apart and never on the front.
+    xy.emplace_back(!p.apart.empty() ? std::nan("") : p.time, p.error);
   }
   const std::vector<std::size_t> front = pareto_front(xy);
-  const std::string plot_note = plot_pareto(dir, points, front, options.error_key);
+  const std::string plot_note = plot_pareto(dir, points, front, error_key);
   if (!plot_note.empty()) std::fprintf(stderr, "drench: %s\n", plot_note.c_str());
 
   // The report: what ran, where, and what it cost.
@@ -441,9 +563,19 @@ int run_sweep(const SweepOptions& options) {
      << options.jobs << " at a time with " << threads << " threads each, on " << cpu_model() << " (" << cores
      << " cores), " << date << ", drench " << DRENCH_VERSION << ". " << failures
      << " runs did not end \"ok\". One row per run in "
-     << "[sweep.csv](sweep.csv); each run's files in `runs/NNN/`, its output in `runs/NNN.log`.\n\n"
-     << "| setting | runs | wall s | fluid s | cloth s | coupling s | surface s | " << options.error_key
-     << " | leaks | max particle m/s | status |\n|---|---|---|---|---|---|---|---|---|---|---|\n";
+     << "[sweep.csv](sweep.csv); each run's files in `runs/NNN/`, its output in `runs/NNN.log`.\n\n";
+  if (with_reference) {
+    md << "Errors against the reference `" << options.reference_dir << "` (" << reference.times.size()
+       << " frames; " << reference_record.value("refinement", nlohmann::json::object()).dump()
+       << "): each observable's largest difference over the frames, its unit in its name, per run in "
+          "`runs/NNN.comparison.json` frame by frame. `density_error_mean` is the pressure solver's "
+          "residual, "
+          "not the error of the result.\n\n";
+  }
+  md << "| setting | runs | wall s | fluid s | cloth s | coupling s | surface s | " << error_label(error_key)
+     << (with_reference ? " | worst relative error" : "")
+     << " | leaks | max particle m/s | status |\n|---|---|---|---|---|---|---|---|"
+     << (with_reference ? "---|" : "") << "---|---|---|\n";
   auto column_median = [&](const std::string& setting, const char* column) {
     const std::size_t c =
         static_cast<std::size_t>(std::find(columns.begin(), columns.end(), column) - columns.begin());
@@ -463,14 +595,21 @@ int run_sweep(const SweepOptions& options) {
        << format(column_median(p.setting, "fluid_s"), "%.2f") << " | "
        << format(column_median(p.setting, "cloth_s"), "%.2f") << " | "
        << format(column_median(p.setting, "coupling_s"), "%.2f") << " | "
-       << format(column_median(p.setting, "surface_s"), "%.2f") << " | " << format(p.error) << " | "
-       << format(column_median(p.setting, "leaks"), "%.0f") << " | "
+       << format(column_median(p.setting, "surface_s"), "%.2f") << " | " << format(p.error) << " | ";
+    if (with_reference) {
+      std::string worst;
+      for (std::size_t i = 0; i < runs.size() && worst.empty(); ++i)
+        if (setting_of(runs[i]) == p.setting) worst = rows[i].back();
+      md << format(column_median(p.setting, "worst_relative_error"))
+         << (worst.empty() ? "" : " (" + worst + ")") << " | ";
+    }
+    md << format(column_median(p.setting, "leaks"), "%.0f") << " | "
        << format(column_median(p.setting, "max_particle_speed_mps"), "%.3g") << " | "
        << (statuses.empty() ? "ok" : statuses) << " |\n";
   }
-  md << "\nThe Pareto front of wall time against " << options.error_key
-     << " (no other setting is both faster and more accurate; settings that leaked are left out), fastest "
-        "first:";
+  md << "\nThe Pareto front of wall time against " << error_label(error_key)
+     << " (no other setting is both faster and more accurate; settings with a run that leaked, blew up or "
+        "stopped are left out), fastest first:";
   for (std::size_t k = 0; k < front.size(); ++k)
     md << (k ? ", " : " ") << "`" << points[front[k]].setting << "`";
   md << ".\n\n" << (plot_note.empty() ? "![wall time against the error](pareto.png)\n" : plot_note + "\n");

@@ -20,9 +20,15 @@ struct SweepOptions {
   int jobs = 1;                        ///< runs side by side, >= 1
   int threads = 0;                     ///< threads per run; 0: thread_count() shared among the jobs
   double timeout_s = 0;  ///< a run's wall time limit (unit: s), after which it is killed; 0: none
-  std::string error_key = "density_error_mean";  ///< the sweep_columns() entry the Pareto plot uses
-  std::string command_line;                      ///< as the user typed it, for the report
-  bool quiet = false;                            ///< no line per finished run
+  /// The column the Pareto plot uses: of sweep_columns(), or with a reference of reference_columns(); empty:
+  /// `cloth_rms_m` with a reference that has a cloth, `front_m` with one without, else `density_error_mean`.
+  std::string error_key;
+  /// A `drench reference` folder (reference.json, scene.json, frames/): every run is compared with it and
+  /// its row gains reference_columns(). Empty: none.
+  std::string reference_dir;
+  ComparisonSettings comparison;  ///< how the runs are compared with the reference
+  std::string command_line;       ///< as the user typed it, for the report
+  bool quiet = false;             ///< no line per finished run
   bool overwrite = false;  ///< replace an earlier sweep in out_dir (output_folder.hpp); else it must be empty
 };
 
@@ -31,10 +37,15 @@ struct SweepOptions {
 /// go into runs/NNN/ with their output in runs/NNN.log. SIGINT or SIGTERM (stop_signal.hpp) is passed on
 /// once to the runs under way, which end as "interrupted"; no further run starts (their rows say so), and the
 /// report is written for what ran.
+/// With a reference, a run that cannot be compared with it (compare_runs' errors: a missing frame, other
+/// frame times) is a row whose status says why, not "ok".
 /// @return the number of runs whose status is not "ok"
-/// @throws SceneError when the scene, an override or a setting is invalid (before anything is written), or
-///         `error_key` is not a column; IoError when DIR cannot be written, is not empty (without
-///         `overwrite`) or holds files an earlier sweep did not write, or a run cannot be started.
+/// @throws SceneError when the scene, an override or a setting is invalid (before anything is written),
+///         `error_key` is not a column, the reference is of another scene (its scene_sha256 differs from the
+///         sweep's scene with its `--set`s), or a setting's frames would not be at the reference's times;
+///         IoError when the reference folder has no readable reference.json or frames (read_run_frames'
+///         errors), when DIR cannot be written, is not empty (without `overwrite`) or holds files an earlier
+///         sweep did not write, or a run cannot be started.
 int run_sweep(const SweepOptions& options);
 
 }  // namespace drench

@@ -1,7 +1,7 @@
 # Layers only look down (docs/architecture.md): common <- {sph, ccd, io} <- coupling <- {surface, wetting}
-# <- scene; the renderer (render/, drench_render) sits above the core, which never includes it; and only
-# bullet_adapter/ (with its tests, the consumer test and the embedding demos, its users) includes
-# Bullet. Run by ctest as `cmake -DSOURCE_DIR=<repo> -P check_layers.cmake`; fails naming each file and
+# <- scene, and io <- compare <- scene (runs against a reference); the renderer (render/, drench_render)
+# sits above the core, which never includes it; and only bullet_adapter/ (with its tests, the consumer test
+# and the embedding demos, its users) includes Bullet. Run by ctest as `cmake -DSOURCE_DIR=<repo> -P check_layers.cmake`; fails naming each file and
 # include that breaks a rule.
 
 cmake_minimum_required(VERSION 3.22)
@@ -10,11 +10,12 @@ set(allowed_common common)
 set(allowed_sph common sph)
 set(allowed_ccd common ccd)
 set(allowed_io common io)
+set(allowed_compare common io compare)
 set(allowed_coupling common sph ccd coupling)
 set(allowed_surface common sph ccd coupling io surface)
 set(allowed_wetting common sph ccd coupling wetting)
-set(allowed_scene common sph ccd io coupling surface wetting scene)
-set(layers common sph ccd io coupling surface wetting scene)
+set(allowed_scene common sph ccd io compare coupling surface wetting scene)
+set(layers common sph ccd io compare coupling surface wetting scene)
 
 set(bullet_header_regex "#include[ \t]*[<\"](btBullet|BulletSoftBody/|BulletDynamics/|BulletCollision/|LinearMath/|Bullet3)")
 set(violations "")

@@ -169,6 +169,8 @@ const std::vector<std::string>& run_output_patterns() {
       kOutputManifest,
       "scene.json",
       "summary.json",
+      // drench reference: the settings the reference was made with, beside the run's files.
+      "reference.json",
       "obstacles.ply",
       "frames/fluid_*.ply",
       "frames/cloth_*.ply",
@@ -185,9 +187,10 @@ const std::vector<std::string>& run_output_patterns() {
 
 const std::vector<std::string>& sweep_output_patterns() {
   static const std::vector<std::string> patterns = [] {
-    std::vector<std::string> list = {kOutputManifest,    "sweep.csv",         "report.md",
-                                     "pareto.png",       "pareto.gp",         "pareto_all.dat",
-                                     "pareto_front.dat", "pareto_leaked.dat", "runs/*.log"};
+    std::vector<std::string> list = {kOutputManifest, "sweep.csv", "report.md", "pareto.png", "pareto.gp",
+                                     "pareto_all.dat", "pareto_front.dat", "pareto_apart.dat",
+                                     // pareto_leaked.dat: an older sweep's, cleared by --overwrite.
+                                     "pareto_leaked.dat", "runs/*.log", "runs/*.comparison.json"};
     for (const std::string& pattern : run_output_patterns())
       list.push_back("runs/*/" + pattern);
     return list;

@@ -211,6 +211,30 @@ std::vector<std::string> sweep_row(const nlohmann::json* summary, const std::str
           field(s, {"max_speed_mps", "node"})};
 }
 
+const std::vector<std::string>& reference_columns() {
+  static const std::vector<std::string> columns = [] {
+    std::vector<std::string> list = observable_names();
+    list.push_back("worst_relative_error");
+    list.push_back("worst_observable");
+    return list;
+  }();
+  return columns;
+}
+
+std::vector<std::string> reference_row(const RunComparison* comparison) {
+  std::vector<std::string> row(reference_columns().size());
+  if (!comparison) return row;
+  const std::vector<std::string>& names = observable_names();
+  for (const ObservableError& e : comparison->observables) {
+    const std::size_t i =
+        static_cast<std::size_t>(std::find(names.begin(), names.end(), e.name) - names.begin());
+    if (i < names.size() && std::isfinite(e.largest)) row[i] = number_field(e.largest);
+  }
+  if (std::isfinite(comparison->worst_relative)) row[names.size()] = number_field(comparison->worst_relative);
+  row[names.size() + 1] = comparison->worst;
+  return row;
+}
+
 double sweep_number(const std::string& text) {
   if (text.empty()) return std::numeric_limits<double>::quiet_NaN();
   char* end = nullptr;

@@ -8,6 +8,8 @@
 #include <utility>
 #include <vector>
 
+#include <drench/compare/run_comparison.hpp>
+
 namespace drench {
 
 /// One `--vary key=v1,v2,...` argument: a scene path as `--set` takes it and the values it takes in turn.
@@ -57,6 +59,15 @@ const std::vector<std::string>& sweep_columns();
 /// The row of one run: sweep_columns() from its summary, or, when `summary` is null (the run died before
 /// writing one), `status` from `failure`. The status is "ok", the summary's step flags, or the failure.
 std::vector<std::string> sweep_row(const nlohmann::json* summary, const std::string& failure);
+
+/// The columns `drench sweep --reference` adds after sweep_columns(): each of observable_names() (the largest
+/// difference from the reference over the frames, unit in the name; compare/run_comparison.hpp), then
+/// `worst_relative_error` (the largest of their relative errors) and `worst_observable` (whose it is).
+const std::vector<std::string>& reference_columns();
+
+/// The reference columns of one run from its comparison; every field empty when `comparison` is null (the
+/// run could not be compared), an observable's field empty when the runs do not have it.
+std::vector<std::string> reference_row(const RunComparison* comparison);
 
 /// A number of a row as the CSV holds it, or NaN for an empty field.
 double sweep_number(const std::string& field);
