@@ -16,11 +16,18 @@ another process shares the machine, where two OpenMP threads wait on each other 
   accuracy_stability.csv; scripts/result_pages finds the largest dt that still ends "ok", with no leak and
   nothing faster than the jet tests' speed bound. Its control, the jet with no cloth in its way, ->
   accuracy_free_jet.csv.
+- PBF (issue 41), a phase of its own (`--only pbf`) that leaves the CSVs above as they are: the jet with
+  PBF and DFSPH at the scene's dt, and PBF, DFSPH and PCISPH at a game's 1/60 s with the cloth in 16
+  sub-steps (PBF's jet is stable there from about 16, tests/bullet_adapter/test_jet_on_cloth.cpp), beside
+  the scene itself (PCISPH) rerun in the same sweep -> accuracy_pbf_jet.csv; and the stability sweep and its
+  control for PBF alone -> accuracy_stability_pbf.csv, accuracy_free_jet_pbf.csv; and PBF's stability with
+  the cloth in 16 sub-steps at 1/60 s, 8 and 4 ms -> accuracy_stability_pbf_cloth16.csv.
 The lines above each CSV's header are `# key: value` notes: the CPU, the commit, the command and the load
 average before and after (the VM is shared; above about 1.5 the times are not worth keeping).
 """
 
 import argparse
+import csv
 import shutil
 import subprocess
 import sys
@@ -60,6 +67,15 @@ STABILITY = [
     "--vary", "time.dt=0.016,0.008,0.004,0.002,0.001",
 ]
 
+# PBF at a game's steps with the cloth in 16 sub-steps (the scene's 4 overstretch under PBF's jet at 8 and 16 ms).
+STABILITY_PBF_CLOTH16 = [
+    "--timeout", "{timeout}",
+    "--set", 'fluid.pressure_solver="pbf"',
+    "--set", "cloth.substeps=16",
+    "--vary", "coupling.cloth_thickness=0.0005,0.001,0.005",
+    "--vary", f"time.dt={repr(1.0 / 60.0)},0.008,0.004",
+]
+
 # The stability sweep's control: the same jet and steps with nothing in its way (the cloth is not coupled), so
 # that what the table blames on contact is not the solver's or the nozzle's own doing.
 FREE_JET = [
@@ -67,6 +83,18 @@ FREE_JET = [
     "--vary", 'fluid.pressure_solver={solvers}',
     "--vary", "time.dt=0.016,0.008,0.004,0.002,0.001",
     "--set", 'effects=["viscosity"]',
+]
+
+
+# At a game's frame: all digits, so that 0.5 s is 30 steps exactly.
+GAME_DT = repr(1.0 / 60.0)
+GAME_CLOTH = f"time.dt={GAME_DT};cloth.substeps=16"
+PBF_JET = [
+    "--one-at-a-time",
+    "--vary", 'fluid.pressure_solver="dfsph","pbf"',
+    "--case", f'pbf at 1/60 s, cloth 16 sub-steps:fluid.pressure_solver="pbf";{GAME_CLOTH}',
+    "--case", f'dfsph at 1/60 s, cloth 16 sub-steps:fluid.pressure_solver="dfsph";{GAME_CLOTH}',
+    "--case", f'pcisph at 1/60 s, cloth 16 sub-steps:fluid.pressure_solver="pcisph";{GAME_CLOTH}',
 ]
 
 
@@ -97,6 +125,29 @@ def keep(csv_path, notes, target):
     print(f"wrote {target} (load {notes['load_before']} before, {notes['load_after']} after)", file=sys.stderr)
 
 
+def pbf_jet(drench, base, out, args):
+    """PBF_JET `--repeat` times as alternating rounds (a sweep's own repeats run back to back, so a change of
+    the shared VM's load would fall on one setting): one CSV whose `repeat` column is the round."""
+    header, rows, notes = None, [], None
+    for k in range(args.repeat):
+        folder = base / f"pbf_jet_{k + 1}"
+        round_notes = sweep(drench, PBF_JET, folder, args.duration, args.threads)
+        notes = notes or round_notes
+        notes["load_after"] = round_notes["load_after"]
+        lines = (folder / "sweep.csv").read_text().splitlines()
+        header = lines[0]
+        columns = header.split(",")
+        for row in csv.reader(lines[1:]):
+            row[columns.index("repeat")] = str(k)
+            rows.append(row)
+    notes["command"] += f" (alternating rounds: {args.repeat})"
+    merged = base / "pbf_jet.csv"
+    with merged.open("w", newline="") as f:
+        f.write(header + "\n")
+        csv.writer(f, lineterminator="\n").writerows(rows)
+    keep(merged, notes, out / "accuracy_pbf_jet.csv")
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--drench", default=str(ROOT / "build" / "demos" / "drench"))
@@ -106,7 +157,12 @@ def main():
     parser.add_argument("--stability-solvers", default='"wcsph","pcisph","dfsph"',
                         help="pressure solvers of the stability sweep and its control, as --vary values (WCSPH's runs take minutes each)")
     parser.add_argument("--threads", type=int, default=1, help="OpenMP threads of each run (default: 1)")
-    parser.add_argument("--only", choices=["one_at_a_time", "stability", "free_jet"], help="run one sweep only")
+    parser.add_argument("--only", choices=["one_at_a_time", "stability", "free_jet", "pbf", "pbf_jet", "pbf_stability",
+                                           "pbf_cloth16"],
+                        help="run one sweep only (pbf: PBF's phase, pbf_jet and pbf_stability together; not part of"
+                             " a run of all)")
+    parser.add_argument("--repeat", type=int, default=3,
+                        help="rounds of PBF's jet comparison (default 3; the page takes medians)")
     parser.add_argument("--timeout", type=int, default=240,
                         help="seconds after which a stability run is stopped (default 240; with WCSPH: 600)")
     parser.add_argument("--jobs", type=int, default=1,
@@ -129,6 +185,19 @@ def main():
             notes = sweep(drench, FREE_JET, base / "free_jet", args.duration, args.threads, args.stability_solvers,
                           args.jobs, args.timeout)
             keep(base / "free_jet" / "sweep.csv", notes, out / "accuracy_free_jet.csv")
+        if args.only in ("pbf", "pbf_jet"):
+            pbf_jet(drench, base, out, args)
+        if args.only in ("pbf", "pbf_stability"):
+            notes = sweep(drench, STABILITY, base / "stability_pbf", args.duration, args.threads, '"pbf"', args.jobs,
+                          args.timeout)
+            keep(base / "stability_pbf" / "sweep.csv", notes, out / "accuracy_stability_pbf.csv")
+            notes = sweep(drench, FREE_JET, base / "free_jet_pbf", args.duration, args.threads, '"pbf"', args.jobs,
+                          args.timeout)
+            keep(base / "free_jet_pbf" / "sweep.csv", notes, out / "accuracy_free_jet_pbf.csv")
+        if args.only in ("pbf", "pbf_stability", "pbf_cloth16"):
+            notes = sweep(drench, STABILITY_PBF_CLOTH16, base / "stability_pbf_cloth16", args.duration, args.threads,
+                          jobs=args.jobs, timeout=args.timeout)
+            keep(base / "stability_pbf_cloth16" / "sweep.csv", notes, out / "accuracy_stability_pbf_cloth16.csv")
 
 
 if __name__ == "__main__":
