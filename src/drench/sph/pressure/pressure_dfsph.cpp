@@ -103,8 +103,12 @@ PressureDfsph::PressureDfsph(const FluidSettings& settings) : m_settings(setting
         squares += (mass * kernel.gradient(-s * Vec3(i, j, k))).squaredNorm();
     }
   }
-  // A filled lattice's gradient sum is zero by symmetry; its squares are the denominator.
-  m_min_denominator = 1e-6 * squares;
+  // A filled lattice's gradient sum is zero by symmetry; its squares are the denominator. A particle under a
+  // tenth of it has lost most of its neighbours or sits where their gradients cancel (inside a moving body's
+  // boundary shell): dividing by that tenth keeps its Jacobi step bounded, where a near-zero denominator
+  // threw particles out of bench_game_frame's level
+  // (Dfsph.AParticleCaughtInABodysShellDoesNotThrowItsNeighbour).
+  m_min_denominator = 0.1 * squares;
 }
 
 void PressureDfsph::follow_particles(const ParticleSet& particles) {
@@ -166,7 +170,7 @@ void PressureDfsph::compute_factors(const FluidContext& ctx) {
     dfsph_denominators(ctx, m_points, begin, end, &m_inv_denominator[begin]);
     for (std::size_t i = begin; i < end; ++i) {
       const Scalar d = m_inv_denominator[i];
-      m_inv_denominator[i] = d > m_min_denominator ? 1.0 / d : 0.0;
+      m_inv_denominator[i] = 1.0 / std::max(d, m_min_denominator);
     }
   });
   m_factors_current = true;

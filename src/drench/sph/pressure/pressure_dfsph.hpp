@@ -80,8 +80,8 @@ class PressureDfsph final : public PressureSolver {
   bool apply_warm_start(const ScalarArray& warm, Scalar scale, ScalarArray& totals);
 
   DfsphSettings m_settings;
-  /// Denominators below this (unit: kg^2/m^8) give factor 0: a particle without neighbors, which no pressure
-  /// can move. 1e-6 of a filled lattice neighborhood's.
+  /// The least denominator a particle's step is divided by (unit: kg^2/m^8): a tenth of a filled lattice
+  /// neighborhood's, an under-relaxation of the particles whose gradients cancel (the constructor says why).
   Scalar m_min_denominator;
   PackedPointArray m_points;        // N: positions (unit: m), w = mass (unit: kg)
   PackedPointArray m_velocities;    // N: the velocities the solve corrects (unit: m/s), w unused
@@ -92,7 +92,7 @@ class PressureDfsph final : public PressureSolver {
   bool m_single = false;
   PackedPointFArray m_points_float, m_velocities_float, m_kappa_points_float, m_boundary_float;
   /// N: 1 / (|sum_j m_j grad W_ij + sum_b Psi_b grad W_ib|^2 + sum_j |m_j grad W_ij|^2) (unit: m^8/kg^2), so
-  /// that kappa_i / rho_i = (density error) / (dt^2 denominator); 0 below m_min_denominator.
+  /// that kappa_i / rho_i = (density error) / (dt^2 denominator); the denominator at least m_min_denominator.
   ScalarArray m_inv_denominator;
   ScalarArray m_kappa;             // N: density solve's sum of kappa_i / rho_i (unit: m^5/(kg s^2))
   ScalarArray m_kappa_divergence;  // N: divergence solve's sum of kappa^v_i / rho_i (unit: m^5/(kg s^2))
