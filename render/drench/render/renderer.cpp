@@ -488,6 +488,11 @@ void Renderer::draw(const FrameGeometry& frame, const Camera& camera, const Part
       glBindFramebuffer(GL_FRAMEBUFFER, s.background_framebuffer);
       draw_opaque();
     }
+    // The opaque scene again in the caller's (multisampled) framebuffer, whose depth the water's last pass
+    // tests against; drawn now so that the surface is uploaded once, for both of its passes.
+    glBindFramebuffer(GL_FRAMEBUFFER, static_cast<GLuint>(caller_framebuffer));
+    glViewport(viewport[0], viewport[1], viewport[2], viewport[3]);
+    draw_opaque();
 
     // The thickness: every face of the water, none hidden, summed.
     const auto set_pass_uniforms = [&](GLuint program, GLint origin_x, GLint origin_y) {
@@ -505,6 +510,7 @@ void Renderer::draw(const FrameGeometry& frame, const Camera& camera, const Part
     };
     s.upload_mesh(*frame.surface);
     glBindFramebuffer(GL_FRAMEBUFFER, s.thickness_framebuffer);
+    glViewport(0, 0, width, height);
     glClearColor(0.0f, 0.0f, 0.0f, 0.0f);
     glClear(GL_COLOR_BUFFER_BIT);
     glDisable(GL_DEPTH_TEST);
@@ -517,12 +523,9 @@ void Renderer::draw(const FrameGeometry& frame, const Camera& camera, const Part
     glDrawElements(GL_TRIANGLES, surface_elements, GL_UNSIGNED_INT, nullptr);
     glDisable(GL_BLEND);
 
-    // The opaque scene again in the caller's (multisampled) framebuffer, then the water's nearest face over
-    // it, shaded from the textures.
+    // The water's nearest face over the opaque scene, shaded from the textures.
     glBindFramebuffer(GL_FRAMEBUFFER, static_cast<GLuint>(caller_framebuffer));
     glViewport(viewport[0], viewport[1], viewport[2], viewport[3]);
-    draw_opaque();
-    s.upload_mesh(*frame.surface);
     set_pass_uniforms(s.water_program, viewport[0], viewport[1]);
     glActiveTexture(GL_TEXTURE1);
     glBindTexture(GL_TEXTURE_2D, s.background_colour);
