@@ -244,6 +244,28 @@ TEST_F(TransparentWater, SaysOnceWhichFramesHaveNoSurfaceAndDrawsThemAsBefore) {
   EXPECT_EQ(image(0).rgb, image(0, true).rgb);
 }
 
+TEST(TransparentWaterSettings, BadOpticsAreNamedAndWriteNothing) {
+  TempDir dir;
+  write_striped_run(dir.path());
+  RenderOptions options = striped_render(dir.path(), WaterShading::TRANSPARENT, "render");
+  const auto message = [&]() -> std::string {
+    try {
+      render_run(options);
+    } catch (const Error& e) {
+      return e.what();
+    }
+    return "did not throw";
+  };
+  options.water.refractive_index = 1.0;
+  EXPECT_EQ(message(), "the water's refractive index must be > 1, got 1");
+  options.water.refractive_index = 1.33;
+  options.water.absorption.y() = -0.5;
+  EXPECT_EQ(message(),
+            "the water's absorption must be >= 0 1/m in each channel, got -0.5 in channel 1 (0 red, "
+            "1 green, 2 blue)");
+  EXPECT_FALSE(fs::exists(dir.path() / "render"));
+}
+
 TEST(ParseWaterShading, NamesBothChoicesForAnUnknownOne) {
   EXPECT_EQ(parse_water_shading("opaque"), WaterShading::OPAQUE);
   EXPECT_EQ(parse_water_shading("transparent"), WaterShading::TRANSPARENT);

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <map>
@@ -183,6 +184,15 @@ RenderResult render_run(const RenderOptions& options) {
   if (options.width < 1 || options.height < 1) {
     throw Error("the image size must be at least 1x1 pixels, got " + std::to_string(options.width) + "x" +
                 std::to_string(options.height));
+  }
+  const WaterStyle& water = options.water;
+  if (!(water.refractive_index > 1.0 && std::isfinite(water.refractive_index)))
+    throw Error("the water's refractive index must be > 1, got " + format_number(water.refractive_index));
+  for (int c = 0; c < 3; ++c) {
+    if (!(water.absorption[c] >= 0.0 && std::isfinite(water.absorption[c])))
+      throw Error("the water's absorption must be >= 0 1/m in each channel, got " +
+                  format_number(water.absorption[c]) + " in channel " + std::to_string(c) +
+                  " (0 red, 1 green, 2 blue)");
   }
   const fs::path dir(options.run_dir);
   RenderResult result;

@@ -23,13 +23,12 @@ struct RenderOptions {
 
 struct RenderResult {
   std::int64_t frames = 0;
-  std::string out_dir;     ///< where the PNGs went
-  Camera camera;           ///< the camera every frame was drawn with
-  std::string gl;          ///< the OpenGL that drew them (OffscreenContext::description)
-  std::string video_path;  ///< the MP4 written, or "" when none was
-  std::string video_note;  ///< with `video`, why no MP4 was written (ffmpeg missing), else ""
-  /// With transparent water, which frames had no surface to draw so (their particles were drawn), else "".
-  std::string water_note;
+  std::string out_dir;         ///< where the PNGs went
+  Camera camera;               ///< the camera every frame was drawn with
+  std::string gl;              ///< the OpenGL that drew them (OffscreenContext::description)
+  std::string video_path;      ///< the MP4 written, or "" when none was
+  std::string video_note;      ///< with `video`, why no MP4 was written (ffmpeg missing), else ""
+  std::string water_note;      ///< with transparent water, frames drawn as particles (no surface), else ""
   double read_seconds = 0.0;   ///< reading and checking the frames, both passes (unit: s)
   double draw_seconds = 0.0;   ///< drawing and reading the pixels back, all frames (unit: s)
   double write_seconds = 0.0;  ///< PNG encoding and writing, all frames (unit: s)
@@ -60,7 +59,8 @@ WaterShading parse_water_shading(const std::string& text);
 /// cloth, its surface with the `surface` effect, its bodies when any frame has them), else nothing is drawn.
 /// Everything is read and checked, and the OpenGL context made, before anything is written: bad input writes
 /// nothing. Each PNG (and the MP4) is written under a temporary name and renamed.
-/// @throws drench::Error for a size < 1; SceneError for a bad scene.json, a malformed `camera_json` or an
+/// @throws drench::Error for a size < 1, a `water.refractive_index` <= 1 or an absorption < 0 (or not
+///         finite); SceneError for a bad scene.json, a malformed `camera_json` or an
 ///         unknown camera key (naming camera.<key>); IoError naming the file when scene.json or the frames
 ///         are missing, a frame's file is missing (the first such), a frame is malformed, a file cannot be
 ///         written, or ffmpeg fails; RenderError when no headless OpenGL context can be made.
