@@ -1,7 +1,8 @@
 // The drench command:
 //   drench run SCENE.json --out DIR [--overwrite] [--set json.path=value ...] [--steps N]
 //   drench reconstruct DIR [--set json.path=value ...]   the surface again from a run's saved frames
-//   drench render DIR [--camera JSON] [--size WxH] [--out DIR] [--video]   a run's frames as PNG (and MP4)
+//   drench render DIR [--camera JSON] [--size WxH] [--out DIR] [--water opaque|transparent] [--video]
+//                                            a run's frames as PNG (and MP4)
 //   drench view SCENE.json [--set ...] [--size WxH] [--frames N --screenshot FILE] [--keys SEQ]   live window
 //   drench ccd FILE_OR_DIR... [--list]      point-triangle CCD against labelled queries (*.vf.txt)
 //   drench sweep SCENE.json --vary key=v1,v2 ... --out DIR [--overwrite] [--reference REF]   over settings
@@ -205,9 +206,11 @@ int reconstruct_command(const std::string& run_dir, const std::vector<std::strin
   return 0;
 }
 
-int render_command(drench::render::RenderOptions options, const std::string& size, bool quiet) {
+int render_command(drench::render::RenderOptions options, const std::string& size, const std::string& water,
+                   bool quiet) {
   g_activity = "rendering";
   drench::render::parse_image_size(size, options.width, options.height);
+  options.water.shading = drench::render::parse_water_shading(water);
   options.progress = !quiet;
   // Said before the frames are drawn, so that nobody waits minutes for a video that will not come.
   if (options.video && drench::find_program("ffmpeg").empty())
@@ -232,6 +235,7 @@ int render_command(drench::render::RenderOptions options, const std::string& siz
   }
   if (!r.video_path.empty()) std::printf("video: %s (%.2f s)\n", r.video_path.c_str(), r.video_seconds);
   if (!r.video_note.empty()) std::fprintf(stderr, "drench: --video: %s\n", r.video_note.c_str());
+  if (!r.water_note.empty()) std::fprintf(stderr, "drench: --water transparent: %s\n", r.water_note.c_str());
   return 0;
 }
 
@@ -497,7 +501,7 @@ int dispatch(int argc, char** argv) {
   reconstruct->add_flag("--quiet", quiet, "no progress line");
 
   drench::render::RenderOptions render_options;
-  std::string render_size = "1280x720";
+  std::string render_size = "1280x720", render_water = "opaque";
   CLI::App* render = app.add_subcommand(
       "render", "draw a run's frames as PNG images, headless (render/frame_NNNN.png), and optionally an MP4");
   render->add_option("dir", render_options.run_dir, "the --out folder of a drench run (scene.json, frames/)")
@@ -507,6 +511,11 @@ int dispatch(int argc, char** argv) {
                      "'{\"position\": [0, 0.4, 1.2], \"target\": [0, 0, 0], \"fov_deg\": 45}'");
   render->add_option("--size", render_size, "image size WIDTHxHEIGHT in pixels")->capture_default_str();
   render->add_option("--out", render_options.out_dir, "folder of the images (default: DIR/render)");
+  render
+      ->add_option("--water", render_water,
+                   "the fluid's surface: opaque (blue) or transparent (water: reflection, refraction, "
+                   "absorption; the cloth seen through it)")
+      ->capture_default_str();
   render->add_flag("--video", render_options.video,
                    "also write video.mp4 through ffmpeg, when it is installed");
   render->add_flag("--quiet", quiet, "no progress line and no camera line");
@@ -625,7 +634,7 @@ int dispatch(int argc, char** argv) {
     if (run->parsed())
       return run_command(scene_path, out_dir, overrides, steps, quiet, overwrite, max_output);
     if (reconstruct->parsed()) return reconstruct_command(reconstruct_dir, overrides, quiet);
-    if (render->parsed()) return render_command(render_options, render_size, quiet);
+    if (render->parsed()) return render_command(render_options, render_size, render_water, quiet);
     if (view->parsed())
       return view_command(scene_path, overrides, view_size, view_frames, view_screenshot, view_keys);
     if (ccd->parsed()) return ccd_command(ccd_paths, ccd_list);

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <map>
@@ -171,12 +172,27 @@ void parse_image_size(const std::string& text, int& width, int& height) {
   if (width < 1 || height < 1 || width > 16384 || height > 16384) throw fail();
 }
 
+WaterShading parse_water_shading(const std::string& text) {
+  if (text == "opaque") return WaterShading::OPAQUE;
+  if (text == "transparent") return WaterShading::TRANSPARENT;
+  throw Error("--water must be opaque or transparent, got \"" + text + "\"");
+}
+
 RenderResult render_run(const RenderOptions& options) {
   const auto start = std::chrono::steady_clock::now();
   auto wall = [&] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(); };
   if (options.width < 1 || options.height < 1) {
     throw Error("the image size must be at least 1x1 pixels, got " + std::to_string(options.width) + "x" +
                 std::to_string(options.height));
+  }
+  const WaterStyle& water = options.water;
+  if (!(water.refractive_index > 1.0 && std::isfinite(water.refractive_index)))
+    throw Error("the water's refractive index must be > 1, got " + format_number(water.refractive_index));
+  for (int c = 0; c < 3; ++c) {
+    if (!(water.absorption[c] >= 0.0 && std::isfinite(water.absorption[c])))
+      throw Error("the water's absorption must be >= 0 1/m in each channel, got " +
+                  format_number(water.absorption[c]) + " in channel " + std::to_string(c) +
+                  " (0 red, 1 green, 2 blue)");
   }
   const fs::path dir(options.run_dir);
   RenderResult result;
@@ -252,6 +268,9 @@ RenderResult render_run(const RenderOptions& options) {
   fs::create_directories(out_dir, ec);
   if (ec) throw IoError(out_dir.string() + ": cannot create: " + ec.message());
 
+  // Transparent water needs the surface; frames without one keep their particles, said once at the end.
+  std::int64_t particle_frames = 0;
+  std::string first_particle_frame;
   ProgressLine progress(options.progress, frames.size());
   for (const FrameFiles& files : frames) {
     LoadedFrame frame;
@@ -275,14 +294,18 @@ RenderResult render_run(const RenderOptions& options) {
     } else if (has_obstacles) {
       geometry.obstacles = &obstacles;
     }
-    if (!files.surface.empty()) geometry.surface = &frame.surface;
+    if (!files.surface.empty()) {
+      geometry.surface = &frame.surface;
+    } else if (particle_frames++ == 0) {
+      first_particle_frame = files.digits;
+    }
     geometry.particles = &frame.fluid.positions;
     if (!frame.fluid.velocities.empty()) geometry.velocities = &frame.fluid.velocities;
     Image image;
     {
       ScopedTimer timer(result.draw_seconds);
       context.bind();
-      renderer.draw(geometry, result.camera, style, options.width, options.height);
+      renderer.draw(geometry, result.camera, style, options.width, options.height, options.water);
       image = context.read_image();
     }
     {
@@ -291,6 +314,15 @@ RenderResult render_run(const RenderOptions& options) {
     }
     ++result.frames;
     progress.update(static_cast<std::size_t>(result.frames), wall());
+  }
+
+  if (options.water.shading == WaterShading::TRANSPARENT && particle_frames > 0) {
+    result.water_note =
+        std::to_string(particle_frames) + " of " + std::to_string(frames.size()) +
+        " frames (the first frame_" + first_particle_frame +
+        ") have no surface_NNNN.ply, so their water is drawn as particles, not as transparent water; the "
+        "scene's `surface` effect writes the surfaces, or `drench reconstruct " +
+        options.run_dir + "` afterwards";
   }
 
   if (options.video) {
