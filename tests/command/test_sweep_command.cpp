@@ -6,49 +6,18 @@
 #include <chrono>
 #include <cstdlib>
 #include <filesystem>
-#include <fstream>
 #include <map>
 #include <nlohmann/json.hpp>
-#include <sstream>
 #include <string>
 #include <vector>
 
+#include "../csv_rows.hpp"
 #include "../drench_command.hpp"
 #include "../temp_dir.hpp"
 
 namespace {
 
 namespace fs = std::filesystem;
-
-/// sweep.csv as rows of named fields (no field of this test's sweeps holds a comma or a quote).
-std::vector<std::map<std::string, std::string>> read_csv(const fs::path& file) {
-  std::ifstream in(file);
-  std::string line;
-  std::vector<std::string> header;
-  std::vector<std::map<std::string, std::string>> rows;
-  auto split = [](const std::string& text) {
-    std::vector<std::string> fields;
-    std::stringstream stream(text);
-    std::string field;
-    while (std::getline(stream, field, ','))
-      fields.push_back(field);
-    if (!text.empty() && text.back() == ',') fields.emplace_back();
-    return fields;
-  };
-  while (std::getline(in, line)) {
-    if (header.empty()) {
-      header = split(line);
-      continue;
-    }
-    const std::vector<std::string> fields = split(line);
-    EXPECT_EQ(fields.size(), header.size()) << line;
-    std::map<std::string, std::string> row;
-    for (std::size_t i = 0; i < header.size() && i < fields.size(); ++i)
-      row[header[i]] = fields[i];
-    rows.push_back(row);
-  }
-  return rows;
-}
 
 const std::string kTank =
     std::string(DRENCH_SOURCE_DIR) + "/demos/scenes/hydrostatic_tank.json" +
@@ -64,7 +33,7 @@ TEST(SweepCommand, EveryRunIsARowWithItsSummarysFiguresFailuresIncluded) {
       dir.path() / "log.txt");
   EXPECT_EQ(status, 2) << "a sweep with a failed run exits 2\n"
                        << drench::test::read_text(dir.path() / "log.txt");
-  const auto rows = read_csv(dir.path() / "sweep/sweep.csv");
+  const auto rows = drench::test::read_csv_rows(dir.path() / "sweep/sweep.csv");
   ASSERT_EQ(rows.size(), 3u) << drench::test::read_text(dir.path() / "log.txt");
   for (int i = 0; i < 2; ++i) {
     const auto& row = rows[i];
@@ -101,7 +70,7 @@ TEST(SweepCommand, ARunPastTheTimeoutIsStoppedAndIsARow) {
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   EXPECT_EQ(status, 2) << drench::test::read_text(dir.path() / "log.txt");
   EXPECT_LT(seconds, 60.0) << "the 600 s run was not stopped";
-  const auto rows = read_csv(dir.path() / "sweep/sweep.csv");
+  const auto rows = drench::test::read_csv_rows(dir.path() / "sweep/sweep.csv");
   ASSERT_EQ(rows.size(), 2u);
   EXPECT_EQ(rows[0].at("status"), "ok");
   EXPECT_NE(rows[1].at("status").find("timed out"), std::string::npos) << rows[1].at("status");

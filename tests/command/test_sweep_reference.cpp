@@ -6,57 +6,18 @@
 
 #include <cstdlib>
 #include <filesystem>
-#include <fstream>
 #include <map>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
+#include "../csv_rows.hpp"
 #include "../drench_command.hpp"
 #include "../temp_dir.hpp"
 
 namespace {
 
 namespace fs = std::filesystem;
-
-/// sweep.csv as rows of named fields; a field in double quotes may hold commas (a run's status does).
-std::vector<std::map<std::string, std::string>> read_csv(const fs::path& file) {
-  auto split = [](const std::string& line) {
-    std::vector<std::string> fields(1);
-    bool quoted = false;
-    for (std::size_t i = 0; i < line.size(); ++i) {
-      const char c = line[i];
-      if (quoted && c == '"' && i + 1 < line.size() && line[i + 1] == '"') {
-        fields.back() += '"';
-        ++i;
-      } else if (c == '"') {
-        quoted = !quoted;
-      } else if (c == ',' && !quoted) {
-        fields.emplace_back();
-      } else {
-        fields.back() += c;
-      }
-    }
-    return fields;
-  };
-  std::ifstream in(file);
-  std::string line;
-  std::vector<std::string> header;
-  std::vector<std::map<std::string, std::string>> rows;
-  while (std::getline(in, line)) {
-    if (header.empty()) {
-      header = split(line);
-      continue;
-    }
-    const std::vector<std::string> fields = split(line);
-    EXPECT_EQ(fields.size(), header.size()) << line;
-    std::map<std::string, std::string> row;
-    for (std::size_t i = 0; i < header.size() && i < fields.size(); ++i)
-      row[header[i]] = fields[i];
-    rows.push_back(row);
-  }
-  return rows;
-}
 
 const std::string kScene = std::string(DRENCH_SOURCE_DIR) + "/demos/scenes/jet_on_cloth.json";
 // The scene's bound on the cloth's stretch is 30%: a fabric stretched further is broken, whatever its error
@@ -98,7 +59,7 @@ TEST(SweepReference, AFinerStepIsCloserAndABrokenSettingIsOffTheFront) {
           reference.string() + " --out " + sweep.string(),
       dir.path() / "sweep.log");
   EXPECT_EQ(status, 2) << "one run is not ok\n" << drench::test::read_text(dir.path() / "sweep.log");
-  const auto rows = read_csv(sweep / "sweep.csv");
+  const auto rows = drench::test::read_csv_rows(sweep / "sweep.csv");
   ASSERT_EQ(rows.size(), 4u) << drench::test::read_text(dir.path() / "sweep.log");
   const double fine = std::stod(row_of(rows, "time.dt=0.0005").at("cloth_rms_m"));
   const double scene = std::stod(row_of(rows, "scene").at("cloth_rms_m"));
