@@ -23,24 +23,9 @@
 
 #include <drench/common/parallel.hpp>
 #include "../demos/buoyancy_tank.hpp"
+#include "../demos/cli_checks.hpp"
 
-namespace {
-
-/// A CLI11 check for a finite number > 0 (CLI::PositiveNumber would name its range as 0 to a 309-digit
-/// number).
-CLI::Validator finite_positive() {
-  return CLI::Validator(
-      [](std::string& text) -> std::string {
-        char* end = nullptr;
-        const double value = std::strtod(text.c_str(), &end);
-        return !text.empty() && *end == '\0' && std::isfinite(value) && value > 0.0
-                   ? ""
-                   : "must be a finite number > 0, got '" + text + "'";
-      },
-      "NUMBER > 0");
-}
-
-}  // namespace
+namespace {}  // namespace
 
 int main(int argc, char** argv) {
   double spacing = 0.01, density = 500.0;
@@ -48,8 +33,10 @@ int main(int argc, char** argv) {
   std::string solver = "pcisph";
   double dt = buoyancy::kDt;
   CLI::App app{"a ball settling in a tank of water: its draft against Archimedes'"};
-  app.add_option("--spacing", spacing, "the water's particle spacing (unit: m)")->check(finite_positive());
-  app.add_option("--density", density, "the ball's density (unit: kg/m^3)")->check(finite_positive());
+  app.add_option("--spacing", spacing, "the water's particle spacing (unit: m)")
+      ->check(drench::cli::finite_positive());
+  app.add_option("--density", density, "the ball's density (unit: kg/m^3)")
+      ->check(drench::cli::finite_positive());
   app.add_option("--solver", solver, "the water's pressure solver")
       ->check(CLI::IsMember({"wcsph", "pcisph", "dfsph", "pbf"}));
   app.add_option("--dt", dt, "the step (unit: s), at most 0.03")->check(CLI::Range(1e-6, 0.03));

@@ -46,6 +46,7 @@
 #include <drench/scene/output_folder.hpp>
 #include <drench/scene/scene_loader.hpp>
 #include "bullet_playground_world.hpp"
+#include "cli_checks.hpp"
 
 namespace {
 
@@ -289,17 +290,8 @@ int main(int argc, char** argv) {
   CLI::App app{"water in a game's Bullet world: a hammock, a curtain, balls and a crate under two jets"};
   app.add_option("--out", options.out,
                  "folder for the frames drench render draws (new or empty); none: no files");
-  // CLI::PositiveNumber would name its range as 0 to a 309-digit number.
   app.add_option("--seconds", options.seconds, "simulated time (unit: s)")
-      ->check(CLI::Validator(
-          [](std::string& text) -> std::string {
-            char* end = nullptr;
-            const double value = std::strtod(text.c_str(), &end);
-            return !text.empty() && *end == '\0' && std::isfinite(value) && value > 0.0
-                       ? ""
-                       : "must be a finite number > 0, got '" + text + "'";
-          },
-          "NUMBER > 0"));
+      ->check(drench::cli::finite_positive());
   app.add_option("--threads", options.threads, "threads of drench's loops (default: the CPUs)")
       ->check(CLI::Range(1, drench::kMaxThreadCount));
   app.add_flag("--no-rigid", options.no_rigid,

@@ -47,10 +47,17 @@
 #include <drench/scene/scene_runner.hpp>
 #include <drench/scene/simulation.hpp>
 
+#include "cli_checks.hpp"
 #include "stop_signal.hpp"
 #include "sweep_command.hpp"
 
 namespace {
+
+using drench::cli::finite_positive;
+using drench::cli::non_negative_number;
+using drench::cli::quoted_argument;
+using drench::cli::shorten_long_words;
+using drench::cli::whole_number;
 
 /// What the command is doing, for the message of an error that carries no context (out of memory).
 const char* g_activity = "starting";
@@ -363,69 +370,10 @@ int ccd_command(const std::vector<std::string>& paths, bool list) {
   return 0;
 }
 
-/// `message` with every word (a run of non-blank characters) over 40 characters cut to its first 24 and its
-/// length: a 309-digit number or a pasted scene must not fill the terminal, and the start tells which it was.
-std::string shorten_long_words(const std::string& message) {
-  constexpr std::size_t kLongest = 40, kKept = 24;
-  std::string shortened, word;
-  auto flush = [&] {
-    if (word.size() > kLongest) {
-      shortened += word.substr(0, kKept) + "...(" + std::to_string(word.size()) + " characters)";
-    } else {
-      shortened += word;
-    }
-    word.clear();
-  };
-  for (const char c : message) {
-    if (c == ' ' || c == '\n' || c == '\t') {
-      flush();
-      shortened += c;
-    } else {
-      word += c;
-    }
-  }
-  flush();
-  return shortened;
-}
-
 /// `message` on one line: an error from a library (OpenVDB, the standard library) may span several.
 std::string one_line(std::string message) {
   std::replace(message.begin(), message.end(), '\n', ' ');
   return message;
-}
-
-/// `text` as a message quotes it: up to 40 characters whole, else its first 24 and its length.
-std::string quoted_argument(const std::string& text) {
-  return "'" + shorten_long_words(text) + "'";
-}
-
-/// A check of a whole number in [low, high] written as decimal digits. CLI11's own checks let "1e308"
-/// through to the conversion, saturate a 309-digit number to the largest integer, and print the bound of
-/// their range as a 309-digit number.
-CLI::Validator whole_number(unsigned long long low, unsigned long long high) {
-  const std::string range = "[" + std::to_string(low) + ", " + std::to_string(high) + "]";
-  return CLI::Validator(
-      [low, high, range](std::string& text) -> std::string {
-        // 19 digits always fit an unsigned 64-bit integer; the bounds here are below 2^63.
-        if (text.empty() || text.size() > 19 || text.find_first_not_of("0123456789") != std::string::npos ||
-            std::stoull(text) < low || std::stoull(text) > high)
-          return "must be a whole number in " + range + ", got " + quoted_argument(text);
-        return "";
-      },
-      "INT in " + range);
-}
-
-/// A check of a finite number >= 0, e.g. a time in seconds.
-CLI::Validator non_negative_number() {
-  return CLI::Validator(
-      [](std::string& text) -> std::string {
-        char* end = nullptr;
-        const double value = std::strtod(text.c_str(), &end);
-        if (text.empty() || *end != '\0' || !std::isfinite(value) || value < 0)
-          return "must be a finite number >= 0, got " + quoted_argument(text);
-        return "";
-      },
-      "NUMBER >= 0");
 }
 
 constexpr unsigned long long kMaxCount = std::numeric_limits<std::int64_t>::max();
@@ -483,7 +431,7 @@ int dispatch(int argc, char** argv) {
   double max_output = drench::kDefaultMaxOutputBytes;
   run->add_option("--max-output", max_output,
                   "refuse a scene whose frames would exceed BYTES (default 10 GiB)")
-      ->check(CLI::PositiveNumber);
+      ->check(finite_positive());
 
   std::string reconstruct_dir;
   CLI::App* reconstruct = app.add_subcommand(
@@ -613,7 +561,7 @@ int dispatch(int argc, char** argv) {
       ->add_option("--cell-size", sweep_options.comparison.cell_size,
                    "with --reference: edge of the mass grid's cells (m; default: four of the reference's "
                    "particle spacings)")
-      ->check(CLI::PositiveNumber);
+      ->check(finite_positive());
   sweep->add_option("--set", sweep_options.overrides, "override a scene value in every run (repeatable)");
   sweep->add_flag("--overwrite", sweep_options.overwrite,
                   "replace an earlier sweep in --out (only the files its drench_run.json lists)");
