@@ -100,7 +100,8 @@ def case(drench, base, name, scene, case_sets, vary, error, threads, refinement,
     commands = [shown(command)]
     summary = json.loads((reference / "summary.json").read_text())
     reference_row = {"case": name, "setting": "reference", "status": summary["status"],
-                     "wall_s": summary["wall_s"], "error_key": error}
+                     "wall_s": summary["wall_s"], "error_key": error,
+                     "max_particle_speed_mps": summary["max_speed_mps"]["particle"]}
     sweep = base / f"{name}_sweep"
     command = [drench, "sweep", scene, *sets(case_sets), "--vary", vary, "--reference", str(reference),
                "--error", error, "--threads", str(threads), "--overwrite", "--quiet", "--out", str(sweep)]
@@ -191,7 +192,8 @@ def main():
         rows = kept_rows + rows
         columns = ["case", "setting", "time.dt", "cloth.substeps", "status", "wall_s", "error_key", "cloth_rms_m",
                    "cloth_max_m", "cloth_sag_m", "held_kg", "past_edges_kg", "mass_l1_kg", "front_m",
-                   "gauge_height_m", "worst_relative_error", "worst_observable", "density_error_mean"]
+                   "gauge_height_m", "worst_relative_error", "worst_observable", "density_error_mean",
+                   "max_particle_speed_mps"]
         text = io.StringIO()
         for line in kept_notes:
             text.write(line + "\n")

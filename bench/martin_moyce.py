@@ -11,7 +11,8 @@ script runs that scene with its column and tank set to theirs at a = 0.25 m: the
 tank 4 m long (Z up to 16, past their last point) and 0.1 m wide, the column across it. The front is the
 largest x of a particle plus half a spacing (the edge of the volume a particle stands for, so Z = 1 at
 t = 0); drench's Z is interpolated linearly between frames (100 per second) at each of their T. Writes
-martin_moyce.csv (one row per run and data point) with `# key: value` notes above the header.
+martin_moyce.csv (one row per run and data point, with the run's status, wall time and fastest particle) with
+`# key: value` notes above the header.
 """
 
 import argparse
@@ -78,12 +79,14 @@ def run_case(drench, base, solver, spacing, threads):
     wall = time.monotonic() - start
     if result.returncode not in (0, 2):
         sys.exit(f"failed ({result.returncode}): {' '.join(command)}\n{result.stderr}")
-    status = json.loads((out / "summary.json").read_text())["status"]
+    summary = json.loads((out / "summary.json").read_text())
+    status = summary["status"]
+    fastest = summary["max_speed_mps"]["particle"]
     frames = sorted((out / "frames").glob("fluid_*.ply"))
     fronts = [(int(f.stem.split("_")[1]) / FRAME_RATE, (largest_x(f) + 0.5 * spacing) / A) for f in frames]
     shown = " ".join("drench" if i == 0 else (f"'{a}'" if any(c in a for c in ' "[') else a)
                      for i, a in enumerate(command[:-1])) + " OUT"
-    return fronts, status.split(":")[0], wall, shown
+    return fronts, status.split(":")[0], wall, fastest, shown
 
 
 def at(series, t):
@@ -114,7 +117,8 @@ def main():
         base.mkdir(parents=True, exist_ok=True)
         for solver in args.solvers.split(","):
             for spacing in args.spacings.split(","):
-                fronts, status, wall, command = run_case(drench, base, solver, float(spacing), args.threads)
+                fronts, status, wall, fastest, command = run_case(drench, base, solver, float(spacing),
+                                                                  args.threads)
                 notes[f"command {solver} {spacing}"] = command
                 errors = []
                 for T, Z in data:
@@ -122,7 +126,7 @@ def main():
                     if math.isfinite(z):
                         errors.append(z - Z)
                     rows.append({"solver": solver, "spacing_m": spacing, "status": status, "wall_s": f"{wall:.1f}",
-                                 "T": T, "Z_martin_moyce": Z, "Z_drench": "" if math.isnan(z) else f"{z:.3f}"})
+                                 "max_particle_speed_mps": f"{fastest:.1f}", "T": T, "Z_martin_moyce": Z, "Z_drench": "" if math.isnan(z) else f"{z:.3f}"})
                 rms = math.sqrt(sum(e * e for e in errors) / len(errors)) if errors else float("nan")
                 notes[f"rms {solver} {spacing}"] = f"{rms:.3f} over {len(errors)} points"
                 print(f"{solver} spacing {spacing}: {status}, {wall:.1f} s wall, RMS of Z - Z_MM {rms:.3f} "
