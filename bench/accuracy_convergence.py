@@ -3,7 +3,7 @@
 against the cloth's sub-steps, on log-log axes with the measured order. Not a CI job: minutes of runs.
 
     python3 bench/accuracy_convergence.py --drench build/demos/drench --out bench/results/debian12-2core \
-        [--keep out/convergence] [--only jet|dam|substeps] [--solvers pcisph,dfsph,wcsph]
+        [--keep out/convergence] [--only jet|dam|substeps] [--solvers pcisph,dfsph,wcsph,pbf] [--part NAME]
 
 For each case one `drench reference` of the scene with the case's `--set`s that refines only the parameter
 studied (dt / 8, or / 16 for the dam break; or 8x the cloth's sub-steps), every run iterating to the same
@@ -12,17 +12,25 @@ parameter, one run at a time on one thread:
 - jet: the Fig. 3 jet on a cloth made small (1 cm particles, a 15 x 15 cloth of 0.3 m, 0.2 s, frames at
   50 per second, so that every frame is a whole number of every step); observable cloth_rms_m (m);
 - dam: the dam break (5 cm particles, 1 s, frames at 25 per second); observable front_m (m), gauges at x =
-  1.5 and 2.5 m; its reference at dt / 16 (0.3 ms), four times below the finest step swept;
+  1.5 and 2.5 m (columns 4 spacings wide across the tank's 1.5 m: the water's volume in them over that
+  cross-section); its reference at dt / 16 (0.3 ms), four times below the finest step swept;
 - substeps: the small jet (PCISPH) at dt 1 ms, cloth.substeps 1, 2, 4, 8 against 32 sub-steps.
+PBF (`fluid.pressure_solver: "pbf"`) has no tolerance: its step is time.dt / fluid.pbf.substeps (4) with 4
+iterations each, so its series is convergence in dt at fixed sub-steps and iterations, against a reference at
+dt / 8 (dt / 16 for the dam) with the same sub-steps and iterations.
 The measured order is the least-squares slope of log(error) against log(dt) (or against log(1 / sub-steps))
 over the runs that ended "ok"; the integrators' expected order is 1 (symplectic Euler for the fluid, Bullet's
-position-based cloth). Writes accuracy_convergence.csv (one row per run) and, with gnuplot,
-accuracy_convergence.png, with `# key: value` notes (CPU, commit, load, the commands) above the header.
+position-based cloth). Writes accuracy_convergence.csv (one row per run, and one per reference with setting
+"reference", so that the wall times of the whole set can be summed) and, with gnuplot,
+accuracy_convergence.png, with `# key: value` notes (CPU, commit, load, the commands) above the header. Each
+invocation is a part (`--part`, default the --only case or "all"): its notes are prefixed with the part's
+name, and an existing CSV keeps the rows of the cases this invocation did not run and the other parts' notes.
 """
 
 import argparse
 import csv
 import io
+import json
 import math
 import shutil
 import subprocess
@@ -81,7 +89,7 @@ def order(points):
     return sum((x - mx) * (y - my) for x, y in xy) / sxx if sxx > 0 else float("nan")
 
 
-def case(drench, base, name, scene, case_sets, vary, error, threads, refinement, gauges=()):
+def case(drench, base, name, scene, case_sets, vary, error, threads, refinement, gauges=(), gauge_options=()):
     """One reference (`refinement`: drench reference's options) and one sweep; the sweep's rows with the
     case's name."""
     reference = base / f"{name}_reference"
@@ -90,18 +98,23 @@ def case(drench, base, name, scene, case_sets, vary, error, threads, refinement,
     if run(command, base / f"{name}_reference.log") != 0:
         sys.exit(f"the reference of {name} did not end ok: {base / (name + '_reference.log')}")
     commands = [shown(command)]
+    summary = json.loads((reference / "summary.json").read_text())
+    reference_row = {"case": name, "setting": "reference", "status": summary["status"],
+                     "wall_s": summary["wall_s"], "error_key": error,
+                     "max_particle_speed_mps": summary["max_speed_mps"]["particle"]}
     sweep = base / f"{name}_sweep"
     command = [drench, "sweep", scene, *sets(case_sets), "--vary", vary, "--reference", str(reference),
                "--error", error, "--threads", str(threads), "--overwrite", "--quiet", "--out", str(sweep)]
     for g in gauges:
         command += ["--gauge", str(g)]
+    command += list(gauge_options)
     run(command, base / f"{name}_sweep.log")
     commands.append(shown(command))
     rows = list(csv.DictReader(open(sweep / "sweep.csv")))
     for r in rows:
         r["case"] = name
         r["error_key"] = error
-    return rows, commands
+    return [reference_row] + rows, commands
 
 
 def main():
@@ -112,9 +125,12 @@ def main():
     parser.add_argument("--solvers", default="pcisph,dfsph,wcsph", help="pressure solvers, comma-separated")
     parser.add_argument("--only", choices=["jet", "dam", "substeps"], help="one case only")
     parser.add_argument("--threads", type=int, default=1)
+    parser.add_argument("--part", help="name of this invocation's notes (one word; default: --only or all)")
     args = parser.parse_args()
+    part = args.part or args.only or "all"
     drench = str(Path(args.drench).resolve())
-    notes = {"cpu": cpu_model(), "commit": commit(), "load_before": load_average()}
+    notes = {"script": " ".join(["python3 bench/accuracy_convergence.py"] + sys.argv[1:]), "cpu": cpu_model(),
+             "commit": commit(), "load_before": load_average()}
     rows, commands = [], []
     with tempfile.TemporaryDirectory() as scratch:
         base = Path(args.keep).resolve() if args.keep else Path(scratch)
@@ -129,7 +145,7 @@ def main():
             if args.only in (None, "dam"):
                 r, c = case(drench, base, f"dam_{solver}", DAM, DAM_SETS + solver_set,
                             "time.dt=" + ",".join(DAM_DTS), "front_m", args.threads, DT_ONLY + ["16"],
-                            gauges=(1.5, 2.5))
+                            gauges=(1.5, 2.5), gauge_options=("--gauge-width", "0.2", "--gauge-depth", "1.5"))
                 rows += r
                 commands += c
         if args.only in (None, "substeps"):
@@ -143,7 +159,7 @@ def main():
         # The measured orders, per case and observable.
         summary = []
         for name in dict.fromkeys(r["case"] for r in rows):
-            these = [r for r in rows if r["case"] == name and r["status"] == "ok"]
+            these = [r for r in rows if r["case"] == name and r["status"] == "ok" and r["setting"] != "reference"]
             for key in ("cloth_rms_m", "cloth_sag_m", "mass_l1_kg", "front_m", "gauge_height_m"):
                 points = []
                 for r in these:
@@ -164,12 +180,25 @@ def main():
 
         out = Path(args.out)
         out.mkdir(parents=True, exist_ok=True)
+        # The other parts' notes and the cases this invocation did not run stay.
+        kept_notes, kept_rows = [], []
+        existing = out / "accuracy_convergence.csv"
+        if existing.exists():
+            lines = existing.read_text().splitlines()
+            kept_notes = [line for line in lines if line.startswith("# ") and not line.startswith(f"# {part} ")]
+            ran = {r["case"] for r in rows}
+            kept_rows = [r for r in csv.DictReader(line for line in lines if not line.startswith("#"))
+                         if r["case"] not in ran]
+        rows = kept_rows + rows
         columns = ["case", "setting", "time.dt", "cloth.substeps", "status", "wall_s", "error_key", "cloth_rms_m",
                    "cloth_max_m", "cloth_sag_m", "held_kg", "past_edges_kg", "mass_l1_kg", "front_m",
-                   "gauge_height_m", "worst_relative_error", "worst_observable", "density_error_mean"]
+                   "gauge_height_m", "worst_relative_error", "worst_observable", "density_error_mean",
+                   "max_particle_speed_mps"]
         text = io.StringIO()
+        for line in kept_notes:
+            text.write(line + "\n")
         for key, value in notes.items():
-            text.write(f"# {key}: {value}\n")
+            text.write(f"# {part} {key}: {value}\n")
         writer = csv.DictWriter(text, fieldnames=columns, extrasaction="ignore", lineterminator="\n")
         writer.writeheader()
         for r in rows:
@@ -182,7 +211,8 @@ def main():
             data = base / "convergence.dat"
             blocks = []
             for name in dict.fromkeys(r["case"] for r in rows):
-                these = [r for r in rows if r["case"] == name and r["status"] == "ok" and r.get(r["error_key"])]
+                these = [r for r in rows if r["case"] == name and r["status"] == "ok" and r.get(r["error_key"])
+                         and r["setting"] != "reference"]
                 lines = []
                 for r in these:
                     step = 1.0 / float(r.get("cloth.substeps") or 4) if name.startswith("substeps") \

@@ -558,6 +558,16 @@ int dispatch(int argc, char** argv) {
   sweep->add_option("--gauge", sweep_options.comparison.gauges_x,
                     "with --reference: x of a water-height gauge (m, repeatable), e.g. for the dam break");
   sweep
+      ->add_option(
+          "--gauge-width", sweep_options.comparison.gauge_width,
+          "with --gauge: width in x of a gauge's column (m; default: the reference's particle spacing)")
+      ->check(finite_positive());
+  sweep
+      ->add_option("--gauge-depth", sweep_options.comparison.gauge_depth,
+                   "with --gauge: depth in z of the channel a gauge's column spans (m; default: the z extent "
+                   "of the reference's first frame's water plus one spacing)")
+      ->check(finite_positive());
+  sweep
       ->add_option("--cell-size", sweep_options.comparison.cell_size,
                    "with --reference: edge of the mass grid's cells (m; default: four of the reference's "
                    "particle spacings)")

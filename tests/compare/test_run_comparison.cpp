@@ -165,8 +165,9 @@ TEST(RunComparison, BlockMovedByOneCellGivesTheL1MassDifferenceByHand) {
   EXPECT_NEAR(observable(coarse_half, "mass_l1_kg").largest, 0.0, 1e-12);
 }
 
-// A dam break's water moved 0.1 m further in x: the front differs by 0.1 m; a gauge at x = 0.45 sees the
-// run's water 0.1 m higher (its column holds the moved block's top, the reference's is empty at the top).
+// A dam break's water moved 0.1 m further in x: the front differs by 0.1 m; a gauge at x = 0.4475 sees the
+// run's sheet (one particle) and a particle above it where the reference's column is empty: two particles'
+// volume over the column's one-spacing square cross-section, 2 x 5 mm of water.
 TEST(RunComparison, SurgeFrontMovedByATenthOfAMetreIsATenthOfAMetre) {
   const test::TempDir dir;
   Vec3Array start, surge;
@@ -183,12 +184,39 @@ TEST(RunComparison, SurgeFrontMovedByATenthOfAMetreIsATenthOfAMetre) {
   const RunComparison c = compare_runs(write_frames(dir, "run", {start, further}), reference, settings);
   EXPECT_NEAR(observable(c, "front_m").largest, 0.1, kRounding);
   EXPECT_NEAR(observable(c, "front_m").normaliser, 0.3, kRounding) << "the reference's front travels 0.3 m";
-  EXPECT_NEAR(observable(c, "gauge_height_m").largest, 0.1, kRounding)
-      << "the reference's column at x = 0.4475 is empty (height 0), the run's top particle is at 0.1025 m, "
-         "0.1 m above the lowest particle of the reference's frame 0";
+  EXPECT_NEAR(observable(c, "gauge_height_m").largest, 2 * kSpacing, kRounding)
+      << "the reference's column at x = 0.4475 is empty (height 0); the run's holds two particles, each "
+         "spacing^3 of water over a spacing x spacing cross-section (the reference's water is one particle "
+         "deep in z)";
   EXPECT_TRUE(std::none_of(c.observables.begin(), c.observables.end(), [](const ObservableError& e) {
     return e.name == "cloth_rms_m";
   })) << "no cloth, no cloth observables";
+}
+
+// A gauge's height is the water's volume in its column over the cross-section: a column 2 cm wide, 2 cm deep
+// and 10 cm high of 5-mm particles reads 10 cm; a droplet thrown 1 m above it adds one particle's volume,
+// 0.125 cm^3 over 4 cm^2, 0.3 mm, where the highest particle would read 1 m more.
+TEST(RunComparison, ALoneDropletAboveAGaugeBarelyChangesItsHeight) {
+  const test::TempDir dir;
+  Vec3Array column;
+  for (int i = 0; i < 4; ++i)
+    for (int j = 0; j < 20; ++j)
+      for (int k = 0; k < 4; ++k)
+        column.emplace_back(0.0025 + 0.005 * i, 0.0025 + 0.005 * j, 0.0025 + 0.005 * k);
+  Vec3Array splashed = column;
+  splashed.emplace_back(0.0075, 1.1, 0.0075);
+  ComparisonSettings settings;
+  settings.gauges_x = {0.01};
+  settings.gauge_width = 0.02;
+  const RunFrames reference = write_frames(dir, "reference", {column, column});
+  const RunComparison still = compare_runs(reference, reference, settings);
+  EXPECT_NEAR(observable(still, "gauge_height_m").normaliser, 0.1, 1e-9)
+      << "the reference's largest gauge height: its 10-cm column, the depth its frame 0's 2 cm";
+  const RunComparison splash =
+      compare_runs(write_frames(dir, "splash", {column, splashed}), reference, settings);
+  const double droplet = kSpacing * kSpacing * kSpacing / (0.02 * 0.02);  // m: 0.3125 mm
+  EXPECT_NEAR(observable(splash, "gauge_height_m").largest, droplet, 1e-9);
+  EXPECT_LT(observable(splash, "gauge_height_m").relative, 0.005) << "under half a percent of the column";
 }
 
 // On a flat cloth over [-0.1, 0.1]^2 at y = 0: 8 particles 1-2 cm above it are held; 8 at 5 cm are above
@@ -211,6 +239,44 @@ TEST(RunComparison, WaterHeldAndPastTheEdgesAreCountedByTheirDefinitions) {
   EXPECT_NEAR(c.reference_series[index("past_edges_kg")][1], 8 * kMass, 1e-12);
   EXPECT_NEAR(c.reference_series[index("fluid_kg")][1], 32 * kMass, 1e-12);
   EXPECT_NEAR(c.worst_relative, 0.0, 1e-12) << "a run against itself";
+}
+
+// Water a kill region removed is in no frame, yet it left the scene: 8 particles killed in the run where the
+// reference holds them on the cloth are 8 particles' more water past the edges, and in the mass grid they
+// left a cell for the "killed" one (L1 = 2 x 8 particles). Killed in both runs, they are no difference.
+TEST(RunComparison, WaterKilledCountsAsPastTheEdgesAndInTheMassDifference) {
+  const test::TempDir dir;
+  const std::vector<Triangle> triangles = patch_triangles(5);
+  const std::vector<Vec3Array> cloth = {patch(5, 0.0), patch(5, 0.0)};
+  const Vec3Array held = block(Vec3(-0.01, 0.0, -0.01));
+  const Vec3Array other = block(Vec3(0.04, 0.0, 0.04));
+  Vec3Array both = held;
+  both.insert(both.end(), other.begin(), other.end());
+  RunFrames reference = write_frames(dir, "reference", {both, both}, cloth, triangles);
+  reference.killed_kg = {0.0, 0.0};
+  RunFrames run = write_frames(dir, "run", {both, other}, cloth, triangles);
+  run.killed_kg = {0.0, 8 * kMass};
+  const RunComparison c = compare_runs(run, reference, {});
+  EXPECT_NEAR(observable(c, "past_edges_kg").largest, 8 * kMass, 1e-12);
+  EXPECT_NEAR(observable(c, "held_kg").largest, 8 * kMass, 1e-12);
+  EXPECT_NEAR(observable(c, "mass_l1_kg").largest, 2 * 8 * kMass, 1e-12);
+  EXPECT_NEAR(observable(c, "mass_l1_kg").normaliser, 16 * kMass, 1e-12) << "the water in the reference";
+  const auto killed = static_cast<std::size_t>(
+      std::find(c.series_names.begin(), c.series_names.end(), "killed_kg") - c.series_names.begin());
+  ASSERT_LT(killed, c.series_names.size());
+  EXPECT_NEAR(c.run_series[killed][1], 8 * kMass, 1e-12);
+
+  // The same 8 killed in the reference as well: nothing differs, and the reference's water is the frame's
+  // plus the killed.
+  RunFrames killed_too = write_frames(dir, "killed_too", {both, other}, cloth, triangles);
+  killed_too.killed_kg = {0.0, 8 * kMass};
+  const RunComparison same = compare_runs(run, killed_too, {});
+  EXPECT_NEAR(same.worst_relative, 0.0, 1e-12);
+  EXPECT_NEAR(observable(same, "mass_l1_kg").normaliser, 16 * kMass, 1e-12);
+
+  run.killed_kg = {0.0};
+  EXPECT_TRUE(test::throws_containing<IoError>([&] { compare_runs(run, reference, {}); },
+                                               {run.dir, "killed water", "1 frames", "has 2"}));
 }
 
 // A run that stopped after two of three frames is measured against the whole reference's sag (0.1 m in its
@@ -292,6 +358,28 @@ TEST(RunFrames, ReadsARunFolderAndNamesTheFirstMissingFrame) {
                                                {"fluid_0001.ply", "missing"}));
   EXPECT_TRUE(test::throws_containing<IoError>([&] { read_run_frames((dir.path() / "nothing").string()); },
                                                {"scene.json", "missing"}));
+}
+
+// With kill regions the water they removed by each frame comes from summary.json; without it the comparison
+// cannot count that water, and says which file lacks it.
+TEST(RunFrames, ReadsTheKilledWaterOfAKillRegionScene) {
+  const test::TempDir dir;
+  dir.write("run/scene.json", R"({"fluid": {"particle_spacing": 0.005, "rest_density": 1000},
+      "emitters": [{"type": "box", "min": [0, 0, 0], "max": [0.02, 0.02, 0.02]}],
+      "kill_regions": [{"type": "plane", "point": [0, -0.5, 0], "normal": [0, 1, 0]}],
+      "time": {"dt": 0.004, "duration": 0.1, "frame_rate": 50}})");
+  const Vec3Array water = block(Vec3::Zero());
+  for (const char* name : {"fluid_0000.ply", "fluid_0001.ply"})
+    dir.write(std::string("run/frames/") + name, points_to_ply("test", water, {}));
+  const std::string folder = (dir.path() / "run").string();
+  EXPECT_TRUE(test::throws_containing<IoError>([&] { read_run_frames(folder); }, {"summary.json"}));
+  dir.write("run/summary.json", R"({"status": "ok"})");
+  EXPECT_TRUE(test::throws_containing<IoError>([&] { read_run_frames(folder); },
+                                               {"summary.json", "killed_kg_by_frame", "missing"}));
+  dir.write("run/summary.json", R"({"killed_kg_by_frame": [0.0, 0.001]})");
+  const RunFrames run = read_run_frames(folder);
+  ASSERT_EQ(run.killed_kg.size(), 2u);
+  EXPECT_DOUBLE_EQ(run.killed_kg[1], 0.001);
 }
 
 // The reference's settings: dt / 8, eta / 10, the cloth's sub-steps x 4, the iterations in double; a key the

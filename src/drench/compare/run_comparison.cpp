@@ -157,15 +157,17 @@ Frame read_frame(const RunFrames& run, std::size_t n) {
 
 /// The series of one frame that do not need the other run.
 struct FrameSeries {
-  double centre_y = kNaN, held = kNaN, past_edges = kNaN, fluid = 0, front = kNaN;
+  double centre_y = kNaN, held = kNaN, past_edges = kNaN, fluid = 0, killed = 0, front = kNaN;
   std::vector<double> gauges;
 };
 
-FrameSeries frame_series(const Frame& frame, const RunFrames& run, const ComparisonSettings& settings,
-                         std::size_t centre_node, double gauge_width, double gauge_floor) {
+FrameSeries frame_series(const Frame& frame, std::size_t frame_index, const RunFrames& run,
+                         const ComparisonSettings& settings, std::size_t centre_node, double gauge_width,
+                         double gauge_depth) {
   FrameSeries s;
   const Vec3Array& particles = frame.fluid.positions;
   s.fluid = static_cast<double>(particles.size()) * run.particle_mass;
+  s.killed = run.killed_kg.empty() ? 0.0 : run.killed_kg[frame_index];
   if (!frame.cloth.positions.empty()) {
     const Vec3Array& nodes = frame.cloth.positions;
     s.centre_y = nodes[centre_node].y();
@@ -183,16 +185,19 @@ FrameSeries frame_series(const Frame& frame, const RunFrames& run, const Compari
       if (std::isfinite(y) && p.y() - y <= settings.held_band) ++held;
     }
     s.held = static_cast<double>(held) * run.particle_mass;
-    s.past_edges = static_cast<double>(past) * run.particle_mass;
+    // Water a kill region removed left the scene, below the cloth in every scene drench has.
+    s.past_edges = static_cast<double>(past) * run.particle_mass + s.killed;
   } else {
     for (const Vec3& p : particles)
       s.front = std::isfinite(s.front) ? std::max(s.front, p.x()) : p.x();
   }
+  // Each particle stands for its rest volume, spacing^3 (m_j / rho0): a splash's droplet adds one of them.
+  const double particle_volume = std::pow(run.particle_spacing, 3);
   for (const Scalar x : settings.gauges_x) {
-    double top = kNaN;
+    std::size_t count = 0;
     for (const Vec3& p : particles)
-      if (std::abs(p.x() - x) <= 0.5 * gauge_width && !(p.y() <= top)) top = p.y();
-    s.gauges.push_back(std::isfinite(top) ? std::max(0.0, top - gauge_floor) : 0.0);
+      if (std::abs(p.x() - x) <= 0.5 * gauge_width) ++count;
+    s.gauges.push_back(static_cast<double>(count) * particle_volume / (gauge_width * gauge_depth));
   }
   return s;
 }
@@ -214,6 +219,8 @@ RunComparison compare_runs(const RunFrames& run, const RunFrames& reference,
     throw SceneError("comparison held_band must be > 0, got " + format_number(settings.held_band));
   if (!(settings.gauge_width >= 0))
     throw SceneError("comparison gauge_width must be >= 0, got " + format_number(settings.gauge_width));
+  if (!(settings.gauge_depth >= 0))
+    throw SceneError("comparison gauge_depth must be >= 0, got " + format_number(settings.gauge_depth));
   const std::size_t run_frames = run.fluid_files.size(), reference_frames = reference.fluid_files.size();
   if (reference_frames == 0)
     throw IoError(reference.dir + ": the reference has no frames (frames/fluid_0000.ply)");
@@ -225,6 +232,12 @@ RunComparison compare_runs(const RunFrames& run, const RunFrames& reference,
   if (run.cloth_files.empty() != reference.cloth_files.empty()) {
     throw IoError((run.cloth_files.empty() ? run.dir : reference.dir) + ": no cloth frames, the other run (" +
                   (run.cloth_files.empty() ? reference.dir : run.dir) + ") has a cloth");
+  }
+  for (const RunFrames* r : {&run, &reference}) {
+    if (!r->killed_kg.empty() && r->killed_kg.size() != r->fluid_files.size()) {
+      throw IoError(r->dir + ": the killed water is recorded for " + std::to_string(r->killed_kg.size()) +
+                    " frames, the run has " + std::to_string(r->fluid_files.size()));
+    }
   }
   const std::size_t frames = run_frames;
   for (std::size_t n = 0; n < frames; ++n) {
@@ -241,7 +254,7 @@ RunComparison compare_runs(const RunFrames& run, const RunFrames& reference,
   const double gauge_width = settings.gauge_width > 0 ? settings.gauge_width : reference.particle_spacing;
   const double cell = settings.cell_size > 0 ? settings.cell_size : 4 * reference.particle_spacing;
 
-  // The reference's frame 0 fixes the centre node and the gauges' floor, for both runs.
+  // The reference's frame 0 fixes the centre node and the gauges' depth, for both runs.
   const Frame reference_first = read_frame(reference, 0);
   std::size_t centre_node = 0;
   if (cloth) {
@@ -258,10 +271,15 @@ RunComparison compare_runs(const RunFrames& run, const RunFrames& reference,
       }
     }
   }
-  double gauge_floor = INFINITY;
-  for (const Vec3& p : reference_first.fluid.positions)
-    gauge_floor = std::min(gauge_floor, p.y());
-  if (!std::isfinite(gauge_floor)) gauge_floor = 0;
+  double gauge_depth = settings.gauge_depth;
+  if (!(gauge_depth > 0)) {
+    double lo = INFINITY, hi = -INFINITY;
+    for (const Vec3& p : reference_first.fluid.positions) {
+      lo = std::min(lo, p.z());
+      hi = std::max(hi, p.z());
+    }
+    gauge_depth = (std::isfinite(lo) ? hi - lo : 0.0) + reference.particle_spacing;
+  }
 
   const std::vector<std::string>& names = observable_names();
   std::vector<std::vector<double>> diff(names.size());
@@ -270,7 +288,7 @@ RunComparison compare_runs(const RunFrames& run, const RunFrames& reference,
   std::vector<FrameSeries> run_s, ref_s;
   for (std::size_t n = 0; n < reference_frames; ++n) {
     const Frame b = n == 0 ? reference_first : read_frame(reference, n);
-    ref_s.push_back(frame_series(b, reference, settings, centre_node, gauge_width, gauge_floor));
+    ref_s.push_back(frame_series(b, n, reference, settings, centre_node, gauge_width, gauge_depth));
     if (n >= frames) continue;
     const Frame a = read_frame(run, n);
     if (cloth) {
@@ -290,9 +308,11 @@ RunComparison compare_runs(const RunFrames& run, const RunFrames& reference,
       diff[0].push_back(std::sqrt(sum / static_cast<double>(pa.size())));
       diff[1].push_back(std::sqrt(largest));
     }
-    run_s.push_back(frame_series(a, run, settings, centre_node, gauge_width, gauge_floor));
+    run_s.push_back(frame_series(a, n, run, settings, centre_node, gauge_width, gauge_depth));
+    // The killed water as one more cell, outside the scene.
     diff[5].push_back(l1_difference(mass_grid(a.fluid.positions, run.particle_mass, cell),
-                                    mass_grid(b.fluid.positions, reference.particle_mass, cell)));
+                                    mass_grid(b.fluid.positions, reference.particle_mass, cell)) +
+                      std::abs(run_s.back().killed - ref_s.back().killed));
   }
 
   for (std::size_t n = 0; n < frames; ++n) {
@@ -320,7 +340,7 @@ RunComparison compare_runs(const RunFrames& run, const RunFrames& reference,
   double largest_sag = 0, largest_mass = 0, largest_gauge = 0;
   for (const FrameSeries& r : ref_s) {
     if (cloth) largest_sag = std::max(largest_sag, std::abs(ref_s[0].centre_y - r.centre_y));
-    largest_mass = std::max(largest_mass, r.fluid);
+    largest_mass = std::max(largest_mass, r.fluid + r.killed);
     for (const double h : r.gauges)
       largest_gauge = std::max(largest_gauge, h);
   }
@@ -347,7 +367,7 @@ RunComparison compare_runs(const RunFrames& run, const RunFrames& reference,
     }
     result.observables.push_back(std::move(e));
   }
-  result.series_names = {"centre_sag_m", "held_kg", "past_edges_kg", "fluid_kg", "front_m"};
+  result.series_names = {"centre_sag_m", "held_kg", "past_edges_kg", "fluid_kg", "killed_kg", "front_m"};
   for (auto [series, source] :
        {std::pair{&result.run_series, &run_s}, std::pair{&result.reference_series, &ref_s}}) {
     series->assign(result.series_names.size(), {});
@@ -356,7 +376,8 @@ RunComparison compare_runs(const RunFrames& run, const RunFrames& reference,
       (*series)[1].push_back(s.held);
       (*series)[2].push_back(s.past_edges);
       (*series)[3].push_back(s.fluid);
-      (*series)[4].push_back(s.front);
+      (*series)[4].push_back(s.killed);
+      (*series)[5].push_back(s.front);
     }
   }
   return result;

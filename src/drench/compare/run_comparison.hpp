@@ -19,6 +19,10 @@ struct RunFrames {
   std::vector<double> times;             ///< the simulated time of each frame (unit: s), frame n at index n
   std::vector<std::string> fluid_files;  ///< frames/fluid_NNNN.ply, one per frame
   std::vector<std::string> cloth_files;  ///< frames/cloth_NNNN.ply, one per frame; empty without a cloth
+  /// The water kill regions had removed by each frame, summed from the start (unit: kg), one per frame, or
+  /// empty for none (a scene without kill regions). It is in no frame file, yet a run that loses more water
+  /// than the reference must show it.
+  std::vector<double> killed_kg;
 };
 
 /// What is compared, and how coarsely.
@@ -32,6 +36,11 @@ struct ComparisonSettings {
   Scalar held_band = 0.02;
   std::vector<Scalar> gauges_x;  ///< dam break: x of each water-height gauge (unit: m); empty: none
   Scalar gauge_width = 0;  ///< width in x of a gauge's column (unit: m), >= 0; 0: the reference's spacing
+  /// Depth in z of the channel a gauge's column spans (unit: m), >= 0; 0: the z extent of the reference's
+  /// frame-0 water plus one spacing (each particle stands for a spacing cube). A gauge's height is the
+  /// water's volume in its column over width x depth, so this must be the channel's when the water spreads
+  /// in z beyond where it started.
+  Scalar gauge_depth = 0;
   /// A run with fewer frames than the reference (one that stopped: a blow-up, a timeout) is compared over the
   /// frames it has; else that is an error.
   bool allow_shorter = false;
@@ -57,8 +66,8 @@ struct RunComparison {
   std::string worst;          ///< the name of the one with the largest relative error; "" when none has one
   double worst_relative = 0;  ///< its relative error; NaN when none has one
   /// Observables over time (unit: as named): the run's over the frames compared, the reference's over all of
-  /// its frames; "centre_sag_m", "held_kg", "past_edges_kg", "fluid_kg", "front_m" (NaN where the scene has
-  /// no such thing).
+  /// its frames; "centre_sag_m", "held_kg", "past_edges_kg" (killed included), "fluid_kg" (in the frame),
+  /// "killed_kg", "front_m" (NaN where the scene has no such thing).
   std::vector<std::vector<double>> run_series, reference_series;
   std::vector<std::string> series_names;
 };
@@ -67,24 +76,27 @@ struct RunComparison {
 /// node against the same node of the reference: same mesh required) and its centre sag (the y drop, from
 /// frame 0, of the node nearest the mean of the reference's frame-0 nodes); the water held by the cloth
 /// (particles above the cloth seen along -y, by at most `held_band`) and the water past its edges (particles
-/// below the cloth's lowest node; through the cloth included, which the leak audit counts apart); the L1
-/// difference of the fluid's mass over cubic cells of `cell_size`; without a cloth, the surge front (the
-/// largest x of a particle) and with gauges the water heights (the highest particle in a column of
-/// `gauge_width` around each gauge, above the reference's lowest particle of frame 0; 0 for an empty column),
-/// the largest difference over the gauges.
+/// below the cloth's lowest node, through the cloth included, which the leak audit counts apart, plus the
+/// water kill regions removed: it left the scene); the L1 difference of the fluid's mass over cubic cells of
+/// `cell_size`, the killed water as one more cell; without a cloth, the surge front (the
+/// largest x of a particle) and with gauges the water heights (the water's rest volume in a column of
+/// `gauge_width` around each gauge, sum of m_j / rho0 = N spacing^3, over the column's cross-section
+/// `gauge_width` x `gauge_depth`: a droplet thrown high moves it by one particle's volume, where the highest
+/// particle would jump to the droplet; 0 for an empty column), the largest difference over the gauges.
 /// Normalisers, from all of the reference's frames (a run that stopped early is not measured against the
 /// small motion of the start): cloth distances and sag by the reference's largest centre sag; masses by the
-/// reference's largest fluid mass over the frames; the front by its travel (last minus first frame); gauge
-/// heights by the reference's largest gauge height. Particles a kill region removed are in no frame and no
-/// mass.
+/// reference's largest water mass over the frames (the frame's plus the killed); the front by its travel
+/// (last minus first frame); gauge heights by the reference's largest gauge height.
 const std::vector<std::string>& observable_names();
 
 /// Compares `run` with `reference` frame by frame.
 /// @throws IoError naming the file or folder: a frame file that is missing or unreadable (read_ply's
 ///         errors), a run with more frames than the reference, or fewer when not `allow_shorter`, a frame
 ///         whose time differs from the reference's by over `time_tolerance` (both times named), a cloth in
-///         one run and not the other, or cloths whose node counts differ (both files named).
-/// @throws SceneError for settings out of range (cell_size < 0, held_band <= 0, gauge_width < 0).
+///         one run and not the other, cloths whose node counts differ (both files named), or `killed_kg`
+///         neither empty nor one per frame.
+/// @throws SceneError for settings out of range (cell_size < 0, held_band <= 0, gauge_width < 0,
+///         gauge_depth < 0).
 RunComparison compare_runs(const RunFrames& run, const RunFrames& reference,
                            const ComparisonSettings& settings);
 

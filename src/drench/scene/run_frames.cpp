@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <filesystem>
+#include <fstream>
 #include <map>
 
 #include <drench/common/error.hpp>
@@ -85,6 +86,29 @@ RunFrames read_run_frames(const std::string& dir) {
       run.cloth_files.push_back(cloth[n]);
     }
     run.times.push_back(frame_time(config.time, n));
+  }
+  if (!config.kill_regions.empty()) {
+    // The water the kill regions removed is in no frame; the run's summary records it per frame.
+    const fs::path summary_file = folder / "summary.json";
+    nlohmann::json summary;
+    try {
+      std::ifstream in(summary_file);
+      if (!in) throw IoError("missing");
+      summary = nlohmann::json::parse(in);
+    } catch (const std::exception& e) {
+      throw IoError(summary_file.string() + ": cannot read the water the kill regions removed: " + e.what());
+    }
+    const nlohmann::json killed = summary.value("killed_kg_by_frame", nlohmann::json());
+    if (!killed.is_array() || killed.size() < run.fluid_files.size()) {
+      throw IoError(summary_file.string() + ": killed_kg_by_frame " +
+                    (killed.is_array()
+                         ? "has " + std::to_string(killed.size()) + " entries for " +
+                               std::to_string(run.fluid_files.size()) + " frames"
+                         : std::string("is missing (a drench before issue 42's kill counts?)")) +
+                    ": the water the kill regions removed is unknown");
+    }
+    for (std::size_t n = 0; n < run.fluid_files.size(); ++n)
+      run.killed_kg.push_back(killed[n].is_number() ? killed[n].get<double>() : NAN);
   }
   return run;
 }

@@ -19,9 +19,13 @@ namespace drench {
 double frame_time(const TimeSettings& time, std::int64_t n);
 
 /// The frames of the run in `dir`: its `scene.json` (the particle mass, rest_density x spacing^3, and the
-/// frames' times) and `frames/fluid_NNNN.ply`, with `frames/cloth_NNNN.ply` when the scene has a cloth.
+/// frames' times) and `frames/fluid_NNNN.ply`, with `frames/cloth_NNNN.ply` when the scene has a cloth,
+/// and when it has kill regions the water they removed by each frame (`summary.json`'s
+/// `killed_kg_by_frame`).
 /// @throws IoError naming the file: no scene.json or an invalid one, no frames/ or no fluid frame, a frame
-///         numbering with a gap (the first missing file named), a fluid frame without its cloth frame.
+///         numbering with a gap (the first missing file named), a fluid frame without its cloth frame; with
+///         kill regions, a summary.json that is missing, unreadable or has no killed_kg_by_frame entry for
+///         a frame.
 RunFrames read_run_frames(const std::string& dir);
 
 /// What `drench reference` makes a scene's reference run of: each setting that bounds the error, made finer.

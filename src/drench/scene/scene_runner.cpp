@@ -223,12 +223,16 @@ RunResult run_scene(Simulation& sim, const RunOptions& options) {
       saved_obstacles.push_back(positions_as_saved(obstacle.positions));
   }
   std::int64_t frame = 0;
+  // The water kill regions had removed when each frame was written: it is in no frame, and a comparison
+  // with a reference (compare/run_comparison.hpp) must still count it.
+  nlohmann::json killed_by_frame = nlohmann::json::array();
   auto write_due_frames = [&] {
     if (frame_rate <= 0) return;
     // A frame is due when the simulated time has reached its time, up to a thousandth of a step.
     while (frame / frame_rate <= sim.time() + 1e-3 * sim.config().time.dt) {
       ScopedTimer timer(output_seconds);
       write_particles_ply((frames / frame_name("fluid", frame)).string(), sim.particles());
+      killed_by_frame.push_back(sim.killed_mass());
       if (const ClothEngine* cloth = sim.cloth()) {
         // Between steps positions_t1 is where the cloth is now (end_step wrote it back to the engine).
         if (const ClothWetting* wetting = sim.wetting()) {
@@ -290,6 +294,7 @@ RunResult run_scene(Simulation& sim, const RunOptions& options) {
   result.effects = sim.effect_counters();
   result.effects.surface = surface_counter;
   result.summary["frames"] = frame;
+  if (!sim.config().kill_regions.empty()) result.summary["killed_kg_by_frame"] = killed_by_frame;
   // Reconstruction and its audit are their own lines, not output.
   result.summary["timings_s"]["output"] = output_seconds - surface_seconds - surface_audit_seconds;
   if (surface) {
