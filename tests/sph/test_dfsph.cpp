@@ -5,7 +5,6 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
-#include <cmath>
 #include <cstdio>
 
 #include <drench/sph/boundary_sampling.hpp>
@@ -105,57 +104,5 @@ TEST(Dfsph, CompressedBlockRelaxesToRestDensityWithinEta) {
   EXPECT_LE(final_error, settings.dfsph.eta);
 }
 
-/// Boundary points on the faces of a cube of side `side` centred at `centre`, one per spacing^2 patch at
-/// the patch's centre, inset by 0.6 spacings as drench places a body's (coupling/rigid_boundary), with the
-/// faces' outward normals: a body's shell as FluidSolver::set_moving_boundary takes it.
-void cube_shell(const Vec3& centre, Scalar side, Vec3Array& points, ScalarArray& volumes,
-                Vec3Array& normals) {
-  const int cells = static_cast<int>(std::lround(side / kSpacing));
-  for (int axis = 0; axis < 3; ++axis) {
-    for (const Scalar sign : {-1.0, 1.0}) {
-      Vec3 normal = Vec3::Zero();
-      normal[axis] = sign;
-      for (int a = 0; a < cells; ++a) {
-        for (int b = 0; b < cells; ++b) {
-          Vec3 p = centre + (0.5 * side - 0.6 * kSpacing) * normal;
-          p[(axis + 1) % 3] += (a + 0.5) * kSpacing - 0.5 * side;
-          p[(axis + 2) % 3] += (b + 0.5) * kSpacing - 0.5 * side;
-          points.push_back(p);
-          volumes.push_back(kSpacing * kSpacing * kSpacing);
-          normals.push_back(normal);
-        }
-      }
-    }
-  }
-}
-
-TEST(Dfsph, AParticleCaughtInABodysShellDoesNotThrowItsNeighbour) {
-  // A game's body moves centimetres per 1/60 s frame and its boundary is placed where the frame starts, so
-  // a particle can be caught inside its shell: the shell's gradients cancel there, and with one fluid
-  // neighbour near the kernel's edge eq. 11's denominator nearly vanishes while the shell compresses the
-  // particle. Its kappa grew as one over that neighbour's gradient, and so did the push on the pair (168 m/s
-  // at 1.95 spacings with a denominator floor of 1e-6 of a lattice's); bench_game_frame's DFSPH threw a
-  // particle to 3,100 m/s so. The pair may not move more than a spacing in the step, and the push may not
-  // grow as the neighbour nears the kernel's edge.
-  const Vec3 centre = Vec3::Constant(0.5 * kSide * kSpacing);
-  Vec3Array points, normals;
-  ScalarArray volumes;
-  cube_shell(centre, 2 * kSpacing, points, volumes, normals);
-  const Scalar bound = kSpacing / kDt;
-  std::vector<Scalar> speeds;
-  for (const Scalar distance : {1.5, 1.8, 1.95}) {
-    FluidSolver fluid = make_fluid(dfsph_settings(), false);
-    const Scalar mass = fluid.settings().rest_density * kSpacing * kSpacing * kSpacing;
-    fluid.particles().add(centre, Vec3::Zero(), mass, 0);
-    fluid.particles().add(centre + Vec3(distance * kSpacing, 0, 0), Vec3::Zero(), mass, 1);
-    fluid.set_moving_boundary(points, volumes, normals);
-    ASSERT_TRUE(fluid.step(kDt).ok());
-    speeds.push_back(fluid.max_speed());
-    std::printf("[ measured ] neighbour at %.2f spacings: fastest particle %.3g m/s (bound %.3g)\n", distance,
-                speeds.back(), bound);
-    EXPECT_LT(speeds.back(), bound);
-  }
-  EXPECT_LE(speeds.back(), speeds.front());
-}
 }  // namespace
 }  // namespace drench

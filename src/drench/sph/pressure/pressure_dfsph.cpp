@@ -107,7 +107,7 @@ PressureDfsph::PressureDfsph(const FluidSettings& settings) : m_settings(setting
   // tenth of it has lost most of its neighbours or sits where their gradients cancel (inside a moving body's
   // boundary shell): dividing by that tenth keeps its Jacobi step bounded, where a near-zero denominator
   // threw particles out of bench_game_frame's level
-  // (Dfsph.AParticleCaughtInABodysShellDoesNotThrowItsNeighbour).
+  // (CaughtParticle.DoesNotThrowItsNeighbour).
   m_min_denominator = 0.1 * squares;
 }
 

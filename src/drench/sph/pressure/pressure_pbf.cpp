@@ -31,8 +31,8 @@ DRENCH_SIMD_CLONES void pbf_moves(const FluidContext& ctx, const PackedPointArra
 
 /// For the particles [begin, end) at the positions of `x_mass` (w = mass): sum_k |grad_k C_i|^2 of eq. 11
 /// (unit: 1/m^2) into `denominators`, and the artificial pressure's move sum_j (m_j / rho0) s_corr_ij grad
-/// W_ij (eq. 13-14, unit: m) into `scorr_moves`, with s_corr = -scorr_scale (W / W(dq))^n. As pbf_moves,
-/// compiled per CPU.
+/// W_ij (eq. 13-14, unit: m) into `scorr_moves`, with s_corr = -scorr_scale (W / W(dq))^n; with
+/// scorr_scale 0 and `scorr_moves` null, the denominators alone. As pbf_moves, compiled per CPU.
 DRENCH_SIMD_CLONES void pbf_gradients(const FluidContext& ctx, const PackedPointArray& x_mass,
                                       Scalar inv_rho0, Scalar scorr_scale, Scalar inv_w_dq, int scorr_n,
                                       std::size_t begin, std::size_t end, Scalar* denominators,
@@ -74,7 +74,8 @@ DRENCH_SIMD_CLONES void pbf_gradients(const FluidContext& ctx, const PackedPoint
           Vec3(Group::sum(gx), Group::sum(gy), Group::sum(gz)) +
           gradient_sum<Group>(ctx.kernel, ctx.boundary_neighbors, i, xi, ctx.boundary.data(), 0.0, inv_rho0);
       denominators[i - begin] = Group::sum(squares) + gradient.squaredNorm();
-      scorr_moves[i - begin] = -scorr_scale * Vec3(Group::sum(sx), Group::sum(sy), Group::sum(sz));
+      if (scorr_moves)
+        scorr_moves[i - begin] = -scorr_scale * Vec3(Group::sum(sx), Group::sum(sy), Group::sum(sz));
     }
   });
 }
@@ -96,6 +97,11 @@ PressurePbf::PressurePbf(const FluidSettings& settings)
   }
   const Scalar lattice = std::pow(s, 6) * sum_squared;
   m_epsilon = m_settings.relaxation * lattice;
+  // As DFSPH's denominator (pressure_dfsph.cpp): a particle under a tenth of the lattice's sum has lost most
+  // of its neighbours or sits where their gradients cancel (caught in a moving body's shell, or between a
+  // body and the cloth); dividing by that tenth keeps its move bounded, where bench_game_frame's level threw
+  // particles at up to 111 m/s (CaughtParticle.DoesNotThrowItsNeighbour).
+  m_min_denominator = 0.1 * lattice;
   m_scorr_scale = m_settings.scorr_k / lattice;
   m_inv_w_dq = 1.0 / kernel.value(m_settings.scorr_dq * kernel.support_radius());
 }
@@ -118,10 +124,12 @@ PressureStats PressurePbf::project(const FluidContext& ctx, Scalar dt) {
   m_chunk_errors.resize((n + kParticleChunk - 1) / kParticleChunk);
   PressureStats stats;
   if (n == 0) return stats;
-  // Once per sub-step, at the prediction the lists were searched at: the denominator of lambda (eq. 11, the
-  // constraint's gradients of eq. 8; boundary points have zero inverse mass, so they enter only the
-  // particle's own gradient) and the artificial pressure's move (eq. 13-14). Both only scale and nudge the
-  // iterations' moves; the densities and the moves themselves are taken at the current positions.
+  // The denominator of lambda (eq. 11, the constraint's gradients of eq. 8; boundary points have zero
+  // inverse mass, so they enter only the particle's own gradient) at each iteration's positions, as the
+  // densities and the moves: kept from the prediction, a particle whose gradients cancelled there (caught in
+  // a moving body's shell) was divided by that small sum while its moves took the large gradient of the
+  // positions it had reached, and left the shell at 39 m/s (CaughtParticle.DoesNotThrowItsNeighbour).
+  // The artificial pressure's move (eq. 13-14), a nudge, once per sub-step at the prediction.
   parallel_for(n, kLightChunk, [&](std::size_t begin, std::size_t end) {
     for (std::size_t i = begin; i < end; ++i) {
       m_points[i] = packed(particles.positions[i], particles.masses[i]);
@@ -132,7 +140,7 @@ PressureStats PressurePbf::project(const FluidContext& ctx, Scalar dt) {
     pbf_gradients(ctx, m_points, inv_rho0, m_scorr_scale, m_inv_w_dq, m_settings.scorr_n, begin, end,
                   &m_denominator[begin], &m_scorr_moves[begin]);
     for (std::size_t i = begin; i < end; ++i)
-      m_denominator[i] += m_epsilon;
+      m_denominator[i] = std::max(m_denominator[i] + m_epsilon, m_min_denominator);
   });
   const Scalar max_correction = m_settings.max_compression_per_iteration
                                     ? *m_settings.max_compression_per_iteration
@@ -140,6 +148,12 @@ PressureStats PressurePbf::project(const FluidContext& ctx, Scalar dt) {
   for (int iteration = 0; iteration < m_settings.iterations; ++iteration) {
     // lambda_i at the current prediction (eq. 11), only for compression.
     for_each_chunk(n, [&](std::size_t begin, std::size_t end) {
+      if (iteration > 0) {
+        pbf_gradients(ctx, m_points, inv_rho0, 0.0, m_inv_w_dq, m_settings.scorr_n, begin, end,
+                      &m_denominator[begin], nullptr);
+        for (std::size_t i = begin; i < end; ++i)
+          m_denominator[i] = std::max(m_denominator[i] + m_epsilon, m_min_denominator);
+      }
       sph_densities(ctx, m_points, begin, end, &particles.densities[begin]);
       ChunkErrors errors;
       for (std::size_t i = begin; i < end; ++i) {
