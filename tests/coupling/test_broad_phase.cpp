@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <memory>
 #include <random>
 
@@ -110,6 +111,50 @@ TEST(BroadPhase, KeepsItsTriangleBoxesOnlyWhileClothAndMarginStayTheSame) {
     std::swap(mesh.triangles[7], mesh.triangles[300]);
     check(first, 0.004, "two triangles swapped");
   }
+}
+
+// The grid keeps its bins across calls and rebins only the triangles whose box changed (a game level's ground
+// never moves): with most of the mesh still, a few nodes moved, a triangle's nodes swapped, a NaN node and
+// back, and the whole mesh scaled by 3 (a new cell size), it must stay exactly the brute-force set.
+TEST(BroadPhase, GridRebinningOnlyMovedTrianglesMatchesBruteForce) {
+  std::mt19937_64 rng(17);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  test::Particles particles;
+  for (int k = 0; k < 2000; ++k)
+    particles.add(Vec3(0.35 * u(rng) + 0.15, 0.01 * u(rng), 0.35 * u(rng) + 0.15),
+                  Vec3(u(rng), u(rng), u(rng)), 0.003, 1e-4);
+  const std::unique_ptr<TriangleBroadPhase> broad_phase = make_broad_phase(BroadPhaseKind::GRID);
+  ClothMesh mesh = test::grid_mesh(21, 0.3, 0.0, 1.0);
+  std::vector<std::pair<Index, Index>> expected, got;
+  const auto check = [&](const char* what) {
+    find_pairs_brute_force(particles.x0, particles.x1, mesh, 0.002, expected);
+    broad_phase->find_pairs(particles.x0, particles.x1, mesh, 0.002, nullptr, got);
+    ASSERT_GT(expected.size(), 100u) << what;
+    EXPECT_EQ(got, expected) << what;
+  };
+  check("first call");
+  for (int step = 0; step < 4; ++step) {
+    for (int k = 0; k < 10; ++k) {  // 10 of 441 nodes moved by up to 3 cm: most triangles keep their box
+      const auto node = static_cast<std::size_t>(rng() % mesh.positions_t1.size());
+      mesh.positions_t0[node] = mesh.positions_t1[node];
+      mesh.positions_t1[node] += 0.03 * Vec3(u(rng), u(rng), u(rng));
+    }
+    check("a few nodes moved");
+  }
+  std::swap(mesh.triangles[3], mesh.triangles[500]);
+  check("two triangles swapped");
+  const Vec3 kept = mesh.positions_t1[50];
+  mesh.positions_t1[50] = Vec3(std::nan(""), 0.0, 0.0);
+  find_pairs_brute_force(particles.x0, particles.x1, mesh, 0.002, expected);
+  broad_phase->find_pairs(particles.x0, particles.x1, mesh, 0.002, nullptr, got);
+  EXPECT_EQ(got, expected) << "a NaN node";
+  mesh.positions_t1[50] = kept;
+  check("the NaN node restored");
+  for (Vec3& x : mesh.positions_t0)
+    x *= 3.0;
+  for (Vec3& x : mesh.positions_t1)
+    x *= 3.0;
+  check("scaled by 3: a new cell size");
 }
 
 }  // namespace

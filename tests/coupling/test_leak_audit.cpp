@@ -134,5 +134,28 @@ TEST(LeakAudit, CountsACrossingThroughAMovingTriangle) {
   EXPECT_EQ(leaks_of(Vec3(0.3, 0.0, 0.3), Vec3(0.3, 0.0, 0.3), mesh), 1u);
 }
 
+// A particle crossing a triangle's plane inside its box but beside it (past its long edge), the triangle
+// still and tilting: no leak, decided without the exact reference (the in-plane edge test); through the
+// triangle it is still one leak.
+TEST(LeakAudit, DecidesACrossingBesideTheTriangleWithoutTheExactReference) {
+  ClothMesh mesh;
+  mesh.positions_t0 = {Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 0, 1)};
+  mesh.positions_t1 = mesh.positions_t0;
+  mesh.inverse_masses = {0, 0, 0};
+  mesh.triangles = {{0, 1, 2}};
+  for (double tilt : {0.0, 0.02}) {
+    mesh.positions_t1[2].y() = tilt;
+    LeakAuditStats beside;
+    EXPECT_EQ(audit_leaks(Vec3Array{Vec3(0.8, 0.05, 0.8)}, Vec3Array{Vec3(0.8, -0.05, 0.75)}, mesh, beside),
+              0u);
+    EXPECT_EQ(beside.pairs, 1u) << "tilt " << tilt;
+    EXPECT_EQ(beside.exact_checks, 0u) << "tilt " << tilt;
+    LeakAuditStats through;
+    EXPECT_EQ(audit_leaks(Vec3Array{Vec3(0.3, 0.05, 0.3)}, Vec3Array{Vec3(0.3, -0.05, 0.25)}, mesh, through),
+              1u)
+        << "tilt " << tilt;
+  }
+}
+
 }  // namespace
 }  // namespace drench

@@ -100,6 +100,20 @@ TEST(NeighborSearch, SparsePointsInHashedCellsMatchBruteForce) {
       << "the test is about hashed cells";
 }
 
+// Hashed cells whose neighbors' keys carry across many bits: a cluster straddling the origin on every axis
+// (cell 2^20 - 1 beside 2^20) and one at the clamp of the outermost cells (about 42 km at 4 cm), where the
+// 27 keys of a cell come from the centre's by masked steps (NeighborSearch::candidate_runs).
+TEST(NeighborSearch, HashedNeighborKeysAcrossTheOriginAndTheClampMatchBruteForce) {
+  Vec3Array points = random_points(1500, Vec3(-0.1, -0.1, -0.1), Vec3(0.1, 0.1, 0.1), 41);
+  const Vec3Array far = random_points(500, Vec3(-40, -5, 0), Vec3(60, 5, 0.1), 42);
+  points.insert(points.end(), far.begin(), far.end());
+  const Vec3Array clamped = random_points(300, Vec3(41943.0, -0.1, 0.0), Vec3(41943.3, 0.1, 0.1), 43);
+  points.insert(points.end(), clamped.begin(), clamped.end());
+  NeighborSearch search(0.04);
+  EXPECT_FALSE(expect_sorted_and_unsorted_queries_match_brute_force(search, points))
+      << "the test is about hashed cells";
+}
+
 // A jet over a cloth: two clusters and a thin stream between them, about 30 cells of the bounding box per
 // point, mostly empty; the grid stays dense (up to 128 per point; it was hashed beyond 4 per point).
 TEST(NeighborSearch, SpreadPointsInADenseGridOfMostlyEmptyCellsMatchBruteForce) {

@@ -11,8 +11,11 @@ namespace drench {
 namespace {
 
 /// Triangles binned into a uniform grid of cells about one triangle box in size: a particle looks only at the
-/// cells its swept box covers. Keys are hashed cell coordinates, sorted once per step; a hash collision only
-/// adds candidates, which the exact box test removes.
+/// cells its swept box covers. Keys are hashed cell coordinates; a hash collision only adds candidates, which
+/// the exact box test removes. The bins are kept across calls and only the triangles whose box changed are
+/// rebinned: in a game's level most triangles (the ground's square, a table) never move, and rebinning them
+/// for every step and every user of a broad phase cost more than the queries (issue 41's profile). The cell
+/// size only decides speed, never the pairs, so it is kept while the mean box stays within a factor 2 of it.
 class GridBroadPhase final : public TriangleBroadPhase {
  public:
   void find_pairs(const Vec3Array& particles_t0, const Vec3Array& particles_t1, const ClothMesh& cloth,
@@ -22,7 +25,9 @@ class GridBroadPhase final : public TriangleBroadPhase {
     const std::size_t f = cloth.triangles.size();
     const std::size_t n = particles_t0.size();
     if (f == 0 || n == 0) return;
-    if (!m_built_for.same_as_last(cloth)) bin_triangles(cloth);
+    // The same cloth as the last call (every sub-step's obstacle, every CCD round): nothing to rebin, and
+    // comparing the positions costs less than recomputing every triangle's box.
+    if (!m_built_for.same_as_last(cloth)) update_bins(cloth);
 
     collect_pairs(
         particles_t0, particles_t1, margin, only, m_boxes,
@@ -44,24 +49,54 @@ class GridBroadPhase final : public TriangleBroadPhase {
   }
 
  private:
-  void bin_triangles(const ClothMesh& cloth) {
+  /// Brings the bins to `cloth`'s triangle boxes. A triangle is rebinned when its box differs, bit for bit,
+  /// from the one it was binned with (a NaN never equals itself: always rebinned), so the bins are those a
+  /// fresh binning with the same cell size would make.
+  void update_bins(const ClothMesh& cloth) {
     const std::size_t f = cloth.triangles.size();
-    m_boxes.resize(f);
+    m_new_boxes.resize(f);
     double extent_sum = 0.0;
     for (std::size_t t = 0; t < f; ++t) {
-      m_boxes[t] = triangle_box(cloth, cloth.triangles[t], 0.0);
-      extent_sum += (m_boxes[t].hi - m_boxes[t].lo).maxCoeff();
+      m_new_boxes[t] = triangle_box(cloth, cloth.triangles[t], 0.0);
+      extent_sum += (m_new_boxes[t].hi - m_new_boxes[t].lo).maxCoeff();
     }
-    m_cell = std::max(extent_sum / static_cast<double>(f), 1e-9);
-    m_entries.clear();
-    m_everywhere.clear();  // triangles too large for the grid: candidates of every particle
+    const double cell = std::max(extent_sum / static_cast<double>(f), 1e-9);
+    const bool rebin_all = m_boxes.size() != f || !(cell <= 2.0 * m_cell && cell >= 0.5 * m_cell);
+    m_changed.assign(f, 0);
+    std::size_t changed = 0;
     for (std::size_t t = 0; t < f; ++t) {
+      const Box3& a = m_new_boxes[t];
+      if (rebin_all || m_boxes.size() != f || !(a.lo == m_boxes[t].lo && a.hi == m_boxes[t].hi)) {
+        m_changed[t] = 1;
+        ++changed;
+      }
+    }
+    if (changed == 0) return;
+    std::swap(m_boxes, m_new_boxes);
+    if (rebin_all) {
+      m_cell = cell;
+      m_entries.clear();
+      m_everywhere.clear();
+    } else {
+      const auto stale = [&](Index t) { return m_changed[t] != 0; };
+      m_entries.erase(std::remove_if(m_entries.begin(), m_entries.end(),
+                                     [&](const auto& entry) { return stale(entry.second); }),
+                      m_entries.end());
+      m_everywhere.erase(std::remove_if(m_everywhere.begin(), m_everywhere.end(), stale), m_everywhere.end());
+    }
+    // The changed triangles' entries, sorted, merged into the kept ones (which stay sorted).
+    const std::size_t kept = m_entries.size();
+    for (std::size_t t = 0; t < f; ++t) {
+      if (!m_changed[t]) continue;
       const bool binned = for_cells(m_boxes[t], [&](std::uint64_t key) {
         m_entries.push_back({key, static_cast<Index>(t)});
       });
-      if (!binned) m_everywhere.push_back(static_cast<Index>(t));
+      if (!binned) m_everywhere.push_back(static_cast<Index>(t));  // too large for the grid: every particle's
     }
-    std::sort(m_entries.begin(), m_entries.end());
+    std::sort(m_entries.begin() + static_cast<std::ptrdiff_t>(kept), m_entries.end());
+    std::inplace_merge(m_entries.begin(), m_entries.begin() + static_cast<std::ptrdiff_t>(kept),
+                       m_entries.end());
+    std::sort(m_everywhere.begin(), m_everywhere.end());
     // Each distinct key's run of entries, found through a hash table: a binary search of all the entries
     // per cell would dominate the grid's queries (bench_coupling find_pairs, docs/performance.md).
     std::vector<std::uint64_t> keys;
@@ -103,9 +138,11 @@ class GridBroadPhase final : public TriangleBroadPhase {
   }
 
   double m_cell = 1.0;
-  std::vector<Box3> m_boxes;
-  std::vector<std::pair<std::uint64_t, Index>> m_entries;
-  KeyIndexTable m_cells;                    // the distinct keys of m_entries, ascending
+  std::vector<Box3> m_boxes;      // F, the box each triangle is binned with
+  std::vector<Box3> m_new_boxes;  // scratch of update_bins
+  std::vector<std::uint8_t> m_changed;
+  std::vector<std::pair<std::uint64_t, Index>> m_entries;  // (cell key, triangle), ascending
+  KeyIndexTable m_cells;                                   // the distinct keys of m_entries, ascending
   std::vector<std::uint32_t> m_cell_begin;  // first entry of each distinct key; one extra end entry
   std::vector<Index> m_everywhere;
   TriangleBoxKey m_built_for;

@@ -93,8 +93,8 @@ class NeighborSearch {
   void candidate_runs(const Vec3i& cell, CandidateRuns& out) const;
   std::uint64_t key_of_cell(const Vec3i& cell) const;
   Vec3i cell_of(const Vec3& x) const;
-  /// Sorted-point range [begin, end) of a cell; false when the cell is empty or unknown.
-  bool cell_range(const Vec3i& cell, std::uint32_t& begin, std::uint32_t& end) const;
+  /// Hashed mode only: the sorted-point range of the cell of Morton key `key`; false when empty or unknown.
+  bool key_range(std::uint64_t key, std::uint32_t& begin, std::uint32_t& end) const;
   /// Dense mode only: the sorted-point range of `count` cells from `cell` along +x (clipped to the grid);
   /// false when empty.
   bool row_range(const Vec3i& cell, int count, std::uint32_t& begin, std::uint32_t& end) const;
