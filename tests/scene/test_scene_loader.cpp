@@ -808,7 +808,8 @@ TEST(SceneLoader, ReadsTheWettingSectionAndChecksWhatItNeeds) {
 TEST(SceneLoader, RejectsUnknownEffectListingKnownEffects) {
   EXPECT_TRUE(
       scene_error(R"({"effects": ["viscosity", "magic"]})",
-                  "effects[1] must be one of \"viscosity\", \"coupling\", \"friction\", \"leak_audit\", "
+                  "effects[1] must be one of \"viscosity\", \"surface_tension\", \"coupling\", \"friction\", "
+                  "\"adhesion\", \"leak_audit\", "
                   "\"surface\", \"wetting\", got "
                   "\"magic\" (x.json)"));
   // Every effect of the registry, also one added later, is named.
@@ -817,10 +818,11 @@ TEST(SceneLoader, RejectsUnknownEffectListingKnownEffects) {
 }
 
 TEST(SceneLoader, RejectsDuplicateEffectListingKnownEffects) {
-  EXPECT_TRUE(
-      scene_error(R"({"effects": ["viscosity", "viscosity"]})",
-                  "effects[1] repeats effects[0]; list each of \"viscosity\", \"coupling\", \"friction\", "
-                  "\"leak_audit\", \"surface\", \"wetting\" at most once, got \"viscosity\""));
+  EXPECT_TRUE(scene_error(
+      R"({"effects": ["viscosity", "viscosity"]})",
+      "effects[1] repeats effects[0]; list each of \"viscosity\", \"surface_tension\", \"coupling\", "
+      "\"friction\", \"adhesion\", "
+      "\"leak_audit\", \"surface\", \"wetting\" at most once, got \"viscosity\""));
 }
 
 TEST(SceneLoader, RejectsEffectsGivenAsString) {
