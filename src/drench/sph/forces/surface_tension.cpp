@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 
 #include <drench/common/parallel.hpp>
 
@@ -14,13 +15,16 @@ constexpr Scalar kPi = 3.14159265358979323846;
 Scalar SurfaceTensionAkinci::cohesion_kernel(Scalar r) const {
   const Scalar h = m_support;
   if (!(r > 0.0) || r > h) return 0.0;
-  const Scalar c = 32.0 / (kPi * std::pow(h, 9));
   const Scalar f = (h - r) * (h - r) * (h - r) * r * r * r;
-  return 2.0 * r > h ? c * f : c * (2.0 * f - std::pow(h, 6) / 64.0);
+  return 2.0 * r > h ? m_cohesion_scale * f : m_cohesion_scale * (2.0 * f - m_cohesion_offset);
 }
 
 SurfaceTensionAkinci::SurfaceTensionAkinci(Scalar sigma, Scalar particle_spacing, Scalar rest_density)
-    : m_gamma(0.0), m_support(2.0 * particle_spacing), m_rest_density(rest_density) {
+    : m_gamma(0.0),
+      m_support(2.0 * particle_spacing),
+      m_rest_density(rest_density),
+      m_cohesion_scale(32.0 / (kPi * std::pow(m_support, 9))),
+      m_cohesion_offset(std::pow(m_support, 6) / 64.0) {
   // S: pairs (i above the plane z = s/2, j below) of the cubic lattice, per column of i, of int_r^H C.
   const Scalar s = particle_spacing;
   const auto binding = [&](Scalar r) {  // int_r^H C(r') dr', Simpson's rule
@@ -47,15 +51,18 @@ void SurfaceTensionAkinci::add_accelerations(const FluidContext& ctx, Scalar /*d
                                              Vec3Array& accelerations) const {
   const ParticleSet& p = ctx.particles;
   const std::size_t n = p.size();
-  const CubicSplineKernel& k = ctx.kernel;
   const NeighborList& nb = ctx.fluid_neighbors;
   m_normals.resize(n);
   m_virial_pressures.resize(n);
   parallel_for(n, kParticleChunk, [&](std::size_t begin, std::size_t end) {
     for (std::size_t i = begin; i < end; ++i) {
       Vec3 g = Vec3::Zero();
-      for (const Index* j = nb.begin(i); j != nb.end(i); ++j)
-        g += (p.masses[*j] / p.densities[*j]) * k.gradient(p.positions[i] - p.positions[*j]);
+      // The lists' gradient factors hold at the current positions (FluidContext), for PBF's prediction too.
+      for (std::uint32_t e = nb.offsets[i]; e < nb.offsets[i + 1]; ++e) {
+        const Index j = nb.indices[e];
+        g += (p.masses[j] / p.densities[j] * static_cast<Scalar>(ctx.fluid_gradient_factors[e])) *
+             (p.positions[i] - p.positions[j]);
+      }
       m_normals[i] = m_support * g;
     }
   });

@@ -37,6 +37,8 @@ class SurfaceTensionAkinci final : public NonPressureForce {
   Scalar m_gamma;
   Scalar m_support;  // H (unit: m)
   Scalar m_rest_density;
+  Scalar m_cohesion_scale;      // 32 / (pi H^9) (unit: 1/m^9)
+  Scalar m_cohesion_offset;     // H^6 / 64 (unit: m^6)
   mutable Vec3Array m_normals;  // n_i (dimensionless), scratch kept between sub-steps
   mutable ScalarArray m_virial_pressures;
 };
