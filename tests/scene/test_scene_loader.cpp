@@ -1216,3 +1216,17 @@ TEST(SceneLoader, ParsesACameraGivenApartFromTheScene) {
 
 }  // namespace
 }  // namespace drench
+
+namespace drench {
+namespace {
+
+// A work of adhesion without the "adhesion" effect would be ignored: the loader names it.
+TEST(SceneLoader, RejectsAdhesionWithoutTheEffect) {
+  EXPECT_TRUE(scene_error(R"({"cloth": {"adhesion": 0.05}})",
+                          "cloth.adhesion sets a work of adhesion, but effects does not list \"adhesion\""));
+  EXPECT_TRUE(scene_error(R"({"obstacles": [{"mesh": "v_plane", "adhesion": 0.05}]})",
+                          "obstacles[0].adhesion sets a work of adhesion"));
+}
+
+}  // namespace
+}  // namespace drench

@@ -432,6 +432,13 @@ SceneConfig parse_scene(const nlohmann::json& document, const std::string& sourc
   check_masses(config, r);
   check_emitters(config, r);
   check_surface(config, r);
+  if (!config.has_effect("adhesion")) {
+    // The works of adhesion would be ignored without the effect.
+    const char* problem = "sets a work of adhesion, but effects does not list \"adhesion\"";
+    if (const Node key = r["cloth"].child("adhesion"); key.present()) key.fail(problem);
+    for (std::size_t i = 0; i < config.obstacles.size(); ++i)
+      if (const Node key = r["obstacles"].element(i).child("adhesion"); key.present()) key.fail(problem);
+  }
   if (config.coupling.asks_tangential() && !config.has_effect("friction")) {
     const Node coupling = r["coupling"];
     const Node key =

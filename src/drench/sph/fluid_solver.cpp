@@ -360,9 +360,6 @@ StepStatus FluidSolver::substep_pbf(Scalar dt, Scalar max_speed, SubstepConstrai
   // Searched at the prediction, as theirs, so that a fast jet needs no skin of its own displacement; the
   // iterations' moves are small beside the support.
   update_neighbors(max_speed * dt);
-  // Where the lists' gradient factors hold: a moving body's reaction is taken there (the projection may move
-  // a particle pressed by a body far from it, and factor times distance would then grow without bound: the
-  // game-like scene threw particles at 31,000 m/s).
   const FluidContext ctx = context();
   if (m_surface_tension) {
     // Macklin & Mueller's prediction takes every external force; surface tension needs the neighbors, so it
@@ -380,6 +377,9 @@ StepStatus FluidSolver::substep_pbf(Scalar dt, Scalar max_speed, SubstepConstrai
       }
     });
   }
+  // Where the lists' gradient factors hold: a moving body's reaction is taken there (the projection may move
+  // a particle pressed by a body far from it, and factor times distance would then grow without bound: the
+  // game-like scene threw particles at 31,000 m/s).
   if (m_boundary_packed.size() > m_static_boundary) m_predicted = m_particles.positions;
   PressureStats pressure;
   {
