@@ -91,6 +91,7 @@ SceneConfig without(SceneConfig scene, const std::string& name) {
   drop(name);
   if (name == "coupling") {
     drop("friction");
+    drop("adhesion");
     drop("wetting");
   }
   if (!scene.has_effect("friction")) scene.coupling.friction_coefficient = 0.0;

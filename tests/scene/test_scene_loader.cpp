@@ -808,7 +808,8 @@ TEST(SceneLoader, ReadsTheWettingSectionAndChecksWhatItNeeds) {
 TEST(SceneLoader, RejectsUnknownEffectListingKnownEffects) {
   EXPECT_TRUE(
       scene_error(R"({"effects": ["viscosity", "magic"]})",
-                  "effects[1] must be one of \"viscosity\", \"coupling\", \"friction\", \"leak_audit\", "
+                  "effects[1] must be one of \"viscosity\", \"surface_tension\", \"coupling\", \"friction\", "
+                  "\"adhesion\", \"leak_audit\", "
                   "\"surface\", \"wetting\", got "
                   "\"magic\" (x.json)"));
   // Every effect of the registry, also one added later, is named.
@@ -817,10 +818,11 @@ TEST(SceneLoader, RejectsUnknownEffectListingKnownEffects) {
 }
 
 TEST(SceneLoader, RejectsDuplicateEffectListingKnownEffects) {
-  EXPECT_TRUE(
-      scene_error(R"({"effects": ["viscosity", "viscosity"]})",
-                  "effects[1] repeats effects[0]; list each of \"viscosity\", \"coupling\", \"friction\", "
-                  "\"leak_audit\", \"surface\", \"wetting\" at most once, got \"viscosity\""));
+  EXPECT_TRUE(scene_error(
+      R"({"effects": ["viscosity", "viscosity"]})",
+      "effects[1] repeats effects[0]; list each of \"viscosity\", \"surface_tension\", \"coupling\", "
+      "\"friction\", \"adhesion\", "
+      "\"leak_audit\", \"surface\", \"wetting\" at most once, got \"viscosity\""));
 }
 
 TEST(SceneLoader, RejectsEffectsGivenAsString) {
@@ -1210,6 +1212,20 @@ TEST(SceneLoader, ParsesACameraGivenApartFromTheScene) {
   EXPECT_TRUE(
       throws_containing<SceneError>([] { parse_camera(json::parse(R"({"up": [0, 1, 0]})"), "--camera"); },
                                     "camera.up is not a known key (--camera)"));
+}
+
+}  // namespace
+}  // namespace drench
+
+namespace drench {
+namespace {
+
+// A work of adhesion without the "adhesion" effect would be ignored: the loader names it.
+TEST(SceneLoader, RejectsAdhesionWithoutTheEffect) {
+  EXPECT_TRUE(scene_error(R"({"cloth": {"adhesion": 0.05}})",
+                          "cloth.adhesion sets a work of adhesion, but effects does not list \"adhesion\""));
+  EXPECT_TRUE(scene_error(R"({"obstacles": [{"mesh": "v_plane", "adhesion": 0.05}]})",
+                          "obstacles[0].adhesion sets a work of adhesion"));
 }
 
 }  // namespace

@@ -34,6 +34,10 @@ struct ClothSettings {
   double stretch_stiffness = 1.0;  ///< Bullet's linear stiffness kLST, in (0, 1]
   double bending_stiffness = 0.5;  ///< stiffness of the bending links (distance 2), in [0, 1]; 0 = none
   double damping = 0.0;            ///< Bullet's kDP, in [0, 1]
+  /// Work of adhesion of water on the cloth (unit: N/m), >= 0, used by the "adhesion" effect
+  /// (AdhesionSettings): Dupre's sigma (1 + cos theta); 0.144, water wets cotton fully (theta 0); about 0.05
+  /// for a water-repellent fabric (theta 110 degrees).
+  double adhesion = 0.144;
   /// A node faster than this at the end of a step stops the run with RUNAWAY_NODE (unit: m/s), > 0;
   /// nullopt: no limit. Far above any cloth under water, so only a blow-up reaches it (docs/scenes.md gives
   /// the demo scenes' fastest nodes).

@@ -1,5 +1,6 @@
 #include <drench/coupling/coupler.hpp>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <string>
@@ -20,6 +21,7 @@
 namespace drench {
 namespace {
 
+using coupling_detail::adhere;
 using coupling_detail::apply_friction;
 using coupling_detail::Contact;
 using coupling_detail::find_contacts;
@@ -56,6 +58,23 @@ Coupler::Coupler(const CouplingSettings& settings, bool with_friction)
 
 Coupler::~Coupler() = default;
 
+void Coupler::set_adhesion(AdhesionSettings settings) {
+  const auto require = [](bool ok, const std::string& what) {
+    if (!ok) throw SceneError(what);
+  };
+  for (std::size_t t = 0; t < settings.work.size(); ++t) {
+    require(settings.work[t] >= 0.0 && std::isfinite(settings.work[t]),
+            "adhesion of triangle " + std::to_string(t) + " must be >= 0 and finite (N/m), got " +
+                format_number(settings.work[t]));
+  }
+  require(settings.range > 0.0 && std::isfinite(settings.range),
+          "adhesion range must be > 0, got " + format_number(settings.range));
+  require(settings.rest_density > 0.0 && std::isfinite(settings.rest_density),
+          "adhesion rest density must be > 0, got " + format_number(settings.rest_density));
+  m_adhesion = std::move(settings);
+  m_adhesion_counter.constructed = 1;
+}
+
 std::uint32_t Coupler::step(const FluidView& fluid, ClothMesh& cloth, double dt, CouplingStepStats& stats) {
   m_node_impulses.assign(cloth.node_count(), Vec3::Zero());
   m_impulse_links.clear();
@@ -65,7 +84,8 @@ std::uint32_t Coupler::step(const FluidView& fluid, ClothMesh& cloth, double dt,
   // lie inside particle_box(x_t0, x_t1, thickness) and every triangle's box inside the mesh's, so when no
   // particle box meets the mesh's there is no pair, no impulse, and later CCD rounds only follow a change.
   if (fluid.positions_t0->empty() || cloth.triangles.empty() ||
-      !any_particle_box_overlaps(*fluid.positions_t0, *fluid.positions_t1, m_settings.cloth_thickness,
+      !any_particle_box_overlaps(*fluid.positions_t0, *fluid.positions_t1,
+                                 std::max(m_settings.cloth_thickness, m_adhesion ? m_adhesion->range : 0.0),
                                  mesh_box(cloth))) {
     ++m_counter.skipped;
     return COUPLING_OK;
@@ -105,6 +125,10 @@ std::uint32_t Coupler::correct(const FluidView& fluid, ClothMesh& cloth, double 
   if (m_with_friction) {
     apply_friction(ctx, contacts, m_settings);  // sec. 3.4, eq. 7-8
     ++m_friction_counter.passes;
+  }
+  if (m_adhesion) {
+    adhere(ctx, *m_broad_phase, *m_adhesion);  // the paper's future work, sec. 6
+    ++m_adhesion_counter.passes;
   }
   for (const Contact& c : contacts) {
     const Vec3 v = ctx.relative_velocity(c.particle, c.triangle, c.weights);

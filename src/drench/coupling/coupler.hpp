@@ -7,6 +7,7 @@
 
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <utility>
 
 #include <drench/common/effect_counter.hpp>
@@ -60,6 +61,18 @@ enum CouplingStatus : std::uint32_t {
   COUPLING_ZONES_STOPPED = 1u << 2,
 };
 
+/// What the "adhesion" stage of a Coupler needs (Coupler::set_adhesion).
+struct AdhesionSettings {
+  /// F values, one per triangle of the mesh Coupler::step is given: the work of adhesion of water on that
+  /// face (unit: N/m = J/m^2), >= 0; Dupre's sigma (1 + cos theta) with theta the contact angle: 0.144 for
+  /// water on a face it wets fully (cotton), about 0.05 for a water-repellent one (theta 110 degrees), 0
+  /// none.
+  ScalarArray work;
+  /// Distance from a face within which water is pulled towards it (unit: m), > 0: the SPH support radius.
+  double range = 0.0;
+  double rest_density = 1000.0;  ///< of the water (unit: kg/m^3), > 0
+};
+
 class TriangleBroadPhase;
 
 /// Couples one fluid and one cloth mesh, step after step. Not thread-safe; uses OpenMP inside.
@@ -94,6 +107,14 @@ class Coupler {
   /// The "friction" effect's counts: constructed 1 when built with friction; a pass per step that ran the
   /// tangential boundary conditions on its contacts.
   const EffectCounter& friction_counter() const { return m_friction_counter; }
+  /// Turns on the adhesion stage (coupler_stages.hpp, adhere): a pull of the water towards the faces within
+  /// settings.range, after friction, before the continuous handling (which keeps it from pulling water
+  /// through a face). Its counts are adhesion_counter()'s.
+  /// @throws SceneError when a work is negative or not finite (naming the triangle), or the range or the
+  ///         rest density is not positive and finite
+  void set_adhesion(AdhesionSettings settings);
+  /// The "adhesion" effect's counts: constructed 1 after set_adhesion; a pass per step() that ran its stages.
+  const EffectCounter& adhesion_counter() const { return m_adhesion_counter; }
 
   /// The impulse each cloth node received in the last step() (unit: N s), M entries, nodes with inverse
   /// mass 0 included: a caller that stepped a moving cloth as kinematic (inverse masses 0) hands these to
@@ -117,6 +138,8 @@ class Coupler {
   bool m_with_friction;
   EffectCounter m_counter;
   EffectCounter m_friction_counter;
+  std::optional<AdhesionSettings> m_adhesion;
+  EffectCounter m_adhesion_counter;
   Vec3Array m_node_impulses;
   ImpulseLinks m_largest;  // N, scratch of step()
   ImpulseLinks m_impulse_links;

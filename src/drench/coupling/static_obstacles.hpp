@@ -26,6 +26,9 @@ struct ObstacleSettings {
   double size = 0.25;           ///< v_plane: each plane's extent from the line where they meet (unit: m), > 0
   double width = 0.3;           ///< v_plane: the extent along z (unit: m), > 0
   double triangle_size = 0.02;  ///< v_plane: the largest edge of its grid's squares (unit: m), > 0
+  /// Work of adhesion of water on the obstacle (unit: N/m), >= 0, used by the "adhesion" effect
+  /// (AdhesionSettings): 0.072, a contact angle of 90 degrees (most plastics are near it).
+  double adhesion = 0.072;
 };
 
 /// The V of ObstacleSettings: both planes on one grid of nodes, sharing the nodes where they meet (no crack

@@ -13,6 +13,8 @@ namespace drench {
 struct EffectCounters {
   /// The viscosity force (FluidSolver): a pass per fluid sub-step.
   EffectCounter viscosity;
+  /// The surface tension force (FluidSolver): a pass per fluid sub-step.
+  EffectCounter surface_tension;
   /// The coupler: a pass per step whose stages ran, a skip per step with no particle within reach of the
   /// cloth and obstacles. Its sub-step obstacle and carried water are built only with it.
   EffectCounter coupling;
@@ -21,6 +23,8 @@ struct EffectCounters {
   EffectCounter substep_obstacle;
   /// The tangential boundary conditions inside the coupler: a pass per coupler step that ran.
   EffectCounter friction;
+  /// Part of "coupling": the pull of the water towards the faces, a pass per coupler step that ran.
+  EffectCounter adhesion;
   /// A pass per step audited, a skip per step with no particle within reach.
   EffectCounter leak_audit;
   /// A pass per frame reconstructed (counted by run_scene; zero in Simulation's).

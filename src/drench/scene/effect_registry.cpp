@@ -1,12 +1,17 @@
 #include <drench/scene/effect_registry.hpp>
 
 #include <algorithm>
+#include <utility>
 
 namespace drench {
 namespace {
 
 void build_viscosity(const EffectSite&, EffectParts& parts) {
   parts.viscosity = true;
+}
+
+void build_surface_tension(const EffectSite&, EffectParts& parts) {
+  parts.surface_tension = true;
 }
 
 void build_coupling(const EffectSite& site, EffectParts& parts) {
@@ -20,6 +25,25 @@ void build_coupling(const EffectSite& site, EffectParts& parts) {
     parts.obstacle =
         std::make_unique<ClothObstacle>(settings.cloth_thickness, settings.broad_phase, carried_water);
   if (carried_water) parts.carried = std::make_unique<CarriedWater>();
+}
+
+void build_adhesion(const EffectSite& site, EffectParts& parts) {
+  if (!parts.coupler) return;  // no cloth and no obstacles: nothing to cling to
+  // One work per triangle of the contact mesh, in its order: the cloth's, then each obstacle's; a program's
+  // own obstacles and rigid bodies after them get none.
+  AdhesionSettings adhesion;
+  if (site.cloth_mesh)
+    adhesion.work.assign(site.cloth_mesh->triangle_count(),
+                         (site.config.cloth ? *site.config.cloth : ClothSettings{}).adhesion);
+  if (site.obstacles) {
+    for (std::size_t i = 0; i < site.obstacles->size() && i < site.config.obstacles.size(); ++i)
+      adhesion.work.insert(adhesion.work.end(), (*site.obstacles)[i].triangles.size(),
+                           site.config.obstacles[i].adhesion);
+  }
+  // The SPH support radius: the water within it of a face feels the face as it feels its neighbors.
+  adhesion.range = 2.0 * site.config.fluid.particle_spacing;
+  adhesion.rest_density = site.config.fluid.rest_density;
+  parts.coupler->set_adhesion(std::move(adhesion));
 }
 
 void build_leak_audit(const EffectSite& site, EffectParts& parts) {
@@ -64,6 +88,13 @@ const std::vector<EffectEntry>& effect_registry() {
        {},
        &EffectCounters::viscosity,
        build_viscosity},
+      {"surface_tension",
+       "the surface tension force of surface_tension.sigma in every fluid sub-step (continuum surface force, "
+       "Brackbill et al. 1992, Morris 2000; the paper's future work, sec. 6), built by the FluidSolver",
+       {},
+       {"surface_tension", "the surface tension"},
+       &EffectCounters::surface_tension,
+       build_surface_tension},
       {"coupling",
        "two-way coupling with the cloth and the obstacles: repulsion (sec. 3.1-3.2, eq. 1-4) and continuous "
        "handling (sec. 3.3, eq. 5-6)",
@@ -78,6 +109,13 @@ const std::vector<EffectEntry>& effect_registry() {
        {},
        &EffectCounters::friction,
        nullptr},
+      {"adhesion",
+       "water clings to the cloth and the obstacles by cloth.adhesion and obstacles[i].adhesion, a work of "
+       "adhesion per area (the paper's future work, sec. 6): a stage of the coupler, after friction",
+       {EffectMesh::NONE, "coupling", ", whose broad phase finds the faces near the water"},
+       {},
+       &EffectCounters::adhesion,
+       build_adhesion},
       {"leak_audit",
        "counts the particles that cross the cloth or an obstacle in a step, by exact predicates (a drench "
        "addition that checks sec. 3.3's claim)",

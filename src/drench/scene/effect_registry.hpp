@@ -15,6 +15,7 @@
 #include <drench/coupling/cloth_mesh.hpp>
 #include <drench/coupling/cloth_obstacle.hpp>
 #include <drench/coupling/coupler.hpp>
+#include <drench/coupling/static_obstacles.hpp>
 #include <drench/scene/effect_counters.hpp>
 #include <drench/scene/scene_config.hpp>
 #include <drench/wetting/cloth_wetting.hpp>
@@ -31,6 +32,9 @@ struct EffectSite {
   const ClothMesh* cloth_mesh = nullptr;
   /// The cloth's engine, or nullptr: its dry node masses (ClothEngine::dry_node_masses).
   const ClothEngine* cloth = nullptr;
+  /// The static obstacles in contact_mesh's order after the cloth's triangles (config.obstacles' first, then
+  /// a program's own), or nullptr for none.
+  const std::vector<TriangleMesh>* obstacles = nullptr;
 };
 
 /// The optional parts of one Simulation, filled by the build functions of the effects its scene lists and
@@ -38,6 +42,8 @@ struct EffectSite {
 struct EffectParts {
   /// "viscosity": the FluidSolver, built after the effects, builds its viscosity force.
   bool viscosity = false;
+  /// "surface_tension": the FluidSolver builds its surface tension force, of config.surface_tension.
+  bool surface_tension = false;
   /// "coupling": the coupler (with the "friction" stage when the scene lists it), the cloth inside the
   /// fluid's sub-steps (coupling.continuous and coupling.substep_obstacle) and the carried water
   /// (coupling.scheme "carried_water").
@@ -90,8 +96,9 @@ struct EffectEntry {
 };
 
 /// The effects, in the order of the coupled step (sec. 5) as docs/scenes.md lists them:
-/// viscosity, coupling, friction, leak_audit, surface, wetting. An effect comes after those it needs, so that
-/// they are built first. Errors and summary.json's `effects_ran` list them in this order.
+/// viscosity, surface_tension, coupling, friction, adhesion, leak_audit, surface, wetting. An effect comes
+/// after those it needs, so that they are built first. Errors and summary.json's `effects_ran` list them in
+/// this order.
 const std::vector<EffectEntry>& effect_registry();
 
 /// The entry named `name`, or nullptr when no effect has that name.

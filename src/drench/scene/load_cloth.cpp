@@ -9,7 +9,7 @@ ClothSettings read_cloth(const Node& node) {
   ClothSettings cloth;
   const ObjectReader r(
       node, {"mesh", "center", "size", "nodes", "area_density", "pinned", "position_iterations", "substeps",
-             "stretch_stiffness", "bending_stiffness", "damping", "max_speed", "max_strain"});
+             "stretch_stiffness", "bending_stiffness", "damping", "max_speed", "max_strain", "adhesion"});
   if (const Node mesh = r["mesh"]; mesh.present()) {
     cloth.mesh = mesh.string();
     if (cloth.mesh.empty()) mesh.fail("must be \"patch\" or the path of an OBJ file");
@@ -38,6 +38,7 @@ ClothSettings read_cloth(const Node& node) {
   r.read("stretch_stiffness", cloth.stretch_stiffness, Range{0.0, true, 1.0, false});
   r.read("bending_stiffness", cloth.bending_stiffness, Range{0.0, false, 1.0, false});
   r.read("damping", cloth.damping, Range{0.0, false, 1.0, false});
+  r.read("adhesion", cloth.adhesion, kNonNegative);
   // null is "no limit", so that --set cloth.max_speed=null can undo the default.
   if (const Node c = r["max_speed"]; c.present())
     cloth.max_speed = c.value().is_null() ? std::nullopt : std::optional<double>(c.number(kPositive));

@@ -7,7 +7,8 @@ namespace drench::loader {
 
 ObstacleSettings read_obstacle(const Node& node) {
   ObstacleSettings obstacle;
-  const ObjectReader r(node, {"mesh", "center", "scale", "angle_deg", "size", "width", "triangle_size"});
+  const ObjectReader r(
+      node, {"mesh", "center", "scale", "angle_deg", "size", "width", "triangle_size", "adhesion"});
   const Node mesh = r["mesh"];
   if (!mesh.present()) mesh.fail_without_value("is missing; must be \"v_plane\" or the path of an OBJ file");
   obstacle.mesh = mesh.string();
@@ -24,6 +25,7 @@ ObstacleSettings read_obstacle(const Node& node) {
   r.read("size", obstacle.size, kPositive);
   r.read("width", obstacle.width, kPositive);
   r.read("triangle_size", obstacle.triangle_size, kPositive);
+  r.read("adhesion", obstacle.adhesion, kNonNegative);
   return obstacle;
 }
 

@@ -31,6 +31,8 @@ CouplingSettings read_coupling(const Node& node);
 SurfaceSettings read_surface(const Node& node);
 /// `wetting` (load_wetting.cpp): absorption, diffusion and dripping; absent: every default.
 WettingSettings read_wetting(const Node& node);
+/// `surface_tension` (load_surface_tension.cpp): its coefficient sigma; absent: water's.
+SurfaceTensionSettings read_surface_tension(const Node& node);
 
 /// `camera` (load_camera.cpp): where renders look from; `position` and `target` both or neither.
 CameraSettings read_camera(const Node& node);

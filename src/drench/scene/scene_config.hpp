@@ -75,6 +75,9 @@ struct SceneConfig {
   SurfaceSettings surface;
   /// Water absorbed, spread and dripped by the cloth (Fig. 9); used when `effects` lists "wetting".
   WettingSettings wetting;
+  /// Surface tension of the water (the paper's future work, sec. 6); used when `effects` lists
+  /// "surface_tension".
+  SurfaceTensionSettings surface_tension;
   std::vector<std::string> effects;  ///< names from known_effects(), each at most once
   /// The camera of renders (`drench render`); absent: framed to the scene's bounds.
   std::optional<CameraSettings> camera;

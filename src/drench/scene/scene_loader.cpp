@@ -408,8 +408,9 @@ json parse_override_value(const std::string& text, const std::string& assignment
 
 SceneConfig parse_scene(const nlohmann::json& document, const std::string& source) {
   const Node root(&document, "", source);
-  const ObjectReader r(root, {"gravity", "fluid", "emitters", "boundaries", "kill_regions", "time", "cloth",
-                              "obstacles", "coupling", "surface", "wetting", "effects", "camera"});
+  const ObjectReader r(
+      root, {"gravity", "fluid", "emitters", "boundaries", "kill_regions", "time", "cloth", "obstacles",
+             "coupling", "surface", "wetting", "effects", "camera", "surface_tension"});
   SceneConfig config;
   config.source = source;
   r.read("gravity", config.gravity);
@@ -423,6 +424,7 @@ SceneConfig parse_scene(const nlohmann::json& document, const std::string& sourc
   config.coupling = loader::read_coupling(r["coupling"]);
   config.surface = loader::read_surface(r["surface"]);
   config.wetting = loader::read_wetting(r["wetting"]);
+  config.surface_tension = loader::read_surface_tension(r["surface_tension"]);
   config.effects = read_effects(r["effects"]);
   if (r["camera"].present()) config.camera = loader::read_camera(r["camera"]);
   check_effects(config, r);
@@ -430,6 +432,13 @@ SceneConfig parse_scene(const nlohmann::json& document, const std::string& sourc
   check_masses(config, r);
   check_emitters(config, r);
   check_surface(config, r);
+  if (!config.has_effect("adhesion")) {
+    // The works of adhesion would be ignored without the effect.
+    const char* problem = "sets a work of adhesion, but effects does not list \"adhesion\"";
+    if (const Node key = r["cloth"].child("adhesion"); key.present()) key.fail(problem);
+    for (std::size_t i = 0; i < config.obstacles.size(); ++i)
+      if (const Node key = r["obstacles"].element(i).child("adhesion"); key.present()) key.fail(problem);
+  }
   if (config.coupling.asks_tangential() && !config.has_effect("friction")) {
     const Node coupling = r["coupling"];
     const Node key =

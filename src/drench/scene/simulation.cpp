@@ -163,10 +163,12 @@ Simulation::Simulation(const SceneConfig& config, std::unique_ptr<ClothEngine> c
         m_config.source + ")");
   }
   // Before the fluid, which builds the viscosity force itself when the effects say so.
-  m_effects = build_effects({m_config, m_engine ? &m_engine->mesh() : nullptr,
-                             m_cloth ? &m_cloth->mesh() : nullptr, m_cloth.get()});
+  m_effects =
+      build_effects({m_config, m_engine ? &m_engine->mesh() : nullptr, m_cloth ? &m_cloth->mesh() : nullptr,
+                     m_cloth.get(), m_with_obstacles ? &m_with_obstacles->obstacles() : nullptr});
   m_fluid = std::make_unique<FluidSolver>(m_config.fluid, m_config.gravity, sample_boundaries(m_config),
-                                          m_config.boundaries, m_effects.viscosity, m_speed_of_sound);
+                                          m_config.boundaries, m_effects.viscosity, m_speed_of_sound,
+                                          m_effects.surface_tension ? &m_config.surface_tension : nullptr);
   m_total_steps = std::max<std::int64_t>(1, std::llround(m_config.time.duration / m_config.time.dt));
   if (m_config.time.adaptive) {
     const TimeSettings& t = m_config.time;
@@ -254,9 +256,11 @@ void Simulation::check_cloth(StepStatus& status) {
 EffectCounters Simulation::effect_counters() const {
   EffectCounters c;
   c.viscosity = m_fluid->viscosity_counter();
+  c.surface_tension = m_fluid->surface_tension_counter();
   if (m_effects.coupler) {
     c.coupling = m_effects.coupler->counter();
     c.friction = m_effects.coupler->friction_counter();
+    c.adhesion = m_effects.coupler->adhesion_counter();
   }
   if (m_effects.obstacle) c.substep_obstacle = m_effects.obstacle->counter();
   c.leak_audit = m_effects.leak_counter;

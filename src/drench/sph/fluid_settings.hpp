@@ -162,6 +162,13 @@ struct ViscositySettings {
   Scalar coefficient = 0.01;
 };
 
+/// Surface tension of the water against air (the scene's `surface_tension` section). Constructed only when
+/// the scene's `effects` lists "surface_tension" (forces/surface_tension.hpp has the model and why).
+struct SurfaceTensionSettings {
+  /// Coefficient sigma (unit: N/m), >= 0; water against air at 20 C: 0.072.
+  Scalar sigma = 0.072;
+};
+
 /// The fluid of a scene (`fluid` in docs/scenes.md).
 struct FluidSettings {
   Scalar rest_density = 1000.0;    ///< rho0 (unit: kg/m^3), > 0

@@ -93,7 +93,8 @@ std::string StepStatus::describe() const {
 }
 
 FluidSolver::FluidSolver(const FluidSettings& settings, const Vec3& gravity, BoundaryParticles boundary,
-                         std::vector<BoundarySettings> guards, bool with_viscosity, Scalar speed_of_sound)
+                         std::vector<BoundarySettings> guards, bool with_viscosity, Scalar speed_of_sound,
+                         const SurfaceTensionSettings* surface_tension)
     : m_settings(settings),
       m_gravity(gravity),
       m_kernel(settings.particle_spacing),
@@ -110,6 +111,15 @@ FluidSolver::FluidSolver(const FluidSettings& settings, const Vec3& gravity, Bou
   if (with_viscosity) {
     m_viscosity = make_viscosity(settings.viscosity, speed_of_sound);
     ++m_viscosity_counter.constructed;
+  }
+  if (surface_tension) {
+    if (!(surface_tension->sigma >= 0.0 && std::isfinite(surface_tension->sigma))) {
+      throw std::invalid_argument("surface_tension.sigma must be >= 0 and finite (N/m), got " +
+                                  std::to_string(surface_tension->sigma));
+    }
+    m_surface_tension =
+        make_surface_tension(*surface_tension, settings.particle_spacing, settings.rest_density);
+    ++m_surface_tension_counter.constructed;
   }
 }
 
@@ -305,6 +315,10 @@ StepStatus FluidSolver::substep(Scalar dt, Scalar max_speed, SubstepConstraint* 
       m_viscosity->add_accelerations(ctx, dt, m_accelerations);
       ++m_viscosity_counter.passes;
     }
+    if (m_surface_tension) {
+      m_surface_tension->add_accelerations(ctx, dt, m_accelerations);
+      ++m_surface_tension_counter.passes;
+    }
     m_velocities_adv.resize(n);
     parallel_for(n, kLightChunk, [&](std::size_t begin, std::size_t end) {
       for (std::size_t i = begin; i < end; ++i)
@@ -346,11 +360,27 @@ StepStatus FluidSolver::substep_pbf(Scalar dt, Scalar max_speed, SubstepConstrai
   // Searched at the prediction, as theirs, so that a fast jet needs no skin of its own displacement; the
   // iterations' moves are small beside the support.
   update_neighbors(max_speed * dt);
+  const FluidContext ctx = context();
+  if (m_surface_tension) {
+    // Macklin & Mueller's prediction takes every external force; surface tension needs the neighbors, so it
+    // is taken at the predicted positions and added to the prediction before the projection (v += dt a,
+    // x += dt^2 a), not after it as the viscosity: the projection then sees the pull it has to balance.
+    compute_densities(ctx);
+    ScopedTimer timer(m_stats.timings_s.forces);
+    m_accelerations.assign(n, Vec3::Zero());
+    m_surface_tension->add_accelerations(ctx, dt, m_accelerations);
+    ++m_surface_tension_counter.passes;
+    parallel_for(n, kLightChunk, [&](std::size_t begin, std::size_t end) {
+      for (std::size_t i = begin; i < end; ++i) {
+        m_particles.velocities[i] += dt * m_accelerations[i];
+        m_particles.positions[i] += (dt * dt) * m_accelerations[i];
+      }
+    });
+  }
   // Where the lists' gradient factors hold: a moving body's reaction is taken there (the projection may move
   // a particle pressed by a body far from it, and factor times distance would then grow without bound: the
   // game-like scene threw particles at 31,000 m/s).
   if (m_boundary_packed.size() > m_static_boundary) m_predicted = m_particles.positions;
-  const FluidContext ctx = context();
   PressureStats pressure;
   {
     ScopedTimer timer(m_stats.timings_s.pressure);

@@ -11,6 +11,7 @@
 #include <drench/sph/boundary_settings.hpp>
 #include <drench/sph/cubic_spline_kernel.hpp>
 #include <drench/sph/fluid_settings.hpp>
+#include <drench/sph/forces/surface_tension.hpp>
 #include <drench/sph/forces/viscosity.hpp>
 #include <drench/sph/particle_set.hpp>
 #include <drench/sph/pressure/pressure_pbf.hpp>
@@ -114,8 +115,12 @@ class FluidSolver {
   /// @param guards  the analytic boundaries behind those particles, enforced by enforce_boundary
   /// @param with_viscosity  builds the viscosity of settings.viscosity (the "viscosity" effect)
   /// @param speed_of_sound  WCSPH's c and the artificial viscosity's c (unit: m/s), > 0
+  /// @param surface_tension  builds the surface tension force with these settings (the "surface_tension"
+  ///        effect); nullptr: none, and no pass for it
+  /// @throws std::invalid_argument when surface_tension->sigma is negative or not finite
   FluidSolver(const FluidSettings& settings, const Vec3& gravity, BoundaryParticles boundary,
-              std::vector<BoundarySettings> guards, bool with_viscosity, Scalar speed_of_sound);
+              std::vector<BoundarySettings> guards, bool with_viscosity, Scalar speed_of_sound,
+              const SurfaceTensionSettings* surface_tension = nullptr);
 
   ParticleSet& particles() { return m_particles; }
   const ParticleSet& particles() const { return m_particles; }
@@ -126,6 +131,10 @@ class FluidSolver {
   /// The "viscosity" effect's counts: constructed 1 when built (with_viscosity), a pass per sub-step's force
   /// pass.
   const EffectCounter& viscosity_counter() const { return m_viscosity_counter; }
+  /// The "surface_tension" effect's counts: constructed 1 when built, a pass per sub-step's force pass.
+  const EffectCounter& surface_tension_counter() const { return m_surface_tension_counter; }
+  /// The surface tension force, or nullptr when it was not built.
+  const SurfaceTensionAkinci* surface_tension() const { return m_surface_tension.get(); }
   /// Mass of one particle, rest_density * spacing^3 (unit: kg).
   Scalar particle_mass() const;
 
@@ -206,6 +215,8 @@ class FluidSolver {
   PressurePbf* m_pbf = nullptr;  // m_pressure when the scene's solver is PBF
   std::unique_ptr<NonPressureForce> m_viscosity;
   EffectCounter m_viscosity_counter;
+  std::unique_ptr<SurfaceTensionAkinci> m_surface_tension;
+  EffectCounter m_surface_tension_counter;
   Vec3Array m_accelerations;
   Vec3Array m_velocities_adv;
   Vec3Array m_pressure_accelerations;

@@ -1,0 +1,140 @@
+// Surface tension (forces/surface_tension.hpp), measured against the physics it claims: a cube of water in
+// zero gravity pulls itself into a sphere, and a resting droplet holds the Laplace pressure 2 sigma / R.
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+
+#include <drench/sph/fluid_solver.hpp>
+#include <drench/surface/surface_reconstruction.hpp>
+
+namespace drench {
+namespace {
+
+constexpr Scalar kSpacing = 0.001;  // m: 1 mm particles, below water's capillary length of 2.7 mm
+constexpr Scalar kSigma = 0.072;    // N/m, water against air
+constexpr Scalar kPi = 3.14159265358979323846;
+
+/// A fluid without gravity or walls; WCSPH at speed of sound `c` (its pressure is the Tait pressure, a
+/// physical pressure with the outside at 0), XSPH viscosity `viscosity` to let oscillations die out.
+FluidSolver make_fluid(PressureSolverKind solver, Scalar viscosity, const SurfaceTensionSettings* tension,
+                       Scalar c = 2.0) {
+  FluidSettings settings;
+  settings.particle_spacing = kSpacing;
+  settings.pressure_solver = solver;
+  settings.viscosity.coefficient = viscosity;
+  return FluidSolver(settings, Vec3::Zero(), BoundaryParticles{}, {}, viscosity > 0.0, c, tension);
+}
+
+/// Fills the lattice points of `spacing` inside the ball of `radius` (m) around the origin.
+void add_ball(FluidSolver& fluid, Scalar radius) {
+  const int n = static_cast<int>(std::ceil(radius / kSpacing));
+  const Scalar mass = fluid.particle_mass();
+  std::uint32_t id = 0;
+  for (int i = -n; i <= n; ++i)
+    for (int j = -n; j <= n; ++j)
+      for (int k = -n; k <= n; ++k) {
+        const Vec3 x = kSpacing * Vec3(i, j, k);
+        if (x.norm() <= radius) fluid.particles().add(x, Vec3::Zero(), mass, id++);
+      }
+}
+
+/// Fills a cube of side particles on the lattice, centred at the origin.
+void add_cube(FluidSolver& fluid, int side) {
+  const Scalar mass = fluid.particle_mass();
+  std::uint32_t id = 0;
+  const Scalar offset = 0.5 * (side - 1);
+  for (int i = 0; i < side; ++i)
+    for (int j = 0; j < side; ++j)
+      for (int k = 0; k < side; ++k)
+        fluid.particles().add(kSpacing * (Vec3(i, j, k) - Vec3::Constant(offset)), Vec3::Zero(), mass, id++);
+}
+
+/// pi^(1/3) (6 V)^(2/3) / A of the fluid's reconstructed surface (sec. 4's Zhu & Bridson field, no
+/// obstacles): 1 for a sphere, 0.806 for a cube.
+Scalar sphericity(const FluidSolver& fluid) {
+  SurfaceSettings settings;
+  settings.contact_aware = false;
+  const SurfaceMesh mesh = reconstruct_surface(fluid.particles().positions, kSpacing, settings, {});
+  Scalar volume = 0.0;
+  Scalar area = 0.0;
+  for (const Triangle& t : mesh.triangles) {
+    const Vec3& a = mesh.positions[t[0]];
+    const Vec3& b = mesh.positions[t[1]];
+    const Vec3& c = mesh.positions[t[2]];
+    volume += a.dot(b.cross(c)) / 6.0;
+    area += 0.5 * (b - a).cross(c - a).norm();
+  }
+  return std::cbrt(kPi) * std::pow(6.0 * std::abs(volume), 2.0 / 3.0) / area;
+}
+
+// A 1 cm cube of water (1000 particles) in zero gravity, with water's sigma: its capillary time
+// sqrt(rho R^3 / sigma) is 57 ms; within 50 ms it is a sphere with every pressure solver (sphericity of the
+// reconstructed surface above 0.95; the cube's is 0.868 there), and without surface tension it stays a cube
+// (PBF's own artificial pressure scatters a free cube without it, so PBF is checked with it only). Steps of
+// 0.5 ms: the capillary limit sqrt(rho spacing^3 / (2 pi sigma)) is 1.5 ms, and PCISPH blew the cube apart
+// at 1 ms (sphericity 0.25) where the other solvers held.
+TEST(SurfaceTension, CubeOfWaterInZeroGravityBecomesASphere) {
+  for (const PressureSolverKind solver : {PressureSolverKind::DFSPH, PressureSolverKind::PCISPH,
+                                          PressureSolverKind::WCSPH, PressureSolverKind::PBF}) {
+    for (const bool with_tension : {true, false}) {
+      const SurfaceTensionSettings tension{kSigma};
+      // WCSPH at 10 m/s: the cohesion pulls the bulk together by about 420 Pa, which its compression limit
+      // (5%) must hold (58 c^2 Pa).
+      FluidSolver fluid = make_fluid(solver, 0.1, with_tension ? &tension : nullptr, 10.0);
+      add_cube(fluid, 10);
+      const Scalar initial = sphericity(fluid);
+      for (int step = 1; step <= 100; ++step)
+        ASSERT_TRUE(fluid.step(0.0005).ok()) << pressure_solver_name(solver) << " step " << step;
+      const Scalar final_sphericity = sphericity(fluid);
+      std::printf("[ measured ] %s %s: sphericity %.4f at 0 s, %.4f at 0.05 s\n",
+                  pressure_solver_name(solver), with_tension ? "with surface tension" : "without", initial,
+                  final_sphericity);
+      if (with_tension) {
+        EXPECT_GT(final_sphericity, 0.95) << pressure_solver_name(solver);
+      } else if (solver != PressureSolverKind::PBF) {
+        EXPECT_LT(final_sphericity, 0.9) << pressure_solver_name(solver);
+      }
+    }
+  }
+}
+
+// Inside a resting droplet the mechanical pressure, the solver's Tait pressure (WCSPH, a physical pressure;
+// 0 outside) plus the virial pressure of the surface tension's pair forces (Irving & Kirkwood), should exceed
+// the outside's by 2 sigma / R. Measured, it does not: at R = 4.6 mm 85 Pa against 31.8 Pa, at R = 8.5 mm
+// 75 Pa against 17.0 Pa after 0.1 s (Tait pressure 500 Pa, virial -416 and -419 Pa): an offset of about
+// 60 Pa that does not scale as 1 / R. Disabled until the calibration of gamma is fixed (issue 43); the
+// expectation is the one the issue asks for, not loosened.
+TEST(SurfaceTension, DISABLED_RestingDropletHoldsTheLaplacePressure) {
+  for (const Scalar radius_in_spacings : {4.5, 8.5}) {
+    const SurfaceTensionSettings tension{kSigma};
+    FluidSolver fluid = make_fluid(PressureSolverKind::WCSPH, 0.1, &tension, 10.0);
+    add_ball(fluid, radius_in_spacings * kSpacing);
+    const std::size_t n = fluid.particles().size();
+    const Scalar radius = std::cbrt(3.0 * n / (4.0 * kPi)) * kSpacing;
+    for (int step = 1; step <= 100; ++step)
+      ASSERT_TRUE(fluid.step(0.001).ok()) << step;
+    const ScalarArray& virial = fluid.surface_tension()->virial_pressures();
+    Vec3 centre = Vec3::Zero();
+    for (const Vec3& x : fluid.particles().positions)
+      centre += x;
+    centre /= static_cast<Scalar>(n);
+    Scalar pressure = 0.0;
+    int count = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+      if ((fluid.particles().positions[i] - centre).norm() < 0.5 * radius) {
+        pressure += fluid.particles().pressures[i] + virial[i];
+        ++count;
+      }
+    }
+    pressure /= count;
+    const Scalar laplace = 2.0 * kSigma / radius;
+    std::printf("[ measured ] R %.4f m: inside %.2f Pa over %d particles, 2 sigma / R %.2f Pa\n", radius,
+                pressure, count, laplace);
+    EXPECT_NEAR(pressure, laplace, 0.15 * laplace) << "R " << radius;
+  }
+}
+
+}  // namespace
+}  // namespace drench
