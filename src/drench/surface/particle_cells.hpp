@@ -20,7 +20,8 @@ namespace drench {
 /// visited in the same order, so both give the same sums to the bit.
 class ParticleCells {
  public:
-  ParticleCells(const Vec3Array& particles, Scalar cell) : m_cell(cell) {
+  /// `rings` (>= 1) cells on each side of a point's own are its neighbourhood: a radius of `rings` cells.
+  ParticleCells(const Vec3Array& particles, Scalar cell, int rings = 1) : m_cell(cell), m_rings(rings) {
     const std::size_t n = particles.size();
     std::vector<Vec3i> cells(n);
     for (std::size_t i = 0; i < n; ++i)
@@ -74,11 +75,11 @@ class ParticleCells {
     const Vec3i c = cell_of(x);
     if (m_dense) {
       const Vec3i local = c - m_min;
-      const int x0 = std::max(local.x() - 1, 0), x1 = std::min(local.x() + 1, m_dims.x() - 1);
+      const int x0 = std::max(local.x() - m_rings, 0), x1 = std::min(local.x() + m_rings, m_dims.x() - 1);
       if (x0 > x1) return;
-      for (int z = local.z() - 1; z <= local.z() + 1; ++z) {
+      for (int z = local.z() - m_rings; z <= local.z() + m_rings; ++z) {
         if (z < 0 || z >= m_dims.z()) continue;
-        for (int y = local.y() - 1; y <= local.y() + 1; ++y) {
+        for (int y = local.y() - m_rings; y <= local.y() + m_rings; ++y) {
           if (y < 0 || y >= m_dims.y()) continue;
           const std::size_t row = (static_cast<std::size_t>(z) * m_dims.y() + y) * m_dims.x();
           for (std::size_t k = m_first[row + x0], end = m_first[row + x1 + 1]; k < end; ++k)
@@ -87,9 +88,9 @@ class ParticleCells {
       }
       return;
     }
-    for (int dz = -1; dz <= 1; ++dz)
-      for (int dy = -1; dy <= 1; ++dy)
-        for (int dx = -1; dx <= 1; ++dx) {
+    for (int dz = -m_rings; dz <= m_rings; ++dz)
+      for (int dy = -m_rings; dy <= m_rings; ++dy)
+        for (int dx = -m_rings; dx <= m_rings; ++dx) {
           const auto it = m_runs.find(key(c + Vec3i(dx, dy, dz)));
           if (it == m_runs.end()) continue;
           for (std::size_t k = it->second.first; k < it->second.second; ++k)
@@ -109,6 +110,7 @@ class ParticleCells {
     return (static_cast<std::size_t>(l.z()) * m_dims.y() + l.y()) * m_dims.x() + l.x();
   }
   Scalar m_cell;
+  int m_rings;
   Vec3Array m_positions;
   IndexArray m_order;  // slot -> particle
   bool m_dense = false;

@@ -186,7 +186,14 @@ SurfaceMesh reconstruct_surface(const Vec3Array& particles, Scalar particle_spac
   }
   lap(local.seconds_kernels);
   VdbNodeGrid grid(cell, outside);
-  grid.activate_around(anisotropic ? kernels.centres : particles, static_cast<int>(std::ceil(reach / cell)));
+  if (anisotropic) {
+    std::vector<int> reaches(particles.size());
+    for (std::size_t i = 0; i < reaches.size(); ++i)
+      reaches[i] = static_cast<int>(std::ceil(kernels.reaches[i] / cell));
+    grid.activate_around(kernels.centres, reaches);
+  } else {
+    grid.activate_around(particles, static_cast<int>(std::ceil(radius / cell)));
+  }
   const std::vector<Vec3i> nodes = grid.active_nodes();
   local.nodes = nodes.size();
   lap(local.seconds_grid);
@@ -204,7 +211,9 @@ SurfaceMesh reconstruct_surface(const Vec3Array& particles, Scalar particle_spac
     std::vector<double> volume(particles.size());
     for (std::size_t s = 0; s < sorted.size(); ++s)
       volume[cells.order()[s]] = inverse_density[s];
-    centre_cells.emplace(kernels.centres, reach);
+    // Cells of half the longest reach, two rings around: a node's candidates fill 5^3 / 8 = 16 reach^3,
+    // where cells of the reach hold 27 reach^3.
+    centre_cells.emplace(kernels.centres, 0.5 * reach, 2);
     const IndexArray& order = centre_cells->order();
     slot_transforms.resize(order.size());
     slot_amplitudes.resize(order.size());
@@ -213,6 +222,21 @@ SurfaceMesh reconstruct_surface(const Vec3Array& particles, Scalar particle_spac
       slot_transforms[s] = kernels.transforms[order[s]];
       slot_amplitudes[s] = kernels.amplitudes[order[s]] * volume[order[s]];
       slot_reach2[s] = kernels.reaches[order[s]] * kernels.reaches[order[s]];
+    }
+  }
+  // Each triangle's box, slightly grown (more than segment_crosses_triangle's tolerance), so the visibility
+  // test of an anisotropic kernel skips the faces its segment's box misses: its node's faces within the
+  // longest reach are many more than a segment can cross.
+  std::vector<std::vector<Eigen::AlignedBox3d>> face_boxes;
+  if (anisotropic && aware) {
+    for (const SurfaceObstacle& o : obstacles) {
+      face_boxes.emplace_back();
+      for (const Triangle& t : *o.triangles) {
+        Eigen::AlignedBox3d box((*o.positions)[t[0]]);
+        box.extend((*o.positions)[t[1]]).extend((*o.positions)[t[2]]);
+        const double grow = 1e-9 * (1.0 + box.max().cwiseAbs().maxCoeff() + box.min().cwiseAbs().maxCoeff());
+        face_boxes.back().emplace_back(box.min() - Vec3::Constant(grow), box.max() + Vec3::Constant(grow));
+      }
     }
   }
   lap(local.seconds_densities);
@@ -275,7 +299,11 @@ SurfaceMesh reconstruct_surface(const Vec3Array& particles, Scalar particle_spac
               if (d.squaredNorm() >= slot_reach2[j]) return;
               const double q = (slot_transforms[j] * d).squaredNorm();
               if (q >= 1.0) return;
+              const Vec3 lo = x.cwiseMin(centres[j]), hi = x.cwiseMax(centres[j]);
               for (const auto& [o, t] : near) {
+                const Eigen::AlignedBox3d& box = face_boxes[o][t];
+                if ((box.min().array() > hi.array()).any() || (box.max().array() < lo.array()).any())
+                  continue;
                 const Triangle& tri = (*obstacles[o].triangles)[t];
                 const Vec3Array& v = *obstacles[o].positions;
                 if (segment_crosses_triangle(x, centres[j], v[tri[0]], v[tri[1]], v[tri[2]])) {
