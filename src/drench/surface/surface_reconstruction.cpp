@@ -123,6 +123,9 @@ constexpr double kColourLevel = 0.6;
 /// low because a free surface's kernels are flattened along its normal and their centres smoothed inwards.
 constexpr double kAnisotropicLevel = 0.12;
 
+/// Fraction of the squared distance to the nearest face below which a segment needs no crossing test.
+constexpr double kClearanceMargin = 1.0 - 1e-6;
+
 /// 1 / sum_j k(|x_i - x_j| / radius) for every particle i (itself included, so >= 1 and finite): the
 /// inverse of its number density in kernel units, by slot of `cells` (ParticleCells::positions()). Onderik et
 /// al. 2011 divide each particle's Zhu-Bridson weight by it; as SPH's m / rho it is also the particle's
@@ -254,6 +257,7 @@ SurfaceMesh reconstruct_surface(const Vec3Array& particles, Scalar particle_spac
         // nodes leaf by leaf), collected once per block and filtered per node: the node's list is the same,
         // without a node's hash lookups and sort (bench_surface jet_on_cloth/contact_aware).
         std::vector<std::pair<Index, Index>> block_near;
+        std::vector<std::pair<Index, Index>> near_radius;
         Vec3i block = Vec3i::Constant(std::numeric_limits<int>::min());
         for (std::size_t n = begin; n < end; ++n) {
           const Vec3 x = nodes[n].cast<double>() * cell;
@@ -267,13 +271,20 @@ SurfaceMesh reconstruct_surface(const Vec3Array& particles, Scalar particle_spac
               bins.collect_box(lo - Vec3::Constant(reach), hi + Vec3::Constant(reach), block_near);
             }
             bins.filter_box(block_near, x - Vec3::Constant(reach), x + Vec3::Constant(reach), near);
+            // The anisotropic kernels' longest reach collects more faces than the reset needs: it looks
+            // within the kernel radius, as for the isotropic kernels.
+            if (anisotropic)
+              bins.filter_box(near, x - Vec3::Constant(radius), x + Vec3::Constant(radius), near_radius);
           }
           bool too_close = false;
-          for (const auto& [o, t] : near) {
+          // Squared distance to the nearest face; a face outside the box of the kernel radius is farther.
+          double clearance2 = anisotropic ? radius * radius : std::numeric_limits<double>::infinity();
+          for (const auto& [o, t] : anisotropic ? near_radius : near) {
             const Triangle& tri = (*obstacles[o].triangles)[t];
             const Vec3Array& p = *obstacles[o].positions;
             const Vec3 w = closest_point_barycentric(x, p[tri[0]], p[tri[1]], p[tri[2]]);
             const Vec3 closest = w.x() * p[tri[0]] + w.y() * p[tri[1]] + w.z() * p[tri[2]];
+            clearance2 = std::min(clearance2, (closest - x).squaredNorm());
             // The paper's delta, and a drench addition that makes the guarantee exact: a node of any grid
             // cell the face passes through is outside too, so no cell the face meets holds a piece of
             // surface, and OpenVDB's quads, each inside the four cells around one grid edge, cannot cross the
@@ -299,6 +310,12 @@ SurfaceMesh reconstruct_surface(const Vec3Array& particles, Scalar particle_spac
               if (d.squaredNorm() >= slot_reach2[j]) return;
               const double q = (slot_transforms[j] * d).squaredNorm();
               if (q >= 1.0) return;
+              // A segment shorter than the distance to the nearest face crosses none (a margin far above
+              // segment_crosses_triangle's tolerance); a longer one stays within the faces collected.
+              if (d.squaredNorm() < kClearanceMargin * clearance2) {
+                weight += slot_amplitudes[j] * zb_kernel(q);
+                return;
+              }
               const Vec3 lo = x.cwiseMin(centres[j]), hi = x.cwiseMax(centres[j]);
               for (const auto& [o, t] : near) {
                 const Eigen::AlignedBox3d& box = face_boxes[o][t];
