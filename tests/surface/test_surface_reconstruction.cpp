@@ -14,6 +14,7 @@
 #include <vector>
 
 #include <drench/common/error.hpp>
+#include <drench/common/parallel.hpp>
 #include <drench/common/triangle_geometry.hpp>
 #include <drench/surface/surface_reconstruction.hpp>
 
@@ -264,6 +265,25 @@ TEST(Anisotropic, RestingBlockKeepsTheIsotropicVolume) {
       signed_volume(reconstruct_surface(water, kSpacing, settings_of(Method::ANISOTROPIC), {}));
   // 3%: the block's edges and corners, which the level was not fitted to, round off differently.
   EXPECT_NEAR(anisotropic, isotropic, 0.03 * isotropic);
+}
+
+TEST(Anisotropic, SameMeshForAnyThreadCount) {
+  // The V's water with its sheet under one plane: kernels near faces, occluded neighbours, kept centres.
+  const VPlane v(0.1, 10);
+  Vec3Array water;
+  for (const Vec3& p : block(Vec3(-0.05, 0.0, -0.04), Vec3(0.05, 0.05, 0.04)))
+    if (p.y() - std::abs(p.x()) >= 0.001 * std::sqrt(2.0)) water.push_back(p);
+  const int before = thread_count();
+  set_thread_count(1);
+  const SurfaceMesh one =
+      reconstruct_surface(water, kSpacing, settings_of(Method::ANISOTROPIC), v.obstacles());
+  set_thread_count(3);
+  const SurfaceMesh three =
+      reconstruct_surface(water, kSpacing, settings_of(Method::ANISOTROPIC), v.obstacles());
+  set_thread_count(before);
+  ASSERT_FALSE(one.triangles.empty());
+  EXPECT_EQ(one.triangles, three.triangles);
+  EXPECT_EQ(one.positions, three.positions) << "bit for bit";
 }
 
 class ContactOffset : public testing::TestWithParam<std::tuple<Method, double>> {};
