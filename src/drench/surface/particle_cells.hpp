@@ -12,12 +12,13 @@
 
 namespace drench {
 
-/// Particles sorted into cubic cells of the kernel radius, so that a node finds every particle within the
-/// radius in the 27 cells around its own. The particles are copied in cell order (z, then y, then x, then
-/// index), so that a node's candidates lie together in memory: for_each_near passes slots of positions().
-/// Where the cells' bounding box is small (it is for any fluid that holds together), a dense table of each
-/// cell's first slot replaces the hash map; the three cells along x of a row are then one run of slots,
-/// visited in the same order, so both give the same sums to the bit.
+/// Particles sorted into cubic cells of the kernel radius (or of a fraction of a reach, searched `rings`
+/// cells around), so that a node finds every particle within the radius in the 27 cells around its own. The
+/// particles are copied in cell order (z, then y, then x, then index), so that a node's candidates lie
+/// together in memory: for_each_near passes slots of positions(). Where the cells' bounding box is small (it
+/// is for any fluid that holds together), a dense table of each cell's first slot replaces the hash map; the
+/// three cells along x of a row are then one run of slots, visited in the same order, so both give the same
+/// sums to the bit.
 class ParticleCells {
  public:
   /// `rings` (>= 1) cells on each side of a point's own are its neighbourhood: a radius of `rings` cells.
@@ -68,8 +69,8 @@ class ParticleCells {
   const Vec3Array& positions() const { return m_positions; }
   /// The particle (index into the constructor's array) at each slot.
   const IndexArray& order() const { return m_order; }
-  /// Calls f(slot) for every particle in the 27 cells around x's, in a fixed order: cells by z, y, x, each
-  /// cell's particles by index.
+  /// Calls f(slot) for every particle in the (2 rings + 1)^3 cells around x's (27 for one ring), in a fixed
+  /// order: cells by z, y, x, each cell's particles by index.
   template <class F>
   void for_each_near(const Vec3& x, F&& f) const {
     const Vec3i c = cell_of(x);
