@@ -771,6 +771,33 @@ TEST(SceneLoader, ReadsTheSurfaceSection) {
                           "surface.field must be one of \"zhu_bridson\", \"density\""));
 }
 
+TEST(SceneLoader, ReadsTheAnisotropicKernelsSettings) {
+  const SceneConfig c =
+      parse(R"({"effects": ["surface"], "surface": {"kernel": "anisotropic", "smoothing": 0.5,
+      "max_anisotropy": 3, "anisotropy_scale": 8, "isolated_scale": 0.7, "min_neighbours": 10}})");
+  EXPECT_EQ(c.surface.kernel, SurfaceKernel::ANISOTROPIC);
+  EXPECT_EQ(c.surface.field, SurfaceField::DENSITY) << "Yu & Turk's kernels are the density field's";
+  EXPECT_EQ(c.surface.smoothing, 0.5);
+  EXPECT_EQ(c.surface.max_anisotropy, 3.0);
+  EXPECT_EQ(c.surface.anisotropy_scale, 8.0);
+  EXPECT_EQ(c.surface.isolated_scale, 0.7);
+  EXPECT_EQ(c.surface.min_neighbours, 10);
+  EXPECT_EQ(parse(R"({"effects": ["surface"]})").surface.kernel, SurfaceKernel::ISOTROPIC);
+  EXPECT_TRUE(
+      scene_error(R"({"effects": ["surface"], "surface": {"kernel": "anisotropic", "field": "zhu_bridson"}})",
+                  "surface.field must be \"density\""));
+  EXPECT_TRUE(scene_error(R"({"effects": ["surface"], "surface": {"smoothing": 1.5}})", "surface.smoothing"));
+  EXPECT_TRUE(scene_error(R"({"effects": ["surface"], "surface": {"max_anisotropy": 0.5}})",
+                          "surface.max_anisotropy"));
+  EXPECT_TRUE(
+      scene_error(R"({"effects": ["surface"], "surface": {"min_neighbours": 0}})", "surface.min_neighbours"));
+}
+
+TEST(SceneLoader, RejectsANegativeContactOffset) {
+  EXPECT_TRUE(scene_error(R"({"effects": ["surface"], "surface": {"contact_offset": -0.001}})",
+                          "surface.contact_offset"));
+}
+
 TEST(SceneLoader, RejectsANonPositiveSurfaceCellSize) {
   EXPECT_TRUE(scene_error(R"({"effects": ["surface"], "surface": {"cell_size": 0}})", "surface.cell_size"));
   EXPECT_TRUE(

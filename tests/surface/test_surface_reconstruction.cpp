@@ -5,13 +5,16 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 #include <map>
 #include <numeric>
 #include <string>
+#include <tuple>
 #include <utility>
 #include <vector>
 
 #include <drench/common/error.hpp>
+#include <drench/common/parallel.hpp>
 #include <drench/common/triangle_geometry.hpp>
 #include <drench/surface/surface_reconstruction.hpp>
 
@@ -94,14 +97,29 @@ TEST(TriangleGeometry, TriangleOverlapsCubeBySeparatingAxes) {
   EXPECT_FALSE(triangle_overlaps_cube(Vec3(3.5, -1, 0), Vec3(-1, 3.5, 0), Vec3(4, 4, 0), centre, 1.0));
 }
 
-class SurfaceOfABall : public testing::TestWithParam<SurfaceField> {};
+/// The settings of each way of reconstructing: the two isotropic fields and Yu & Turk's anisotropic kernels.
+enum class Method { ZHU_BRIDSON, DENSITY, ANISOTROPIC };
+
+SurfaceSettings settings_of(Method m) {
+  SurfaceSettings s;
+  s.field = m == Method::ZHU_BRIDSON ? SurfaceField::ZHU_BRIDSON : SurfaceField::DENSITY;
+  s.kernel = m == Method::ANISOTROPIC ? SurfaceKernel::ANISOTROPIC : SurfaceKernel::ISOTROPIC;
+  return s;
+}
+
+std::string name_of(const testing::TestParamInfo<Method>& param) {
+  return param.param == Method::ZHU_BRIDSON ? "ZhuBridson"
+         : param.param == Method::DENSITY   ? "Density"
+                                            : "Anisotropic";
+}
+
+class SurfaceOfABall : public testing::TestWithParam<Method> {};
 
 TEST_P(SurfaceOfABall, IsAClosedOutwardMeshOfTheBallsVolume) {
   Vec3Array ball;
   for (const Vec3& p : block(Vec3::Constant(-0.1), Vec3::Constant(0.1)))
     if (p.norm() <= 0.1) ball.push_back(p);
-  SurfaceSettings settings;
-  settings.field = GetParam();
+  const SurfaceSettings settings = settings_of(GetParam());
   SurfaceStats stats;
   const SurfaceMesh mesh = reconstruct_surface(ball, kSpacing, settings, {}, &stats);
   ASSERT_FALSE(mesh.triangles.empty());
@@ -127,17 +145,16 @@ TEST_P(SurfaceOfABall, IsAClosedOutwardMeshOfTheBallsVolume) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Fields, SurfaceOfABall,
-                         testing::Values(SurfaceField::ZHU_BRIDSON, SurfaceField::DENSITY),
-                         [](const testing::TestParamInfo<SurfaceField>& param) {
-                           return param.param == SurfaceField::ZHU_BRIDSON ? "ZhuBridson" : "Density";
-                         });
+                         testing::Values(Method::ZHU_BRIDSON, Method::DENSITY, Method::ANISOTROPIC), name_of);
 
-TEST(Surface, ContactAwareSurfaceDoesNotCrossTheClothTheWaterRestsOn) {
+class ContactAware : public testing::TestWithParam<Method> {};
+
+TEST_P(ContactAware, SurfaceDoesNotCrossTheClothTheWaterRestsOn) {
   const Sheet cloth(0.0, 0.15, 31);
   // The lowest particles 1 mm above the cloth.
   const Vec3Array slab = block(Vec3(-0.05, 0.001 - 0.5 * kSpacing, -0.05), Vec3(0.05, 0.031, 0.05));
-  SurfaceSettings aware;
-  SurfaceSettings plain;
+  const SurfaceSettings aware = settings_of(GetParam());
+  SurfaceSettings plain = aware;
   plain.contact_aware = false;
   const SurfaceMesh with = reconstruct_surface(slab, kSpacing, aware, cloth.obstacles());
   const SurfaceMesh without = reconstruct_surface(slab, kSpacing, plain, cloth.obstacles());
@@ -147,13 +164,13 @@ TEST(Surface, ContactAwareSurfaceDoesNotCrossTheClothTheWaterRestsOn) {
     ASSERT_GT(x.y(), 0.0) << "a vertex under the cloth";
 }
 
-TEST(Surface, WaterOnBothSidesOfAClothGivesTwoSurfaces) {
+TEST_P(ContactAware, WaterOnBothSidesOfAClothGivesTwoSurfaces) {
   const Sheet cloth(0.0, 0.15, 31);
   Vec3Array water = block(Vec3(-0.05, 0.001 - 0.5 * kSpacing, -0.05), Vec3(0.05, 0.021, 0.05));
   for (const Vec3& p : block(Vec3(-0.05, -0.021, -0.05), Vec3(0.05, -0.001 + 0.5 * kSpacing, 0.05)))
     water.push_back(p);
-  SurfaceSettings aware;
-  SurfaceSettings plain;
+  const SurfaceSettings aware = settings_of(GetParam());
+  SurfaceSettings plain = aware;
   plain.contact_aware = false;
   const SurfaceMesh two = reconstruct_surface(water, kSpacing, aware, cloth.obstacles());
   const SurfaceMesh one = reconstruct_surface(water, kSpacing, plain, cloth.obstacles());
@@ -161,6 +178,152 @@ TEST(Surface, WaterOnBothSidesOfAClothGivesTwoSurfaces) {
   EXPECT_EQ(count_surface_intersections(two, cloth.obstacles()), 0u);
   EXPECT_EQ(pieces(one), 1) << "without the cloth the two slabs merge into one blob";
 }
+
+/// Fig. 8's V: two planes meeting along the z axis at 90 degrees, opening upwards, each `size` wide from the
+/// fold and 2 size long in z, in n x n cells.
+struct VPlane {
+  Vec3Array positions;
+  std::vector<Triangle> triangles;
+  VPlane(double size, int n) {
+    for (int side = 0; side < 2; ++side) {
+      const Vec3 along = Vec3(side == 0 ? -1.0 : 1.0, 1.0, 0.0).normalized();
+      const Index first = static_cast<Index>(positions.size());
+      for (int k = 0; k <= n; ++k)
+        for (int i = 0; i <= n; ++i)
+          positions.push_back(along * size * i / n + Vec3(0, 0, -size + 2.0 * size * k / n));
+      for (int k = 0; k < n; ++k)
+        for (int i = 0; i < n; ++i) {
+          const Index a = first + k * (n + 1) + i, b = a + 1, c = a + n + 1, d = c + 1;
+          triangles.push_back({a, b, c});
+          triangles.push_back({b, d, c});
+        }
+    }
+  }
+  std::vector<SurfaceObstacle> obstacles() const { return {SurfaceObstacle{&positions, &triangles}}; }
+};
+
+TEST_P(ContactAware, SurfaceDoesNotCrossTheV) {
+  const VPlane v(0.1, 10);
+  // Water in the fold, its particles at least 1 mm off both planes, and a sheet one particle thick under the
+  // right plane, 1 mm below it: a kernel that reached through the V would make the two surfaces meet there.
+  Vec3Array water;
+  for (const Vec3& p : block(Vec3(-0.05, 0.0, -0.04), Vec3(0.05, 0.05, 0.04)))
+    if (p.y() - std::abs(p.x()) >= 0.001 * std::sqrt(2.0)) water.push_back(p);
+  const Vec3 normal = Vec3(-1, 1, 0).normalized();  // of the right plane, into the fold
+  for (double u = 0.01; u < 0.09; u += kSpacing)
+    for (double z = -0.04; z < 0.04; z += kSpacing)
+      water.push_back(Vec3(1, 1, 0).normalized() * u + Vec3(0, 0, z) - 0.001 * normal);
+  const SurfaceSettings aware = settings_of(GetParam());
+  SurfaceSettings plain = aware;
+  plain.contact_aware = false;
+  const SurfaceMesh with = reconstruct_surface(water, kSpacing, aware, v.obstacles());
+  ASSERT_FALSE(with.triangles.empty());
+  EXPECT_EQ(count_surface_intersections(with, v.obstacles()), 0u);
+  EXPECT_GT(
+      count_surface_intersections(reconstruct_surface(water, kSpacing, plain, v.obstacles()), v.obstacles()),
+      0u)
+      << "the count must be able to fail";
+}
+
+INSTANTIATE_TEST_SUITE_P(Fields, ContactAware,
+                         testing::Values(Method::ZHU_BRIDSON, Method::DENSITY, Method::ANISOTROPIC), name_of);
+
+/// A sheet one particle thick in the plane y = 0 (on a layer of grid nodes), n x n particles `pitch` apart.
+Vec3Array flat_sheet(int n, double pitch) {
+  Vec3Array p;
+  for (int k = 0; k < n; ++k)
+    for (int i = 0; i < n; ++i)
+      p.emplace_back((i - 0.5 * (n - 1)) * pitch, 0.0, (k - 0.5 * (n - 1)) * pitch);
+  return p;
+}
+
+TEST(Anisotropic, ThinSheetIsOneSheetWhereIsotropicKernelsBreakIt) {
+  // Spread to 2.4 spacings, as the jet's sheet thins on the V: no isotropic kernel of radius 2 spacings
+  // spans the gap (the density field's midpoint between two particles is 2 (1 - 0.36)^3 = 0.52 < 0.6).
+  // Each particle has 4 (corner) to 9 neighbours within r_i = 4 spacings, fewer than Yu & Turk's N_eps =
+  // 25, which would leave it isotropic: the test asks for 4.
+  const Vec3Array sheet = flat_sheet(12, 2.4 * kSpacing);
+  SurfaceSettings anisotropic = settings_of(Method::ANISOTROPIC);
+  anisotropic.min_neighbours = 4;
+  SurfaceStats stats;
+  const SurfaceMesh one = reconstruct_surface(sheet, kSpacing, anisotropic, {}, &stats);
+  EXPECT_EQ(stats.anisotropic, sheet.size());
+  EXPECT_EQ(pieces(one), 1);
+  // Flat: every vertex within the thickness of the flattened kernels (k_r = 4: a quarter of the long axis).
+  for (const Vec3& x : one.positions)
+    ASSERT_LT(std::abs(x.y()), kSpacing) << "vertex at y = " << x.y();
+  const SurfaceMesh beads = reconstruct_surface(sheet, kSpacing, settings_of(Method::DENSITY), {});
+  EXPECT_EQ(pieces(beads), static_cast<int>(sheet.size())) << "isotropic: one bead per particle";
+}
+
+TEST(Anisotropic, RestingBlockKeepsTheIsotropicVolume) {
+  // 20 x 8 x 20 particles, a block not used to choose the level (the ball was).
+  const Vec3Array water = block(Vec3(-0.1, 0.0, -0.1), Vec3(0.1, 0.08, 0.1));
+  const double isotropic =
+      signed_volume(reconstruct_surface(water, kSpacing, settings_of(Method::DENSITY), {}));
+  const double anisotropic =
+      signed_volume(reconstruct_surface(water, kSpacing, settings_of(Method::ANISOTROPIC), {}));
+  // 3%: the block's edges and corners, which the level was not fitted to, round off differently.
+  EXPECT_NEAR(anisotropic, isotropic, 0.03 * isotropic);
+}
+
+TEST(Anisotropic, SameMeshForAnyThreadCount) {
+  // The V's water with its sheet under one plane: kernels near faces, occluded neighbours, kept centres.
+  const VPlane v(0.1, 10);
+  Vec3Array water;
+  for (const Vec3& p : block(Vec3(-0.05, 0.0, -0.04), Vec3(0.05, 0.05, 0.04)))
+    if (p.y() - std::abs(p.x()) >= 0.001 * std::sqrt(2.0)) water.push_back(p);
+  const int before = thread_count();
+  set_thread_count(1);
+  const SurfaceMesh one =
+      reconstruct_surface(water, kSpacing, settings_of(Method::ANISOTROPIC), v.obstacles());
+  set_thread_count(3);
+  const SurfaceMesh three =
+      reconstruct_surface(water, kSpacing, settings_of(Method::ANISOTROPIC), v.obstacles());
+  set_thread_count(before);
+  ASSERT_FALSE(one.triangles.empty());
+  EXPECT_EQ(one.triangles, three.triangles);
+  EXPECT_EQ(one.positions, three.positions) << "bit for bit";
+}
+
+class ContactOffset : public testing::TestWithParam<std::tuple<Method, double>> {};
+
+TEST_P(ContactOffset, SurfaceKeepsTheOffsetFromTheCloth) {
+  // The bound: a node within contact_offset of a face is outside, so each vertex lies on (OpenVDB: is the
+  // mean of) crossings of grid edges that start at an inside node, at least offset from the plane of a flat
+  // cloth, and end at most one cell nearer: the signed distance to the plane is linear along an edge and
+  // its mean is the mean's, so every vertex is at least offset - cell from the cloth.
+  const auto [method, offset_in_cells] = GetParam();
+  // The cloth between two layers of grid nodes (at 0.26 cells), so that each offset resets its own layers.
+  const double height = 0.0013;
+  const Sheet cloth(height, 0.15, 31);
+  const Vec3Array slab =
+      block(Vec3(-0.05, height + 0.001 - 0.5 * kSpacing, -0.05), Vec3(0.05, height + 0.031, 0.05));
+  SurfaceSettings settings = settings_of(method);
+  const double cell = settings.resolved_cell_size(kSpacing);
+  settings.contact_offset = offset_in_cells * cell;
+  const SurfaceMesh mesh = reconstruct_surface(slab, kSpacing, settings, cloth.obstacles());
+  ASSERT_FALSE(mesh.triangles.empty());
+  double lowest = std::numeric_limits<double>::infinity();
+  for (const Vec3& x : mesh.positions)
+    lowest = std::min(lowest, x.y() - height);
+  EXPECT_GE(lowest, settings.contact_offset - cell - 1e-9);
+  // And the offset is what holds it there: the water reaches the cloth (its lowest particles 1 mm above),
+  // so the surface comes within a cell and a half of the offset, or of one cell below that, where the nodes
+  // of the cells the face passes through (within a cell of it on every axis) are what is outside.
+  EXPECT_LE(lowest, std::max(settings.contact_offset, cell) + 1.5 * cell);
+  EXPECT_EQ(count_surface_intersections(mesh, cloth.obstacles()), 0u);
+}
+
+INSTANTIATE_TEST_SUITE_P(Range, ContactOffset,
+                         testing::Combine(testing::Values(Method::ZHU_BRIDSON, Method::ANISOTROPIC),
+                                          testing::Values(0.0, 0.5, 1.0, 1.8, 2.0, 3.0)),
+                         [](const testing::TestParamInfo<std::tuple<Method, double>>& param) {
+                           return name_of(testing::TestParamInfo<Method>(std::get<0>(param.param), 0)) + "_" +
+                                  std::to_string(
+                                      static_cast<int>(std::lround(10 * std::get<1>(param.param)))) +
+                                  "TenthsOfACell";
+                         });
 
 TEST(Surface, BadInputIsNamed) {
   const Vec3Array ball = block(Vec3::Constant(-0.02), Vec3::Constant(0.02));
@@ -195,6 +358,22 @@ TEST(Surface, BadInputIsNamed) {
     EXPECT_NE(std::string(e.what()).find("triangle 1 names node 99"), std::string::npos) << e.what();
   }
   EXPECT_TRUE(reconstruct_surface({}, kSpacing, SurfaceSettings{}, {}).triangles.empty());
+  SurfaceSettings aniso = settings_of(Method::ANISOTROPIC);
+  aniso.field = SurfaceField::ZHU_BRIDSON;
+  try {
+    reconstruct_surface(ball, kSpacing, aniso, {});
+    ADD_FAILURE() << "no error for the anisotropic kernel in the Zhu-Bridson field";
+  } catch (const SceneError& e) {
+    EXPECT_NE(std::string(e.what()).find("surface.field"), std::string::npos) << e.what();
+  }
+  aniso = settings_of(Method::ANISOTROPIC);
+  aniso.smoothing = 1.5;
+  try {
+    reconstruct_surface(ball, kSpacing, aniso, {});
+    ADD_FAILURE() << "no error for smoothing 1.5";
+  } catch (const SceneError& e) {
+    EXPECT_NE(std::string(e.what()).find("surface.smoothing"), std::string::npos) << e.what();
+  }
 }
 
 }  // namespace

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <functional>
 #include <limits>
+#include <optional>
 #include <string>
 #include <unordered_map>
 #include <utility>
@@ -13,6 +14,8 @@
 #include <drench/common/error.hpp>
 #include <drench/common/parallel.hpp>
 #include <drench/common/triangle_geometry.hpp>
+#include <drench/surface/anisotropic_kernels.hpp>
+#include <drench/surface/particle_cells.hpp>
 #include <drench/surface/triangle_bins.hpp>
 #include <drench/surface/vdb_mesher.hpp>
 
@@ -40,6 +43,26 @@ void check_input(const Vec3Array& particles, Scalar spacing, const SurfaceSettin
       !std::isfinite(settings.kernel_radius_in_spacings) ||
       !std::isfinite(settings.particle_radius_in_spacings)) {
     throw SceneError("surface: the kernel and particle radii must be > 0 and finite");
+  }
+  if (settings.kernel == SurfaceKernel::ANISOTROPIC) {
+    if (settings.field != SurfaceField::DENSITY) {
+      throw SceneError(
+          "surface.kernel \"anisotropic\" is a kernel of the density field (Yu & Turk 2013): "
+          "surface.field must be \"density\"");
+    }
+    const auto require = [](bool ok, const char* key, const char* range, double value) {
+      if (!ok)
+        throw SceneError(std::string("surface.") + key + " must be " + range + ", got " + number(value));
+    };
+    require(settings.smoothing >= 0.0 && settings.smoothing <= 1.0, "smoothing", "in [0, 1]",
+            settings.smoothing);
+    require(settings.max_anisotropy >= 1.0 && std::isfinite(settings.max_anisotropy), "max_anisotropy",
+            ">= 1 and finite", settings.max_anisotropy);
+    require(settings.anisotropy_scale > 0.0 && std::isfinite(settings.anisotropy_scale), "anisotropy_scale",
+            "> 0 and finite", settings.anisotropy_scale);
+    require(settings.isolated_scale > 0.0 && settings.isolated_scale <= 2.0, "isolated_scale", "in (0, 2]",
+            settings.isolated_scale);
+    require(settings.min_neighbours >= 1, "min_neighbours", ">= 1", settings.min_neighbours);
   }
   for (std::size_t i = 0; i < particles.size(); ++i) {
     if (!particles[i].allFinite()) {
@@ -70,107 +93,6 @@ void check_input(const Vec3Array& particles, Scalar spacing, const SurfaceSettin
   }
 }
 
-/// Particles sorted into cubic cells of the kernel radius, so that a node finds every particle within the
-/// radius in the 27 cells around its own. The particles are copied in cell order (z, then y, then x, then
-/// index), so that a node's candidates lie together in memory: for_each_near passes slots of positions().
-/// Where the cells' bounding box is small (it is for any fluid that holds together), a dense table of each
-/// cell's first slot replaces the hash map; the three cells along x of a row are then one run of slots,
-/// visited in the same order, so both give the same sums to the bit.
-class ParticleCells {
- public:
-  ParticleCells(const Vec3Array& particles, Scalar cell) : m_cell(cell) {
-    const std::size_t n = particles.size();
-    std::vector<Vec3i> cells(n);
-    for (std::size_t i = 0; i < n; ++i)
-      cells[i] = cell_of(particles[i]);
-    m_min = m_max = cells.empty() ? Vec3i::Zero() : cells[0];
-    for (const Vec3i& c : cells) {
-      m_min = m_min.cwiseMin(c);
-      m_max = m_max.cwiseMax(c);
-    }
-    const Eigen::Vector3d extent = (m_max - m_min).cast<double>() + Eigen::Vector3d::Ones();
-    // Up to 8 table entries per particle (or 16 MB): a splash spread far needs the hash map instead.
-    m_dense = !cells.empty() && extent.prod() <= std::max(8.0 * static_cast<double>(n), double(1 << 21));
-    IndexArray order(n);  // slot -> particle
-    if (m_dense) {
-      m_dims = (m_max - m_min) + Vec3i::Ones();
-      // A counting sort: within a cell the particles stay in index order, as sorting (key, index) leaves
-      // them.
-      m_first.assign(static_cast<std::size_t>(m_dims.prod()) + 1, 0);
-      for (const Vec3i& c : cells)
-        ++m_first[slot_of(c) + 1];
-      for (std::size_t k = 1; k < m_first.size(); ++k)
-        m_first[k] += m_first[k - 1];
-      std::vector<std::size_t> next(m_first.begin(), m_first.end() - 1);
-      for (std::size_t i = 0; i < n; ++i)
-        order[next[slot_of(cells[i])]++] = static_cast<Index>(i);
-    } else {
-      std::vector<std::pair<std::uint64_t, Index>> keyed(n);
-      for (std::size_t i = 0; i < n; ++i)
-        keyed[i] = {key(cells[i]), static_cast<Index>(i)};
-      std::sort(keyed.begin(), keyed.end());
-      for (std::size_t i = 0; i < n; ++i) {
-        order[i] = keyed[i].second;
-        if (i == 0 || keyed[i].first != keyed[i - 1].first) m_runs[keyed[i].first] = {i, i};
-        m_runs[keyed[i].first].second = i + 1;
-      }
-    }
-    m_positions.resize(n);
-    for (std::size_t k = 0; k < n; ++k)
-      m_positions[k] = particles[order[k]];
-  }
-  Vec3i cell_of(const Vec3& x) const { return (x / m_cell).array().floor().cast<int>(); }
-  /// The particles' positions in cell order, by slot.
-  const Vec3Array& positions() const { return m_positions; }
-  /// Calls f(slot) for every particle in the 27 cells around x's, in a fixed order: cells by z, y, x, each
-  /// cell's particles by index.
-  template <class F>
-  void for_each_near(const Vec3& x, F&& f) const {
-    const Vec3i c = cell_of(x);
-    if (m_dense) {
-      const Vec3i local = c - m_min;
-      const int x0 = std::max(local.x() - 1, 0), x1 = std::min(local.x() + 1, m_dims.x() - 1);
-      if (x0 > x1) return;
-      for (int z = local.z() - 1; z <= local.z() + 1; ++z) {
-        if (z < 0 || z >= m_dims.z()) continue;
-        for (int y = local.y() - 1; y <= local.y() + 1; ++y) {
-          if (y < 0 || y >= m_dims.y()) continue;
-          const std::size_t row = (static_cast<std::size_t>(z) * m_dims.y() + y) * m_dims.x();
-          for (std::size_t k = m_first[row + x0], end = m_first[row + x1 + 1]; k < end; ++k)
-            f(static_cast<Index>(k));
-        }
-      }
-      return;
-    }
-    for (int dz = -1; dz <= 1; ++dz)
-      for (int dy = -1; dy <= 1; ++dy)
-        for (int dx = -1; dx <= 1; ++dx) {
-          const auto it = m_runs.find(key(c + Vec3i(dx, dy, dz)));
-          if (it == m_runs.end()) continue;
-          for (std::size_t k = it->second.first; k < it->second.second; ++k)
-            f(static_cast<Index>(k));
-        }
-  }
-
- private:
-  static std::uint64_t key(const Vec3i& c) {
-    const auto part = [](int v) {
-      return static_cast<std::uint64_t>(static_cast<std::uint32_t>(v + (1 << 20))) & 0x1fffff;
-    };
-    return part(c.x()) | (part(c.y()) << 21) | (part(c.z()) << 42);
-  }
-  std::size_t slot_of(const Vec3i& c) const {
-    const Vec3i l = c - m_min;
-    return (static_cast<std::size_t>(l.z()) * m_dims.y() + l.y()) * m_dims.x() + l.x();
-  }
-  Scalar m_cell;
-  Vec3Array m_positions;
-  bool m_dense = false;
-  Vec3i m_min, m_max, m_dims;
-  std::vector<std::size_t> m_first;  // dense: slot of each cell's first particle, then the total
-  std::unordered_map<std::uint64_t, std::pair<std::size_t, std::size_t>> m_runs;  // sparse: key -> slots
-};
-
 /// Area-weighted mean of the faces' normals at each vertex; a vertex of no face keeps +y.
 void compute_vertex_normals(SurfaceMesh& mesh) {
   mesh.normals.assign(mesh.positions.size(), Vec3::Zero());
@@ -196,6 +118,13 @@ inline double zb_kernel(double s2) {
 /// of a flat lattice (kernel radius 2 spacings, the default) crosses its physical surface, half a spacing
 /// beyond its last layer, so that a ball keeps its volume (tests/surface: Fields/SurfaceOfABall).
 constexpr double kColourLevel = 0.6;
+/// The same for the anisotropic kernels (Yu & Turk 2013 leave the level to the user too): where a ball of 10
+/// spacings' radius keeps its volume (0.10: +0.5%, 0.15: -0.4%; tests/surface: Fields/SurfaceOfABall),
+/// low because a free surface's kernels are flattened along its normal and their centres smoothed inwards.
+constexpr double kAnisotropicLevel = 0.12;
+
+/// Fraction of the squared distance to the nearest face below which a segment needs no crossing test.
+constexpr double kClearanceMargin = 1.0 - 1e-6;
 
 /// 1 / sum_j k(|x_i - x_j| / radius) for every particle i (itself included, so >= 1 and finite): the
 /// inverse of its number density in kernel units, by slot of `cells` (ParticleCells::positions()). Onderik et
@@ -246,8 +175,28 @@ SurfaceMesh reconstruct_surface(const Vec3Array& particles, Scalar particle_spac
     seconds = std::chrono::duration<double>(now - stage_start).count();
     stage_start = now;
   };
+  const bool aware = settings.contact_aware && !obstacles.empty();
+  const TriangleBins bins = aware ? TriangleBins(obstacles, radius) : TriangleBins();
+  const bool anisotropic = settings.kernel == SurfaceKernel::ANISOTROPIC;
+  AnisotropicKernels kernels;
+  // How far a node looks for particles (unit: m): the kernel radius, or the longest anisotropic kernel's
+  // reach.
+  Scalar reach = radius;
+  if (anisotropic) {
+    kernels = anisotropic_kernels_yu_turk(particles, radius, settings, obstacles, aware ? &bins : nullptr);
+    reach = *std::max_element(kernels.reaches.begin(), kernels.reaches.end());
+    local.anisotropic = kernels.anisotropic;
+  }
+  lap(local.seconds_kernels);
   VdbNodeGrid grid(cell, outside);
-  grid.activate_around(particles, static_cast<int>(std::ceil(radius / cell)));
+  if (anisotropic) {
+    std::vector<int> reaches(particles.size());
+    for (std::size_t i = 0; i < reaches.size(); ++i)
+      reaches[i] = static_cast<int>(std::ceil(kernels.reaches[i] / cell));
+    grid.activate_around(kernels.centres, reaches);
+  } else {
+    grid.activate_around(particles, static_cast<int>(std::ceil(radius / cell)));
+  }
   const std::vector<Vec3i> nodes = grid.active_nodes();
   local.nodes = nodes.size();
   lap(local.seconds_grid);
@@ -256,8 +205,43 @@ SurfaceMesh reconstruct_surface(const Vec3Array& particles, Scalar particle_spac
   const std::vector<double> inverse_density = inverse_number_densities(cells, radius);
   const Vec3Array& sorted = cells.positions();
   const bool density_field = settings.field == SurfaceField::DENSITY;
-  const bool aware = settings.contact_aware && !obstacles.empty();
-  const TriangleBins bins = aware ? TriangleBins(obstacles, radius) : TriangleBins();
+  // The anisotropic kernels by slot of their own cells (of the longest reach), each with its particle's
+  // volume (the isotropic inverse number density, Yu & Turk's m_j / rho_j) in its amplitude.
+  std::optional<ParticleCells> centre_cells;
+  std::vector<Eigen::Matrix3d> slot_transforms;
+  std::vector<double> slot_amplitudes, slot_reach2;
+  if (anisotropic) {
+    std::vector<double> volume(particles.size());
+    for (std::size_t s = 0; s < sorted.size(); ++s)
+      volume[cells.order()[s]] = inverse_density[s];
+    // Cells of half the longest reach, two rings around: a node's candidates fill 5^3 / 8 = 16 reach^3,
+    // where cells of the reach hold 27 reach^3.
+    centre_cells.emplace(kernels.centres, 0.5 * reach, 2);
+    const IndexArray& order = centre_cells->order();
+    slot_transforms.resize(order.size());
+    slot_amplitudes.resize(order.size());
+    slot_reach2.resize(order.size());
+    for (std::size_t s = 0; s < order.size(); ++s) {
+      slot_transforms[s] = kernels.transforms[order[s]];
+      slot_amplitudes[s] = kernels.amplitudes[order[s]] * volume[order[s]];
+      slot_reach2[s] = kernels.reaches[order[s]] * kernels.reaches[order[s]];
+    }
+  }
+  // Each triangle's box, slightly grown (more than segment_crosses_triangle's tolerance), so the visibility
+  // test of an anisotropic kernel skips the faces its segment's box misses: its node's faces within the
+  // longest reach are many more than a segment can cross.
+  std::vector<std::vector<Eigen::AlignedBox3d>> face_boxes;
+  if (anisotropic && aware) {
+    for (const SurfaceObstacle& o : obstacles) {
+      face_boxes.emplace_back();
+      for (const Triangle& t : *o.triangles) {
+        Eigen::AlignedBox3d box((*o.positions)[t[0]]);
+        box.extend((*o.positions)[t[1]]).extend((*o.positions)[t[2]]);
+        const double grow = 1e-9 * (1.0 + box.max().cwiseAbs().maxCoeff() + box.min().cwiseAbs().maxCoeff());
+        face_boxes.back().emplace_back(box.min() - Vec3::Constant(grow), box.max() + Vec3::Constant(grow));
+      }
+    }
+  }
   lap(local.seconds_densities);
   std::vector<float> values(nodes.size(), outside);
   const double radius2 = radius * radius;
@@ -273,6 +257,7 @@ SurfaceMesh reconstruct_surface(const Vec3Array& particles, Scalar particle_spac
         // nodes leaf by leaf), collected once per block and filtered per node: the node's list is the same,
         // without a node's hash lookups and sort (bench_surface jet_on_cloth/contact_aware).
         std::vector<std::pair<Index, Index>> block_near;
+        std::vector<std::pair<Index, Index>> near_radius;
         Vec3i block = Vec3i::Constant(std::numeric_limits<int>::min());
         for (std::size_t n = begin; n < end; ++n) {
           const Vec3 x = nodes[n].cast<double>() * cell;
@@ -283,16 +268,23 @@ SurfaceMesh reconstruct_surface(const Vec3Array& particles, Scalar particle_spac
               block = leaf;
               const Vec3 lo = (8 * leaf).cast<double>() * cell,
                          hi = (8 * leaf + Vec3i::Constant(7)).cast<double>() * cell;
-              bins.collect_box(lo - Vec3::Constant(radius), hi + Vec3::Constant(radius), block_near);
+              bins.collect_box(lo - Vec3::Constant(reach), hi + Vec3::Constant(reach), block_near);
             }
-            bins.filter_box(block_near, x - Vec3::Constant(radius), x + Vec3::Constant(radius), near);
+            bins.filter_box(block_near, x - Vec3::Constant(reach), x + Vec3::Constant(reach), near);
+            // The anisotropic kernels' longest reach collects more faces than the reset needs: it looks
+            // within the kernel radius, as for the isotropic kernels.
+            if (anisotropic)
+              bins.filter_box(near, x - Vec3::Constant(radius), x + Vec3::Constant(radius), near_radius);
           }
           bool too_close = false;
-          for (const auto& [o, t] : near) {
+          // Squared distance to the nearest face; a face outside the box of the kernel radius is farther.
+          double clearance2 = anisotropic ? radius * radius : std::numeric_limits<double>::infinity();
+          for (const auto& [o, t] : anisotropic ? near_radius : near) {
             const Triangle& tri = (*obstacles[o].triangles)[t];
             const Vec3Array& p = *obstacles[o].positions;
             const Vec3 w = closest_point_barycentric(x, p[tri[0]], p[tri[1]], p[tri[2]]);
             const Vec3 closest = w.x() * p[tri[0]] + w.y() * p[tri[1]] + w.z() * p[tri[2]];
+            clearance2 = std::min(clearance2, (closest - x).squaredNorm());
             // The paper's delta, and a drench addition that makes the guarantee exact: a node of any grid
             // cell the face passes through is outside too, so no cell the face meets holds a piece of
             // surface, and OpenVDB's quads, each inside the four cells around one grid edge, cannot cross the
@@ -309,7 +301,36 @@ SurfaceMesh reconstruct_surface(const Vec3Array& particles, Scalar particle_spac
           }
           double weight = 0.0;
           Vec3 mean = Vec3::Zero();
-          if (near.empty()) {
+          if (anisotropic) {
+            // Yu & Turk 2013's field, the visibility test now from the node to each kernel's centre: a kernel
+            // whose long axis reaches across a face to the node is occluded there like a particle.
+            const Vec3Array& centres = centre_cells->positions();
+            centre_cells->for_each_near(x, [&](Index j) {
+              const Vec3 d = x - centres[j];
+              if (d.squaredNorm() >= slot_reach2[j]) return;
+              const double q = (slot_transforms[j] * d).squaredNorm();
+              if (q >= 1.0) return;
+              // A segment shorter than the distance to the nearest face crosses none (a margin far above
+              // segment_crosses_triangle's tolerance); a longer one stays within the faces collected.
+              if (d.squaredNorm() < kClearanceMargin * clearance2) {
+                weight += slot_amplitudes[j] * zb_kernel(q);
+                return;
+              }
+              const Vec3 lo = x.cwiseMin(centres[j]), hi = x.cwiseMax(centres[j]);
+              for (const auto& [o, t] : near) {
+                const Eigen::AlignedBox3d& box = face_boxes[o][t];
+                if ((box.min().array() > hi.array()).any() || (box.max().array() < lo.array()).any())
+                  continue;
+                const Triangle& tri = (*obstacles[o].triangles)[t];
+                const Vec3Array& v = *obstacles[o].positions;
+                if (segment_crosses_triangle(x, centres[j], v[tri[0]], v[tri[1]], v[tri[2]])) {
+                  ++occluded;
+                  return;
+                }
+              }
+              weight += slot_amplitudes[j] * zb_kernel(q);
+            });
+          } else if (near.empty()) {
             // No face in reach, so no visibility test: a lambda this small is inlined into for_each_near's
             // loop, where the one below, with the segment tests, was a call per candidate (perf: the field's
             // lambda out of line, 56% of a reconstruction). Same sums in the same order: the same bits.
@@ -339,7 +360,10 @@ SurfaceMesh reconstruct_surface(const Vec3Array& particles, Scalar particle_spac
               mean += w * p;
             });
           }
-          if (weight > 0.0 && density_field) {
+          if (weight > 0.0 && anisotropic) {
+            values[n] = static_cast<float>(
+                std::min<double>((kAnisotropicLevel - weight) * particle_spacing, outside));
+          } else if (weight > 0.0 && density_field) {
             // The colour field is about 1 inside and 0 far outside; scaled by the spacing, its values near
             // the surface are lengths like the Zhu-Bridson field's, which the mesher's interpolation expects.
             values[n] =

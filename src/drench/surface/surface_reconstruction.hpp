@@ -32,11 +32,14 @@ struct SurfaceStats {
   std::uint64_t nodes = 0;        ///< grid nodes given a field value
   std::uint64_t occluded = 0;     ///< node-particle pairs whose segment crossed a triangle (Fig. 2a)
   std::uint64_t reset_nodes = 0;  ///< nodes set outside for being within contact_offset of a face (Fig. 2b)
+  std::uint64_t anisotropic = 0;  ///< particles given an anisotropic kernel (kernel ANISOTROPIC)
   double seconds = 0.0;           ///< wall time (unit: s)
   /// Wall time of the stages within `seconds` (unit: s), to see where a reconstruction's time goes
   /// (bench_surface): activating the grid's nodes around the particles and listing them; sorting the
   /// particles into cells and their inverse number densities (and the obstacles' triangles into bins); the
-  /// field at every node, visibility and reset included; marching cubes and the vertex normals.
+  /// field at every node, visibility and reset included; marching cubes and the vertex normals. Before them,
+  /// the anisotropic kernels (0 for the isotropic ones).
+  double seconds_kernels = 0.0;
   double seconds_grid = 0.0;
   double seconds_densities = 0.0;
   double seconds_field = 0.0;

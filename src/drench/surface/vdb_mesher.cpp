@@ -6,6 +6,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <map>
 #include <mutex>
 #include <string>
 
@@ -75,6 +76,29 @@ void VdbNodeGrid::activate_around(const Vec3Array& particles, int reach) {
     openvdb::tools::dilateActiveValues(grid.tree(), reach + 1, openvdb::tools::NN_FACE_EDGE_VERTEX,
                                        openvdb::tools::EXPAND_TILES);
   });
+}
+
+void VdbNodeGrid::activate_around(const Vec3Array& particles, const std::vector<int>& reaches) {
+  // Dilation distributes over union: each reach's particles dilated on their own grid, then merged.
+  std::map<int, Vec3Array> groups;
+  for (std::size_t i = 0; i < particles.size(); ++i)
+    groups[reaches[i]].push_back(particles[i]);
+  if (groups.size() == 1) {
+    activate_around(particles, groups.begin()->first);
+    return;
+  }
+  const double cell = m_impl->grid->voxelSize()[0];
+  const float outside = m_impl->grid->background();
+  for (const auto& [reach, points] : groups) {
+    VdbNodeGrid part(cell, outside);
+    try {
+      part.activate_around(points, reach);
+    } catch (const Error&) {
+      activate_around(particles, reach);  // names the particle by its index in `particles`
+      throw;
+    }
+    vdb_call("merge its active nodes", cell, [&] { m_impl->grid->topologyUnion(*part.m_impl->grid); });
+  }
 }
 
 std::vector<Vec3i> VdbNodeGrid::active_nodes() const {

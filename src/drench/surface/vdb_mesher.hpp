@@ -24,6 +24,9 @@ class VdbNodeGrid {
   /// value some particle can change, so the work follows the fluid, not its bounding box.
   /// @throws Error naming the particle when its node index exceeds 2^30 (OpenVDB coordinates are int32)
   void activate_around(const Vec3Array& particles, int reach);
+  /// The same with a reach per particle (N entries, >= 0, in nodes): a kernel's own reach, so that a small
+  /// kernel does not activate the nodes only the longest one can change.
+  void activate_around(const Vec3Array& particles, const std::vector<int>& reaches);
   /// The active nodes' integer coordinates, in the grid's fixed traversal order.
   std::vector<Vec3i> active_nodes() const;
   /// Sets the value of each node (same length as `nodes`).
