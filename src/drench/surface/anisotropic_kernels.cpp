@@ -21,26 +21,9 @@ constexpr double kMaxAxisInRadii = 2.0;
 
 using Near = std::vector<std::pair<Index, Index>>;
 
-using FaceBoxes = std::vector<std::vector<Eigen::AlignedBox3d>>;
-
-/// Each face's box, grown by far more than segment_crosses_triangle's tolerance.
-FaceBoxes face_boxes(const std::vector<SurfaceObstacle>& obstacles) {
-  FaceBoxes boxes;
-  for (const SurfaceObstacle& o : obstacles) {
-    boxes.emplace_back();
-    for (const Triangle& t : *o.triangles) {
-      Eigen::AlignedBox3d box((*o.positions)[t[0]]);
-      box.extend((*o.positions)[t[1]]).extend((*o.positions)[t[2]]);
-      const double grow = 1e-9 * (1.0 + box.max().cwiseAbs().maxCoeff() + box.min().cwiseAbs().maxCoeff());
-      boxes.back().emplace_back(box.min() - Vec3::Constant(grow), box.max() + Vec3::Constant(grow));
-    }
-  }
-  return boxes;
-}
-
 /// Whether the segment pq crosses a face of `near`; faces whose box misses the segment's are skipped.
 bool crosses_any(const Vec3& p, const Vec3& q, const Near& near,
-                 const std::vector<SurfaceObstacle>& obstacles, const FaceBoxes& boxes) {
+                 const std::vector<SurfaceObstacle>& obstacles, const ObstacleFaceBoxes& boxes) {
   const Vec3 lo = p.cwiseMin(q), hi = p.cwiseMax(q);
   for (const auto& [o, t] : near) {
     const Eigen::AlignedBox3d& box = boxes[o][t];
@@ -53,6 +36,20 @@ bool crosses_any(const Vec3& p, const Vec3& q, const Near& near,
 }
 
 }  // namespace
+
+ObstacleFaceBoxes obstacle_face_boxes(const std::vector<SurfaceObstacle>& obstacles) {
+  ObstacleFaceBoxes boxes;
+  for (const SurfaceObstacle& o : obstacles) {
+    boxes.emplace_back();
+    for (const Triangle& t : *o.triangles) {
+      Eigen::AlignedBox3d box((*o.positions)[t[0]]);
+      box.extend((*o.positions)[t[1]]).extend((*o.positions)[t[2]]);
+      const double grow = 1e-9 * (1.0 + box.max().cwiseAbs().maxCoeff() + box.min().cwiseAbs().maxCoeff());
+      boxes.back().emplace_back(box.min() - Vec3::Constant(grow), box.max() + Vec3::Constant(grow));
+    }
+  }
+  return boxes;
+}
 
 AnisotropicKernels anisotropic_kernels_yu_turk(const Vec3Array& particles, Scalar radius,
                                                const SurfaceSettings& settings,
@@ -72,7 +69,7 @@ AnisotropicKernels anisotropic_kernels_yu_turk(const Vec3Array& particles, Scala
   const Vec3Array& sorted = cells.positions();
   const IndexArray& order = cells.order();
   const double lambda = settings.smoothing;
-  const FaceBoxes boxes = aware ? face_boxes(obstacles) : FaceBoxes();
+  const ObstacleFaceBoxes boxes = aware ? obstacle_face_boxes(obstacles) : ObstacleFaceBoxes();
   // The centres are smoothed over the kernel radius, not r_i as Yu & Turk do: over r_i, lambda 0.9 moved a
   // flat surface's outer layer 1.2 spacings inwards and a ball lost 27% of its volume (measured, a lattice
   // ball of 10 spacings' radius); over the kernel radius it moves 0.4 spacings, which the level makes up.

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 
 #include <drench/common/types.hpp>
 #include <drench/surface/surface_reconstruction.hpp>
@@ -16,6 +17,15 @@
 namespace drench {
 
 class TriangleBins;
+
+/// Per obstacle, per triangle: the triangle's box, grown by far more than segment_crosses_triangle's
+/// tolerance, so that a segment whose box misses it cannot cross the triangle (unit: m).
+using ObstacleFaceBoxes = std::vector<std::vector<Eigen::AlignedBox3d>>;
+
+/// The boxes of every triangle of `obstacles`, in their order: the visibility tests of the anisotropic
+/// kernels (their neighbourhoods here, the node-to-centre segments in reconstruct_surface) skip the faces a
+/// segment's box misses.
+ObstacleFaceBoxes obstacle_face_boxes(const std::vector<SurfaceObstacle>& obstacles);
 
 /// One ellipsoidal kernel per particle, by particle index.
 struct AnisotropicKernels {

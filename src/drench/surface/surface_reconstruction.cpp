@@ -227,21 +227,10 @@ SurfaceMesh reconstruct_surface(const Vec3Array& particles, Scalar particle_spac
       slot_reach2[s] = kernels.reaches[order[s]] * kernels.reaches[order[s]];
     }
   }
-  // Each triangle's box, slightly grown (more than segment_crosses_triangle's tolerance), so the visibility
-  // test of an anisotropic kernel skips the faces its segment's box misses: its node's faces within the
-  // longest reach are many more than a segment can cross.
-  std::vector<std::vector<Eigen::AlignedBox3d>> face_boxes;
-  if (anisotropic && aware) {
-    for (const SurfaceObstacle& o : obstacles) {
-      face_boxes.emplace_back();
-      for (const Triangle& t : *o.triangles) {
-        Eigen::AlignedBox3d box((*o.positions)[t[0]]);
-        box.extend((*o.positions)[t[1]]).extend((*o.positions)[t[2]]);
-        const double grow = 1e-9 * (1.0 + box.max().cwiseAbs().maxCoeff() + box.min().cwiseAbs().maxCoeff());
-        face_boxes.back().emplace_back(box.min() - Vec3::Constant(grow), box.max() + Vec3::Constant(grow));
-      }
-    }
-  }
+  // The visibility test of an anisotropic kernel skips the faces its segment's box misses: its node's faces
+  // within the longest reach are many more than a segment can cross.
+  const ObstacleFaceBoxes face_boxes =
+      anisotropic && aware ? obstacle_face_boxes(obstacles) : ObstacleFaceBoxes();
   lap(local.seconds_densities);
   std::vector<float> values(nodes.size(), outside);
   const double radius2 = radius * radius;
