@@ -47,7 +47,8 @@ constexpr const char* kFullScene = R"({
                "max_relief_per_substep": 0.2, "precision": "double"},
     "viscosity": {"method": "artificial", "coefficient": 0.05},
     "cfl": 0.25,
-    "sort_interval": 20
+    "sort_interval": 20,
+    "substep_halvings": 6
   },
   "emitters": [
     {"type": "nozzle", "center": [0, 1, 0], "direction": [0, 0, -2], "radius": 0.03, "speed": 2.5,
@@ -91,6 +92,7 @@ TEST(SceneLoader, ParsesFullSceneIntoEveryMember) {
   EXPECT_DOUBLE_EQ(c.fluid.viscosity.coefficient, 0.05);
   EXPECT_DOUBLE_EQ(c.fluid.cfl, 0.25);
   EXPECT_EQ(c.fluid.sort_interval, 20);
+  EXPECT_EQ(c.fluid.substep_halvings, 6);
 
   ASSERT_EQ(c.emitters.size(), 2u);
   EXPECT_EQ(c.emitters[0].kind, EmitterSettings::Kind::NOZZLE);
@@ -144,6 +146,7 @@ TEST(SceneLoader, EmptyObjectTakesStructDefaults) {
   EXPECT_EQ(c.fluid.viscosity.method, d.fluid.viscosity.method);
   EXPECT_EQ(c.fluid.cfl, d.fluid.cfl);
   EXPECT_EQ(c.fluid.sort_interval, d.fluid.sort_interval);
+  EXPECT_EQ(c.fluid.substep_halvings, d.fluid.substep_halvings);
   EXPECT_TRUE(c.emitters.empty());
   EXPECT_TRUE(c.boundaries.empty());
   EXPECT_TRUE(c.kill_regions.empty());
@@ -260,7 +263,8 @@ TEST(SceneLoader, RejectsMisspeltFluidKeyListingKnownKeys) {
   EXPECT_TRUE(
       scene_error(R"({"fluid": {"visocsity": {}}})",
                   "fluid.visocsity is not a known key (x.json); known: rest_density, particle_spacing, "
-                  "pressure_solver, wcsph, pcisph, dfsph, pbf, viscosity, cfl, max_speed, sort_interval"));
+                  "pressure_solver, wcsph, pcisph, dfsph, pbf, viscosity, cfl, max_speed, sort_interval, "
+                  "substep_halvings"));
 }
 
 TEST(SceneLoader, RejectsNonFiniteNumberInDocumentBuiltInCode) {
@@ -511,6 +515,15 @@ TEST(SceneLoader, RejectsAnEmitterAtOrOverMaxSpeedNamingIt) {
 TEST(SceneLoader, RejectsZeroSortInterval) {
   EXPECT_TRUE(
       scene_error(R"({"fluid": {"sort_interval": 0}})", "fluid.sort_interval must be >= 1, got 0 (x.json)"));
+}
+
+TEST(SceneLoader, RejectsSubstepHalvingsOutsideZeroToTwenty) {
+  EXPECT_TRUE(scene_error(R"({"fluid": {"substep_halvings": -1}})",
+                          "fluid.substep_halvings must be in [0, 20], got -1 (x.json)"));
+  EXPECT_TRUE(scene_error(R"({"fluid": {"substep_halvings": 21}})",
+                          "fluid.substep_halvings must be in [0, 20], got 21 (x.json)"));
+  EXPECT_TRUE(scene_error(R"({"fluid": {"substep_halvings": 1.5}})",
+                          "fluid.substep_halvings must be an integer, got 1.5 (x.json)"));
 }
 
 TEST(SceneLoader, RejectsSortIntervalBeyondIntRange) {

@@ -9,8 +9,9 @@ namespace drench::loader {
 
 FluidSettings read_fluid(const Node& node) {
   FluidSettings fluid;
-  const ObjectReader r(node, {"rest_density", "particle_spacing", "pressure_solver", "wcsph", "pcisph",
-                              "dfsph", "pbf", "viscosity", "cfl", "max_speed", "sort_interval"});
+  const ObjectReader r(
+      node, {"rest_density", "particle_spacing", "pressure_solver", "wcsph", "pcisph", "dfsph", "pbf",
+             "viscosity", "cfl", "max_speed", "sort_interval", "substep_halvings"});
   r.read("rest_density", fluid.rest_density, kPositive);
   r.read("particle_spacing", fluid.particle_spacing, kPositive);
   r.read_choice("pressure_solver", fluid.pressure_solver,
@@ -20,6 +21,8 @@ FluidSettings read_fluid(const Node& node) {
                                             {"pbf", PressureSolverKind::PBF}});
   r.read("cfl", fluid.cfl, Range{0.0, true, 1.0, false});
   r.read("sort_interval", fluid.sort_interval, kAtLeastOne);
+  // 20 halvings are a millionth of the step: past that a failing solve is not the step's fault.
+  r.read("substep_halvings", fluid.substep_halvings, Range{0.0, false, 20.0, false});
   // null is "no limit", so that --set fluid.max_speed=null can undo the default.
   if (const Node c = r["max_speed"]; c.present())
     fluid.max_speed = c.value().is_null() ? std::nullopt : std::optional<Scalar>(c.number(kPositive));

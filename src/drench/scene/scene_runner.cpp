@@ -94,7 +94,8 @@ nlohmann::json make_summary(const Simulation& sim, double wall_seconds, const st
     s["divergence_iterations"] = {{"mean", f.divergence_iterations / substeps},
                                   {"max", f.max_divergence_iterations}};
   }
-  s["fluid_substeps"] = {{"total", f.substeps}, {"max_per_step", f.max_substeps_per_step}};
+  s["fluid_substeps"] = {
+      {"total", f.substeps}, {"max_per_step", f.max_substeps_per_step}, {"halved", f.substeps_halved}};
   if (sim.steps_done() > 0) {
     s["dt_s"] = {{"min", sim.min_dt()}, {"mean", sim.sum_dt() / sim.steps_done()}, {"max", sim.max_dt()}};
   }

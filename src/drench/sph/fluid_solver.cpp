@@ -246,6 +246,9 @@ StepStatus FluidSolver::step(Scalar dt, SubstepConstraint* constraint) {
   if (m_particles.empty()) return status;
   Scalar remaining = dt;
   int count = 0;
+  // No sub-step is halved below this; a solve that fails there is kept with PRESSURE_NOT_CONVERGED.
+  const Scalar shortest = std::ldexp(dt, -m_settings.substep_halvings) * (1.0 + 1e-9);
+  bool converged = true;
   while (true) {
     const Scalar speed = max_speed();
     // An infinite speed is left to the non-finite check, which names it as such.
@@ -267,15 +270,30 @@ StepStatus FluidSolver::step(Scalar dt, SubstepConstraint* constraint) {
       remaining -= sub;
       continue;
     }
-    const Scalar limit = cfl_limit(speed);
+    const Scalar cfl = cfl_limit(speed);
     // A NaN limit means a NaN velocity: take one sub-step so that the check below names the particle.
+    const Scalar limit = std::isnan(cfl) ? cfl : std::min(cfl, m_substep_cap);
     const Scalar wanted = std::isfinite(limit) ? std::ceil(remaining / limit) : 1.0;
     const int n = static_cast<int>(std::clamp(wanted, 1.0, 1e6));
     const Scalar sub = n == 1 ? remaining : remaining / n;
-    status |= substep(sub, speed, constraint);
+    const bool may_redo = sub > shortest;
+    bool redo = false;
+    status |= substep(sub, speed, constraint, may_redo, redo);
+    if (redo) {
+      m_substep_cap = 0.5 * sub;
+      converged = false;
+      ++m_stats.substeps_halved;
+      continue;
+    }
     ++count;
     if (n == 1 || !status.ok()) break;
     remaining -= sub;
+  }
+  // Back toward the CFL limit, a little per step, so that a passing hard moment does not slow the rest of the
+  // run, and a lasting one costs a redone solve only now and then.
+  if (converged && std::isfinite(m_substep_cap)) {
+    m_substep_cap *= 1.25;
+    if (m_substep_cap >= dt) m_substep_cap = std::numeric_limits<Scalar>::infinity();
   }
   m_stats.max_substeps_per_step = std::max(m_stats.max_substeps_per_step, count);
   return status;
@@ -294,13 +312,17 @@ FluidContext FluidSolver::context() {
                       m_particles.common_mass()};
 }
 
-StepStatus FluidSolver::substep(Scalar dt, Scalar max_speed, SubstepConstraint* constraint) {
+StepStatus FluidSolver::substep(Scalar dt, Scalar max_speed, SubstepConstraint* constraint, bool may_redo,
+                                bool& redo) {
   sort_particles();
   update_neighbors(max_speed * dt);
   ++m_stats.substeps;
   const std::size_t n = m_particles.size();
   const FluidContext ctx = context();
   compute_densities(ctx);
+  // DFSPH's divergence solve changes the velocities in place: a redone sub-step must start from these.
+  const bool keep_velocities = may_redo && m_settings.pressure_solver == PressureSolverKind::DFSPH;
+  if (keep_velocities) m_velocities_start = m_particles.velocities;
   DivergenceStats divergence;
   {
     ScopedTimer timer(m_stats.timings_s.pressure);
@@ -329,6 +351,15 @@ StepStatus FluidSolver::substep(Scalar dt, Scalar max_speed, SubstepConstraint* 
   {
     ScopedTimer timer(m_stats.timings_s.pressure);
     pressure = m_pressure->solve(ctx, m_velocities_adv, dt, m_pressure_accelerations);
+  }
+  if (may_redo && (!pressure.converged || !divergence.converged)) {
+    // Its iterations were spent and count; its errors are those of a state that is thrown away.
+    m_stats.pressure_iterations += pressure.iterations;
+    m_stats.max_pressure_iterations = std::max(m_stats.max_pressure_iterations, pressure.iterations);
+    --m_stats.substeps;
+    if (keep_velocities) m_particles.velocities.swap(m_velocities_start);
+    redo = true;
+    return {};
   }
   record(pressure);
 
