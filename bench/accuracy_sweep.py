@@ -3,6 +3,7 @@
 
     python3 bench/accuracy_sweep.py --drench build/demos/drench --out bench/results/debian12-2core \
         [--keep out/accuracy] [--duration 0.5] [--only stability --timeout 600 --jobs 2]
+    python3 bench/accuracy_sweep.py --out bench/results/debian12-2core --only dam_reference
     python3 scripts/result_pages
 
 Two sweeps of the Fig. 3 jet on a cloth (demos/scenes/jet_on_cloth.json), one run at a time on one thread
@@ -22,12 +23,22 @@ another process shares the machine, where two OpenMP threads wait on each other 
   the scene itself (PCISPH) rerun in the same sweep -> accuracy_pbf_jet.csv; and the stability sweep and its
   control for PBF alone -> accuracy_stability_pbf.csv, accuracy_free_jet_pbf.csv; and PBF's stability with
   the cloth in 16 sub-steps at 1/60 s, 8 and 4 ms -> accuracy_stability_pbf_cloth16.csv.
+- against a reference (issue 42), each a phase of its own (`--only jet_reference`, `--only dam_reference`):
+  one `drench reference` of the scene and a one-at-a-time `drench sweep --reference` of the settings a user
+  would touch, with each run's error in the scene's observables. The jet on a cloth (the full scene, 0.5 s,
+  frames at 25 per second): reference at dt / 8, eta / 10 in double, 4x the cloth's sub-steps ->
+  accuracy_reference_one_at_a_time.csv. The dam break (5 cm particles, 1 s, frames at 25 per second, as
+  bench/accuracy_convergence.py's): reference at dt / 16, eta / 10 in double; the surge front (m) on the
+  Pareto axis, the gauges at x = 1.5 and 2.5 m and the L1 mass difference beside it; a run faster than 20
+  m/s is drawn apart (`--speed-bound`) -> accuracy_reference_dam_one_at_a_time.csv. Each CSV's notes hold
+  both commands and the reference's wall time and fastest particle.
 The lines above each CSV's header are `# key: value` notes: the CPU, the commit, the command and the load
 average before and after (the VM is shared; above about 1.5 the times are not worth keeping).
 """
 
 import argparse
 import csv
+import json
 import shutil
 import subprocess
 import sys
@@ -98,6 +109,97 @@ PBF_JET = [
 ]
 
 
+# Against a reference (issue 42). Frames at 25 per second: every 40 ms frame is a whole number of steps of
+# every dt swept and of the reference's (jet: 8, 4, 2, 1 and 0.125 ms; dam: 10, 5, 2.5 and 0.3125 ms).
+JET_REFERENCE = {
+    "scene": SCENE,
+    "sets": ["time.frame_rate=25"],
+    "refinement": [],  # drench reference's defaults: dt / 8, eta / 10 in double, 4x the cloth's sub-steps
+    "sweep": [
+        "--one-at-a-time",
+        "--vary", "time.dt=0.002,0.004,0.008",
+        "--vary", "fluid.pcisph.eta=0.01",
+        "--vary", 'fluid.pressure_solver="dfsph"',
+        "--vary", "cloth.substeps=1,2,8",
+    ],
+    "csv": "accuracy_reference_one_at_a_time.csv",
+}
+# The dam break's water falls 1 m (4.4 m/s) and splashes up the far wall: the fastest particle of its PCISPH
+# and DFSPH references is 9.2 and 10.2 m/s (accuracy_convergence.csv). 20 m/s, twice that, is no flow of
+# this scene, only a blow-up's throw, whose front measures the throw rather than the surge.
+DAM_SPEED_BOUND = "20"
+DAM_REFERENCE = {
+    "scene": "demos/scenes/dam_break.json",
+    "sets": ["time.duration=1.0", "time.frame_rate=25"],
+    # dt / 16: four times below the finest step swept (as accuracy_convergence.py's dam references); eta / 10
+    # in double (PCISPH's 1e-4, the convergence study's tolerance) by drench reference's defaults.
+    "refinement": ["--dt-divisor", "16"],
+    "sweep": [
+        "--one-at-a-time",
+        "--vary", "time.dt=0.0025,0.01",
+        "--vary", 'fluid.pressure_solver="dfsph","wcsph","pbf"',
+        "--vary", "fluid.pcisph.eta=0.0001,0.01",
+        "--vary", "fluid.viscosity.coefficient=0.001,0.1",
+        "--vary", "fluid.cfl=0.2,0.8",
+        "--error", "front_m",
+        "--gauge", "1.5", "--gauge", "2.5", "--gauge-width", "0.2", "--gauge-depth", "1.5",
+        "--speed-bound", DAM_SPEED_BOUND,
+        "--timeout", "600",
+    ],
+    "csv": "accuracy_reference_dam_one_at_a_time.csv",
+}
+
+
+def shown(command):
+    return " ".join("drench" if i == 0 else (f"'{a}'" if any(c in a for c in ' "[;') else a)
+                    for i, a in enumerate(command))
+
+
+def reference_sweep(drench, phase, base, out, threads):
+    """One `drench reference` and one `drench sweep --reference` of `phase` (JET_REFERENCE, DAM_REFERENCE);
+    the sweep's CSV with both commands, the reference's wall time and its fastest particle in the notes."""
+    sets = [a for s in phase["sets"] for a in ("--set", s)]
+    reference = base / (Path(phase["csv"]).stem + "_reference")
+    sweep_dir = base / (Path(phase["csv"]).stem + "_sweep")
+    notes = {"cpu": cpu_model(), "commit": commit(), "load_before": load_average()}
+    command = [drench, "reference", phase["scene"], *sets, *phase["refinement"], "--threads", str(threads),
+               "--quiet", "--overwrite", "--out", str(reference)]
+    if subprocess.run(command, cwd=ROOT).returncode != 0 or not (reference / "reference.json").exists():
+        sys.exit(f"the reference did not end ok: {' '.join(command)}")
+    summary = json.loads((reference / "summary.json").read_text())
+    notes["reference command"] = (f"{shown(command[:-1])} REF ({summary['wall_s']:.1f} s wall; fastest particle "
+                                  f"{summary['max_speed_mps']['particle']:.2f} m/s; dt {summary['dt_s']['max']:g} s)")
+    command = [drench, "sweep", phase["scene"], *sets, *phase["sweep"], "--reference", str(reference),
+               "--threads", str(threads), "--overwrite", "--quiet", "--out", str(sweep_dir)]
+    result = subprocess.run(command, cwd=ROOT)
+    if result.returncode not in (0, 2):
+        sys.exit(f"drench sweep failed ({result.returncode}): {' '.join(command)}")
+    notes["sweep command"] = shown(command[:-1]).replace(str(reference), "REF") + " SWEEP"
+    notes["load_after"] = load_average()
+    # Frame by frame, from runs/NNN.comparison.json: where over the run the largest difference is, and which
+    # way the scene's run is off (its series beside the reference's), which one number per run cannot say.
+    error = phase["sweep"][phase["sweep"].index("--error") + 1] if "--error" in phase["sweep"] else "cloth_rms_m"
+    series = {"front_m": "front_m", "cloth_rms_m": "centre_sag_m"}[error]
+    for n, row in enumerate(csv.DictReader(open(sweep_dir / "sweep.csv")), start=1):
+        path = sweep_dir / "runs" / f"{n:03d}.comparison.json"
+        if not path.exists():
+            continue
+        comparison = json.loads(path.read_text())
+        summary_path = sweep_dir / "runs" / f"{n:03d}" / "summary.json"
+        if summary_path.exists():
+            substeps = json.loads(summary_path.read_text()).get("fluid_substeps", {}).get("total")
+            notes[f"fluid sub-steps {row['setting']}"] = substeps
+        per_frame = comparison["observables"].get(error, {}).get("per_frame", [])
+        notes[f"{error} per frame (mm) {row['setting']}"] = " ".join(
+            "-" if v is None else f"{1000 * v:.0f}" for v in per_frame)
+        if n == 1:
+            for who in ("reference", "run"):
+                values = comparison["series"][who][series]
+                notes[f"{series} per frame (m) {'reference' if who == 'reference' else row['setting']}"] = " ".join(
+                    "-" if v is None else f"{v:.3f}" for v in values)
+    keep(sweep_dir / "sweep.csv", notes, out / phase["csv"])
+
+
 def sweep(drench, arguments, out_dir, duration, threads, solvers="", jobs=1, timeout=240):
     arguments = [a.format(solvers=solvers, timeout=timeout) if "{" in a else a for a in arguments]
     command = [drench, "sweep", SCENE, *arguments, "--threads", str(threads), "--out", str(out_dir),
@@ -158,9 +260,10 @@ def main():
                         help="pressure solvers of the stability sweep and its control, as --vary values (WCSPH's runs take minutes each)")
     parser.add_argument("--threads", type=int, default=1, help="OpenMP threads of each run (default: 1)")
     parser.add_argument("--only", choices=["one_at_a_time", "stability", "free_jet", "pbf", "pbf_jet", "pbf_stability",
-                                           "pbf_cloth16"],
-                        help="run one sweep only (pbf: PBF's phase, pbf_jet and pbf_stability together; not part of"
-                             " a run of all)")
+                                           "pbf_cloth16", "jet_reference", "dam_reference"],
+                        help="run one sweep only (pbf: PBF's phase, pbf_jet and pbf_stability together;"
+                             " jet_reference, dam_reference: against a reference; none of these is part of a run"
+                             " of all)")
     parser.add_argument("--repeat", type=int, default=3,
                         help="rounds of PBF's jet comparison (default 3; the page takes medians)")
     parser.add_argument("--timeout", type=int, default=240,
@@ -198,6 +301,10 @@ def main():
             notes = sweep(drench, STABILITY_PBF_CLOTH16, base / "stability_pbf_cloth16", args.duration, args.threads,
                           jobs=args.jobs, timeout=args.timeout)
             keep(base / "stability_pbf_cloth16" / "sweep.csv", notes, out / "accuracy_stability_pbf_cloth16.csv")
+        if args.only == "jet_reference":
+            reference_sweep(drench, JET_REFERENCE, base, out, args.threads)
+        if args.only == "dam_reference":
+            reference_sweep(drench, DAM_REFERENCE, base, out, args.threads)
 
 
 if __name__ == "__main__":

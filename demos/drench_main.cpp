@@ -549,6 +549,11 @@ int dispatch(int argc, char** argv) {
       ->add_option("--timeout", sweep_options.timeout_s,
                    "stop a run after this many seconds of wall time; its row says so (default: no limit)")
       ->check(non_negative_number());
+  sweep
+      ->add_option("--speed-bound", sweep_options.speed_bound_mps,
+                   "the scene's speed bound (m/s): a run whose fastest particle or node went faster is drawn "
+                   "apart and never on the Pareto front (default: none)")
+      ->check(finite_positive());
   sweep->add_option(
       "--error", sweep_options.error_key,
       "the sweep.csv column pareto.png plots against wall time (default: density_error_mean; with "

@@ -236,12 +236,12 @@ std::string plot_pareto(const fs::path& dir, const std::vector<SettingPoint>& po
          << (positive && high > 20 * low ? "set logscale y\n" : "") << "plot '"
          << (dir / "pareto_all.dat").string()
          << "' using 1:2 with points pt 7 ps 1.1 lc rgb '#999999' title 'settings', \\\n"
-         << (apart.str().empty()
-                 ? ""
-                 : "  '" + (dir / "pareto_apart.dat").string() +
-                       "' using 1:2 with points pt 2 ps 1.4 lw 2 lc rgb '#c0392b' title "
-                       "'not ok: leaked, blew up or stopped (never on the front)', \\\n  '' using 1:2:3 with "
-                       "labels left offset 0.8,0.6 font ',9' tc rgb '#c0392b' notitle, \\\n")
+         << (apart.str().empty() ? ""
+                                 : "  '" + (dir / "pareto_apart.dat").string() +
+                                       "' using 1:2 with points pt 2 ps 1.4 lw 2 lc rgb '#c0392b' title "
+                                       "'not ok: leaked, blew up, stopped or too fast (never on the front)', "
+                                       "\\\n  '' using 1:2:3 with "
+                                       "labels left offset 0.8,0.6 font ',9' tc rgb '#c0392b' notitle, \\\n")
          << "  '" << (dir / "pareto_front.dat").string()
          << "' using 1:2 with linespoints pt 7 ps 1.4 lw 2 lc rgb '#1f5fa8' title 'Pareto front', \\\n"
          << "  '' using 1:2:3 with labels left offset 0.8,0.6 font ',9' notitle\n";
@@ -522,6 +522,10 @@ int run_sweep(const SweepOptions& options) {
   std::map<std::string, std::vector<double>> times, errors;
   const std::size_t leaks_index =
       static_cast<std::size_t>(std::find(columns.begin(), columns.end(), "leaks") - columns.begin());
+  const std::size_t particle_speed_index = static_cast<std::size_t>(
+      std::find(columns.begin(), columns.end(), "max_particle_speed_mps") - columns.begin());
+  const std::size_t node_speed_index = static_cast<std::size_t>(
+      std::find(columns.begin(), columns.end(), "max_node_speed_mps") - columns.begin());
   for (std::size_t i = 0; i < runs.size(); ++i) {
     const std::string setting = setting_of(runs[i]);
     if (!point_of.count(setting)) {
@@ -535,6 +539,11 @@ int run_sweep(const SweepOptions& options) {
       if (p.apart.empty()) p.apart = short_status(rows[i][0]);
     }
     if (sweep_number(rows[i][leaks_index]) > 0 && p.apart.empty()) p.apart = "leaked";
+    // NaN (no summary) compares false: such a run did not end "ok" and is apart already.
+    const double fastest =
+        std::fmax(sweep_number(rows[i][particle_speed_index]), sweep_number(rows[i][node_speed_index]));
+    if (options.speed_bound_mps > 0 && fastest > options.speed_bound_mps && p.apart.empty())
+      p.apart = "faster than " + format(options.speed_bound_mps, "%g") + " m/s";
     double e = sweep_number(rows[i][error_index]);
     if (error_key == "energy_drift") e = std::abs(e);
     times[setting].push_back(sweep_number(rows[i][wall_index]));
@@ -605,11 +614,18 @@ int run_sweep(const SweepOptions& options) {
     }
     md << format(column_median(p.setting, "leaks"), "%.0f") << " | "
        << format(column_median(p.setting, "max_particle_speed_mps"), "%.3g") << " | "
-       << (statuses.empty() ? "ok" : statuses) << " |\n";
+       << (!statuses.empty() ? statuses
+           : p.apart.empty() ? "ok"
+                             : "ok, " + p.apart)
+       << " |\n";
   }
   md << "\nThe Pareto front of wall time against " << error_label(error_key)
      << " (no other setting is both faster and more accurate; settings with a run that leaked, blew up or "
-        "stopped are left out), fastest first:";
+        "stopped"
+     << (options.speed_bound_mps > 0
+             ? ", or went faster than " + format(options.speed_bound_mps, "%g") + " m/s (--speed-bound),"
+             : "")
+     << " are left out), fastest first:";
   for (std::size_t k = 0; k < front.size(); ++k)
     md << (k ? ", " : " ") << "`" << points[front[k]].setting << "`";
   md << ".\n\n" << (plot_note.empty() ? "![wall time against the error](pareto.png)\n" : plot_note + "\n");

@@ -20,6 +20,10 @@ struct SweepOptions {
   int jobs = 1;                        ///< runs side by side, >= 1
   int threads = 0;                     ///< threads per run; 0: thread_count() shared among the jobs
   double timeout_s = 0;  ///< a run's wall time limit (unit: s), after which it is killed; 0: none
+  /// The scene's speed bound (unit: m/s), >= 0; 0: none. A run whose fastest particle or cloth node went
+  /// faster (summary.json's max_speed_mps) ended "ok" yet threw water no flow of the scene makes: it is drawn
+  /// apart and never on the Pareto front, as a run that leaked or stopped (issue 42). Its row is unchanged.
+  double speed_bound_mps = 0;
   /// The column the Pareto plot uses: of sweep_columns(), or with a reference of reference_columns(); empty:
   /// `cloth_rms_m` with a reference that has a cloth, `front_m` with one without, else `density_error_mean`.
   std::string error_key;

@@ -76,6 +76,35 @@ TEST(SweepCommand, ARunPastTheTimeoutIsStoppedAndIsARow) {
   EXPECT_NE(rows[1].at("status").find("timed out"), std::string::npos) << rows[1].at("status");
 }
 
+// A run that ends "ok" yet goes faster than the scene's speed bound (--speed-bound) is drawn apart and kept
+// off the Pareto front, its row unchanged (issue 42). The dam break made coarse (10 cm particles, 0.3 s):
+// under the scene's gravity its fastest particle reaches 7.3 m/s, under 1 m/s^2 0.70 m/s (measured); the
+// bound, 3 m/s, lies between them by a factor of two and more either way.
+TEST(SweepCommand, ARunFasterThanTheSpeedBoundIsOffTheFront) {
+  const drench::test::TempDir dir;
+  const std::string dam = std::string(DRENCH_SOURCE_DIR) + "/demos/scenes/dam_break.json" +
+                          " --set fluid.particle_spacing=0.1 --set time.duration=0.3 --set time.frame_rate=0";
+  const fs::path out = dir.path() / "sweep";
+  ASSERT_EQ(drench::test::run_drench("sweep " + dam + " --one-at-a-time --vary 'gravity=[0,-1,0]'" +
+                                         " --speed-bound 3 --threads 1 --out " + out.string(),
+                                     dir.path() / "log.txt"),
+            0)
+      << "a run too fast still ends ok\n"
+      << drench::test::read_text(dir.path() / "log.txt");
+  const auto rows = drench::test::read_csv_rows(out / "sweep.csv");
+  ASSERT_EQ(rows.size(), 2u);
+  EXPECT_EQ(rows[0].at("status"), "ok");
+  EXPECT_GT(std::stod(rows[0].at("max_particle_speed_mps")), 3.0) << "the scene's gravity";
+  EXPECT_LT(std::stod(rows[1].at("max_particle_speed_mps")), 3.0) << "1 m/s^2";
+  const std::string front = drench::test::read_text(out / "pareto_front.dat");
+  const std::string apart = drench::test::read_text(out / "pareto_apart.dat");
+  EXPECT_EQ(front.find("scene"), std::string::npos) << front;
+  EXPECT_NE(apart.find("scene (faster than 3 m/s)"), std::string::npos) << apart;
+  EXPECT_NE(front.find("gravity"), std::string::npos) << front;
+  const std::string report = drench::test::read_text(out / "report.md");
+  EXPECT_NE(report.find("ok, faster than 3 m/s"), std::string::npos) << report;
+}
+
 TEST(SweepCommand, ABadSettingFailsBeforeAnyRunAndWritesNothing) {
   const drench::test::TempDir dir;
   const fs::path out = dir.path() / "sweep";
