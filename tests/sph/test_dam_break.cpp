@@ -55,7 +55,7 @@ TEST(DamBreakDfsph, StaysFiniteInsideTheBoxConservesParticlesAndLosesEnergy) {
 // until they diverge (measured: 100 iterations, then water at 81 m/s within 0.05 s). Halving and redoing such
 // a sub-step (fluid.substep_halvings, Ihmsen et al. 2010's shock handling) keeps every particle below the
 // speed of a free fall from the column's top, sqrt(2 g H), and the energy from rising.
-TEST(NarrowDamBreakPcisph, RedoesFailedSolvesAtHalfTheSubstepAndStaysBelowTheFreeFallSpeed) {
+TEST(NarrowDamBreakPcisph, RedoesDivergedSolvesAtHalfTheSubstepAndStaysBelowTheFreeFallSpeed) {
   for (const int halvings : {4, 0}) {
     const SceneConfig config = testing::demo_scene(
         "dam_break.json", {"fluid.particle_spacing=0.0125", "fluid.pressure_solver=pcisph",

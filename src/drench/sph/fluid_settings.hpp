@@ -188,13 +188,15 @@ struct FluidSettings {
   /// Far above any flow of water, so only a blow-up reaches it, which would otherwise crawl: the CFL limit
   /// cuts each step for that one particle.
   std::optional<Scalar> max_speed = 1000.0;
-  /// How many times a sub-step whose pressure solve did not converge is halved and redone from its start,
-  /// >= 0 (PCISPH and DFSPH; PBF's iterations are fixed). The shortened sub-step stays for the following
-  /// steps and grows back by 1.25x per step whose solves converged, as the adaptive time step of Ihmsen et
-  /// al. 2010 ("Boundary handling and adaptive time-stepping for PCISPH", their shock handling) restores a
-  /// state and retries. A solve that still fails at dt / 2^substep_halvings is kept with
-  /// PRESSURE_NOT_CONVERGED. 0 keeps every solve. A narrow dam break's corner threw PCISPH's water at 46 m/s
-  /// without it (FluidSolver/SubstepHalving tests).
+  /// How many times a sub-step whose pressure solve diverged (PressureStats::diverged: it ended above eta
+  /// with a larger error than before its first iteration) is halved and redone from its start, >= 0 (PCISPH
+  /// and DFSPH; PBF's iterations are fixed). The shortened sub-step stays for the following steps and grows
+  /// back by 1.25x per step without a redo, as the adaptive time step of Ihmsen et al. 2010 ("Boundary
+  /// handling and adaptive time-stepping for PCISPH", their shock handling) restores a state and retries. A
+  /// solve that only stalls above eta is kept (a shorter sub-step would relieve an old compression faster:
+  /// the CaughtParticle test), as is one that diverges at dt / 2^substep_halvings, with
+  /// PRESSURE_NOT_CONVERGED. 0 keeps every solve. A narrow dam break's corners threw PCISPH's water at
+  /// 81 m/s without it (the NarrowDamBreakPcisph test).
   int substep_halvings = 4;
   /// Fluid sub-steps between re-sorting particles along a z-order curve for cache locality, >= 1.
   int sort_interval = 10;

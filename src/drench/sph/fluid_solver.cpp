@@ -246,9 +246,9 @@ StepStatus FluidSolver::step(Scalar dt, SubstepConstraint* constraint) {
   if (m_particles.empty()) return status;
   Scalar remaining = dt;
   int count = 0;
-  // No sub-step is halved below this; a solve that fails there is kept with PRESSURE_NOT_CONVERGED.
+  // No sub-step is halved below this; a solve that diverges there is kept with PRESSURE_NOT_CONVERGED.
   const Scalar shortest = std::ldexp(dt, -m_settings.substep_halvings) * (1.0 + 1e-9);
-  bool converged = true;
+  bool redone = false;
   while (true) {
     const Scalar speed = max_speed();
     // An infinite speed is left to the non-finite check, which names it as such.
@@ -281,7 +281,7 @@ StepStatus FluidSolver::step(Scalar dt, SubstepConstraint* constraint) {
     status |= substep(sub, speed, constraint, may_redo, redo);
     if (redo) {
       m_substep_cap = 0.5 * sub;
-      converged = false;
+      redone = true;
       ++m_stats.substeps_halved;
       continue;
     }
@@ -291,7 +291,7 @@ StepStatus FluidSolver::step(Scalar dt, SubstepConstraint* constraint) {
   }
   // Back toward the CFL limit, a little per step, so that a passing hard moment does not slow the rest of the
   // run, and a lasting one costs a redone solve only now and then.
-  if (converged && std::isfinite(m_substep_cap)) {
+  if (!redone && std::isfinite(m_substep_cap)) {
     m_substep_cap *= 1.25;
     if (m_substep_cap >= dt) m_substep_cap = std::numeric_limits<Scalar>::infinity();
   }
@@ -352,7 +352,7 @@ StepStatus FluidSolver::substep(Scalar dt, Scalar max_speed, SubstepConstraint* 
     ScopedTimer timer(m_stats.timings_s.pressure);
     pressure = m_pressure->solve(ctx, m_velocities_adv, dt, m_pressure_accelerations);
   }
-  if (may_redo && (!pressure.converged || !divergence.converged)) {
+  if (may_redo && pressure.diverged) {
     // Its iterations were spent and count; its errors are those of a state that is thrown away.
     m_stats.pressure_iterations += pressure.iterations;
     m_stats.max_pressure_iterations = std::max(m_stats.max_pressure_iterations, pressure.iterations);

@@ -80,7 +80,7 @@ struct FluidStatistics {
   std::int64_t steps = 0;
   std::int64_t substeps = 0;
   int max_substeps_per_step = 0;
-  /// Sub-steps redone at half their length after a pressure solve that did not converge
+  /// Sub-steps redone at half their length after a pressure solve that diverged
   /// (FluidSettings::substep_halvings). Their pressure iterations count in pressure_iterations; they are not
   /// in `substeps` nor in the density errors.
   std::int64_t substeps_halved = 0;
@@ -143,7 +143,7 @@ class FluidSolver {
   Scalar particle_mass() const;
 
   /// Advances the fluid by dt (unit: s, > 0), in as many equal-ish sub-steps as the CFL limit asks, or
-  /// shorter after a pressure solve that did not converge (FluidSettings::substep_halvings; PBF: in
+  /// shorter after a pressure solve that diverged (FluidSettings::substep_halvings; PBF: in
   /// settings().pbf.substeps equal ones). Stops before a sub-step with RUNAWAY_PARTICLE when a particle is
   /// faster than settings().max_speed.
   /// @param constraint  optional, applied after every sub-step (must outlive the call)
@@ -177,8 +177,8 @@ class FluidSolver {
   /// @param max_displacement  how far the fastest particle may move in the coming sub-step (unit: m): decides
   ///        the skin of a new grid search
   void update_neighbors(Scalar max_displacement);
-  /// One sub-step. With `may_redo`, a pressure solve that did not converge leaves the state as the
-  /// sub-step found it (but for the neighbor lists, the densities and the pressures) and sets `redo`.
+  /// One sub-step. With `may_redo`, a pressure solve that diverged (PressureStats::diverged) leaves the state
+  /// as the sub-step found it (but for the neighbor lists, the densities and the pressures) and sets `redo`.
   StepStatus substep(Scalar dt, Scalar max_speed, SubstepConstraint* constraint, bool may_redo, bool& redo);
   /// PBF's sub-step (Macklin & Mueller 2013, Algorithm 1): predicts positions with gravity, searches
   /// neighbors there, projects them (PressurePbf::project), takes v = (x* - x) / dt, then the viscosity
@@ -228,7 +228,7 @@ class FluidSolver {
   Vec3Array m_velocities_adv;
   Vec3Array m_pressure_accelerations;
   Vec3Array m_velocities_start;  // a sub-step's start velocities, kept while it may be redone (DFSPH)
-  /// The longest sub-step since a pressure solve failed to converge at twice it (unit: s); infinite when none
+  /// The longest sub-step since a pressure solve diverged at twice it (unit: s); infinite when none
   Scalar m_substep_cap = std::numeric_limits<Scalar>::infinity();
   FluidStatistics m_stats;
 };

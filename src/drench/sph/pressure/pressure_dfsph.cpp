@@ -339,6 +339,7 @@ PressureStats PressureDfsph::solve(const FluidContext& ctx, const Vec3Array& vel
   const Scalar rho0 = ctx.rest_density;
   const Scalar scale = 1.0 / (static_cast<Scalar>(n) * rho0);
   ChunkErrors errors = measure(ctx, dt, Measure::FIRST_DENSITY);
+  const Scalar first_error = errors.sum_to_target;
   if (m_settings.warm_start && apply_warm_start(m_warm, 0.5, m_kappa)) {
     update_velocities(ctx, dt, &accelerations, nullptr);
     errors = measure(ctx, dt, Measure::DENSITY);
@@ -350,6 +351,7 @@ PressureStats PressureDfsph::solve(const FluidContext& ctx, const Vec3Array& vel
     if ((below && stats.iterations >= m_settings.min_iterations) ||
         stats.iterations >= m_settings.max_iterations) {
       stats.converged = below;
+      stats.diverged = !below && errors.sum_to_target > first_error;
       break;
     }
     update_velocities(ctx, dt, &accelerations, &m_kappa);

@@ -88,6 +88,7 @@ PressureStats PressurePcisph::solve(const FluidContext& ctx, const Vec3Array& ve
   for_each_chunk(n, predict);
   const std::size_t chunks = (n + kParticleChunk - 1) / kParticleChunk;
   m_chunk_errors.resize(chunks);
+  Scalar first_error = 0.0;
   while (true) {
     const int iteration = stats.iterations;
     for_each_chunk(n, [&](std::size_t begin, std::size_t end) {
@@ -143,11 +144,13 @@ PressureStats PressurePcisph::solve(const FluidContext& ctx, const Vec3Array& ve
     stats.max_density_error = total.max / rho0;
     // The convergence test measures the error against each particle's target density (the rest density
     // unless max_relief_per_substep is set); the reported errors are against the rest density.
-    const bool below =
-        (m_settings.max_relief_per_substep ? total.sum_to_target : total.sum) * scale <= m_settings.eta;
+    const Scalar error = (m_settings.max_relief_per_substep ? total.sum_to_target : total.sum) * scale;
+    if (iteration == 0) first_error = error;
+    const bool below = error <= m_settings.eta;
     if ((below && stats.iterations >= m_settings.min_iterations) ||
         stats.iterations >= m_settings.max_iterations) {
       stats.converged = below;
+      stats.diverged = !below && error > first_error;
       break;
     }
   }

@@ -15,6 +15,9 @@ struct PressureStats {
   Scalar average_density_error = 0;  ///< mean over particles of max(rho - rho0, 0) / rho0 after the solve
   Scalar max_density_error = 0;      ///< largest max(rho - rho0, 0) / rho0 of any particle after the solve
   bool converged = true;             ///< false when the solve stopped at its max_iterations above eta
+  /// True when it stopped at its max_iterations with a larger error (against its targets) than its first
+  /// prediction's, before any pressure: the iterations made the state worse than none would have.
+  bool diverged = false;
 };
 
 /// What one divergence solve (PressureSolver::correct_divergence) reports.
