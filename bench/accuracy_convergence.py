@@ -24,7 +24,8 @@ position-based cloth). Writes accuracy_convergence.csv (one row per run, and one
 "reference", so that the wall times of the whole set can be summed) and, with gnuplot,
 accuracy_convergence.png, with `# key: value` notes (CPU, commit, load, the commands) above the header. Each
 invocation is a part (`--part`, default the --only case or "all"): its notes are prefixed with the part's
-name, and an existing CSV keeps the rows of the cases this invocation did not run and the other parts' notes.
+name, and an existing CSV keeps the rows of the cases this invocation did not run and the other parts' notes
+(but their orders and commands of the cases it ran again).
 """
 
 import argparse
@@ -185,8 +186,15 @@ def main():
         existing = out / "accuracy_convergence.csv"
         if existing.exists():
             lines = existing.read_text().splitlines()
-            kept_notes = [line for line in lines if line.startswith("# ") and not line.startswith(f"# {part} ")]
             ran = {r["case"] for r in rows}
+
+            def stale(line):
+                """Another part's note on a case this invocation ran again: its order or its commands."""
+                return any(f" order {c} " in line or f"/{c}_reference" in line or f"/{c}_sweep " in line
+                           or line.endswith(f"/{c}_sweep") for c in ran)
+
+            kept_notes = [line for line in lines if line.startswith("# ") and not line.startswith(f"# {part} ")
+                          and not stale(line)]
             kept_rows = [r for r in csv.DictReader(line for line in lines if not line.startswith("#"))
                          if r["case"] not in ran]
         rows = kept_rows + rows

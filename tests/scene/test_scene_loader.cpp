@@ -364,8 +364,11 @@ TEST(SceneLoader, ReadsPbfWithItsSettingsAndDefaults) {
   EXPECT_EQ(d.scorr_n, 4);
   EXPECT_DOUBLE_EQ(d.scorr_dq, 0.2);
   EXPECT_EQ(d.max_compression_per_iteration, 0.05);
+  EXPECT_EQ(d.scorr_substep, 1.0 / 240.0);
   EXPECT_FALSE(parse(R"({"fluid": {"pbf": {"max_compression_per_iteration": null}}})")
                    .fluid.pbf.max_compression_per_iteration);
+  EXPECT_FALSE(parse(R"({"fluid": {"pbf": {"scorr_substep": null}}})").fluid.pbf.scorr_substep);
+  EXPECT_EQ(parse(R"({"fluid": {"pbf": {"scorr_substep": 0.001}}})").fluid.pbf.scorr_substep, 0.001);
   const SceneConfig c = parse(R"({"fluid": {"pressure_solver": "pbf", "pbf": {"substeps": 2, "iterations": 6,
       "relaxation": 0.5, "scorr_k": 0, "scorr_n": 2, "scorr_dq": 0.3}}})");
   EXPECT_EQ(c.fluid.pressure_solver, PressureSolverKind::PBF);
@@ -387,9 +390,12 @@ TEST(SceneLoader, RejectsBadPbfSettingsNamingTheKey) {
                           "fluid.pbf.scorr_dq must be in (0, 1), got 1 (x.json)"));
   EXPECT_TRUE(scene_error(R"({"fluid": {"pbf": {"sub_steps": 2}}})",
                           "fluid.pbf.sub_steps is not a known key (x.json); known: substeps, iterations, "
-                          "relaxation, scorr_k, scorr_n, scorr_dq, max_compression_per_iteration"));
+                          "relaxation, scorr_k, scorr_n, scorr_dq, max_compression_per_iteration, "
+                          "scorr_substep"));
   EXPECT_TRUE(scene_error(R"({"fluid": {"pbf": {"max_compression_per_iteration": 0}}})",
                           "fluid.pbf.max_compression_per_iteration must be > 0, got 0 (x.json)"));
+  EXPECT_TRUE(scene_error(R"({"fluid": {"pbf": {"scorr_substep": -0.004}}})",
+                          "fluid.pbf.scorr_substep must be > 0, got -0.004 (x.json)"));
 }
 
 TEST(SceneLoader, RejectsBadDfsphSettingsNamingTheKey) {

@@ -60,7 +60,7 @@ FluidSettings read_fluid(const Node& node) {
                       fluid.dfsph.max_iterations);
 
   const ObjectReader pbf(r["pbf"], {"substeps", "iterations", "relaxation", "scorr_k", "scorr_n", "scorr_dq",
-                                    "max_compression_per_iteration"});
+                                    "max_compression_per_iteration", "scorr_substep"});
   pbf.read("substeps", fluid.pbf.substeps, kAtLeastOne);
   pbf.read("iterations", fluid.pbf.iterations, kAtLeastOne);
   pbf.read("relaxation", fluid.pbf.relaxation, kNonNegative);
@@ -74,7 +74,8 @@ FluidSettings read_fluid(const Node& node) {
         std::tuple{&pcisph, "max_compression_per_iteration", &fluid.pcisph.max_compression_per_iteration},
         std::tuple{&pcisph, "max_relief_per_substep", &fluid.pcisph.max_relief_per_substep},
         std::tuple{&dfsph, "max_relief_per_substep", &fluid.dfsph.max_relief_per_substep},
-        std::tuple{&pbf, "max_compression_per_iteration", &fluid.pbf.max_compression_per_iteration}}) {
+        std::tuple{&pbf, "max_compression_per_iteration", &fluid.pbf.max_compression_per_iteration},
+        std::tuple{&pbf, "scorr_substep", &fluid.pbf.scorr_substep}}) {
     if (const Node c = (*reader)[key]; c.present()) {
       if (c.value().is_null()) {
         limit->reset();

@@ -124,6 +124,13 @@ PressureStats PressurePbf::project(const FluidContext& ctx, Scalar dt) {
   m_chunk_errors.resize((n + kParticleChunk - 1) / kParticleChunk);
   PressureStats stats;
   if (n == 0) return stats;
+  // The artificial pressure as the force it stands for (PbfSettings::scorr_substep): below the sub-step its
+  // k holds at, its move shrinks as dt^2, so that it gives the same acceleration at every sub-step.
+  Scalar scorr_scale = m_scorr_scale;
+  if (m_settings.scorr_substep && dt < *m_settings.scorr_substep) {
+    const Scalar ratio = dt / *m_settings.scorr_substep;
+    scorr_scale *= ratio * ratio;
+  }
   // The denominator of lambda (eq. 11, the constraint's gradients of eq. 8; boundary points have zero
   // inverse mass, so they enter only the particle's own gradient) at each iteration's positions, as the
   // densities and the moves: kept from the prediction, a particle whose gradients cancelled there (caught in
@@ -137,7 +144,7 @@ PressureStats PressurePbf::project(const FluidContext& ctx, Scalar dt) {
     }
   });
   for_each_chunk(n, [&](std::size_t begin, std::size_t end) {
-    pbf_gradients(ctx, m_points, inv_rho0, m_scorr_scale, m_inv_w_dq, m_settings.scorr_n, begin, end,
+    pbf_gradients(ctx, m_points, inv_rho0, scorr_scale, m_inv_w_dq, m_settings.scorr_n, begin, end,
                   &m_denominator[begin], &m_scorr_moves[begin]);
     for (std::size_t i = begin; i < end; ++i)
       m_denominator[i] = std::max(m_denominator[i] + m_epsilon, m_min_denominator);

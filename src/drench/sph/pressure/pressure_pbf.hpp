@@ -20,7 +20,8 @@ class PressurePbf final : public PressureSolver {
   /// Moves ctx.particles.positions, the predicted positions x* (unit: m), by settings.pbf.iterations Jacobi
   /// iterations; ctx.particles.densities end as the densities of the last iteration's positions before its
   /// move (unit: kg/m^3), and the stats report their error, as PCISPH's.
-  /// @param dt  the sub-step (unit: s), > 0: only scales boundary_pressure_factors
+  /// @param dt  the sub-step (unit: s), > 0: scales boundary_pressure_factors, and the artificial pressure's
+  ///        move below PbfSettings::scorr_substep
   /// Preconditions: ctx's neighbor lists were searched at the predicted positions.
   PressureStats project(const FluidContext& ctx, Scalar dt);
 
