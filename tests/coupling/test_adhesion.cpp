@@ -175,8 +175,8 @@ Resting rest(Scalar work) {
 // Young-Dupre: the work of adhesion W = sigma (1 + cos theta) sets the contact angle theta. On cotton (W =
 // 2 sigma = 0.144 N/m, theta 0) water spreads; on a water-repellent fabric (W = 0.05 N/m, theta 108
 // degrees) it beads, its cap base 1.06 R0 wide; without adhesion (theta 180) it is a ball on a point.
-// Measured (the margins below leave about a third of each measured gap): cotton 48 degrees (the film
-// cannot thin below about two particle layers, which caps its spread), contact radius 1.35 R0, 82% of the
+// Measured (the margins below leave about a third of each measured gap): cotton 48 degrees (a film a few
+// particles thick, thinner than which particles cannot spread), contact radius 1.35 R0, 82% of the
 // water within 1.5 spacings of the plate; water-repellent 118 degrees, 0.93 R0, 34%; none 150 degrees,
 // 0.68 R0, 16%. A droplet wets (theta < 90 degrees) the cotton plate and not the water-repellent one, whose
 // contact radius cotton's exceeds by 1.3 times (measured 1.46), with twice the water touching (2.4 times).
