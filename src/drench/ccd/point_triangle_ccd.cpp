@@ -227,6 +227,34 @@ Bernstein<4> coplanarity(const VertexFaceQuery& q, std::array<V3, 3>& n) {
   return dot(n, difference(q.a_t0, q.a_t1, q.p_t0, q.p_t1));
 }
 
+/// True when the point is certainly outside the triangle at every time of the step, beyond one of its edges:
+/// for a fixed direction d (an edge's outward normal in the triangle's plane at t0 or at t1), d . (p - v) > 0
+/// for every vertex v at both ends. Each d . (p(t) - v(t)) is linear in t, so its ends decide it on [0, 1]:
+/// the point is then beyond the whole triangle along d at every time, and cannot touch it. Any d serves (it
+/// need not be the exact normal), so only the dot products and the differences in them round, by at most
+/// 4 u of their terms' magnitude, covered twice. A particle crossing the plane of a face beside it (a curved
+/// cloth, a faceted ball) is decided here, before the quartic inside tests, which were most of the filter's
+/// time in issue 41's game frame. The leak audit has its own copy on purpose (coupling/leak_audit.cpp).
+bool certainly_beside(const VertexFaceQuery& q) {
+  const Vec3* ends[2][4] = {{&q.p_t0, &q.a_t0, &q.b_t0, &q.c_t0}, {&q.p_t1, &q.a_t1, &q.b_t1, &q.c_t1}};
+  for (const auto& frame : ends) {
+    const Vec3 normal = (*frame[2] - *frame[1]).cross(*frame[3] - *frame[1]);
+    for (int e = 0; e < 3; ++e) {
+      const Vec3 d = (*frame[1 + (e + 1) % 3] - *frame[1 + e]).cross(normal);  // away from the third vertex
+      bool beside = true;
+      for (int end = 0; end < 2 && beside; ++end) {
+        for (int v = 1; v <= 3 && beside; ++v) {
+          const Vec3 diff = *ends[end][0] - *ends[end][v];
+          const double margin = 8.0 * kUnitRoundoff * d.cwiseAbs().dot(diff.cwiseAbs()) + kTiny;
+          beside = d.dot(diff) > margin;
+        }
+      }
+      if (beside) return true;
+    }
+  }
+  return false;
+}
+
 /// The inside tests on [0, 1], given the normal's coefficients.
 std::array<Bernstein<5>, 3> inside_tests(const VertexFaceQuery& q, const std::array<V3, 3>& n) {
   const auto pa = difference(q.p_t0, q.p_t1, q.a_t0, q.a_t1);
@@ -414,6 +442,7 @@ CcdResult point_triangle_ccd(const VertexFaceQuery& query, const CcdSettings& se
   root.f = coplanarity(query, normal);
   if (!all_finite(root.f)) return exact_from(query, 0.0, settings);  // overflow: only exact arithmetic helps
   if (certainly_positive(root.f) || certainly_negative(root.f)) return CcdResult{};  // never coplanar
+  if (certainly_beside(query)) return CcdResult{};  // never inside: no need of the inside tests
   root.g = inside_tests(query, normal);
   for (const auto& g : root.g) {
     if (!all_finite(g)) return exact_from(query, 0.0, settings);
