@@ -5,7 +5,8 @@
 // spinning from before the warm-up to the end of the run, as a game's or a renderer's threads would).
 //
 //   build-bench/bench/bench_game_frame [--frames 600] [--warmup 60] [--solvers dfsph,pcisph,pbf] [--busy N]
-//       [--benchmark_filter=...] --benchmark_out=game_frame.json --benchmark_out_format=json
+//       [--broad-phase grid|fcl] [--benchmark_filter=...] --benchmark_out=game_frame.json
+//       --benchmark_out_format=json
 // bench/game_frame.py runs it and writes bench/results/<machine>/game_frame.csv.
 //
 // One benchmark iteration is one frame (Iterations(frames), UseManualTime with the frame's wall time): the
@@ -24,6 +25,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <optional>
 #include <string>
 #include <thread>
 #include <vector>
@@ -47,6 +49,8 @@ struct Options {
   long frames = 600;  // timed frames per benchmark
   long warmup = 60;   // frames stepped before them, untimed
   int busy = 0;       // spinning threads of the busy condition; 0: one per CPU
+  // The coupling's broad phase; none: the level's own (coupling.broad_phase of playground::scene).
+  std::optional<drench::BroadPhaseKind> broad_phase;
   std::vector<drench::PressureSolverKind> solvers = {
       drench::PressureSolverKind::DFSPH, drench::PressureSolverKind::PCISPH, drench::PressureSolverKind::PBF};
 };
@@ -93,12 +97,13 @@ double quantile(std::vector<double> values, double q) {
 /// (unit: m/s); particles at the end and at most; the fluid's CFL sub-steps per frame and mean density error
 /// over the timed frames; the time of a blow-up (0: none), after which nothing more is stepped.
 void game_frame(benchmark::State& state, const std::string& name, drench::PressureSolverKind solver,
-                int threads, int busy, long warmup) {
+                int threads, int busy, long warmup, std::optional<drench::BroadPhaseKind> broad_phase) {
   drench::set_thread_count(threads);
   const auto frames = static_cast<long>(state.max_iterations);
   playground::World game;
-  const drench::SceneConfig scene =
+  drench::SceneConfig scene =
       playground::scene(static_cast<double>(warmup + frames) * playground::kDt, solver);
+  if (broad_phase) scene.coupling.broad_phase = *broad_phase;
   drench::bullet::CoupledWorld coupled(game.world, game.cloths(), scene);
   const BusyThreads spinning(busy);
 
@@ -201,6 +206,15 @@ Options parse(int argc, char** argv) {
       options.warmup = count_option(argv[0], "--warmup", value, 0);
     } else if (flag == "--busy") {
       options.busy = static_cast<int>(count_option(argv[0], "--busy", value, 1));
+    } else if (flag == "--broad-phase") {
+      const std::string name = value;
+      if (name == "grid") {
+        options.broad_phase = drench::BroadPhaseKind::GRID;
+      } else if (name == "fcl") {
+        options.broad_phase = drench::BroadPhaseKind::FCL;
+      } else {
+        usage(argv[0], "--broad-phase: unknown broad phase '" + name + "' (known: grid, fcl)");
+      }
     } else if (flag == "--solvers") {
       options.solvers.clear();
       std::string list = value;
@@ -237,7 +251,8 @@ int main(int argc, char** argv) {
         const std::string name = std::string("game_frame/") + drench::pressure_solver_name(solver) +
                                  "/threads:" + std::to_string(threads) +
                                  (busy == 0 ? "/alone" : "/busy:" + std::to_string(busy));
-        benchmark::RegisterBenchmark(name.c_str(), game_frame, name, solver, threads, busy, options.warmup)
+        benchmark::RegisterBenchmark(name.c_str(), game_frame, name, solver, threads, busy, options.warmup,
+                                     options.broad_phase)
             ->Iterations(options.frames)
             ->UseManualTime()
             ->Unit(benchmark::kMillisecond);

@@ -207,10 +207,6 @@ inline drench::SceneConfig scene(
   stage.max = drench::Vec3(1.6, 2.0, 1.2);
   s.kill_regions.push_back(stage);
   s.coupling.cloth_thickness = 0.002;  // the paper's h (unit: m)
-  // Most of the level's triangles (the ground's square, the table) never move, and the grid keeps their bins
-  // across steps: bench_game_frame's PBF frame took 0.76x the CPU time of FCL's per-particle tree queries
-  // (issue 41). Both give the same pairs, so the results are the same.
-  s.coupling.broad_phase = drench::BroadPhaseKind::GRID;
   // Each node holds water up to this share of its Bullet mass: a tenth for the heavy, proofed canvas (the
   // hammock then takes up to 0.3 kg), and the light curtain saturates and drips.
   s.wetting.max_saturation = 0.1;

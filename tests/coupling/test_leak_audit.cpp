@@ -2,6 +2,9 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <limits>
+
 #include <drench/coupling/leak_audit.hpp>
 #include "coupling_fixtures.hpp"
 
@@ -154,6 +157,47 @@ TEST(LeakAudit, DecidesACrossingBesideTheTriangleWithoutTheExactReference) {
     EXPECT_EQ(audit_leaks(Vec3Array{Vec3(0.3, 0.05, 0.3)}, Vec3Array{Vec3(0.3, -0.05, 0.25)}, mesh, through),
               1u)
         << "tilt " << tilt;
+  }
+}
+
+// A LeakAudit kept over the steps of a run files again only the faces that moved: over steps where a cloth
+// waves above a still floor of larger faces, then shrinks to a tenth (a new cell size), then has a NaN node,
+// it flags exactly the particles a fresh audit flags, with the same pair counts.
+TEST(LeakAudit, KeptOverStepsFlagsWhatAFreshAuditFlags) {
+  ClothMesh mesh = grid_mesh(9, 0.4, 0.05, 1.0);                    // 128 moving faces of 5 cm
+  const ClothMesh floor = grid_mesh(5, 1.0, 0.0, 0.0, -0.3, -0.3);  // 32 still faces of 25 cm
+  const auto cloth_nodes = static_cast<Index>(mesh.node_count());
+  for (std::size_t v = 0; v < floor.node_count(); ++v) {
+    mesh.positions_t0.push_back(floor.positions_t0[v]);
+    mesh.positions_t1.push_back(floor.positions_t0[v]);
+    mesh.inverse_masses.push_back(0.0);
+  }
+  for (const Triangle& t : floor.triangles)
+    mesh.triangles.push_back({t[0] + cloth_nodes, t[1] + cloth_nodes, t[2] + cloth_nodes});
+  const ClothMesh rest = mesh;
+  LeakAudit kept;
+  for (int step = 0; step < 8; ++step) {
+    for (Index v = 0; v < cloth_nodes; ++v) {
+      const Vec3& x = rest.positions_t0[v];
+      const double scale = step >= 5 ? 0.1 : 1.0;
+      mesh.positions_t0[v] = scale * x + Vec3(0, 0.01 * std::sin(7.0 * x.x() + step), 0);
+      mesh.positions_t1[v] = scale * x + Vec3(0, 0.01 * std::sin(7.0 * x.x() + step + 1), 0);
+    }
+    if (step == 7) mesh.positions_t1[3].y() = std::numeric_limits<double>::quiet_NaN();
+    Vec3Array x0, x1;
+    for (int i = 0; i < 200; ++i) {
+      const double x = -0.2 + 0.004 * i, z = 0.03 + 0.0017 * i;
+      const double y = i % 2 ? 0.05 : 0.0;  // about the cloth, or about the floor
+      x0.emplace_back(x, y + 0.02, z);
+      x1.emplace_back(x, y + (i % 3 == 0 ? -0.02 : 0.015), z);  // every third goes through the plane
+    }
+    LeakAuditStats fresh_stats, kept_stats;
+    std::vector<std::uint8_t> fresh_flags, kept_flags;
+    const std::uint64_t fresh = audit_leaks(x0, x1, mesh, fresh_stats, &fresh_flags);
+    EXPECT_EQ(kept.audit(x0, x1, mesh, kept_stats, &kept_flags), fresh) << "step " << step;
+    EXPECT_GT(fresh, 0u) << "step " << step;
+    EXPECT_EQ(kept_flags, fresh_flags) << "step " << step;
+    EXPECT_EQ(kept_stats.pairs, fresh_stats.pairs) << "step " << step;
   }
 }
 

@@ -227,6 +227,90 @@ Bernstein<4> coplanarity(const VertexFaceQuery& q, std::array<V3, 3>& n) {
   return dot(n, difference(q.a_t0, q.a_t1, q.p_t0, q.p_t1));
 }
 
+/// det[u; v; w] in plain floating point and a bound on its rounding error: u, v, w are differences of input
+/// doubles (one rounding each, relative u) and each of the six terms adds at most 5 more roundings, their sum
+/// 3: |error| <= 16 u sum |terms| covers it with a margin (Shewchuk 1997's orient3d bound is 7.8 u for exact
+/// inputs), and the absolute term any underflow.
+struct PlainDet {
+  double value;
+  double error;
+};
+
+PlainDet plain_det3(const Vec3& u, const Vec3& v, const Vec3& w) {
+  const double t[6] = {u.x() * v.y() * w.z(), u.y() * v.z() * w.x(), u.z() * v.x() * w.y(),
+                       u.z() * v.y() * w.x(), u.x() * v.z() * w.y(), u.y() * v.x() * w.z()};
+  const double value = ((t[0] + t[1]) + t[2]) - ((t[3] + t[4]) + t[5]);
+  double magnitude = 0.0;
+  for (const double x : t)
+    magnitude += std::abs(x);
+  return {value, 16.0 * kUnitRoundoff * magnitude + kTiny};
+}
+
+/// True when eq. 6, f(t) = det[b - a, c - a, p - a](t), certainly keeps one sign on [0, 1], decided in plain
+/// floating point with a certified bound before the filter's running error analysis: its Bernstein
+/// coefficients (from the blossom of the trilinear determinant; for a triangle that does not move, f is
+/// linear and its two ends decide) are all certainly of that sign. Then the point never reaches the
+/// triangle's plane: no contact. Most queries of a step end here (a particle near a face, not crossing its
+/// plane), and the filter's error-tracked cubic cost several times more (issue 41's game frame, where every
+/// fluid sub-step tests the particles against the cloth at rest, coupling/cloth_obstacle.hpp).
+bool certainly_one_signed(const VertexFaceQuery& q) {
+  const Vec3 b0 = q.b_t0 - q.a_t0, c0 = q.c_t0 - q.a_t0, p0 = q.p_t0 - q.a_t0;
+  const Vec3 b1 = q.b_t1 - q.a_t1, c1 = q.c_t1 - q.a_t1, p1 = q.p_t1 - q.a_t1;
+  const auto one_signed = [](const double* coef, const double* err, int count) {
+    bool positive = true, negative = true;
+    for (int k = 0; k < count; ++k) {
+      // The sums of determinants round too: a further 3 u of their magnitude, covered by the growth.
+      const double margin = err[k] * kGrow + 4.0 * kUnitRoundoff * std::abs(coef[k]);
+      positive = positive && coef[k] > margin;
+      negative = negative && coef[k] < -margin;
+    }
+    return positive || negative;
+  };
+  if (q.a_t0 == q.a_t1 && q.b_t0 == q.b_t1 && q.c_t0 == q.c_t1) {
+    const PlainDet d0 = plain_det3(b0, c0, p0), d1 = plain_det3(b0, c0, p1);
+    const double coef[2] = {d0.value, d1.value}, err[2] = {d0.error, d1.error};
+    return one_signed(coef, err, 2);
+  }
+  const PlainDet d[8] = {plain_det3(b0, c0, p0), plain_det3(b1, c0, p0), plain_det3(b0, c1, p0),
+                         plain_det3(b0, c0, p1), plain_det3(b0, c1, p1), plain_det3(b1, c0, p1),
+                         plain_det3(b1, c1, p0), plain_det3(b1, c1, p1)};
+  // Bernstein coefficients times 3 (the sign is what matters).
+  const double coef[4] = {3 * d[0].value, d[1].value + d[2].value + d[3].value,
+                          d[4].value + d[5].value + d[6].value, 3 * d[7].value};
+  const double err[4] = {3 * d[0].error, d[1].error + d[2].error + d[3].error,
+                         d[4].error + d[5].error + d[6].error, 3 * d[7].error};
+  return one_signed(coef, err, 4);
+}
+
+/// True when the point is certainly outside the triangle at every time of the step, beyond one of its edges:
+/// for a fixed direction d (an edge's outward normal in the triangle's plane at t0 or at t1), d . (p - v) > 0
+/// for every vertex v at both ends. Each d . (p(t) - v(t)) is linear in t, so its ends decide it on [0, 1]:
+/// the point is then beyond the whole triangle along d at every time, and cannot touch it. Any d serves (it
+/// need not be the exact normal), so only the dot products and the differences in them round, by at most
+/// 4 u of their terms' magnitude, covered twice. A particle crossing the plane of a face beside it (a curved
+/// cloth, a faceted ball) is decided here, before the error-tracked cubic and the quartic inside tests,
+/// which were most of the filter's time in issue 41's game frame. The leak audit keeps its own copies of
+/// this test and certainly_one_signed on purpose (coupling/leak_audit.cpp): it checks the coupler.
+bool certainly_beside(const VertexFaceQuery& q) {
+  const Vec3* ends[2][4] = {{&q.p_t0, &q.a_t0, &q.b_t0, &q.c_t0}, {&q.p_t1, &q.a_t1, &q.b_t1, &q.c_t1}};
+  for (const auto& frame : ends) {
+    const Vec3 normal = (*frame[2] - *frame[1]).cross(*frame[3] - *frame[1]);
+    for (int e = 0; e < 3; ++e) {
+      const Vec3 d = (*frame[1 + (e + 1) % 3] - *frame[1 + e]).cross(normal);  // away from the third vertex
+      bool beside = true;
+      for (int end = 0; end < 2 && beside; ++end) {
+        for (int v = 1; v <= 3 && beside; ++v) {
+          const Vec3 diff = *ends[end][0] - *ends[end][v];
+          const double margin = 8.0 * kUnitRoundoff * d.cwiseAbs().dot(diff.cwiseAbs()) + kTiny;
+          beside = d.dot(diff) > margin;
+        }
+      }
+      if (beside) return true;
+    }
+  }
+  return false;
+}
+
 /// The inside tests on [0, 1], given the normal's coefficients.
 std::array<Bernstein<5>, 3> inside_tests(const VertexFaceQuery& q, const std::array<V3, 3>& n) {
   const auto pa = difference(q.p_t0, q.p_t1, q.a_t0, q.a_t1);
@@ -406,6 +490,9 @@ CcdResult point_triangle_ccd(const VertexFaceQuery& query, const CcdSettings& se
       return r;
     }
   }
+
+  if (certainly_one_signed(query)) return CcdResult{};  // never coplanar
+  if (certainly_beside(query)) return CcdResult{};      // never inside the triangle
 
   Span root;
   root.t_lo = 0.0;

@@ -11,9 +11,7 @@
 namespace drench {
 namespace {
 
-struct Bounds {
-  Vec3 lo, hi;
-};
+using leak_audit_detail::Bounds;
 
 Bounds bounds_of(std::initializer_list<const Vec3*> points) {
   Bounds b{**points.begin(), **points.begin()};
@@ -97,69 +95,111 @@ bool certainly_beside(const Vec3* x0, const Vec3* x1) {
   return false;
 }
 
+/// The grid's key of a cell (integer coordinates as doubles).
+std::uint64_t cell_key(const Eigen::Array3d& c) {
+  return static_cast<std::uint64_t>(
+      (static_cast<std::int64_t>(c[0]) * 1000003LL + static_cast<std::int64_t>(c[1])) * 1000033LL +
+      static_cast<std::int64_t>(c[2]));
+}
+
 }  // namespace
 
 std::uint64_t audit_leaks(const Vec3Array& particles_t0, const Vec3Array& particles_t1,
                           const ClothMesh& cloth, LeakAuditStats& stats, std::vector<std::uint8_t>* leaked) {
-  const auto start = std::chrono::steady_clock::now();
-  const std::size_t n = particles_t0.size();
-  if (leaked) leaked->assign(n, 0);
-  std::uint64_t count = 0;
-  if (n == 0 || cloth.triangles.empty()) return 0;
+  LeakAudit audit;
+  return audit.audit(particles_t0, particles_t1, cloth, stats, leaked);
+}
 
+void LeakAudit::update_grid(const ClothMesh& cloth) {
   // Triangles filed in every cell their box meets, cells the median triangle's size: one large face (a
   // table's top beside a cloth's small ones) then does not make every cell large, which made every particle
-  // near a body test all its faces (test RigidBodies.ABallOfTwiceTheWatersDensitySinks). A pair is examined
-  // only in the cell of its boxes' overlap's lower corner, so once. A triangle over 4,096 cells is tested
-  // by every particle instead.
-  std::vector<Bounds> boxes;
-  boxes.reserve(cloth.triangles.size());
-  std::vector<double> sizes;
-  sizes.reserve(cloth.triangles.size());
-  for (const Triangle& t : cloth.triangles) {
-    const Vec3Array& a = cloth.positions_t0;
-    const Vec3Array& b = cloth.positions_t1;
-    boxes.push_back(bounds_of({&a[t[0]], &a[t[1]], &a[t[2]], &b[t[0]], &b[t[1]], &b[t[2]]}));
-    sizes.push_back((boxes.back().hi - boxes.back().lo).maxCoeff());
+  // near a body test all its faces (test RigidBodies.ABallOfTwiceTheWatersDensitySinks). A triangle over
+  // 4,096 cells is tested by every particle instead.
+  const std::size_t f = cloth.triangles.size();
+  m_new_boxes.resize(f);
+  m_sizes.resize(f);
+  const Vec3Array& a = cloth.positions_t0;
+  const Vec3Array& b = cloth.positions_t1;
+  for (std::size_t t = 0; t < f; ++t) {
+    const Triangle& tri = cloth.triangles[t];
+    m_new_boxes[t] = bounds_of({&a[tri[0]], &a[tri[1]], &a[tri[2]], &b[tri[0]], &b[tri[1]], &b[tri[2]]});
+    m_sizes[t] = (m_new_boxes[t].hi - m_new_boxes[t].lo).maxCoeff();
   }
-  std::nth_element(sizes.begin(), sizes.begin() + static_cast<long>(sizes.size() / 2), sizes.end());
-  double cell = sizes[sizes.size() / 2];
-  if (!(cell > 1e-9)) cell = 1e-9;  // also a NaN median
+  std::nth_element(m_sizes.begin(), m_sizes.begin() + static_cast<long>(f / 2), m_sizes.end());
+  double median = m_sizes[f / 2];
+  if (!(median > 1e-9)) median = 1e-9;  // also a NaN median
+  const bool refile_all = m_boxes.size() != f || !(median <= 2.0 * m_cell && median >= 0.5 * m_cell);
+  m_changed.assign(f, 0);
+  std::size_t changed = 0;
+  for (std::size_t t = 0; t < f; ++t) {
+    const Bounds& box = m_new_boxes[t];
+    // A box with a NaN never equals itself: always filed again (as oversized, where no test passes).
+    if (refile_all || !(box.lo == m_boxes[t].lo && box.hi == m_boxes[t].hi)) {
+      m_changed[t] = 1;
+      ++changed;
+    }
+  }
+  if (changed == 0) return;
+  std::swap(m_boxes, m_new_boxes);
+  if (refile_all) {
+    m_cell = median;
+    m_entries.clear();
+    m_oversized.clear();
+  } else {
+    const auto stale = [&](Index t) { return m_changed[t] != 0; };
+    m_entries.erase(std::remove_if(m_entries.begin(), m_entries.end(),
+                                   [&](const auto& entry) { return stale(entry.second); }),
+                    m_entries.end());
+    m_oversized.erase(std::remove_if(m_oversized.begin(), m_oversized.end(), stale), m_oversized.end());
+  }
+  const double cell = m_cell;
   const auto cell_of = [cell](const Vec3& x) { return Eigen::Array3d((x / cell).array().floor()); };
-  const auto key = [](const Eigen::Array3d& c) {
-    return (static_cast<std::int64_t>(c[0]) * 1000003LL + static_cast<std::int64_t>(c[1])) * 1000033LL +
-           static_cast<std::int64_t>(c[2]);
-  };
-  // The grid as (cell key, triangle) entries sorted once, each cell's run found through a hash table: a
-  // std::unordered_map of vectors, allocated afresh every step, was a fifth of the audit (issue 41's
-  // profile). Within a cell the triangles stay in ascending order, as the map's vectors held them.
-  std::vector<std::pair<std::uint64_t, Index>> entries;
-  std::vector<Index> oversized;
-  for (std::size_t t = 0; t < boxes.size(); ++t) {
-    const Eigen::Array3d lo = cell_of(boxes[t].lo), hi = cell_of(boxes[t].hi);
+  // The changed triangles' entries, sorted and merged into the kept ones (sorted): within a cell the
+  // triangles stay in ascending order, as a fresh filing gives them.
+  const std::size_t kept = m_entries.size();
+  for (std::size_t t = 0; t < f; ++t) {
+    if (!m_changed[t]) continue;
+    const Eigen::Array3d lo = cell_of(m_boxes[t].lo), hi = cell_of(m_boxes[t].hi);
     // `!(... <= ...)` also sends a box with a NaN here, where its bounds test never passes.
     if (!((hi - lo + 1.0).prod() <= 4096.0)) {
-      oversized.push_back(static_cast<Index>(t));
+      m_oversized.push_back(static_cast<Index>(t));
       continue;
     }
     for (double z = lo[2]; z <= hi[2]; z += 1.0)
       for (double y = lo[1]; y <= hi[1]; y += 1.0)
         for (double x = lo[0]; x <= hi[0]; x += 1.0)
-          entries.emplace_back(static_cast<std::uint64_t>(key(Eigen::Array3d(x, y, z))),
-                               static_cast<Index>(t));
+          m_entries.emplace_back(cell_key(Eigen::Array3d(x, y, z)), static_cast<Index>(t));
   }
-  std::sort(entries.begin(), entries.end());
+  std::sort(m_entries.begin() + static_cast<std::ptrdiff_t>(kept), m_entries.end());
+  std::inplace_merge(m_entries.begin(), m_entries.begin() + static_cast<std::ptrdiff_t>(kept),
+                     m_entries.end());
+  std::sort(m_oversized.begin(), m_oversized.end());
+  // Each cell's run of entries, found through a hash table: a std::unordered_map of vectors, allocated
+  // afresh every step, was a fifth of the audit (issue 41's profile).
   std::vector<std::uint64_t> keys;
-  std::vector<std::uint32_t> cell_begin;
-  for (std::size_t e = 0; e < entries.size(); ++e) {
-    if (e == 0 || entries[e].first != entries[e - 1].first) {
-      keys.push_back(entries[e].first);
-      cell_begin.push_back(static_cast<std::uint32_t>(e));
+  m_cell_begin.clear();
+  for (std::size_t e = 0; e < m_entries.size(); ++e) {
+    if (e == 0 || m_entries[e].first != m_entries[e - 1].first) {
+      keys.push_back(m_entries[e].first);
+      m_cell_begin.push_back(static_cast<std::uint32_t>(e));
     }
   }
-  cell_begin.push_back(static_cast<std::uint32_t>(entries.size()));
-  KeyIndexTable grid;
-  grid.build(std::move(keys));
+  m_cell_begin.push_back(static_cast<std::uint32_t>(m_entries.size()));
+  m_grid.build(std::move(keys));
+}
+
+std::uint64_t LeakAudit::audit(const Vec3Array& particles_t0, const Vec3Array& particles_t1,
+                               const ClothMesh& cloth, LeakAuditStats& stats,
+                               std::vector<std::uint8_t>* leaked) {
+  const auto start = std::chrono::steady_clock::now();
+  const std::size_t n = particles_t0.size();
+  if (leaked) leaked->assign(n, 0);
+  std::uint64_t count = 0;
+  if (n == 0 || cloth.triangles.empty()) return 0;
+  update_grid(cloth);
+  const double cell = m_cell;
+  const auto cell_of = [cell](const Vec3& x) { return Eigen::Array3d((x / cell).array().floor()); };
+  const std::vector<Bounds>& boxes = m_boxes;
 
   // Per particle, 1 + the first triangle it crosses, or 0.
   std::vector<std::uint64_t> flags(n, 0);
@@ -184,7 +224,7 @@ std::uint64_t audit_leaks(const Vec3Array& particles_t0, const Vec3Array& partic
       const auto apart = [&](const Bounds& tb) {
         return !((box.hi.array() >= tb.lo.array()).all() && (tb.hi.array() >= box.lo.array()).all());
       };
-      for (Index t : oversized) {
+      for (Index t : m_oversized) {
         if (apart(boxes[t])) continue;
         if (crosses(t)) {
           flags[p] = 1 + static_cast<std::uint64_t>(t);
@@ -199,11 +239,11 @@ std::uint64_t audit_leaks(const Vec3Array& particles_t0, const Vec3Array& partic
         for (double y = lo[1]; y <= hi[1] && !flags[p]; y += 1.0) {
           for (double x = lo[0]; x <= hi[0] && !flags[p]; x += 1.0) {
             const Eigen::Array3d here(x, y, z);
-            const std::int64_t cell_index = grid.find(static_cast<std::uint64_t>(key(here)));
+            const std::int64_t cell_index = m_grid.find(cell_key(here));
             if (cell_index < 0) continue;
-            for (std::uint32_t e = cell_begin[static_cast<std::size_t>(cell_index)];
-                 e < cell_begin[static_cast<std::size_t>(cell_index) + 1]; ++e) {
-              const Index t = entries[e].second;
+            for (std::uint32_t e = m_cell_begin[static_cast<std::size_t>(cell_index)];
+                 e < m_cell_begin[static_cast<std::size_t>(cell_index) + 1]; ++e) {
+              const Index t = m_entries[e].second;
               const Bounds& tb = boxes[t];
               if (apart(tb)) continue;
               // The pair's one cell: where the overlap of the two boxes begins.

@@ -497,7 +497,7 @@ void Simulation::step_cloth_and_couple(Scalar dt, StepStatus& status) {
       near = any_particle_box_overlaps(p.positions_t0, p.positions, 0.0, mesh_box(mesh));
     }
     if (near) {
-      if (audit_leaks(p.positions_t0, p.positions, mesh, m_leak_stats) > 0 &&
+      if (m_leak_audit.audit(p.positions_t0, p.positions, mesh, m_leak_stats) > 0 &&
           !(status.flags & StepStatus::LEAKED)) {
         status.flags |= StepStatus::LEAKED;
         status.leaked_particle = p.ids[static_cast<std::size_t>(m_leak_stats.leak_particle)];

@@ -197,6 +197,7 @@ class Simulation {
   ImpulseLinks m_pending_links;           // the particles that gave them, carried in that step
   CouplingStepStats m_coupling_stats;
   LeakAuditStats m_leak_stats;
+  LeakAudit m_leak_audit;  // its grid of the mesh's faces kept from step to step
   std::uint32_t m_coupling_status = 0;
   std::uint32_t m_last_coupling_status = 0;
   std::int64_t m_non_finite_node = -1;
