@@ -100,12 +100,41 @@ TEST(SurfaceTension, CubeOfWaterInZeroGravityBecomesASphere) {
   }
 }
 
-// Inside a resting droplet the mechanical pressure, the solver's Tait pressure (WCSPH, a physical pressure;
-// 0 outside) plus the virial pressure of the surface tension's pair forces (Irving & Kirkwood), should exceed
-// the outside's by 2 sigma / R. Measured, it does not: at R = 4.6 mm 85 Pa against 31.8 Pa, at R = 8.5 mm
-// 75 Pa against 17.0 Pa after 0.1 s (Tait pressure 500 Pa, virial -416 and -419 Pa): an offset of about
-// 60 Pa that does not scale as 1 / R. Disabled until the calibration of gamma is fixed (issue 43); the
-// expectation is the one the issue asks for, not loosened.
+/// The virial pressure of the SPH pressure force's pairs at particle i (unit: Pa): (rho_i / 6) sum_j x_ij .
+/// a_ij with a_ij = -m_j (p_i / rho_i^2 + p_j / rho_j^2) grad W_ij, from the solver's last densities and
+/// pressures at the current positions (the fluid at rest barely moves in a sub-step). Equals p_i only where
+/// sum_j V_j x_ij . grad W_ij is -3: on the cubic lattice the cubic spline gives -3.06.
+Scalar pressure_force_virial(const FluidSolver& fluid, std::size_t i) {
+  const ParticleSet& p = fluid.particles();
+  const CubicSplineKernel& kernel = fluid.kernel();
+  const Scalar support_sq = kernel.support_radius() * kernel.support_radius();
+  const Scalar rho_i = p.densities[i];
+  Scalar virial = 0.0;
+  for (std::size_t j = 0; j < p.size(); ++j) {
+    const Vec3 x_ij = p.positions[i] - p.positions[j];
+    if (j == i || x_ij.squaredNorm() >= support_sq) continue;
+    const Scalar rho_j = p.densities[j];
+    const Scalar w = p.masses[j] * (p.pressures[i] / (rho_i * rho_i) + p.pressures[j] / (rho_j * rho_j));
+    virial -= w * x_ij.dot(kernel.gradient(x_ij));
+  }
+  return rho_i * virial / 6.0;
+}
+
+// Inside a resting droplet the pressure should exceed the outside's (0) by 2 sigma / R (issue 43). The
+// pressure measured is the mechanical one: the virial of every pair force (Irving & Kirkwood 1950, each pair
+// shared by its two particles; the kinetic part is negligible at rest), (rho_i / 6) sum_j x_ij . a_ij over
+// the SPH pressure force's pairs (WCSPH's Tait pressure is a physical one, 0 outside) and the surface
+// tension's (cohesion and curvature), averaged over the particles within R / 2 of the centre; the Tait
+// pressure plus the surface tension's virial alone reads within 12 Pa of it. It is not 2 sigma / R: 94 Pa at
+// R = 4.5 mm (31.8 Pa) and 73 Pa at 8.5 mm (17.0 Pa) here, 78-115 and 44-123 Pa at later times, from jittered
+// starts or with artificial viscosity (alpha 1), the larger droplet often the higher. The momentum flux
+// across the equator balances within 1% of its parts, yet the droplets never come to rest (1-2 cm/s after 0.3
+// s, i.e. rho c v of 100-200 Pa swings). A flat slab, periodic sideways and damped, shows why: with the
+// curvature term it keeps moving at 1.4 cm/s (the term is no energy's gradient) and its two faces carry 0.014
+// and 0.152 N/m of int (p_N - p_T) dz; without it, it rests (8e-6 m/s) and carries 0.003 and 0.014 N/m. The
+// particles at rest are a lattice that holds shear stress, for which the Laplace pressure is 2 f / R with the
+// surface stress f, not the surface energy that gamma is calibrated to (Shuttleworth 1950). Disabled until a
+// model holds 15% at both radii; the expectation is the issue's, not loosened.
 TEST(SurfaceTension, DISABLED_RestingDropletHoldsTheLaplacePressure) {
   for (const Scalar radius_in_spacings : {4.5, 8.5}) {
     const SurfaceTensionSettings tension{kSigma};
@@ -121,17 +150,21 @@ TEST(SurfaceTension, DISABLED_RestingDropletHoldsTheLaplacePressure) {
       centre += x;
     centre /= static_cast<Scalar>(n);
     Scalar pressure = 0.0;
+    Scalar tait = 0.0;
     int count = 0;
     for (std::size_t i = 0; i < n; ++i) {
       if ((fluid.particles().positions[i] - centre).norm() < 0.5 * radius) {
-        pressure += fluid.particles().pressures[i] + virial[i];
+        pressure += pressure_force_virial(fluid, i) + virial[i];
+        tait += fluid.particles().pressures[i];
         ++count;
       }
     }
     pressure /= count;
+    tait /= count;
     const Scalar laplace = 2.0 * kSigma / radius;
-    std::printf("[ measured ] R %.4f m: inside %.2f Pa over %d particles, 2 sigma / R %.2f Pa\n", radius,
-                pressure, count, laplace);
+    std::printf(
+        "[ measured ] R %.4f m: inside %.2f Pa (Tait %.1f Pa) over %d particles, 2 sigma / R %.2f Pa\n",
+        radius, pressure, tait, count, laplace);
     EXPECT_NEAR(pressure, laplace, 0.15 * laplace) << "R " << radius;
   }
 }

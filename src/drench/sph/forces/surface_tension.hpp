@@ -16,12 +16,16 @@ namespace drench {
 /// Their gamma is not sigma; drench sets gamma = 2 sigma spacing^2 / (m^2 S), with S the sum over the pairs
 /// of a cubic lattice that straddle a plane, per lattice column, of int_r^H C: the work per unit area of
 /// pulling two half-spaces of the lattice apart by the cohesion is then 2 sigma (the definition of sigma).
-/// The curvature term is zero on a flat face and adds to the tension of a curved one.
+/// That is its surface energy, not its mechanical tension (issue 43, tests/sph/test_surface_tension.cpp): on
+/// a flat slab, periodic sideways and damped, int (p_N - p_T) dz of the pair forces' virial is 0.003-0.014
+/// N/m at sigma 0.072 without the curvature term (the particles at rest are a lattice that holds shear
+/// stress, so its surface stress need not equal its surface energy) and 0.014-0.152 N/m with it, which never
+/// lets the fluid rest (it is not the gradient of an energy): resting droplets do not hold 2 sigma / R.
 /// Chosen by measurement over a continuum surface force (Brackbill et al. 1992, Morris 2000), which is
 /// calibrated to sigma by construction but needs the curvature: from colour-gradient normals, on a lattice
 /// droplet of 4.5 and 8.5 spacings, it read 5-7 / R where 2 / R is right (2.1-2.3 / R with the exact
 /// normals), and the droplets it drove did not come to rest. This one turns a cube into a sphere with every
-/// pressure solver (tests/sph/test_surface_tension.cpp); its Laplace pressure is not yet 2 sigma / R there.
+/// pressure solver (tests/sph/test_surface_tension.cpp).
 class SurfaceTensionAkinci final : public NonPressureForce {
  public:
   /// @param sigma  (unit: N/m), >= 0;  @param particle_spacing  (unit: m), > 0;
