@@ -62,25 +62,26 @@ class SurfaceTensionAkinci final : public SurfaceTension {
 /// outside; it points inwards and is the surface's delta function) and kappa_i = div m the curvature of the
 /// outward normals m. D = spacing sum_k |g_k| over a column of a flat cubic lattice's face (0.51 for the
 /// cubic spline), so that the force per unit area of a face is sigma kappa: the interior of a droplet then
-/// holds the pressure sigma kappa = 2 sigma / R. Not a pair force: momentum is conserved only as far as kappa
-/// is even. The curvature follows Morris 2000 in taking it only where the colour gradient is reliable: on the
-/// surface layer, |g| spacing > 0.1 and |g smoothed| spacing > 0.16 (disorder alone gives the first inside,
-/// rarely the second); other particles get no force. Two changes make it right on a lattice, where plain
-/// colour-gradient normals gave 5-7 / R: the normals are of g smoothed twice with W (a 4-spacing support,
-/// which irons out the lattice's steps), and the divergence is the renormalised one (Bonet & Lok 1999)
-/// restricted to the tangent plane, trace(M^-1 G) with M = m m^T + sum_j (P w_j)(P x_ji)^T, G = sum_j (P
-/// w_j)(m_j - m_i)^T, w_j = V_j grad W_ij, P = I - m_i m_i^T, over surface neighbours: the surface layer is
-/// one particle thick, so the full M is singular there, and m's derivative along itself is 0 anyway. kappa is
-/// then averaged over the surface neighbours with weights V_j W_ij and held within
-/// +-2 / spacing (a droplet of one spacing); a particle whose tangent plane holds too few surface neighbours
-/// (det M < 0.01) gets kappa 0. Last, the particles' centres lie half a spacing inside the surface that
-/// bounds their volumes, whose curvature is kappa / (1 + kappa spacing / 4) (a sphere's parallel surface).
-/// Measured (tests/sph/test_surface_tension.cpp): on lattice droplets of R = 4.5, 8.5, 12.5 spacings kappa
-/// reads 1.03, 1.06, 1.09 times 2 / R (weighted by |g|); a resting droplet under WCSPH holds 35.0 Pa at R =
-/// 4.5 mm (2 sigma / R: 31.8) and 17.9 Pa at 8.5 mm (17.0), where Akinci's model holds 94 and 73 Pa. A 1 cm
-/// cube becomes a sphere in 50 ms with WCSPH (sphericity 0.996) and DFSPH (0.968), not with PCISPH (0.943)
-/// and PBF (0.07: PBF scatters a free cube by itself, and this force has no cohesion to hold it), so it is
-/// not the default. Cost: four neighbour passes, one with a 3 x 3 inverse per particle of the surface.
+/// holds the pressure sigma kappa = 2 sigma / R. Not a pair force: the forces on a closed surface sum to zero
+/// only as far as kappa is uniform. The curvature follows Morris 2000 in taking it only where the colour
+/// gradient is reliable: on the surface layer, |g| spacing > 0.1 and |g smoothed| spacing > 0.16 (disorder
+/// alone gives the first inside, rarely the second); other particles get no force. Two changes make it right
+/// on a lattice, where plain colour-gradient normals gave 5-7 / R: the normals are of g smoothed twice with W
+/// (a 4-spacing support, which irons out the lattice's steps), and the divergence is the renormalised one
+/// (Bonet & Lok 1999) restricted to the tangent plane, trace(M^-1 G) with M = m m^T + sum_j (P w_j)(P
+/// x_ji)^T, G = sum_j (P w_j)(m_j - m_i)^T, w_j = V_j grad W_ij, P = I - m_i m_i^T, over surface neighbours:
+/// the surface layer is one particle thick, so the full M is singular there, and m's derivative along itself
+/// is 0 anyway. kappa is then averaged over the surface neighbours with weights V_j W_ij and held within +-2
+/// / spacing (a droplet of one spacing); a particle whose tangent plane holds too few surface neighbours (det
+/// M < 0.01) gets kappa 0. Last, the particles' centres lie half a spacing inside the surface that bounds
+/// their volumes, whose curvature is kappa / (1 + kappa spacing / 4) (a sphere's parallel surface). Measured
+/// (tests/sph/test_surface_tension.cpp): on lattice droplets of R = 4.5, 8.5, 12.5 spacings kappa
+/// reads 1.03, 1.06, 1.09 times 2 / R (weighted by |g|); a resting droplet under WCSPH holds 34.4 Pa at R =
+/// 4.5 mm (2 sigma / R: 31.8) and 17.6 Pa at 8.5 mm (17.0) over 0.05-0.1 s, where Akinci's model holds 94 and
+/// 73 Pa. A 1 cm cube becomes a sphere in 50 ms with WCSPH (sphericity 0.996) and DFSPH (0.968), not with
+/// PCISPH (0.943) and PBF (0.07: PBF scatters a free cube by itself, and this force has no cohesion to hold
+/// it), so it is not the default. Cost: five neighbour passes, one with a 3 x 3 inverse per particle of the
+/// surface.
 class SurfaceTensionCsf final : public SurfaceTension {
  public:
   /// @param sigma  (unit: N/m), >= 0;  @param particle_spacing  (unit: m), > 0, the kernel's smoothing length
