@@ -483,6 +483,23 @@ TEST(SceneLoader, RejectsUnknownViscosityMethod) {
       "fluid.viscosity.method must be one of \"xsph\", \"artificial\", got \"laminar\" (x.json)"));
 }
 
+TEST(SceneLoader, ReadsTheSurfaceTensionModel) {
+  EXPECT_EQ(parse(R"({})").surface_tension.model, SurfaceTensionModel::AKINCI);
+  const SceneConfig c =
+      parse(R"({"effects": ["surface_tension"], "surface_tension": {"sigma": 0.05, "model": "csf"}})");
+  EXPECT_EQ(c.surface_tension.model, SurfaceTensionModel::CSF);
+  EXPECT_DOUBLE_EQ(c.surface_tension.sigma, 0.05);
+  EXPECT_EQ(parse(R"({"effects": ["surface_tension"], "surface_tension": {"model": "akinci"}})")
+                .surface_tension.model,
+            SurfaceTensionModel::AKINCI);
+}
+
+TEST(SceneLoader, RejectsUnknownSurfaceTensionModel) {
+  EXPECT_TRUE(
+      scene_error(R"({"effects": ["surface_tension"], "surface_tension": {"model": "becker"}})",
+                  "surface_tension.model must be one of \"csf\", \"akinci\", got \"becker\" (x.json)"));
+}
+
 TEST(SceneLoader, RejectsNegativeViscosityCoefficient) {
   EXPECT_TRUE(scene_error(R"({"fluid": {"viscosity": {"coefficient": -0.1}}})",
                           "fluid.viscosity.coefficient must be >= 0, got -0.1 (x.json)"));

@@ -1,5 +1,6 @@
 // Surface tension (forces/surface_tension.hpp), measured against the physics it claims: a cube of water in
-// zero gravity pulls itself into a sphere, and a resting droplet holds the Laplace pressure 2 sigma / R.
+// zero gravity pulls itself into a sphere (the default, Akinci's model), and a resting droplet holds the
+// Laplace pressure 2 sigma / R (the continuum surface force, whose curvature is checked first).
 
 #include <gtest/gtest.h>
 
@@ -100,38 +101,107 @@ TEST(SurfaceTension, CubeOfWaterInZeroGravityBecomesASphere) {
   }
 }
 
-// Inside a resting droplet the mechanical pressure, the solver's Tait pressure (WCSPH, a physical pressure;
-// 0 outside) plus the virial pressure of the surface tension's pair forces (Irving & Kirkwood), should exceed
-// the outside's by 2 sigma / R. Measured, it does not: at R = 4.6 mm 85 Pa against 31.8 Pa, at R = 8.5 mm
-// 75 Pa against 17.0 Pa after 0.1 s (Tait pressure 500 Pa, virial -416 and -419 Pa): an offset of about
-// 60 Pa that does not scale as 1 / R. Disabled until the calibration of gamma is fixed (issue 43); the
-// expectation is the one the issue asks for, not loosened.
-TEST(SurfaceTension, DISABLED_RestingDropletHoldsTheLaplacePressure) {
+// The continuum surface force's curvature on droplets cut from the particle lattice (the Laplace test's
+// starting shapes), weighted by |g| as the force is: within 15% of 2 / R at R = 4.5, 8.5 and 12.5 spacings,
+// R the radius of the droplet's volume (N spacing^3). Plain colour-gradient normals read 5-7 / R here.
+TEST(SurfaceTension, CsfCurvatureOfALatticeDropletIsTwoOverR) {
+  for (const Scalar radius_in_spacings : {4.5, 8.5, 12.5}) {
+    const SurfaceTensionSettings tension{kSigma, SurfaceTensionModel::CSF};
+    FluidSolver fluid = make_fluid(PressureSolverKind::WCSPH, 0.0, &tension, 10.0);
+    add_ball(fluid, radius_in_spacings * kSpacing);
+    ASSERT_TRUE(fluid.step(1e-7).ok());
+    const auto* csf = dynamic_cast<const SurfaceTensionCsf*>(fluid.surface_tension());
+    ASSERT_NE(csf, nullptr);
+    const std::size_t n = fluid.particles().size();
+    const Scalar radius = std::cbrt(3.0 * n / (4.0 * kPi)) * kSpacing;
+    Scalar weighted = 0.0;
+    Scalar weights = 0.0;
+    Scalar lowest = 1e9;
+    Scalar highest = -1e9;
+    for (std::size_t i = 0; i < n; ++i) {
+      const Vec3& g = csf->colour_gradients()[i];
+      const Scalar kappa = csf->curvatures()[i];
+      if (kappa == 0.0) continue;
+      weighted += g.norm() * kappa;
+      weights += g.norm();
+      lowest = std::min(lowest, kappa);
+      highest = std::max(highest, kappa);
+    }
+    const Scalar mean = weighted / weights;
+    std::printf("[ measured ] R %.4f m: kappa R / 2 %.3f (|g|-weighted), %.3f to %.3f\n", radius,
+                0.5 * mean * radius, 0.5 * lowest * radius, 0.5 * highest * radius);
+    EXPECT_NEAR(mean, 2.0 / radius, 0.15 * 2.0 / radius) << "R " << radius;
+  }
+}
+
+/// The virial pressure of the SPH pressure force's pairs at particle i (unit: Pa): (rho_i / 6) sum_j x_ij .
+/// a_ij with a_ij = -m_j (p_i / rho_i^2 + p_j / rho_j^2) grad W_ij, from the solver's last densities and
+/// pressures at the current positions (the fluid at rest barely moves in a sub-step). Equals p_i only where
+/// sum_j V_j x_ij . grad W_ij is -3: on the cubic lattice the cubic spline gives -3.06.
+Scalar pressure_force_virial(const FluidSolver& fluid, std::size_t i) {
+  const ParticleSet& p = fluid.particles();
+  const CubicSplineKernel& kernel = fluid.kernel();
+  const Scalar support_sq = kernel.support_radius() * kernel.support_radius();
+  const Scalar rho_i = p.densities[i];
+  Scalar virial = 0.0;
+  for (std::size_t j = 0; j < p.size(); ++j) {
+    const Vec3 x_ij = p.positions[i] - p.positions[j];
+    if (j == i || x_ij.squaredNorm() >= support_sq) continue;
+    const Scalar rho_j = p.densities[j];
+    const Scalar w = p.masses[j] * (p.pressures[i] / (rho_i * rho_i) + p.pressures[j] / (rho_j * rho_j));
+    virial -= w * x_ij.dot(kernel.gradient(x_ij));
+  }
+  return rho_i * virial / 6.0;
+}
+
+// Inside a resting droplet the pressure should exceed the outside's (0) by 2 sigma / R (issue 43), here with
+// the continuum surface force. The pressure measured is the mechanical one: the virial of every pair force
+// (Irving & Kirkwood 1950, each pair shared by its two particles; the kinetic part is negligible at rest),
+// (rho_i / 6) sum_j x_ij . a_ij over the SPH pressure force's pairs (WCSPH's Tait pressure is a physical one,
+// 0 outside) and the surface tension's (none for this model: its force acts on the surface layer only),
+// averaged over the particles within R / 2 of the centre, and over 0.05-0.1 s every 5 ms: the small droplet
+// still rings (26-36 Pa at single instants from 0.05 to 0.15 s, mean 32.4 Pa). Measured: 34.4 Pa (33.2-35.8)
+// at R = 4.5 mm (2 sigma / R 31.8) and 17.6 Pa (17.2-18.0) at 8.5 mm (17.0). Akinci's model, the default,
+// holds 94 and 73 Pa here: its pair forces' surface stress is not the surface energy its gamma is calibrated
+// to (a flat slab's int (p_N - p_T) dz reads 0.003-0.152 N/m against 0.072), and its curvature term is no
+// energy's gradient, so its droplets never rest (1-2 cm/s after 0.3 s).
+TEST(SurfaceTension, RestingDropletHoldsTheLaplacePressure) {
   for (const Scalar radius_in_spacings : {4.5, 8.5}) {
-    const SurfaceTensionSettings tension{kSigma};
+    const SurfaceTensionSettings tension{kSigma, SurfaceTensionModel::CSF};
     FluidSolver fluid = make_fluid(PressureSolverKind::WCSPH, 0.1, &tension, 10.0);
     add_ball(fluid, radius_in_spacings * kSpacing);
     const std::size_t n = fluid.particles().size();
     const Scalar radius = std::cbrt(3.0 * n / (4.0 * kPi)) * kSpacing;
-    for (int step = 1; step <= 100; ++step)
+    Scalar sum = 0.0;
+    Scalar lowest = 1e9;
+    Scalar highest = -1e9;
+    int samples = 0;
+    for (int step = 1; step <= 100; ++step) {
       ASSERT_TRUE(fluid.step(0.001).ok()) << step;
-    const ScalarArray& virial = fluid.surface_tension()->virial_pressures();
-    Vec3 centre = Vec3::Zero();
-    for (const Vec3& x : fluid.particles().positions)
-      centre += x;
-    centre /= static_cast<Scalar>(n);
-    Scalar pressure = 0.0;
-    int count = 0;
-    for (std::size_t i = 0; i < n; ++i) {
-      if ((fluid.particles().positions[i] - centre).norm() < 0.5 * radius) {
-        pressure += fluid.particles().pressures[i] + virial[i];
-        ++count;
+      if (step < 50 || step % 5 != 0) continue;
+      const ScalarArray& virial = fluid.surface_tension()->virial_pressures();
+      Vec3 centre = Vec3::Zero();
+      for (const Vec3& x : fluid.particles().positions)
+        centre += x;
+      centre /= static_cast<Scalar>(n);
+      Scalar pressure = 0.0;
+      int count = 0;
+      for (std::size_t i = 0; i < n; ++i) {
+        if ((fluid.particles().positions[i] - centre).norm() < 0.5 * radius) {
+          pressure += pressure_force_virial(fluid, i) + virial[i];
+          ++count;
+        }
       }
+      pressure /= count;
+      sum += pressure;
+      lowest = std::min(lowest, pressure);
+      highest = std::max(highest, pressure);
+      ++samples;
     }
-    pressure /= count;
+    const Scalar pressure = sum / samples;
     const Scalar laplace = 2.0 * kSigma / radius;
-    std::printf("[ measured ] R %.4f m: inside %.2f Pa over %d particles, 2 sigma / R %.2f Pa\n", radius,
-                pressure, count, laplace);
+    std::printf("[ measured ] R %.4f m: inside %.2f Pa (%.1f to %.1f over %d samples), 2 sigma / R %.2f Pa\n",
+                radius, pressure, lowest, highest, samples, laplace);
     EXPECT_NEAR(pressure, laplace, 0.15 * laplace) << "R " << radius;
   }
 }

@@ -89,8 +89,10 @@ const std::vector<EffectEntry>& effect_registry() {
        &EffectCounters::viscosity,
        build_viscosity},
       {"surface_tension",
-       "the surface tension force of surface_tension.sigma in every fluid sub-step (continuum surface force, "
-       "Brackbill et al. 1992, Morris 2000; the paper's future work, sec. 6), built by the FluidSolver",
+       "the surface tension force of surface_tension.sigma in every fluid sub-step, of surface_tension.model "
+       "(Akinci et al. 2013's cohesion and curvature, or the continuum surface force of Brackbill et al. "
+       "1992; "
+       "the paper's future work, sec. 6), built by the FluidSolver",
        {},
        {"surface_tension", "the surface tension"},
        &EffectCounters::surface_tension,

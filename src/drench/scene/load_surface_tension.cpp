@@ -1,4 +1,4 @@
-/// `surface_tension` of a scene: the water's surface tension coefficient (SurfaceTensionSettings,
+/// `surface_tension` of a scene: the water's surface tension coefficient and model (SurfaceTensionSettings,
 /// sph/fluid_settings.hpp).
 
 #include <drench/scene/load_sections.hpp>
@@ -7,8 +7,11 @@ namespace drench::loader {
 
 SurfaceTensionSettings read_surface_tension(const Node& node) {
   SurfaceTensionSettings surface_tension;
-  const ObjectReader r(node, {"sigma"});
+  const ObjectReader r(node, {"sigma", "model"});
   r.read("sigma", surface_tension.sigma, kNonNegative);
+  r.read_choice("model", surface_tension.model,
+                Choices<SurfaceTensionModel>{{"csf", SurfaceTensionModel::CSF},
+                                             {"akinci", SurfaceTensionModel::AKINCI}});
   return surface_tension;
 }
 

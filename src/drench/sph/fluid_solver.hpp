@@ -138,7 +138,7 @@ class FluidSolver {
   /// The "surface_tension" effect's counts: constructed 1 when built, a pass per sub-step's force pass.
   const EffectCounter& surface_tension_counter() const { return m_surface_tension_counter; }
   /// The surface tension force, or nullptr when it was not built.
-  const SurfaceTensionAkinci* surface_tension() const { return m_surface_tension.get(); }
+  const SurfaceTension* surface_tension() const { return m_surface_tension.get(); }
   /// Mass of one particle, rest_density * spacing^3 (unit: kg).
   Scalar particle_mass() const;
 
@@ -222,7 +222,7 @@ class FluidSolver {
   PressurePbf* m_pbf = nullptr;  // m_pressure when the scene's solver is PBF
   std::unique_ptr<NonPressureForce> m_viscosity;
   EffectCounter m_viscosity_counter;
-  std::unique_ptr<SurfaceTensionAkinci> m_surface_tension;
+  std::unique_ptr<SurfaceTension> m_surface_tension;
   EffectCounter m_surface_tension_counter;
   Vec3Array m_accelerations;
   Vec3Array m_velocities_adv;
