@@ -59,4 +59,24 @@ class KeyIndexTable {
   std::uint64_t m_mask = 15;
 };
 
+/// Indexes the runs of equal keys in `entries`, sorted by key: `run_begin` gets the first entry of each
+/// distinct key and one extra end entry, `table` the distinct keys in order, so that the entries of a key
+/// that `table.find` places at k are [run_begin[k], run_begin[k + 1]). The cell grids of the grid broad phase
+/// and of the leak audit keep their triangles so (coupling/broad_phase.cpp, coupling/leak_audit.cpp).
+/// Precondition: fewer than 2^32 entries.
+template <class Value>
+void index_key_runs(const std::vector<std::pair<std::uint64_t, Value>>& entries,
+                    std::vector<std::uint32_t>& run_begin, KeyIndexTable& table) {
+  std::vector<std::uint64_t> keys;
+  run_begin.clear();
+  for (std::size_t e = 0; e < entries.size(); ++e) {
+    if (e == 0 || entries[e].first != entries[e - 1].first) {
+      keys.push_back(entries[e].first);
+      run_begin.push_back(static_cast<std::uint32_t>(e));
+    }
+  }
+  run_begin.push_back(static_cast<std::uint32_t>(entries.size()));
+  table.build(std::move(keys));
+}
+
 }  // namespace drench

@@ -120,16 +120,7 @@ class GridBroadPhase final : public TriangleBroadPhase {
     std::sort(m_everywhere.begin(), m_everywhere.end());
     // Each distinct key's run of entries, found through a hash table: a binary search of all the entries
     // per cell would dominate the grid's queries (bench_coupling find_pairs, docs/performance.md).
-    std::vector<std::uint64_t> keys;
-    m_cell_begin.clear();
-    for (std::size_t e = 0; e < m_entries.size(); ++e) {
-      if (e == 0 || m_entries[e].first != m_entries[e - 1].first) {
-        keys.push_back(m_entries[e].first);
-        m_cell_begin.push_back(static_cast<std::uint32_t>(e));
-      }
-    }
-    m_cell_begin.push_back(static_cast<std::uint32_t>(m_entries.size()));
-    m_cells.build(std::move(keys));
+    index_key_runs(m_entries, m_cell_begin, m_cells);
   }
 
   /// Visits the keys of the cells the box covers; returns false, visiting nothing, when they are too many (a

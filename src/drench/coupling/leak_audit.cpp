@@ -176,16 +176,7 @@ void LeakAudit::update_grid(const ClothMesh& cloth) {
   std::sort(m_oversized.begin(), m_oversized.end());
   // Each cell's run of entries, found through a hash table: a std::unordered_map of vectors, allocated
   // afresh every step, was a fifth of the audit (issue 41's profile).
-  std::vector<std::uint64_t> keys;
-  m_cell_begin.clear();
-  for (std::size_t e = 0; e < m_entries.size(); ++e) {
-    if (e == 0 || m_entries[e].first != m_entries[e - 1].first) {
-      keys.push_back(m_entries[e].first);
-      m_cell_begin.push_back(static_cast<std::uint32_t>(e));
-    }
-  }
-  m_cell_begin.push_back(static_cast<std::uint32_t>(m_entries.size()));
-  m_grid.build(std::move(keys));
+  index_key_runs(m_entries, m_cell_begin, m_grid);
 }
 
 std::uint64_t LeakAudit::audit(const Vec3Array& particles_t0, const Vec3Array& particles_t1,
