@@ -12,6 +12,7 @@
 #include <drench/common/triangle_geometry.hpp>
 #include <drench/coupling/coupler.hpp>
 #include <drench/coupling/leak_audit.hpp>
+#include <drench/sph/fluid_solver.hpp>
 #include "coupling_fixtures.hpp"
 
 namespace drench {
@@ -390,6 +391,55 @@ TEST(Coupler, RejectsBadSettingsNamingThem) {
   } catch (const SceneError& e) {
     EXPECT_NE(std::string(e.what()).find("coupling.cloth_thickness"), std::string::npos) << e.what();
   }
+}
+
+// A droplet falling 3 mm onto a static horizontal plate under free slip: the plate's normal is vertical, so
+// it may change only the water's vertical momentum; the fluid step alone changes the horizontal one by about
+// 1e-8 N s. Measured over 75 ms: the coupler adds 1.8e-6 N s along +x and 2.0e-6 along +z (1.4% of the
+// 1.3e-4 N s it gives upward), with the droplet placed anywhere on the plate's grid, so the water drifts at
+// about 1 cm/s (found by the beading test of test_adhesion.cpp). Disabled until the coupler's bias is found;
+// the expectation (0.1% of the vertical impulse) is the fact to restore, not to loosen.
+TEST(Coupler, DISABLED_ADropletLandingOnAStaticPlateGainsNoSidewaysMomentum) {
+  constexpr Scalar spacing = 0.001, dt = 0.0005;
+  FluidSettings settings;
+  settings.particle_spacing = spacing;
+  settings.pressure_solver = PressureSolverKind::DFSPH;
+  FluidSolver fluid(settings, Vec3(0.0, -9.81, 0.0), BoundaryParticles{}, {}, true, 10.0);
+  std::uint32_t id = 0;
+  for (int i = -3; i <= 3; ++i)
+    for (int j = -3; j <= 3; ++j)
+      for (int k = -3; k <= 3; ++k) {
+        const Vec3 offset = spacing * Vec3(i, j, k);
+        if (offset.norm() <= 3.5 * spacing)
+          fluid.particles().add(offset + Vec3(0.0, 4.0 * spacing, 0.0), Vec3::Zero(), fluid.particle_mass(),
+                                id++);
+      }
+  ClothMesh plate = ClothMesh::grid(41, 0.06, 0.0, 0.0, -0.03, -0.03);
+  CouplingSettings coupling;
+  coupling.cloth_thickness = 0.5 * spacing;
+  Coupler coupler(coupling, false);
+  const auto momentum = [&fluid]() {
+    const ParticleSet& p = fluid.particles();
+    Vec3 m = Vec3::Zero();
+    for (std::size_t i = 0; i < p.size(); ++i)
+      m += p.masses[i] * p.velocities[i];
+    return m;
+  };
+  Vec3 from_coupler = Vec3::Zero();
+  for (int step = 1; step <= 150; ++step) {
+    ASSERT_TRUE(fluid.step(dt).ok()) << step;
+    ParticleSet& p = fluid.particles();
+    const FluidView view{&p.positions_t0, &p.positions, &p.velocities, &p.masses, nullptr};
+    CouplingStepStats stats;
+    const Vec3 before = momentum();
+    ASSERT_EQ(coupler.step(view, plate, dt, stats), COUPLING_OK) << step;
+    from_coupler += momentum() - before;
+  }
+  std::printf("[ measured ] the coupler's impulse on the water: (%.3g, %.3g, %.3g) N s\n", from_coupler.x(),
+              from_coupler.y(), from_coupler.z());
+  const Scalar tolerance = 1e-3 * std::abs(from_coupler.y());
+  EXPECT_LT(std::abs(from_coupler.x()), tolerance);
+  EXPECT_LT(std::abs(from_coupler.z()), tolerance);
 }
 
 }  // namespace
