@@ -6,6 +6,7 @@
 
 #include <drench/coupling/cloth_mesh.hpp>
 #include <drench/coupling/coupler.hpp>
+#include <drench/sph/fluid_solver.hpp>
 
 namespace drench::test {
 
@@ -28,5 +29,18 @@ struct Particles {
   }
   FluidView view() { return FluidView{&x0, &x1, &v, &m}; }
 };
+
+/// Adds to `fluid`, at rest, the points of a cubic lattice of `spacing` (unit: m) within 3.5 spacings of
+/// `centre` (unit: m): a droplet of 179 particles, ids from 0 (the fluid must be empty).
+inline void add_droplet(FluidSolver& fluid, const Vec3& centre, double spacing) {
+  std::uint32_t id = 0;
+  for (int i = -3; i <= 3; ++i)
+    for (int j = -3; j <= 3; ++j)
+      for (int k = -3; k <= 3; ++k) {
+        const Vec3 offset = spacing * Vec3(i, j, k);
+        if (offset.norm() <= 3.5 * spacing)
+          fluid.particles().add(centre + offset, Vec3::Zero(), fluid.particle_mass(), id++);
+      }
+}
 
 }  // namespace drench::test

@@ -11,6 +11,7 @@
 
 #include <drench/coupling/coupler.hpp>
 #include <drench/sph/fluid_solver.hpp>
+#include "coupling_fixtures.hpp"
 
 namespace drench {
 namespace {
@@ -119,15 +120,7 @@ Resting rest(Scalar work) {
   settings.pressure_solver = PressureSolverKind::DFSPH;
   const SurfaceTensionSettings tension{kSigma};
   FluidSolver fluid(settings, Vec3(0.0, -0.981, 0.0), BoundaryParticles{}, {}, true, 10.0, &tension);
-  std::uint32_t id = 0;
-  for (int i = -3; i <= 3; ++i)
-    for (int j = -3; j <= 3; ++j)
-      for (int k = -3; k <= 3; ++k) {
-        const Vec3 offset = kSpacing * Vec3(i, j, k);
-        if (offset.norm() <= 3.5 * kSpacing)
-          fluid.particles().add(offset + Vec3(0.0, 4.0 * kSpacing, 0.0), Vec3::Zero(), fluid.particle_mass(),
-                                id++);
-      }
+  test::add_droplet(fluid, Vec3(0.0, 4.0 * kSpacing, 0.0), kSpacing);
   // Wider than the droplet needs: the coupling lets it drift sideways (by 1 cm in 0.2 s at earth's gravity).
   ClothMesh plate = ClothMesh::grid(41, 0.06, 0.0, 0.0, -0.03, -0.03);
   CouplingSettings coupling;

@@ -405,15 +405,7 @@ TEST(Coupler, DISABLED_ADropletLandingOnAStaticPlateGainsNoSidewaysMomentum) {
   settings.particle_spacing = spacing;
   settings.pressure_solver = PressureSolverKind::DFSPH;
   FluidSolver fluid(settings, Vec3(0.0, -9.81, 0.0), BoundaryParticles{}, {}, true, 10.0);
-  std::uint32_t id = 0;
-  for (int i = -3; i <= 3; ++i)
-    for (int j = -3; j <= 3; ++j)
-      for (int k = -3; k <= 3; ++k) {
-        const Vec3 offset = spacing * Vec3(i, j, k);
-        if (offset.norm() <= 3.5 * spacing)
-          fluid.particles().add(offset + Vec3(0.0, 4.0 * spacing, 0.0), Vec3::Zero(), fluid.particle_mass(),
-                                id++);
-      }
+  test::add_droplet(fluid, Vec3(0.0, 4.0 * spacing, 0.0), spacing);
   ClothMesh plate = ClothMesh::grid(41, 0.06, 0.0, 0.0, -0.03, -0.03);
   CouplingSettings coupling;
   coupling.cloth_thickness = 0.5 * spacing;
