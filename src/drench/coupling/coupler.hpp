@@ -36,8 +36,8 @@ struct CouplingStepStats {
   std::uint64_t ccd_iterations = 0;  ///< rounds of CCD run
   std::uint64_t failsafe_activations = 0;  ///< particles the fail-safe moved with their triangle
   std::uint64_t obstacle_stops = 0;        ///< particles stopped by the cloth inside fluid sub-steps
-  /// Particles and cloth nodes the last resort stopped at their start positions for a step, where even the
-  /// fail-safe left a collision (COUPLING_ZONES_STOPPED)
+  /// Particles and cloth nodes the last resort joined into impact zones for a step, where even the fail-safe
+  /// left a collision (COUPLING_ZONES_STOPPED)
   std::uint64_t stopped_particles = 0;
   std::uint64_t stopped_nodes = 0;
   double slip_sum_mps = 0.0;  ///< sum over contacts of the relative tangential speed after coupling
@@ -56,7 +56,8 @@ enum CouplingStatus : std::uint32_t {
   /// audit counts the crossing. Smaller dt helps.
   COUPLING_UNRESOLVED = 1u << 1,
   /// The fail-safe left collisions (a particle caught in a fold), so the particles and nodes involved were
-  /// stopped at their start positions for the step; no crossing, but momentum was not conserved for them
+  /// joined into impact zones, each moving by one displacement for the step (the mean of its members'; at
+  /// rest when it holds an unmoved node); no crossing, but their momentum was not conserved
   /// (CouplingStepStats::stopped_particles, stopped_nodes). Rare; lower dt if frequent.
   COUPLING_ZONES_STOPPED = 1u << 2,
 };

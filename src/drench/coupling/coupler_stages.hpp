@@ -208,8 +208,8 @@ void adhere(StepContext& ctx, TriangleBroadPhase& broad_phase, const AdhesionSet
 /// impact, the first round over every pair, later ones over the pairs whose motion the previous round
 /// changed, until no pair collides. After settings.max_ccd_iterations rounds the fail-safe moves each
 /// particle still colliding with its triangle's contact point, which that triangle cannot cross; and where
-/// that is not enough (folds), the colliding particles and nodes stop at their start positions for the step
-/// (impact zones at rest), until no pair collides.
+/// that is not enough (folds), the colliding particles and nodes join impact zones that each move by one
+/// displacement for the step (rigid impact zones that only translate), until no pair collides.
 /// Adds to the stats' ccd_iterations, ccd_impacts, failsafe_activations, stopped_particles, stopped_nodes.
 /// @param broad_phase  the coupler's, queried with margin 0 for swept boxes
 /// @param settings  cloth_thickness (unit: m) > 0, max_ccd_iterations >= 1
