@@ -166,7 +166,9 @@ class StepContext {
 
 /// Proximity (sec. 3.1, proximity.cpp): eq. 1's plane distance and barycentric inside test, extended to edges
 /// and vertices by taking the closest point of the closed triangle; all at the start positions, which also
-/// decide the side (sec. 3.2). A particle whose closest points on several triangles coincide (a shared edge
+/// decide the side (sec. 3.2). An edge or vertex contact counts only in that feature's Voronoi region: it is
+/// dropped when a triangle holding the feature lies closer to the particle (the particle is over that face,
+/// whose normal is the paper's). A particle whose closest points on several triangles coincide (a shared edge
 /// or vertex) keeps one contact, the triangle of lowest index, so it is pushed once.
 /// @param ctx  the step; read only: the start positions, and the relative velocity (end minus start over dt)
 ///        for each contact's tangential_pre and the side of a particle lying exactly on a triangle
