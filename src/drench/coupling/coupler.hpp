@@ -88,11 +88,11 @@ class Coupler {
   Coupler(const Coupler&) = delete;
   Coupler& operator=(const Coupler&) = delete;
 
-  /// One coupling step of length dt (unit: s, > 0): repulsion (eq. 1-4), friction (eq. 7-8), then continuous
-  /// handling (eq. 5-6) on the corrected motion until no particle crosses a triangle. Impulses go to both
-  /// sides, mass-weighted, the triangle's share to its nodes by barycentric weights, so the total linear
-  /// momentum is conserved exactly (up to rounding); pinned nodes (inverse mass 0) never move.
-  /// When no particle is within reach of the cloth (no particle's box over the step, grown by the cloth
+  /// One coupling step of length dt (unit: s, > 0): adhesion when set, repulsion (eq. 1-4), friction (eq.
+  /// 7-8), then continuous handling (eq. 5-6) on the corrected motion until no particle crosses a triangle.
+  /// Impulses go to both sides, mass-weighted, the triangle's share to its nodes by barycentric weights, so
+  /// the total linear momentum is conserved exactly (up to rounding); pinned nodes (inverse mass 0) never
+  /// move. When no particle is within reach of the cloth (no particle's box over the step, grown by the cloth
   /// thickness, meets the mesh's box over the step), the step is skipped after that one test: it would change
   /// nothing, and its outputs are those of a step without contacts (counter().skipped).
   /// @param fluid  N particles; positions_t1 and velocities are changed
