@@ -371,32 +371,49 @@ std::size_t nodes_moved_by(const ClothMesh& mesh, const Vec3& displacement, doub
   return count;
 }
 
+/// One coupling step of 4 ms, with 4 CCD rounds before the fail-safe, of a particle at rest at y = 0 between
+/// two sheets (two_sheets' arguments, unit: m): the fold of the crumpled cloth (issue 39) in small.
+struct FoldStep {
+  ClothMesh mesh;
+  Particles particles;
+  CouplingStepStats stats;
+  std::uint32_t status = COUPLING_OK;
+  std::pair<std::int64_t, std::int64_t> unresolved;
+
+  FoldStep(double y_top, double dy_top, double y_bottom, double dy_bottom)
+      : mesh(two_sheets(y_top, dy_top, y_bottom, dy_bottom)) {
+    const double dt = 0.004;
+    particles.add(Vec3(0.3, 0.0, 0.2), Vec3::Zero(), dt, kMass);
+    CouplingSettings settings;
+    settings.max_ccd_iterations = 4;
+    Coupler coupler(settings);
+    status = coupler.step(particles.view(), mesh, dt, stats);
+    unresolved = coupler.unresolved();
+  }
+  std::size_t leaks() {
+    LeakAuditStats audit;
+    return audit_leaks(particles.x0, particles.x1, mesh, audit);
+  }
+};
+
 // A particle in a fold whose two layers pass through it from both sides (the crumpled cloth of issue 39): it
 // cannot follow both, so the fail-safe alone left a crossing. The last resort joins the particle and both
 // layers' colliding triangles into one zone that moves by the mean of its nodes' displacements, here zero up
 // to rounding (1e-15 m): the start was free of crossings, and a rigid zone keeps it so.
 TEST(Coupler, AParticleCaughtInAFoldNeverCrossesEitherLayer) {
-  const double dt = 0.004;
-  ClothMesh mesh = two_sheets(0.002, -0.012, -0.003, 0.012);
-  Particles particles;
-  particles.add(Vec3(0.3, 0.0, 0.2), Vec3::Zero(), dt, kMass);
-  CouplingSettings settings;
-  settings.max_ccd_iterations = 4;
-  Coupler coupler(settings);
-  CouplingStepStats stats;
-  const std::uint32_t status = coupler.step(particles.view(), mesh, dt, stats);
-  EXPECT_NE(status & COUPLING_FAILSAFE_USED, 0u) << "the fold must need the fail-safe, else it tests nothing";
-  EXPECT_NE(status & COUPLING_ZONES_STOPPED, 0u);
-  EXPECT_EQ(status & COUPLING_UNRESOLVED, 0u);
-  EXPECT_EQ(coupler.unresolved(), std::make_pair(std::int64_t{-1}, std::int64_t{-1}));
-  LeakAuditStats leaks;
-  EXPECT_EQ(audit_leaks(particles.x0, particles.x1, mesh, leaks), 0u);
+  FoldStep fold(0.002, -0.012, -0.003, 0.012);
+  EXPECT_NE(fold.status & COUPLING_FAILSAFE_USED, 0u)
+      << "the fold must need the fail-safe, else it tests nothing";
+  EXPECT_NE(fold.status & COUPLING_ZONES_STOPPED, 0u);
+  EXPECT_EQ(fold.status & COUPLING_UNRESOLVED, 0u);
+  EXPECT_EQ(fold.unresolved, std::make_pair(std::int64_t{-1}, std::int64_t{-1}));
+  EXPECT_EQ(fold.leaks(), 0u);
   // The zone: the particle and the two triangles it was between (three nodes each); the others moved as
   // their engine said.
-  EXPECT_LT((particles.x1[0] - particles.x0[0]).norm(), 1e-15);
-  EXPECT_EQ(stats.stopped_particles, 1u);
-  EXPECT_EQ(stats.stopped_nodes, 6u);
-  EXPECT_EQ(nodes_moved_by(mesh, Vec3::Zero(), 1e-15), 6u);
+  EXPECT_LT((fold.particles.x1[0] - fold.particles.x0[0]).norm(), 1e-15);
+  EXPECT_EQ(fold.stats.stopped_particles, 1u);
+  EXPECT_EQ(fold.stats.stopped_nodes, 6u);
+  EXPECT_EQ(nodes_moved_by(fold.mesh, Vec3::Zero(), 1e-15), 6u);
 }
 
 // The crumpled cloth at dt 4 ms: folds falling at several m/s. Zones at rest held the caught nodes back by
@@ -404,24 +421,15 @@ TEST(Coupler, AParticleCaughtInAFoldNeverCrossesEitherLayer) {
 // fall, the upper faster, through a particle at rest: the zone moves by its six nodes' mean displacement
 // (-8 mm), and the particle stays between the layers.
 TEST(Coupler, AnImpactZoneInAFallingFoldMovesWithItsNodes) {
-  const double dt = 0.004;
-  ClothMesh mesh = two_sheets(0.002, -0.012, -0.003, -0.004);
-  Particles particles;
-  particles.add(Vec3(0.3, 0.0, 0.2), Vec3::Zero(), dt, kMass);
-  CouplingSettings settings;
-  settings.max_ccd_iterations = 4;
-  Coupler coupler(settings);
-  CouplingStepStats stats;
-  const std::uint32_t status = coupler.step(particles.view(), mesh, dt, stats);
-  ASSERT_NE(status & COUPLING_ZONES_STOPPED, 0u)
+  FoldStep fold(0.002, -0.012, -0.003, -0.004);
+  ASSERT_NE(fold.status & COUPLING_ZONES_STOPPED, 0u)
       << "the fold must need the last resort, else it tests nothing";
-  EXPECT_EQ(status & COUPLING_UNRESOLVED, 0u);
-  LeakAuditStats leaks;
-  EXPECT_EQ(audit_leaks(particles.x0, particles.x1, mesh, leaks), 0u);
+  EXPECT_EQ(fold.status & COUPLING_UNRESOLVED, 0u);
+  EXPECT_EQ(fold.leaks(), 0u);
   const Vec3 zone(0.0, -0.008, 0.0);
-  EXPECT_LT((particles.x1[0] - particles.x0[0] - zone).norm(), 1e-15);
-  EXPECT_EQ(stats.stopped_nodes, 6u);
-  EXPECT_EQ(nodes_moved_by(mesh, zone, 1e-15), 6u);
+  EXPECT_LT((fold.particles.x1[0] - fold.particles.x0[0] - zone).norm(), 1e-15);
+  EXPECT_EQ(fold.stats.stopped_nodes, 6u);
+  EXPECT_EQ(nodes_moved_by(fold.mesh, zone, 1e-15), 6u);
 }
 
 TEST(Coupler, RejectsBadSettingsNamingThem) {
