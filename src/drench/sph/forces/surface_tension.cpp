@@ -22,8 +22,10 @@ Scalar SurfaceTensionAkinci::cohesion_kernel(Scalar r) const {
   return 2.0 * r > h ? m_cohesion_scale * f : m_cohesion_scale * (2.0 * f - m_cohesion_offset);
 }
 
-SurfaceTensionAkinci::SurfaceTensionAkinci(Scalar sigma, Scalar particle_spacing, Scalar rest_density)
-    : m_gamma(0.0),
+SurfaceTensionAkinci::SurfaceTensionAkinci(Scalar sigma, Scalar particle_spacing, Scalar rest_density,
+                                           Terms terms)
+    : m_terms(terms),
+      m_gamma(0.0),
       m_support(2.0 * particle_spacing),
       m_rest_density(rest_density),
       m_cohesion_scale(32.0 / (kPi * std::pow(m_support, 9))),
@@ -55,20 +57,22 @@ void SurfaceTensionAkinci::add_accelerations(const FluidContext& ctx, Scalar /*d
   const ParticleSet& p = ctx.particles;
   const std::size_t n = p.size();
   const NeighborList& nb = ctx.fluid_neighbors;
-  m_normals.resize(n);
+  const bool curvature_term = m_terms == Terms::COHESION_AND_CURVATURE;
+  m_normals.assign(n, Vec3::Zero());
   m_virial_pressures.resize(n);
-  parallel_for(n, kParticleChunk, [&](std::size_t begin, std::size_t end) {
-    for (std::size_t i = begin; i < end; ++i) {
-      Vec3 g = Vec3::Zero();
-      // The lists' gradient factors hold at the current positions (FluidContext), for PBF's prediction too.
-      for (std::uint32_t e = nb.offsets[i]; e < nb.offsets[i + 1]; ++e) {
-        const Index j = nb.indices[e];
-        g += (p.masses[j] / p.densities[j] * static_cast<Scalar>(ctx.fluid_gradient_factors[e])) *
-             (p.positions[i] - p.positions[j]);
+  if (curvature_term)
+    parallel_for(n, kParticleChunk, [&](std::size_t begin, std::size_t end) {
+      for (std::size_t i = begin; i < end; ++i) {
+        Vec3 g = Vec3::Zero();
+        // The lists' gradient factors hold at the current positions (FluidContext), for PBF's prediction too.
+        for (std::uint32_t e = nb.offsets[i]; e < nb.offsets[i + 1]; ++e) {
+          const Index j = nb.indices[e];
+          g += (p.masses[j] / p.densities[j] * static_cast<Scalar>(ctx.fluid_gradient_factors[e])) *
+               (p.positions[i] - p.positions[j]);
+        }
+        m_normals[i] = m_support * g;
       }
-      m_normals[i] = m_support * g;
-    }
-  });
+    });
   const Scalar rho0 = m_rest_density;
   parallel_for(n, kParticleChunk, [&](std::size_t begin, std::size_t end) {
     for (std::size_t i = begin; i < end; ++i) {
@@ -80,8 +84,9 @@ void SurfaceTensionAkinci::add_accelerations(const FluidContext& ctx, Scalar /*d
         if (!(r > 0.0) || r > m_support) continue;
         const Scalar correction = 2.0 * rho0 / (p.densities[i] + p.densities[*j]);
         const Vec3 cohesion = (-m_gamma * p.masses[*j] * cohesion_kernel(r) / r) * x_ij;
-        const Vec3 curvature = -m_gamma * (m_normals[i] - m_normals[*j]);
-        const Vec3 a_ij = correction * (cohesion + curvature);
+        const Vec3 a_ij = curvature_term
+                              ? Vec3(correction * (cohesion - m_gamma * (m_normals[i] - m_normals[*j])))
+                              : Vec3(correction * cohesion);
         a += a_ij;
         virial += x_ij.dot(a_ij);
       }
@@ -103,8 +108,13 @@ constexpr Scalar kSmoothedThreshold = 0.16;
 constexpr int kNormalSmoothingPasses = 2;
 }  // namespace
 
-SurfaceTensionCsf::SurfaceTensionCsf(Scalar sigma, Scalar particle_spacing)
-    : m_sigma(sigma), m_spacing(particle_spacing), m_delta_normalisation(0.0) {
+SurfaceTensionCsf::SurfaceTensionCsf(Scalar sigma, Scalar particle_spacing, Scalar rest_density,
+                                     Scalar cohesion_share)
+    : m_sigma((1.0 - cohesion_share) * sigma),
+      m_spacing(particle_spacing),
+      m_delta_normalisation(0.0),
+      m_cohesion(cohesion_share * sigma, particle_spacing, rest_density,
+                 SurfaceTensionAkinci::Terms::COHESION) {
   // D: the face z = 0 of the lattice filling z <= 0; every layer whose support reaches past the face counts.
   const CubicSplineKernel kernel(particle_spacing);
   const Scalar s = particle_spacing;
@@ -119,7 +129,7 @@ SurfaceTensionCsf::SurfaceTensionCsf(Scalar sigma, Scalar particle_spacing)
   }
 }
 
-void SurfaceTensionCsf::add_accelerations(const FluidContext& ctx, Scalar /*dt*/,
+void SurfaceTensionCsf::add_accelerations(const FluidContext& ctx, Scalar dt,
                                           Vec3Array& accelerations) const {
   const ParticleSet& p = ctx.particles;
   const std::size_t n = p.size();
@@ -132,7 +142,6 @@ void SurfaceTensionCsf::add_accelerations(const FluidContext& ctx, Scalar /*dt*/
   m_on_surface.resize(n);
   m_raw_curvatures.assign(n, 0.0);
   m_curvatures.assign(n, 0.0);
-  m_virial_pressures.assign(n, 0.0);
   // Rest volumes m / rho0: SPH's density of a surface particle is low by the kernel's truncation, not by
   // expansion, and D is calibrated with the lattice's volumes (m / rho_j read kappa 18-36% high on droplets).
   const Scalar rest_density = ctx.rest_density;
@@ -210,13 +219,14 @@ void SurfaceTensionCsf::add_accelerations(const FluidContext& ctx, Scalar /*dt*/
           (m_sigma * m_curvatures[i] / (m_delta_normalisation * rest_density)) * m_colour_gradients[i];
     }
   });
+  m_cohesion.add_accelerations(ctx, dt, accelerations);
 }
 
 std::unique_ptr<SurfaceTension> make_surface_tension(const SurfaceTensionSettings& settings,
                                                      Scalar particle_spacing, Scalar rest_density) {
   if (settings.model == SurfaceTensionModel::AKINCI)
     return std::make_unique<SurfaceTensionAkinci>(settings.sigma, particle_spacing, rest_density);
-  return std::make_unique<SurfaceTensionCsf>(settings.sigma, particle_spacing);
+  return std::make_unique<SurfaceTensionCsf>(settings.sigma, particle_spacing, rest_density);
 }
 
 }  // namespace drench
