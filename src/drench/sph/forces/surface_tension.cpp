@@ -54,6 +54,11 @@ SurfaceTensionAkinci::SurfaceTensionAkinci(Scalar sigma, Scalar particle_spacing
 
 void SurfaceTensionAkinci::add_accelerations(const FluidContext& ctx, Scalar /*dt*/,
                                              Vec3Array& accelerations) const {
+  add_pair_accelerations(ctx, nullptr, accelerations);
+}
+
+void SurfaceTensionAkinci::add_pair_accelerations(const FluidContext& ctx, const std::vector<char>* mask,
+                                                  Vec3Array& accelerations) const {
   const ParticleSet& p = ctx.particles;
   const std::size_t n = p.size();
   const NeighborList& nb = ctx.fluid_neighbors;
@@ -78,7 +83,9 @@ void SurfaceTensionAkinci::add_accelerations(const FluidContext& ctx, Scalar /*d
     for (std::size_t i = begin; i < end; ++i) {
       Vec3 a = Vec3::Zero();
       Scalar virial = 0.0;
+      const bool masked_i = mask && (*mask)[i];
       for (const Index* j = nb.begin(i); j != nb.end(i); ++j) {
+        if (mask && !masked_i && !(*mask)[*j]) continue;
         const Vec3 x_ij = p.positions[i] - p.positions[*j];
         const Scalar r = x_ij.norm();
         if (!(r > 0.0) || r > m_support) continue;
@@ -114,7 +121,10 @@ SurfaceTensionCsf::SurfaceTensionCsf(Scalar sigma, Scalar particle_spacing, Scal
       m_spacing(particle_spacing),
       m_delta_normalisation(0.0),
       m_cohesion(cohesion_share * sigma, particle_spacing, rest_density,
-                 SurfaceTensionAkinci::Terms::COHESION) {
+                 SurfaceTensionAkinci::Terms::COHESION),
+      m_small_droplets((1.0 - cohesion_share) * sigma, particle_spacing, rest_density),
+      m_min_resolved_particles(
+          static_cast<std::size_t>(std::ceil(4.0 / 3.0 * kPi * std::pow(kMinResolvedRadius, 3)))) {
   // D: the face z = 0 of the lattice filling z <= 0; every layer whose support reaches past the face counts.
   const CubicSplineKernel kernel(particle_spacing);
   const Scalar s = particle_spacing;
@@ -142,6 +152,7 @@ void SurfaceTensionCsf::add_accelerations(const FluidContext& ctx, Scalar dt,
   m_on_surface.resize(n);
   m_raw_curvatures.assign(n, 0.0);
   m_curvatures.assign(n, 0.0);
+  mark_unresolved_droplets(ctx);
   // Rest volumes m / rho0: SPH's density of a surface particle is low by the kernel's truncation, not by
   // expansion, and D is calibrated with the lattice's volumes (m / rho_j read kappa 18-36% high on droplets).
   const Scalar rest_density = ctx.rest_density;
@@ -202,7 +213,7 @@ void SurfaceTensionCsf::add_accelerations(const FluidContext& ctx, Scalar dt,
   });
   parallel_for(n, kParticleChunk, [&](std::size_t begin, std::size_t end) {
     for (std::size_t i = begin; i < end; ++i) {
-      if (!m_on_surface[i]) continue;
+      if (!m_on_surface[i] || m_unresolved[i]) continue;
       Scalar weights = volume(static_cast<Index>(i)) * self_weight;
       Scalar sum = weights * m_raw_curvatures[i];
       for (const Index* j = nb.begin(i); j != nb.end(i); ++j) {
@@ -220,6 +231,45 @@ void SurfaceTensionCsf::add_accelerations(const FluidContext& ctx, Scalar dt,
     }
   });
   m_cohesion.add_accelerations(ctx, dt, accelerations);
+  m_virial_pressures = m_cohesion.virial_pressures();
+  if (m_unresolved_count == 0) return;
+  m_small_droplets.add_pair_accelerations(ctx, &m_unresolved, accelerations);
+  for (std::size_t i = 0; i < n; ++i)
+    m_virial_pressures[i] += m_small_droplets.virial_pressures()[i];
+}
+
+void SurfaceTensionCsf::mark_unresolved_droplets(const FluidContext& ctx) const {
+  // Union-find over the pairs within the support: sequential, so the same sets for any thread count.
+  const ParticleSet& p = ctx.particles;
+  const std::size_t n = p.size();
+  const NeighborList& nb = ctx.fluid_neighbors;
+  const Scalar support_sq = ctx.kernel.support_radius() * ctx.kernel.support_radius();
+  m_droplet.resize(n);
+  for (std::size_t i = 0; i < n; ++i)
+    m_droplet[i] = static_cast<Index>(i);
+  const auto root = [&](Index i) {
+    while (m_droplet[i] != i) {
+      m_droplet[i] = m_droplet[m_droplet[i]];
+      i = m_droplet[i];
+    }
+    return i;
+  };
+  for (std::size_t i = 0; i < n; ++i)
+    for (const Index* j = nb.begin(i); j != nb.end(i); ++j) {
+      if ((p.positions[i] - p.positions[*j]).squaredNorm() >= support_sq) continue;
+      const Index a = root(static_cast<Index>(i));
+      const Index b = root(*j);
+      if (a != b) m_droplet[std::max(a, b)] = std::min(a, b);
+    }
+  m_droplet_sizes.assign(n, 0);
+  for (std::size_t i = 0; i < n; ++i)
+    ++m_droplet_sizes[root(static_cast<Index>(i))];
+  m_unresolved.resize(n);
+  m_unresolved_count = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    m_unresolved[i] = m_droplet_sizes[m_droplet[i]] < m_min_resolved_particles;
+    m_unresolved_count += m_unresolved[i] ? 1 : 0;
+  }
 }
 
 std::unique_ptr<SurfaceTension> make_surface_tension(const SurfaceTensionSettings& settings,
