@@ -186,10 +186,10 @@ Scalar pressure_force_virial(const FluidSolver& fluid, std::size_t i) {
 // surface layer only), averaged over the particles within R / 2 of the centre, and over 0.05-0.1 s every 5
 // ms: the small droplet still rings (26-36 Pa at single instants from 0.05 to 0.15 s without the cohesion).
 // Measured: 35.2 Pa (34.3-35.8) at R = 4.5 mm (2 sigma / R 31.8) and 18.0 Pa (17.5-18.5) at 8.5 mm (17.0);
-// without the cohesion 34.4 and 17.6 Pa. Akinci's model holds 94 and 73 Pa here: its pair
-// forces' surface stress is not the surface energy its gamma is calibrated to (a flat slab's int (p_N - p_T)
-// dz reads 0.003-0.152 N/m against 0.072), and its curvature term is no energy's gradient, so its droplets
-// never rest (1-2 cm/s after 0.3 s).
+// without the cohesion 34.4 and 17.6 Pa. Akinci's model holds 94 and 73 Pa here: its pair forces' surface
+// stress is not the surface energy its gamma is calibrated to (a flat slab's int (p_N - p_T) dz reads
+// 0.003-0.152 N/m against 0.072), and its curvature term is no energy's gradient, so its droplets never rest
+// (1-2 cm/s after 0.3 s).
 TEST(SurfaceTension, RestingDropletHoldsTheLaplacePressure) {
   for (const Scalar radius_in_spacings : {4.5, 8.5}) {
     const SurfaceTensionSettings tension{kSigma, SurfaceTensionModel::CSF};
