@@ -158,6 +158,38 @@ TEST(SurfaceTension, CsfCurvatureOfALatticeDropletIsTwoOverR) {
   }
 }
 
+// The continuum force's curvature is checked from 4.5 spacings up and its normals are smoothed over 4, so
+// droplets smaller than a ball of 4 spacings (268 particles) take Akinci's pair forces instead: two droplets
+// far apart, of 3 and 5 spacings, are told apart whole, and the small one's particles get no continuum
+// curvature.
+TEST(SurfaceTension, CsfLeavesDropletsBelowFourSpacingsToAkincisForces) {
+  const SurfaceTensionSettings tension{kSigma, SurfaceTensionModel::CSF};
+  FluidSolver fluid = make_fluid(PressureSolverKind::WCSPH, 0.0, &tension, 10.0);
+  add_ball(fluid, 3.0 * kSpacing);
+  const std::size_t small = fluid.particles().size();
+  FluidSolver big = make_fluid(PressureSolverKind::WCSPH, 0.0, nullptr, 10.0);
+  add_ball(big, 5.0 * kSpacing);
+  for (std::size_t i = 0; i < big.particles().size(); ++i)
+    fluid.particles().add(big.particles().positions[i] + Vec3(0.02, 0.0, 0.0), Vec3::Zero(),
+                          fluid.particle_mass(), static_cast<std::uint32_t>(small + i));
+  ASSERT_TRUE(fluid.step(1e-7).ok());
+  const auto* csf = dynamic_cast<const SurfaceTensionCsf*>(fluid.surface_tension());
+  ASSERT_NE(csf, nullptr);
+  std::size_t small_unresolved = 0;
+  std::size_t big_unresolved = 0;
+  std::size_t small_curved = 0;
+  for (std::size_t i = 0; i < fluid.particles().size(); ++i) {
+    const bool in_small = fluid.particles().positions[i].x() < 0.01;
+    (in_small ? small_unresolved : big_unresolved) += csf->unresolved()[i] ? 1 : 0;
+    if (in_small && csf->curvatures()[i] != 0.0) ++small_curved;
+  }
+  std::printf("[ measured ] %zu and %zu particles: %zu and %zu in droplets too small\n", small,
+              fluid.particles().size() - small, small_unresolved, big_unresolved);
+  EXPECT_EQ(small_unresolved, small);
+  EXPECT_EQ(big_unresolved, 0u);
+  EXPECT_EQ(small_curved, 0u);
+}
+
 /// The virial pressure of the SPH pressure force's pairs at particle i (unit: Pa): (rho_i / 6) sum_j x_ij .
 /// a_ij with a_ij = -m_j (p_i / rho_i^2 + p_j / rho_j^2) grad W_ij, from the solver's last densities and
 /// pressures at the current positions (the fluid at rest barely moves in a sub-step). Equals p_i only where
