@@ -81,11 +81,13 @@ void SurfaceTensionAkinci::add_pair_accelerations(const FluidContext& ctx, const
   const Scalar rho0 = m_rest_density;
   parallel_for(n, kParticleChunk, [&](std::size_t begin, std::size_t end) {
     for (std::size_t i = begin; i < end; ++i) {
+      if (mask && !(*mask)[i]) {
+        m_virial_pressures[i] = 0.0;
+        continue;
+      }
       Vec3 a = Vec3::Zero();
       Scalar virial = 0.0;
-      const bool masked_i = mask && (*mask)[i];
       for (const Index* j = nb.begin(i); j != nb.end(i); ++j) {
-        if (mask && !masked_i && !(*mask)[*j]) continue;
         const Vec3 x_ij = p.positions[i] - p.positions[*j];
         const Scalar r = x_ij.norm();
         if (!(r > 0.0) || r > m_support) continue;
@@ -267,7 +269,7 @@ void SurfaceTensionCsf::mark_unresolved_droplets(const FluidContext& ctx) const 
   m_unresolved.resize(n);
   m_unresolved_count = 0;
   for (std::size_t i = 0; i < n; ++i) {
-    m_unresolved[i] = m_droplet_sizes[m_droplet[i]] < m_min_resolved_particles;
+    m_unresolved[i] = m_droplet_sizes[root(static_cast<Index>(i))] < m_min_resolved_particles;
     m_unresolved_count += m_unresolved[i] ? 1 : 0;
   }
 }

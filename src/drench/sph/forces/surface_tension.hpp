@@ -48,7 +48,8 @@ class SurfaceTensionAkinci final : public SurfaceTension {
   SurfaceTensionAkinci(Scalar sigma, Scalar particle_spacing, Scalar rest_density,
                        Terms terms = Terms::COHESION_AND_CURVATURE);
   void add_accelerations(const FluidContext& ctx, Scalar dt, Vec3Array& accelerations) const override;
-  /// As add_accelerations, over the pairs (i, j) with mask[i] or mask[j] only (N flags), or all when null.
+  /// As add_accelerations, on the particles i with mask[i] only (N flags), or all when null. Momentum is
+  /// conserved where every pair within the support has both flags or neither (whole droplets).
   void add_pair_accelerations(const FluidContext& ctx, const std::vector<char>* mask,
                               Vec3Array& accelerations) const;
   /// Their gamma (unit: N m^3 / kg^2 in the cohesion term).
@@ -152,7 +153,7 @@ class SurfaceTensionCsf final : public SurfaceTension {
   SurfaceTensionAkinci m_cohesion;
   SurfaceTensionAkinci m_small_droplets;  // Akinci's full pair forces with the continuum force's share
   std::size_t m_min_resolved_particles;   // of a ball of kMinResolvedRadius spacings
-  mutable std::vector<Index> m_droplet;   // union-find parents, then each particle's droplet's root
+  mutable std::vector<Index> m_droplet;   // union-find parents (a root is its own)
   mutable std::vector<std::size_t> m_droplet_sizes;
   mutable std::vector<char> m_unresolved;  // in a droplet below m_min_resolved_particles
   mutable std::size_t m_unresolved_count = 0;
