@@ -180,10 +180,10 @@ Scalar cap_base_radius(Scalar theta_degree) {
 // Young-Dupre: the work of adhesion W = sigma (1 + cos theta) sets the contact angle theta. On cotton (W =
 // 2 sigma = 0.144 N/m, theta 0) water spreads; on a water-repellent fabric (W = 0.05 N/m, theta 108
 // degrees) it beads, its cap base 1.06 R0 wide; without adhesion (theta 180) it is a ball on a point.
-// Measured: water-repellent 104 degrees, contact radius 1.09 R0 (within 15 degrees and 15% of Young-Dupre's
-// cap); cotton 56 degrees, 1.41 R0, wider than any cap of theta >= 90 degrees (1.26 R0): a film a few
-// particles thick, thinner than which particles cannot spread, so theta 0 is out of reach; none 160
-// degrees, 0.68 R0. The lowest particles sit at 0.36-0.49 mm, inside the cloth thickness (0.5 mm) where the
+// Measured: water-repellent 102 degrees, contact radius 1.11 R0 (within 15 degrees and 15% of Young-Dupre's
+// cap); cotton 59 degrees, 1.42 R0, wider than any cap of theta >= 90 degrees (1.26 R0): a film a few
+// particles thick, thinner than which particles cannot spread, so theta 0 is out of reach; none 156
+// degrees, 0.70 R0. The lowest particles sit at 0.39-0.59 mm, about the cloth thickness (0.5 mm), where the
 // elastic repulsion balances the pull.
 TEST(Adhesion, DropletSpreadsOnCottonAndBeadsOnAWaterRepellentPlate) {
   const Resting cotton = rest(2.0 * kSigma);

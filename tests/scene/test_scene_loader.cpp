@@ -484,7 +484,7 @@ TEST(SceneLoader, RejectsUnknownViscosityMethod) {
 }
 
 TEST(SceneLoader, ReadsTheSurfaceTensionModel) {
-  EXPECT_EQ(parse(R"({})").surface_tension.model, SurfaceTensionModel::AKINCI);
+  EXPECT_EQ(parse(R"({})").surface_tension.model, SurfaceTensionModel::CSF);
   const SceneConfig c =
       parse(R"({"effects": ["surface_tension"], "surface_tension": {"sigma": 0.05, "model": "csf"}})");
   EXPECT_EQ(c.surface_tension.model, SurfaceTensionModel::CSF);

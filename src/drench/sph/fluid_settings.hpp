@@ -177,16 +177,17 @@ struct ViscositySettings {
 /// the scene's `effects` lists "surface_tension" (forces/surface_tension.hpp has the model and why).
 /// The surface tension model (forces/surface_tension.hpp has each and the measurements behind the default).
 enum class SurfaceTensionModel {
-  CSF,    ///< continuum surface force sigma kappa n (Brackbill et al. 1992, Morris 2000)
+  CSF,  ///< continuum surface force (Brackbill et al. 1992, Morris 2000), a cohesion, Akinci's in small drops
   AKINCI  ///< cohesion and curvature pair forces (Akinci et al. 2013)
 };
 
 struct SurfaceTensionSettings {
   /// Coefficient sigma (unit: N/m), >= 0; water against air at 20 C: 0.072.
   Scalar sigma = 0.072;
-  /// Akinci's by default: the only one that turns a cube into a sphere with every pressure solver (the
-  /// continuum surface force holds the Laplace pressure but fails that with PCISPH and PBF).
-  SurfaceTensionModel model = SurfaceTensionModel::AKINCI;
+  /// The continuum surface force by default: with its cohesion and Akinci's forces in small droplets it
+  /// turns a cube into a sphere with every pressure solver, holds the Laplace pressure and the adhesion's
+  /// droplets; Akinci's model alone fails the Laplace pressure (forces/surface_tension.hpp).
+  SurfaceTensionModel model = SurfaceTensionModel::CSF;
 };
 
 /// The fluid of a scene (`fluid` in docs/scenes.md).

@@ -22,8 +22,10 @@ Scalar SurfaceTensionAkinci::cohesion_kernel(Scalar r) const {
   return 2.0 * r > h ? m_cohesion_scale * f : m_cohesion_scale * (2.0 * f - m_cohesion_offset);
 }
 
-SurfaceTensionAkinci::SurfaceTensionAkinci(Scalar sigma, Scalar particle_spacing, Scalar rest_density)
-    : m_gamma(0.0),
+SurfaceTensionAkinci::SurfaceTensionAkinci(Scalar sigma, Scalar particle_spacing, Scalar rest_density,
+                                           Terms terms)
+    : m_terms(terms),
+      m_gamma(0.0),
       m_support(2.0 * particle_spacing),
       m_rest_density(rest_density),
       m_cohesion_scale(32.0 / (kPi * std::pow(m_support, 9))),
@@ -52,26 +54,37 @@ SurfaceTensionAkinci::SurfaceTensionAkinci(Scalar sigma, Scalar particle_spacing
 
 void SurfaceTensionAkinci::add_accelerations(const FluidContext& ctx, Scalar /*dt*/,
                                              Vec3Array& accelerations) const {
+  add_pair_accelerations(ctx, nullptr, accelerations);
+}
+
+void SurfaceTensionAkinci::add_pair_accelerations(const FluidContext& ctx, const std::vector<char>* mask,
+                                                  Vec3Array& accelerations) const {
   const ParticleSet& p = ctx.particles;
   const std::size_t n = p.size();
   const NeighborList& nb = ctx.fluid_neighbors;
-  m_normals.resize(n);
+  const bool curvature_term = m_terms == Terms::COHESION_AND_CURVATURE;
+  m_normals.assign(n, Vec3::Zero());
   m_virial_pressures.resize(n);
-  parallel_for(n, kParticleChunk, [&](std::size_t begin, std::size_t end) {
-    for (std::size_t i = begin; i < end; ++i) {
-      Vec3 g = Vec3::Zero();
-      // The lists' gradient factors hold at the current positions (FluidContext), for PBF's prediction too.
-      for (std::uint32_t e = nb.offsets[i]; e < nb.offsets[i + 1]; ++e) {
-        const Index j = nb.indices[e];
-        g += (p.masses[j] / p.densities[j] * static_cast<Scalar>(ctx.fluid_gradient_factors[e])) *
-             (p.positions[i] - p.positions[j]);
+  if (curvature_term)
+    parallel_for(n, kParticleChunk, [&](std::size_t begin, std::size_t end) {
+      for (std::size_t i = begin; i < end; ++i) {
+        Vec3 g = Vec3::Zero();
+        // The lists' gradient factors hold at the current positions (FluidContext), for PBF's prediction too.
+        for (std::uint32_t e = nb.offsets[i]; e < nb.offsets[i + 1]; ++e) {
+          const Index j = nb.indices[e];
+          g += (p.masses[j] / p.densities[j] * static_cast<Scalar>(ctx.fluid_gradient_factors[e])) *
+               (p.positions[i] - p.positions[j]);
+        }
+        m_normals[i] = m_support * g;
       }
-      m_normals[i] = m_support * g;
-    }
-  });
+    });
   const Scalar rho0 = m_rest_density;
   parallel_for(n, kParticleChunk, [&](std::size_t begin, std::size_t end) {
     for (std::size_t i = begin; i < end; ++i) {
+      if (mask && !(*mask)[i]) {
+        m_virial_pressures[i] = 0.0;
+        continue;
+      }
       Vec3 a = Vec3::Zero();
       Scalar virial = 0.0;
       for (const Index* j = nb.begin(i); j != nb.end(i); ++j) {
@@ -80,8 +93,9 @@ void SurfaceTensionAkinci::add_accelerations(const FluidContext& ctx, Scalar /*d
         if (!(r > 0.0) || r > m_support) continue;
         const Scalar correction = 2.0 * rho0 / (p.densities[i] + p.densities[*j]);
         const Vec3 cohesion = (-m_gamma * p.masses[*j] * cohesion_kernel(r) / r) * x_ij;
-        const Vec3 curvature = -m_gamma * (m_normals[i] - m_normals[*j]);
-        const Vec3 a_ij = correction * (cohesion + curvature);
+        const Vec3 a_ij = curvature_term
+                              ? Vec3(correction * (cohesion - m_gamma * (m_normals[i] - m_normals[*j])))
+                              : Vec3(correction * cohesion);
         a += a_ij;
         virial += x_ij.dot(a_ij);
       }
@@ -103,8 +117,16 @@ constexpr Scalar kSmoothedThreshold = 0.16;
 constexpr int kNormalSmoothingPasses = 2;
 }  // namespace
 
-SurfaceTensionCsf::SurfaceTensionCsf(Scalar sigma, Scalar particle_spacing)
-    : m_sigma(sigma), m_spacing(particle_spacing), m_delta_normalisation(0.0) {
+SurfaceTensionCsf::SurfaceTensionCsf(Scalar sigma, Scalar particle_spacing, Scalar rest_density,
+                                     Scalar cohesion_share)
+    : m_sigma((1.0 - cohesion_share) * sigma),
+      m_spacing(particle_spacing),
+      m_delta_normalisation(0.0),
+      m_cohesion(cohesion_share * sigma, particle_spacing, rest_density,
+                 SurfaceTensionAkinci::Terms::COHESION),
+      m_small_droplets((1.0 - cohesion_share) * sigma, particle_spacing, rest_density),
+      m_min_resolved_particles(
+          static_cast<std::size_t>(std::ceil(4.0 / 3.0 * kPi * std::pow(kMinResolvedRadius, 3)))) {
   // D: the face z = 0 of the lattice filling z <= 0; every layer whose support reaches past the face counts.
   const CubicSplineKernel kernel(particle_spacing);
   const Scalar s = particle_spacing;
@@ -119,7 +141,7 @@ SurfaceTensionCsf::SurfaceTensionCsf(Scalar sigma, Scalar particle_spacing)
   }
 }
 
-void SurfaceTensionCsf::add_accelerations(const FluidContext& ctx, Scalar /*dt*/,
+void SurfaceTensionCsf::add_accelerations(const FluidContext& ctx, Scalar dt,
                                           Vec3Array& accelerations) const {
   const ParticleSet& p = ctx.particles;
   const std::size_t n = p.size();
@@ -132,7 +154,7 @@ void SurfaceTensionCsf::add_accelerations(const FluidContext& ctx, Scalar /*dt*/
   m_on_surface.resize(n);
   m_raw_curvatures.assign(n, 0.0);
   m_curvatures.assign(n, 0.0);
-  m_virial_pressures.assign(n, 0.0);
+  mark_unresolved_droplets(ctx);
   // Rest volumes m / rho0: SPH's density of a surface particle is low by the kernel's truncation, not by
   // expansion, and D is calibrated with the lattice's volumes (m / rho_j read kappa 18-36% high on droplets).
   const Scalar rest_density = ctx.rest_density;
@@ -193,7 +215,7 @@ void SurfaceTensionCsf::add_accelerations(const FluidContext& ctx, Scalar /*dt*/
   });
   parallel_for(n, kParticleChunk, [&](std::size_t begin, std::size_t end) {
     for (std::size_t i = begin; i < end; ++i) {
-      if (!m_on_surface[i]) continue;
+      if (!m_on_surface[i] || m_unresolved[i]) continue;
       Scalar weights = volume(static_cast<Index>(i)) * self_weight;
       Scalar sum = weights * m_raw_curvatures[i];
       for (const Index* j = nb.begin(i); j != nb.end(i); ++j) {
@@ -210,13 +232,53 @@ void SurfaceTensionCsf::add_accelerations(const FluidContext& ctx, Scalar /*dt*/
           (m_sigma * m_curvatures[i] / (m_delta_normalisation * rest_density)) * m_colour_gradients[i];
     }
   });
+  m_cohesion.add_accelerations(ctx, dt, accelerations);
+  m_virial_pressures = m_cohesion.virial_pressures();
+  if (m_unresolved_count == 0) return;
+  m_small_droplets.add_pair_accelerations(ctx, &m_unresolved, accelerations);
+  for (std::size_t i = 0; i < n; ++i)
+    m_virial_pressures[i] += m_small_droplets.virial_pressures()[i];
+}
+
+void SurfaceTensionCsf::mark_unresolved_droplets(const FluidContext& ctx) const {
+  // Union-find over the pairs within the support: sequential, so the same sets for any thread count.
+  const ParticleSet& p = ctx.particles;
+  const std::size_t n = p.size();
+  const NeighborList& nb = ctx.fluid_neighbors;
+  const Scalar support_sq = ctx.kernel.support_radius() * ctx.kernel.support_radius();
+  m_droplet.resize(n);
+  for (std::size_t i = 0; i < n; ++i)
+    m_droplet[i] = static_cast<Index>(i);
+  const auto root = [&](Index i) {
+    while (m_droplet[i] != i) {
+      m_droplet[i] = m_droplet[m_droplet[i]];
+      i = m_droplet[i];
+    }
+    return i;
+  };
+  for (std::size_t i = 0; i < n; ++i)
+    for (const Index* j = nb.begin(i); j != nb.end(i); ++j) {
+      if ((p.positions[i] - p.positions[*j]).squaredNorm() >= support_sq) continue;
+      const Index a = root(static_cast<Index>(i));
+      const Index b = root(*j);
+      if (a != b) m_droplet[std::max(a, b)] = std::min(a, b);
+    }
+  m_droplet_sizes.assign(n, 0);
+  for (std::size_t i = 0; i < n; ++i)
+    ++m_droplet_sizes[root(static_cast<Index>(i))];
+  m_unresolved.resize(n);
+  m_unresolved_count = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    m_unresolved[i] = m_droplet_sizes[root(static_cast<Index>(i))] < m_min_resolved_particles;
+    m_unresolved_count += m_unresolved[i] ? 1 : 0;
+  }
 }
 
 std::unique_ptr<SurfaceTension> make_surface_tension(const SurfaceTensionSettings& settings,
                                                      Scalar particle_spacing, Scalar rest_density) {
   if (settings.model == SurfaceTensionModel::AKINCI)
     return std::make_unique<SurfaceTensionAkinci>(settings.sigma, particle_spacing, rest_density);
-  return std::make_unique<SurfaceTensionCsf>(settings.sigma, particle_spacing);
+  return std::make_unique<SurfaceTensionCsf>(settings.sigma, particle_spacing, rest_density);
 }
 
 }  // namespace drench
