@@ -205,14 +205,15 @@ int offset_in_leaf(int x, int y, int z) {
   return ((x & 7) << 6) | ((y & 7) << 3) | (z & 7);
 }
 
-/// Yu & Turk 2013's field at every node of `nodes` into `values`, contact-aware (sec. 4): a node within the
-/// contact offset of a face is reset (Fig. 2b), and a kernel adds to a node only if the segment from the
-/// node to its centre crosses no face (Fig. 2a). Each kernel is spread over the nodes of its own support,
-/// leaf by leaf, row by row of the grid (the row's interval from the quadratic |G (x - c)|^2 < 1), where a
-/// node gathering from every centre within the longest reach tested 8 candidates for each one in its
-/// support (the V's frames: 68 million for 8.6 million within reach, 1.8 million in a support). A node
-/// still receives its kernels in slot order, each value computed as a gathering node computes it: the same
-/// sums to the bit. Returns (occluded pairs, reset nodes).
+/// Yu & Turk 2013's field at every node of `nodes` (listed leaf by leaf, as active_nodes() lists them) into
+/// `values`, contact-aware (sec. 4): a node within the contact offset of a face is reset (Fig. 2b), and a
+/// kernel adds to a node only if the segment from the node to its centre crosses no face (Fig. 2a). Each
+/// kernel is spread over the nodes of its own support, leaf by leaf, row by row of the grid (the row's
+/// interval from the quadratic |G (x - c)|^2 < 1), where a node gathering from every centre within the
+/// longest reach tested 37 candidates for each kernel whose support holds it (the V's frames: 68 million
+/// for 8.6 million within reach and 1.8 million in a support). A node still receives its kernels in slot
+/// order, each term computed as a gathering node computed it: the same sums to the bit. A node's reset test
+/// runs when the first kernel reaches it. Returns (occluded pairs, reset nodes).
 std::pair<std::uint64_t, std::uint64_t> anisotropic_field(const std::vector<Vec3i>& nodes, Scalar cell,
                                                           Scalar radius, Scalar reach, Scalar offset,
                                                           Scalar particle_spacing, const SlotKernels& kernels,
@@ -266,7 +267,10 @@ std::pair<std::uint64_t, std::uint64_t> anisotropic_field(const std::vector<Vec3
       runs.size(), 8, Counts(0, 0),
       [&](std::size_t begin, std::size_t end) {
         std::uint64_t occluded = 0, reset = 0;
-        std::array<int, 512> local;  // offset in the leaf -> node, or -1 (inactive or reset)
+        // Per offset in the leaf: its node (or -1: inactive), whether the reset test has run and found it
+        // outside (Fig. 2b), the squared distance to its nearest face, its field.
+        std::array<int, 512> local;
+        std::array<signed char, 512> state;  // 0: not tested yet, 1: reset, 2: open
         std::array<double, 512> weight, clearance2;
         // A node's faces within the longest reach, for its segments' tests: collected for the leaf and
         // filtered for the node only when a segment is longer than the distance to the nearest face.
@@ -280,26 +284,36 @@ std::pair<std::uint64_t, std::uint64_t> anisotropic_field(const std::vector<Vec3
                      leaf_hi = (origin + Vec3i::Constant(7)).cast<double>() * cell;
           local.fill(-1);
           near_ready.fill(false);
-          bool reach_collected = false;
-          if (bins)
-            bins->collect_box(leaf_lo - Vec3::Constant(reset_reach), leaf_hi + Vec3::Constant(reset_reach),
-                              block_reset);
+          bool reset_collected = false, reach_collected = false;
           for (std::size_t n = run.begin; n < run.end; ++n) {
-            const Vec3 x = nodes[n].cast<double>() * cell;
             const int k = offset_in_leaf(nodes[n].x(), nodes[n].y(), nodes[n].z());
-            // A face outside the box of the kernel radius is farther than it.
-            clearance2[k] = bins ? radius * radius : std::numeric_limits<double>::infinity();
-            if (bins) {
-              bins->filter_box(block_reset, x - Vec3::Constant(reset_reach), x + Vec3::Constant(reset_reach),
-                               faces);
-              if (node_is_reset(x, faces, obstacles, offset, cell, clearance2[k])) {  // Fig. 2b
-                ++reset;
-                continue;
-              }
-            }
             local[k] = static_cast<int>(n);
+            state[k] = 0;
             weight[k] = 0.0;
           }
+          // The reset test of a node no kernel reaches would change nothing (it stays outside): it runs when
+          // the first kernel does.
+          const auto is_open = [&](int k, const Vec3& x) {
+            if (state[k] == 0) {
+              // A face outside the box of the kernel radius is farther than it.
+              clearance2[k] = bins ? radius * radius : std::numeric_limits<double>::infinity();
+              state[k] = 2;
+              if (bins) {
+                if (!reset_collected) {
+                  bins->collect_box(leaf_lo - Vec3::Constant(reset_reach),
+                                    leaf_hi + Vec3::Constant(reset_reach), block_reset);
+                  reset_collected = true;
+                }
+                bins->filter_box(block_reset, x - Vec3::Constant(reset_reach),
+                                 x + Vec3::Constant(reset_reach), faces);
+                if (node_is_reset(x, faces, obstacles, offset, cell, clearance2[k])) {
+                  state[k] = 1;
+                  ++reset;
+                }
+              }
+            }
+            return state[k] == 2;
+          };
           for (std::size_t e = first[r]; e < first[r + 1]; ++e) {
             const Index s = leaf_kernels[e];
             const Vec3& c = centres[s];
@@ -329,6 +343,7 @@ std::pair<std::uint64_t, std::uint64_t> anisotropic_field(const std::vector<Vec3
                   if (d.squaredNorm() >= kernels.reach2[s]) continue;
                   const double q = (g * d).squaredNorm();
                   if (q >= 1.0) continue;
+                  if (!is_open(k, x)) continue;
                   // A segment shorter than the distance to the nearest face crosses none (a margin far
                   // above segment_crosses_triangle's tolerance); a longer one stays within the faces of
                   // the node's reach.
@@ -355,7 +370,7 @@ std::pair<std::uint64_t, std::uint64_t> anisotropic_field(const std::vector<Vec3
           }
           for (std::size_t n = run.begin; n < run.end; ++n) {
             const int k = offset_in_leaf(nodes[n].x(), nodes[n].y(), nodes[n].z());
-            if (local[k] >= 0 && weight[k] > 0.0)
+            if (state[k] == 2 && weight[k] > 0.0)
               values[n] = static_cast<float>(
                   std::min<double>((kAnisotropicLevel - weight[k]) * particle_spacing, outside));
           }
@@ -407,11 +422,21 @@ SurfaceMesh reconstruct_surface(const Vec3Array& particles, Scalar particle_spac
   }
   lap(local.seconds_kernels);
   VdbNodeGrid grid(cell, outside);
+  // Per particle, the box of nodes its anisotropic kernel's support can touch.
+  std::vector<Vec3i> box_lo, box_hi;
   if (anisotropic) {
-    std::vector<int> reaches(particles.size());
-    for (std::size_t i = 0; i < reaches.size(); ++i)
-      reaches[i] = static_cast<int>(std::ceil(kernels.reaches[i] / cell));
-    grid.activate_around(kernels.centres, reaches);
+    grid.check_range(kernels.centres);
+    box_lo.resize(particles.size());
+    box_hi.resize(particles.size());
+    for (std::size_t i = 0; i < particles.size(); ++i) {
+      // The support |G d| < 1 is d = G^-1 w for |w| < 1: its half-width along axis k is row k's norm. A
+      // node more on every side, so no rounding leaves a node of the support out.
+      const Vec3 half = kernels.transforms[i].inverse().rowwise().norm();
+      const Vec3& c = kernels.centres[i];
+      box_lo[i] = ((c - half) / cell).array().floor().cast<int>() - 1;
+      box_hi[i] = ((c + half) / cell).array().ceil().cast<int>() + 1;
+    }
+    grid.activate_boxes(box_lo, box_hi);
   } else {
     grid.activate_around(particles, static_cast<int>(std::ceil(radius / cell)));
   }
@@ -440,15 +465,11 @@ SurfaceMesh reconstruct_surface(const Vec3Array& particles, Scalar particle_spac
     slot_kernels.lo.resize(order.size());
     slot_kernels.hi.resize(order.size());
     for (std::size_t s = 0; s < order.size(); ++s) {
-      const Eigen::Matrix3d& g = kernels.transforms[order[s]];
-      slot_kernels.transforms[s] = g;
+      slot_kernels.transforms[s] = kernels.transforms[order[s]];
       slot_kernels.amplitudes[s] = kernels.amplitudes[order[s]] * volume[order[s]];
       slot_kernels.reach2[s] = kernels.reaches[order[s]] * kernels.reaches[order[s]];
-      // The support |G d| < 1 is d = G^-1 w for |w| < 1: its half-width along axis k is row k's norm.
-      const Vec3 half = g.inverse().rowwise().norm();
-      const Vec3& c = (*slot_kernels.centres)[s];
-      slot_kernels.lo[s] = ((c - half) / cell).array().floor().cast<int>() - 1;
-      slot_kernels.hi[s] = ((c + half) / cell).array().ceil().cast<int>() + 1;
+      slot_kernels.lo[s] = box_lo[order[s]];
+      slot_kernels.hi[s] = box_hi[order[s]];
     }
   }
   // The visibility test of an anisotropic kernel skips the faces its segment's box misses: its node's faces
