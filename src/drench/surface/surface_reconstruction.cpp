@@ -511,7 +511,7 @@ SurfaceMesh reconstruct_surface(const Vec3Array& particles, Scalar particle_spac
               bins.filter_box(block_near, x - Vec3::Constant(radius), x + Vec3::Constant(radius), near);
             }
             double clearance2 = std::numeric_limits<double>::infinity();
-            if (node_is_reset(x, near, obstacles, offset, cell, clearance2)) {  // Fig. 2b
+            if (!near.empty() && node_is_reset(x, near, obstacles, offset, cell, clearance2)) {  // Fig. 2b
               ++reset;
               continue;
             }
