@@ -449,7 +449,9 @@ SurfaceMesh reconstruct_surface(const Vec3Array& particles, Scalar particle_spac
   const Vec3Array& sorted = cells.positions();
   const bool density_field = settings.field == SurfaceField::DENSITY;
   // The anisotropic kernels by slot of their own cells (of half the longest reach), each with its particle's
-  // volume (the isotropic inverse number density, Yu & Turk's m_j / rho_j) in its amplitude.
+  // volume (the isotropic inverse number density, Yu & Turk's m_j / rho_j) in its amplitude. The cells give
+  // the order a node sums its kernels in (that of the surfaces made before the kernels were spread: the
+  // same bits) and neighbouring kernels neighbouring slots.
   std::optional<ParticleCells> centre_cells;
   SlotKernels slot_kernels;
   if (anisotropic) {
