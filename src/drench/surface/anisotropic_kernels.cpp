@@ -21,11 +21,12 @@ constexpr double kMaxAxisInRadii = 2.0;
 
 using Near = std::vector<std::pair<Index, Index>>;
 
-/// Whether the segment pq crosses a face of `near`; faces whose box misses the segment's are skipped.
-bool crosses_any(const Vec3& p, const Vec3& q, const Near& near,
-                 const std::vector<SurfaceObstacle>& obstacles, const ObstacleFaceBoxes& boxes) {
+}  // namespace
+
+bool segment_crosses_faces(const Vec3& p, const Vec3& q, const std::vector<std::pair<Index, Index>>& faces,
+                           const std::vector<SurfaceObstacle>& obstacles, const ObstacleFaceBoxes& boxes) {
   const Vec3 lo = p.cwiseMin(q), hi = p.cwiseMax(q);
-  for (const auto& [o, t] : near) {
+  for (const auto& [o, t] : faces) {
     const Eigen::AlignedBox3d& box = boxes[o][t];
     if ((box.min().array() > hi.array()).any() || (box.max().array() < lo.array()).any()) continue;
     const Triangle& tri = (*obstacles[o].triangles)[t];
@@ -34,8 +35,6 @@ bool crosses_any(const Vec3& p, const Vec3& q, const Near& near,
   }
   return false;
 }
-
-}  // namespace
 
 ObstacleFaceBoxes obstacle_face_boxes(const std::vector<SurfaceObstacle>& obstacles) {
   ObstacleFaceBoxes boxes;
@@ -114,7 +113,7 @@ AnisotropicKernels anisotropic_kernels_yu_turk(const Vec3Array& particles, Scala
           cells.for_each_near(x, [&](Index j) {
             const double d2 = (sorted[j] - x).squaredNorm();
             if (d2 >= r2) return;
-            if (d2 >= clearance2 && crosses_any(x, sorted[j], near, obstacles, boxes)) {
+            if (d2 >= clearance2 && segment_crosses_faces(x, sorted[j], near, obstacles, boxes)) {
               ++c.occluded;
               return;
             }
@@ -133,7 +132,8 @@ AnisotropicKernels anisotropic_kernels_yu_turk(const Vec3Array& particles, Scala
           mean /= weight;  // the particle itself has w = 1
           Vec3 centre = (1.0 - lambda) * x + lambda * smooth_mean / smooth_weight;
           // The mean of the visible neighbours can lie behind a bent cloth (the V's fold): keep x_i there.
-          if ((centre - x).squaredNorm() >= clearance2 && crosses_any(x, centre, near, obstacles, boxes)) {
+          if ((centre - x).squaredNorm() >= clearance2 &&
+              segment_crosses_faces(x, centre, near, obstacles, boxes)) {
             centre = x;
             ++c.kept;
           }

@@ -5,6 +5,7 @@
 /// is never moved across a triangle.
 
 #include <cstdint>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Core>
@@ -26,6 +27,12 @@ using ObstacleFaceBoxes = std::vector<std::vector<Eigen::AlignedBox3d>>;
 /// kernels (their neighbourhoods here, the node-to-centre segments in reconstruct_surface) skip the faces a
 /// segment's box misses.
 ObstacleFaceBoxes obstacle_face_boxes(const std::vector<SurfaceObstacle>& obstacles);
+
+/// Whether the segment pq crosses one of the triangles `faces` ((obstacle, triangle) pairs of `obstacles`),
+/// as segment_crosses_triangle decides; a face whose box in `boxes` misses the segment's box is skipped
+/// without a test.
+bool segment_crosses_faces(const Vec3& p, const Vec3& q, const std::vector<std::pair<Index, Index>>& faces,
+                           const std::vector<SurfaceObstacle>& obstacles, const ObstacleFaceBoxes& boxes);
 
 /// One ellipsoidal kernel per particle, by particle index.
 struct AnisotropicKernels {

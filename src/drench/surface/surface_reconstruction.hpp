@@ -29,9 +29,11 @@ struct SurfaceMesh {
 
 /// What one reconstruction did.
 struct SurfaceStats {
-  std::uint64_t nodes = 0;        ///< grid nodes given a field value
-  std::uint64_t occluded = 0;     ///< node-particle pairs whose segment crossed a triangle (Fig. 2a)
-  std::uint64_t reset_nodes = 0;  ///< nodes set outside for being within contact_offset of a face (Fig. 2b)
+  std::uint64_t nodes = 0;     ///< grid nodes given a field value
+  std::uint64_t occluded = 0;  ///< node-particle pairs whose segment crossed a triangle (Fig. 2a)
+  /// Nodes set outside for being within contact_offset of a face (Fig. 2b); of the anisotropic kernels'
+  /// field, only nodes some kernel's support holds (the others are outside anyway, and not tested).
+  std::uint64_t reset_nodes = 0;
   std::uint64_t anisotropic = 0;  ///< particles given an anisotropic kernel (kernel ANISOTROPIC)
   double seconds = 0.0;           ///< wall time (unit: s)
   /// Wall time of the stages within `seconds` (unit: s), to see where a reconstruction's time goes

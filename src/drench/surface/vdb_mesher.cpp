@@ -5,8 +5,8 @@
 #include <openvdb/tools/VolumeToMesh.h>
 
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
-#include <map>
 #include <mutex>
 #include <string>
 
@@ -56,18 +56,59 @@ VdbNodeGrid::VdbNodeGrid(Scalar cell, float outside) : m_impl(std::make_unique<I
 
 VdbNodeGrid::~VdbNodeGrid() = default;
 
+void VdbNodeGrid::check_range(const Vec3Array& points) const {
+  const double cell = m_impl->grid->voxelSize()[0];
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const Vec3 node = (points[i] / cell).array().floor().matrix();
+    if (!(node.cwiseAbs().maxCoeff() <= kMaxNodeIndex)) {
+      throw Error("surface: particle " + std::to_string(i) + " at (" + show(points[i].x()) + ", " +
+                  show(points[i].y()) + ", " + show(points[i].z()) +
+                  ") m is beyond the surface grid's int32 coordinates at cell size " + show(cell) +
+                  " m (|x| / cell <= 2^30); choose a larger surface.cell_size");
+    }
+  }
+}
+
+void VdbNodeGrid::activate_boxes(const std::vector<Vec3i>& lo, const std::vector<Vec3i>& hi) {
+  using Leaf = openvdb::FloatGrid::TreeType::LeafNodeType;
+  static_assert(Leaf::DIM == 8, "a leaf's value mask: one 64-bit word of (y, z) bits per x");
+  auto accessor = m_impl->grid->getAccessor();
+  const auto leaf_of = [](int v) { return v >> 3; };
+  // bits[k]: nodes k, k + 1, ..., 7 of a leaf's row along z (or, times 0x0101..., along y).
+  const auto from = [](int k) { return 0xffu & (0xffu << k); };
+  vdb_call("activate its nodes", m_impl->grid->voxelSize()[0], [&] {
+    for (std::size_t i = 0; i < lo.size(); ++i) {
+      for (int lx = leaf_of(lo[i].x()); lx <= leaf_of(hi[i].x()); ++lx)
+        for (int ly = leaf_of(lo[i].y()); ly <= leaf_of(hi[i].y()); ++ly)
+          for (int lz = leaf_of(lo[i].z()); lz <= leaf_of(hi[i].z()); ++lz) {
+            const openvdb::Coord origin(8 * lx, 8 * ly, 8 * lz);
+            const openvdb::Coord a =
+                openvdb::Coord::maxComponent(openvdb::Coord(lo[i].x(), lo[i].y(), lo[i].z()), origin) -
+                origin;
+            const openvdb::Coord b =
+                openvdb::Coord::minComponent(openvdb::Coord(hi[i].x(), hi[i].y(), hi[i].z()),
+                                             origin.offsetBy(7)) -
+                origin;
+            // Offset in a leaf: x << 6 | y << 3 | z, so word x holds the (y, z) plane, y a byte of it.
+            const std::uint64_t z_bits = from(a.z()) & ~from(b.z() + 1);
+            std::uint64_t plane = 0;
+            for (int y = a.y(); y <= b.y(); ++y)
+              plane |= z_bits << (8 * y);
+            auto& mask = accessor.touchLeaf(origin)->getValueMask();
+            for (int x = a.x(); x <= b.x(); ++x)
+              mask.template getWord<std::uint64_t>(x) |= plane;
+          }
+    }
+  });
+}
+
 void VdbNodeGrid::activate_around(const Vec3Array& particles, int reach) {
   openvdb::FloatGrid& grid = *m_impl->grid;
   auto accessor = grid.getAccessor();
   const double cell = grid.voxelSize()[0];
+  check_range(particles);
   for (std::size_t i = 0; i < particles.size(); ++i) {
     const Vec3 node = (particles[i] / cell).array().floor().matrix();
-    if (!(node.cwiseAbs().maxCoeff() <= kMaxNodeIndex)) {
-      throw Error("surface: particle " + std::to_string(i) + " at (" + show(particles[i].x()) + ", " +
-                  show(particles[i].y()) + ", " + show(particles[i].z()) +
-                  ") m is beyond the surface grid's int32 coordinates at cell size " + show(cell) +
-                  " m (|x| / cell <= 2^30); choose a larger surface.cell_size");
-    }
     accessor.setValueOn(
         openvdb::Coord(static_cast<int>(node.x()), static_cast<int>(node.y()), static_cast<int>(node.z())));
   }
@@ -76,29 +117,6 @@ void VdbNodeGrid::activate_around(const Vec3Array& particles, int reach) {
     openvdb::tools::dilateActiveValues(grid.tree(), reach + 1, openvdb::tools::NN_FACE_EDGE_VERTEX,
                                        openvdb::tools::EXPAND_TILES);
   });
-}
-
-void VdbNodeGrid::activate_around(const Vec3Array& particles, const std::vector<int>& reaches) {
-  // Dilation distributes over union: each reach's particles dilated on their own grid, then merged.
-  std::map<int, Vec3Array> groups;
-  for (std::size_t i = 0; i < particles.size(); ++i)
-    groups[reaches[i]].push_back(particles[i]);
-  if (groups.size() == 1) {
-    activate_around(particles, groups.begin()->first);
-    return;
-  }
-  const double cell = m_impl->grid->voxelSize()[0];
-  const float outside = m_impl->grid->background();
-  for (const auto& [reach, points] : groups) {
-    VdbNodeGrid part(cell, outside);
-    try {
-      part.activate_around(points, reach);
-    } catch (const Error&) {
-      activate_around(particles, reach);  // names the particle by its index in `particles`
-      throw;
-    }
-    vdb_call("merge its active nodes", cell, [&] { m_impl->grid->topologyUnion(*part.m_impl->grid); });
-  }
 }
 
 std::vector<Vec3i> VdbNodeGrid::active_nodes() const {

@@ -24,9 +24,14 @@ class VdbNodeGrid {
   /// value some particle can change, so the work follows the fluid, not its bounding box.
   /// @throws Error naming the particle when its node index exceeds 2^30 (OpenVDB coordinates are int32)
   void activate_around(const Vec3Array& particles, int reach);
-  /// The same with a reach per particle (N entries, >= 0, in nodes): a kernel's own reach, so that a small
-  /// kernel does not activate the nodes only the longest one can change.
-  void activate_around(const Vec3Array& particles, const std::vector<int>& reaches);
+  /// Activates the nodes of the boxes [lo[i], hi[i]] (node indices, inclusive, within 2^30 + 64 of 0: see
+  /// check_range; `lo` and `hi` the same length): each the box of an anisotropic kernel's support, which
+  /// for a flattened kernel holds far fewer nodes than the cube of its longest axis. Sets the bits of
+  /// OpenVDB's leaves directly, 64 nodes a word.
+  void activate_boxes(const std::vector<Vec3i>& lo, const std::vector<Vec3i>& hi);
+  /// Throws the error activate_around throws for a point whose node is beyond the grid's int32
+  /// coordinates (|x| / cell > 2^30), naming its index in `points`.
+  void check_range(const Vec3Array& points) const;
   /// The active nodes' integer coordinates, in the grid's fixed traversal order.
   std::vector<Vec3i> active_nodes() const;
   /// Sets the value of each node (same length as `nodes`).
