@@ -1,6 +1,7 @@
 // Adhesion of water to the cloth and the obstacles (the paper's future work, sec. 6). Declared and documented
 // in coupler_stages.hpp.
 
+#include <algorithm>
 #include <cstdint>
 #include <limits>
 #include <utility>
@@ -13,7 +14,8 @@
 namespace drench {
 namespace coupling_detail {
 
-void adhere(StepContext& ctx, TriangleBroadPhase& broad_phase, const AdhesionSettings& settings) {
+void adhere(StepContext& ctx, TriangleBroadPhase& broad_phase, const AdhesionSettings& settings,
+            double thickness) {
   const ClothMesh& cloth = ctx.cloth();
   const double range = settings.range;
   std::vector<std::pair<Index, Index>> pairs;
@@ -36,9 +38,13 @@ void adhere(StepContext& ctx, TriangleBroadPhase& broad_phase, const AdhesionSet
       weights[k] = w;
     }
   });
-  // 6 W / (rho0 r^2): the peak of a pull falling linearly to 0 at the range, whose work on a layer of water
-  // pulled off the face, rho0 int_0^r a(d) d dd, is W per unit area.
-  const double peak_per_work = 6.0 / (settings.rest_density * range * range);
+  // The water's surface lies at the cloth thickness h, where repulsion holds it, so the pull falls from its
+  // peak at h to 0 at the range r: the work to pull water filling d >= h off the face, rho0 int_h^r a(d)
+  // (d - h) dd, is then W per unit area for a peak of 6 W / (rho0 (r - h)^2). Measured from d = 0 instead,
+  // the pull's work within h went unspent, and a water-repellent plate beaded at 123 degrees against
+  // Young-Dupre's 108 (Adhesion.DropletSpreadsOnCottonAndBeadsOnAWaterRepellentPlate).
+  const double span = range - std::min(thickness, 0.5 * range);
+  const double peak_per_work = 6.0 / (settings.rest_density * span * span);
   const double dt = ctx.dt();
   // Pairs come sorted by particle; one thread, in that order, so any thread count gives the same bits.
   for (std::size_t k = 0; k < pairs.size();) {
@@ -53,7 +59,7 @@ void adhere(StepContext& ctx, TriangleBroadPhase& broad_phase, const AdhesionSet
     const Vec3 closest = w[0] * cloth.positions_t0[tri[0]] + w[1] * cloth.positions_t0[tri[1]] +
                          w[2] * cloth.positions_t0[tri[2]];
     const Vec3 towards_face = (closest - ctx.x0()[p]) / distance[best];
-    const double pull = peak_per_work * settings.work[t] * (1.0 - distance[best] / range);
+    const double pull = peak_per_work * settings.work[t] * std::min(1.0, (range - distance[best]) / span);
     ctx.apply(p, t, w, (ctx.mass(p) * pull * dt) * towards_face);
   }
 }

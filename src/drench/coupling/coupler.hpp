@@ -36,8 +36,8 @@ struct CouplingStepStats {
   std::uint64_t ccd_iterations = 0;  ///< rounds of CCD run
   std::uint64_t failsafe_activations = 0;  ///< particles the fail-safe moved with their triangle
   std::uint64_t obstacle_stops = 0;        ///< particles stopped by the cloth inside fluid sub-steps
-  /// Particles and cloth nodes the last resort stopped at their start positions for a step, where even the
-  /// fail-safe left a collision (COUPLING_ZONES_STOPPED)
+  /// Particles and cloth nodes the last resort joined into impact zones for a step, where even the fail-safe
+  /// left a collision (COUPLING_ZONES_STOPPED)
   std::uint64_t stopped_particles = 0;
   std::uint64_t stopped_nodes = 0;
   double slip_sum_mps = 0.0;  ///< sum over contacts of the relative tangential speed after coupling
@@ -56,7 +56,8 @@ enum CouplingStatus : std::uint32_t {
   /// audit counts the crossing. Smaller dt helps.
   COUPLING_UNRESOLVED = 1u << 1,
   /// The fail-safe left collisions (a particle caught in a fold), so the particles and nodes involved were
-  /// stopped at their start positions for the step; no crossing, but momentum was not conserved for them
+  /// joined into impact zones, each moving by one displacement for the step (the mean of its members'; at
+  /// rest when it holds an unmoved node); no crossing, but their momentum was not conserved
   /// (CouplingStepStats::stopped_particles, stopped_nodes). Rare; lower dt if frequent.
   COUPLING_ZONES_STOPPED = 1u << 2,
 };
@@ -87,11 +88,11 @@ class Coupler {
   Coupler(const Coupler&) = delete;
   Coupler& operator=(const Coupler&) = delete;
 
-  /// One coupling step of length dt (unit: s, > 0): repulsion (eq. 1-4), friction (eq. 7-8), then continuous
-  /// handling (eq. 5-6) on the corrected motion until no particle crosses a triangle. Impulses go to both
-  /// sides, mass-weighted, the triangle's share to its nodes by barycentric weights, so the total linear
-  /// momentum is conserved exactly (up to rounding); pinned nodes (inverse mass 0) never move.
-  /// When no particle is within reach of the cloth (no particle's box over the step, grown by the cloth
+  /// One coupling step of length dt (unit: s, > 0): adhesion when set, repulsion (eq. 1-4), friction (eq.
+  /// 7-8), then continuous handling (eq. 5-6) on the corrected motion until no particle crosses a triangle.
+  /// Impulses go to both sides, mass-weighted, the triangle's share to its nodes by barycentric weights, so
+  /// the total linear momentum is conserved exactly (up to rounding); pinned nodes (inverse mass 0) never
+  /// move. When no particle is within reach of the cloth (no particle's box over the step, grown by the cloth
   /// thickness, meets the mesh's box over the step), the step is skipped after that one test: it would change
   /// nothing, and its outputs are those of a step without contacts (counter().skipped).
   /// @param fluid  N particles; positions_t1 and velocities are changed

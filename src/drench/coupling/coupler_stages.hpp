@@ -166,7 +166,9 @@ class StepContext {
 
 /// Proximity (sec. 3.1, proximity.cpp): eq. 1's plane distance and barycentric inside test, extended to edges
 /// and vertices by taking the closest point of the closed triangle; all at the start positions, which also
-/// decide the side (sec. 3.2). A particle whose closest points on several triangles coincide (a shared edge
+/// decide the side (sec. 3.2). An edge or vertex contact counts only in that feature's Voronoi region: it is
+/// dropped when a triangle holding the feature lies closer to the particle (the particle is over that face,
+/// whose normal is the paper's). A particle whose closest points on several triangles coincide (a shared edge
 /// or vertex) keeps one contact, the triangle of lowest index, so it is pushed once.
 /// @param ctx  the step; read only: the start positions, and the relative velocity (end minus start over dt)
 ///        for each contact's tangential_pre and the side of a particle lying exactly on a triangle
@@ -192,24 +194,28 @@ void repulse(StepContext& ctx, std::vector<Contact>& contacts, const CouplingSet
 /// @param settings  slip and friction_coefficient mu (>= 0, dimensionless)
 void apply_friction(StepContext& ctx, std::vector<Contact>& contacts, const CouplingSettings& settings);
 
-/// Adhesion of water to the faces (adhesion.cpp; the paper's future work, sec. 6), after friction: every
-/// particle whose start position lies within `settings.range` of a face is pulled towards its closest face by
-/// a = 6 W / (rho0 r^2) (1 - d / r), d its distance, r the range, W the face's work of adhesion: the work to
-/// pull a layer of water off the face is then W per unit area (the integral of rho0 a d' over d' in [0, r]).
-/// An impulse -m a dt n on the particle and its opposite on the face's nodes by the barycentric weights
-/// (apply), so the cloth takes what the water gets; static faces (inverse mass 0) book it in node_impulses
-/// only.
+/// Adhesion of water to the faces (adhesion.cpp; the paper's future work, sec. 6), before repulsion, so that
+/// the inelastic impulse of eq. 2 stops what the pull adds to an approach and the water stays out of the
+/// cloth thickness. Every particle whose start position lies within `settings.range` of a face is pulled
+/// towards its closest face by a = 6 W / (rho0 (r - h)^2) min(1, (r - d) / (r - h)), d its distance, r the
+/// range, h the thickness, W the face's work of adhesion: the work to pull water filling d >= h off the face
+/// is then W per unit area (the integral of rho0 a (d' - h) over d' in [h, r]). An impulse -m a dt n on the
+/// particle and its opposite on the face's nodes by the barycentric weights (apply), so the cloth takes what
+/// the water gets; static faces (inverse mass 0) book it in node_impulses only.
 /// @param broad_phase  the coupler's, queried at x_t0 with margin range / 2
 /// @param settings  work (N/m, one per triangle of ctx's mesh, missing ones 0), range (m) > 0, rest density
-void adhere(StepContext& ctx, TriangleBroadPhase& broad_phase, const AdhesionSettings& settings);
+/// @param thickness  the cloth thickness h (unit: m), > 0; where it exceeds half the range, half the range
+///        stands for it
+void adhere(StepContext& ctx, TriangleBroadPhase& broad_phase, const AdhesionSettings& settings,
+            double thickness);
 
 /// Continuous intersection handling (sec. 3.3, continuous_handling.cpp) on the motion the earlier stages
 /// corrected: rounds of point-triangle CCD (eq. 5-6) and an inelastic impulse at each particle's earliest
 /// impact, the first round over every pair, later ones over the pairs whose motion the previous round
 /// changed, until no pair collides. After settings.max_ccd_iterations rounds the fail-safe moves each
 /// particle still colliding with its triangle's contact point, which that triangle cannot cross; and where
-/// that is not enough (folds), the colliding particles and nodes stop at their start positions for the step
-/// (impact zones at rest), until no pair collides.
+/// that is not enough (folds), the colliding particles and nodes join impact zones that each move by one
+/// displacement for the step (rigid impact zones that only translate), until no pair collides.
 /// Adds to the stats' ccd_iterations, ccd_impacts, failsafe_activations, stopped_particles, stopped_nodes.
 /// @param broad_phase  the coupler's, queried with margin 0 for swept boxes
 /// @param settings  cloth_thickness (unit: m) > 0, max_ccd_iterations >= 1

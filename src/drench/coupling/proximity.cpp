@@ -53,23 +53,55 @@ std::vector<Contact> find_contacts(const StepContext& ctx, const std::vector<std
       keep[k] = 1;
     }
   });
-  std::vector<Contact> contacts;
+  // A closest point on an edge or a vertex of triangle B counts only when no triangle A holding that edge or
+  // vertex lies closer: otherwise the particle sits over A's face, and B's slanted normal pushes it sideways
+  // (water landing on a flat plate drifted, Coupler.ADropletLandingOnAStaticPlateGainsNoSidewaysMomentum).
+  // As A holds the feature, distance_A <= distance_B, equal only where the closest points coincide: a
+  // particle off a convex crease keeps its edge contact.
+  std::vector<double> distance(pairs.size(), 0.0);
   for (std::size_t k = 0; k < pairs.size(); ++k) {
-    if (!keep[k]) continue;
-    const Contact& c = candidates[k];
-    // Pairs come sorted by particle: earlier contacts of the same particle are at the back of `contacts`.
-    const Triangle& tri = cloth.triangles[c.triangle];
-    const Vec3 point = c.weights[0] * cloth.positions_t0[tri[0]] + c.weights[1] * cloth.positions_t0[tri[1]] +
-                       c.weights[2] * cloth.positions_t0[tri[2]];
-    bool duplicate = false;
-    for (auto it = contacts.rbegin(); it != contacts.rend() && it->particle == c.particle; ++it) {
-      const Triangle& other = cloth.triangles[it->triangle];
-      const Vec3 other_point = it->weights[0] * cloth.positions_t0[other[0]] +
-                               it->weights[1] * cloth.positions_t0[other[1]] +
-                               it->weights[2] * cloth.positions_t0[other[2]];
-      if ((point - other_point).norm() <= 1e-12 * (1.0 + point.norm())) duplicate = true;
+    if (keep[k]) distance[k] = thickness - candidates[k].overlap;
+  }
+  const auto holds_feature = [&](const Contact& b, Index t) {
+    const Triangle& tri = cloth.triangles[b.triangle];
+    const Triangle& other = cloth.triangles[t];
+    for (int i = 0; i < 3; ++i) {
+      if (b.weights[i] > 0.0 && other[0] != tri[i] && other[1] != tri[i] && other[2] != tri[i]) return false;
     }
-    if (!duplicate) contacts.push_back(c);
+    return true;
+  };
+  std::vector<Contact> contacts;
+  for (std::size_t first = 0; first < pairs.size();) {
+    std::size_t last = first;
+    while (last < pairs.size() && pairs[last].first == pairs[first].first)
+      ++last;
+    for (std::size_t k = first; k < last; ++k) {
+      if (!keep[k]) continue;
+      const Contact& c = candidates[k];
+      bool shadowed = false;
+      if (c.weights.minCoeff() <= 0.0) {
+        for (std::size_t other = first; other < last && !shadowed; ++other) {
+          shadowed = other != k && keep[other] && distance[other] < distance[k] * (1.0 - 1e-9) &&
+                     holds_feature(c, candidates[other].triangle);
+        }
+      }
+      if (shadowed) continue;
+      // Pairs come sorted by particle: earlier contacts of the same particle are at the back of `contacts`.
+      const Triangle& tri = cloth.triangles[c.triangle];
+      const Vec3 point = c.weights[0] * cloth.positions_t0[tri[0]] +
+                         c.weights[1] * cloth.positions_t0[tri[1]] +
+                         c.weights[2] * cloth.positions_t0[tri[2]];
+      bool duplicate = false;
+      for (auto it = contacts.rbegin(); it != contacts.rend() && it->particle == c.particle; ++it) {
+        const Triangle& other = cloth.triangles[it->triangle];
+        const Vec3 other_point = it->weights[0] * cloth.positions_t0[other[0]] +
+                                 it->weights[1] * cloth.positions_t0[other[1]] +
+                                 it->weights[2] * cloth.positions_t0[other[2]];
+        if ((point - other_point).norm() <= 1e-12 * (1.0 + point.norm())) duplicate = true;
+      }
+      if (!duplicate) contacts.push_back(c);
+    }
+    first = last;
   }
   return contacts;
 }
