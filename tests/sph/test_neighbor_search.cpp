@@ -100,9 +100,9 @@ TEST(NeighborSearch, SparsePointsInHashedCellsMatchBruteForce) {
       << "the test is about hashed cells";
 }
 
-// Hashed cells whose neighbors' keys carry across many bits: a cluster straddling the origin on every axis
-// (cell 2^20 - 1 beside 2^20) and one at the clamp of the outermost cells (about 42 km at 4 cm), where the
-// 27 keys of a cell come from the centre's by masked steps (NeighborSearch::candidate_runs).
+// Hashed rows about the origin and the clamp: a cluster straddling the origin on every axis (cell 2^20 - 1
+// beside 2^20) and one at the clamp of the outermost cells (about 42 km at 4 cm), where a row's key packs
+// the largest coordinates (NeighborSearch::candidate_runs).
 TEST(NeighborSearch, HashedNeighborKeysAcrossTheOriginAndTheClampMatchBruteForce) {
   Vec3Array points = random_points(1500, Vec3(-0.1, -0.1, -0.1), Vec3(0.1, 0.1, 0.1), 41);
   const Vec3Array far = random_points(500, Vec3(-40, -5, 0), Vec3(60, 5, 0.1), 42);
@@ -133,6 +133,30 @@ TEST(NeighborSearch, SpreadPointsInADenseGridOfMostlyEmptyCellsMatchBruteForce) 
   NeighborSearch search(radius);
   EXPECT_TRUE(expect_sorted_and_unsorted_queries_match_brute_force(search, points))
       << "the test is about a dense grid of more than 4 cells per point";
+}
+
+// find_self() takes the built points in the grid's order, a cell at a time: it must give find()'s lists of
+// the points querying themselves exactly, counts and order (the order fixes the bits of every pair sum), in
+// the hashed layout (sparse points spread far) and the dense one, for points in any order.
+TEST(NeighborSearch, FindSelfGivesFindsListsInTheSameOrderInEitherLayout) {
+  Vec3Array sparse = random_points(1500, Vec3(0, 0, 0), Vec3(0.2, 0.2, 0.2), 51);
+  const Vec3Array far = random_points(500, Vec3(-40, -5, 0), Vec3(60, 5, 0.1), 52);
+  sparse.insert(sparse.end(), far.begin(), far.end());
+  const Vec3Array block = random_points(2000, Vec3(-0.1, 0, 0), Vec3(0.2, 0.1, 0.3), 53);
+  for (const bool dense : {false, true}) {
+    NeighborSearch search(0.04);
+    const Vec3Array& points = dense ? block : sparse;
+    for (const Vec3Array& order : {points, z_ordered(search, points)}) {
+      search.build(order);
+      ASSERT_EQ(search.dense(), dense);
+      NeighborList expected, got;
+      search.find(order, expected, /*exclude_self=*/true);
+      search.find_self(got);
+      EXPECT_EQ(got.offsets, expected.offsets) << (dense ? "dense" : "hashed");
+      EXPECT_EQ(got.indices, expected.indices) << (dense ? "dense" : "hashed");
+      expect_same_sets(got, brute_force(order, order, 0.04, true));
+    }
+  }
 }
 
 // A NaN point (a particle the solver will name after the sub-step) sits in the grid's lowest cell: it is

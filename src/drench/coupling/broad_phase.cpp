@@ -3,8 +3,9 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 
-#include <drench/common/key_index_table.hpp>
+#include <drench/common/cell_lists.hpp>
 #include <drench/common/parallel.hpp>
 
 namespace drench {
@@ -29,17 +30,15 @@ class GridBroadPhase final : public TriangleBroadPhase {
     if (f == 0 || n == 0) return;
     // The same cloth as the last call (every sub-step's obstacle, every CCD round): nothing to rebin, and
     // comparing the positions costs less than recomputing every triangle's box.
-    if (!m_built_for.same_as_last(cloth)) update_bins(cloth);
+    if (!m_built_for.same_as_last(cloth, &m_moved)) update_bins(cloth);
 
     collect_pairs(
         particles_t0, particles_t1, margin, only, m_boxes,
         [&](const Box3& box, std::vector<Index>& candidates) {
           candidates.assign(m_everywhere.begin(), m_everywhere.end());
-          const bool binned = for_cells(box, [&](std::uint64_t key) {
-            const std::int64_t cell = m_cells.find(key);
-            if (cell < 0) return;
-            for (std::uint32_t e = m_cell_begin[cell]; e < m_cell_begin[cell + 1]; ++e)
-              candidates.push_back(m_entries[e].second);
+          const bool binned = for_cells(cell_range(box), [&](std::uint64_t key) {
+            const std::vector<Index>* list = m_lists.find(key);
+            if (list) candidates.insert(candidates.end(), list->begin(), list->end());
           });
           if (!binned) {
             candidates.resize(f);
@@ -74,66 +73,69 @@ class GridBroadPhase final : public TriangleBroadPhase {
   /// binning with the same cell size would make; every box is updated for the exact test.
   void update_bins(const ClothMesh& cloth) {
     const std::size_t f = cloth.triangles.size();
+    // Only the faces with a moved node (m_moved, from m_built_for) get new boxes: in a game's level most
+    // never move (the ground's square, a table), and their boxes, extents and cells were most of this update
+    // (issue 41's profile). The extents are summed in face order as before, so the cell is the same bits.
+    const bool all_faces = m_boxes.size() != f || m_extents.size() != f || m_ranges.size() != f;
     m_boxes.resize(f);
+    m_extents.resize(f);
+    m_face_moved.assign(f, 0);
     double extent_sum = 0.0;
     for (std::size_t t = 0; t < f; ++t) {
-      m_boxes[t] = triangle_box(cloth, cloth.triangles[t], 0.0);
-      extent_sum += (m_boxes[t].hi - m_boxes[t].lo).maxCoeff();
+      const Triangle& tri = cloth.triangles[t];
+      if (all_faces || m_moved[tri[0]] || m_moved[tri[1]] || m_moved[tri[2]]) {
+        m_face_moved[t] = 1;
+        m_boxes[t] = triangle_box(cloth, tri, 0.0);
+        m_extents[t] = (m_boxes[t].hi - m_boxes[t].lo).maxCoeff();
+      }
+      extent_sum += m_extents[t];
     }
     const double cell = std::max(extent_sum / static_cast<double>(f), 1e-9);
     const bool rebin_all = m_ranges.size() != f || !(cell <= 2.0 * m_cell && cell >= 0.5 * m_cell);
-    if (rebin_all) m_cell = cell;
-    m_changed.assign(f, 0);
-    std::size_t changed = 0;
-    m_ranges.resize(f);
-    for (std::size_t t = 0; t < f; ++t) {
-      const CellRange range = cell_range(m_boxes[t]);
-      if (rebin_all || !(range == m_ranges[t])) {
-        m_ranges[t] = range;
-        m_changed[t] = 1;
-        ++changed;
-      }
-    }
-    if (changed == 0) return;
     if (rebin_all) {
-      m_entries.clear();
+      m_cell = cell;
+      m_lists.clear();
       m_everywhere.clear();
-    } else {
-      const auto stale = [&](Index t) { return m_changed[t] != 0; };
-      m_entries.erase(std::remove_if(m_entries.begin(), m_entries.end(),
-                                     [&](const auto& entry) { return stale(entry.second); }),
-                      m_entries.end());
-      m_everywhere.erase(std::remove_if(m_everywhere.begin(), m_everywhere.end(), stale), m_everywhere.end());
+      m_ranges.resize(f);
+      for (std::size_t t = 0; t < f; ++t) {
+        m_ranges[t] = cell_range(m_boxes[t]);
+        file(static_cast<Index>(t), m_ranges[t]);
+      }
+      return;
     }
-    // The changed triangles' entries, sorted, merged into the kept ones (which stay sorted).
-    const std::size_t kept = m_entries.size();
+    // A triangle that now covers other cells leaves the lists of its old cells and joins those of its new
+    // ones: the cost follows the few that change cells, where sorting and indexing every entry again whenever
+    // one changed was most of the update in issue 41's level.
     for (std::size_t t = 0; t < f; ++t) {
-      if (!m_changed[t]) continue;
-      const bool binned = for_cells(m_boxes[t], [&](std::uint64_t key) {
-        m_entries.push_back({key, static_cast<Index>(t)});
-      });
-      if (!binned) m_everywhere.push_back(static_cast<Index>(t));  // too large for the grid: every particle's
+      // A face that did not move keeps its box, and with the same cell its cells.
+      if (!m_face_moved[t]) continue;
+      const CellRange range = cell_range(m_boxes[t]);
+      if (range == m_ranges[t]) continue;
+      unfile(static_cast<Index>(t), m_ranges[t]);
+      m_ranges[t] = range;
+      file(static_cast<Index>(t), range);
     }
-    std::sort(m_entries.begin() + static_cast<std::ptrdiff_t>(kept), m_entries.end());
-    std::inplace_merge(m_entries.begin(), m_entries.begin() + static_cast<std::ptrdiff_t>(kept),
-                       m_entries.end());
-    std::sort(m_everywhere.begin(), m_everywhere.end());
-    // Each distinct key's run of entries, found through a hash table: a binary search of all the entries
-    // per cell would dominate the grid's queries (bench_coupling find_pairs, docs/performance.md).
-    index_key_runs(m_entries, m_cell_begin, m_cells);
+  }
+
+  /// Adds triangle t to the lists of the cells of `range`, or to m_everywhere when they are too many.
+  void file(Index t, const CellRange& range) {
+    if (!for_cells(range, [&](std::uint64_t key) { m_lists.add(key, t); })) m_everywhere.push_back(t);
+  }
+
+  /// Takes triangle t out of the lists file(t, range) put it in.
+  void unfile(Index t, const CellRange& range) {
+    if (!for_cells(range, [&](std::uint64_t key) { m_lists.remove(key, t); }))
+      m_everywhere.erase(std::find(m_everywhere.begin(), m_everywhere.end(), t));
   }
 
   /// Visits the keys of the cells the box covers; returns false, visiting nothing, when they are too many (a
   /// particle flying across the domain in one step), and the caller tests every triangle instead.
   template <class Visit>
-  bool for_cells(const Box3& box, Visit&& visit) const {
-    const Eigen::Array3d lo = (box.lo / m_cell).array().floor();
-    const Eigen::Array3d hi = (box.hi / m_cell).array().floor();
-    const Eigen::Array3d count = hi - lo + 1.0;
-    if (!(count.prod() <= kMaxCellsPerBox)) return false;
-    for (double z = lo[2]; z <= hi[2]; z += 1.0) {
-      for (double y = lo[1]; y <= hi[1]; y += 1.0) {
-        for (double x = lo[0]; x <= hi[0]; x += 1.0)
+  static bool for_cells(const CellRange& range, Visit&& visit) {
+    if (range.everywhere) return false;
+    for (double z = range.lo[2]; z <= range.hi[2]; z += 1.0) {
+      for (double y = range.lo[1]; y <= range.hi[1]; y += 1.0) {
+        for (double x = range.lo[0]; x <= range.hi[0]; x += 1.0)
           visit(key(x, y, z));
       }
     }
@@ -150,22 +152,66 @@ class GridBroadPhase final : public TriangleBroadPhase {
   }
 
   double m_cell = 1.0;
-  std::vector<Box3> m_boxes;        // F, each triangle's current box (the exact test's)
-  std::vector<CellRange> m_ranges;  // F, the cells each triangle is binned in
-  std::vector<std::uint8_t> m_changed;
-  std::vector<std::pair<std::uint64_t, Index>> m_entries;  // (cell key, triangle), ascending
-  KeyIndexTable m_cells;                                   // the distinct keys of m_entries, ascending
-  std::vector<std::uint32_t> m_cell_begin;  // first entry of each distinct key; one extra end entry
-  std::vector<Index> m_everywhere;
+  std::vector<Box3> m_boxes;               // F, each triangle's current box (the exact test's)
+  std::vector<CellRange> m_ranges;         // F, the cells each triangle is binned in
+  std::vector<double> m_extents;           // F, each triangle's box's largest extent (unit: m)
+  std::vector<std::uint8_t> m_moved;       // M, the nodes that moved since the last update (m_built_for)
+  std::vector<std::uint8_t> m_face_moved;  // F, the triangles with such a node
+  CellLists<Index> m_lists;                // the triangles of each cell key, ascending
+  std::vector<Index> m_everywhere;         // the triangles over kMaxCellsPerBox cells, in no order
   TriangleBoxKey m_built_for;
 };
 
 }  // namespace
 
-bool TriangleBoxKey::same_as_last(const ClothMesh& cloth) {
-  if (m_valid && cloth.positions_t0 == m_positions_t0 && cloth.positions_t1 == m_positions_t1 &&
-      cloth.triangles == m_triangles) {
+namespace {
+
+/// a == b for every element, as std::vector's ==, or the same bytes: bytes that are the same give the same
+/// boxes bit for bit, so a NaN that is still there need not be seen as a change. One comparison of the
+/// bytes first: the element loop was most of a query that found the cloth unchanged (every sub-step's
+/// obstacle, every CCD round).
+bool same_positions(const Vec3Array& a, const Vec3Array& b) {
+  static_assert(sizeof(Vec3) == 3 * sizeof(double), "a position is three doubles");
+  if (a.size() != b.size()) return false;
+  if (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(Vec3)) == 0) return true;
+  bool same = true;
+  for (std::size_t i = 0; i < a.size() && same; ++i)
+    same = a[i].x() == b[i].x() && a[i].y() == b[i].y() && a[i].z() == b[i].z();
+  return same;
+}
+
+/// a == b, as std::vector's ==, in one comparison of the bytes (indices have no padding and compare as
+/// bytes): std::vector's compared the 3 indices of every triangle in a call of its own, which was most of a
+/// query that found the cloth unchanged (issue 41's profile).
+bool same_triangles(const std::vector<Triangle>& a, const std::vector<Triangle>& b) {
+  static_assert(sizeof(Triangle) == 3 * sizeof(Index), "a triangle is three indices");
+  return a.size() == b.size() &&
+         (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(Triangle)) == 0);
+}
+
+}  // namespace
+
+bool TriangleBoxKey::same_as_last(const ClothMesh& cloth, std::vector<std::uint8_t>* moved) {
+  const bool same_triangles_as_last = m_valid && same_triangles(cloth.triangles, m_triangles);
+  if (same_triangles_as_last && same_positions(cloth.positions_t0, m_positions_t0) &&
+      same_positions(cloth.positions_t1, m_positions_t1)) {
     return true;
+  }
+  if (moved) {
+    const std::size_t m = cloth.positions_t0.size();
+    const bool comparable = same_triangles_as_last && m_positions_t0.size() == m &&
+                            m_positions_t1.size() == m && cloth.positions_t1.size() == m;
+    moved->assign(m, comparable ? 0 : 1);
+    if (comparable) {
+      // As the comparison above: a NaN differs from itself, so a node with one counts as moved.
+      const auto differs = [](const Vec3& a, const Vec3& b) {
+        return !(a.x() == b.x() && a.y() == b.y() && a.z() == b.z());
+      };
+      for (std::size_t i = 0; i < m; ++i) {
+        (*moved)[i] = static_cast<std::uint8_t>(differs(cloth.positions_t0[i], m_positions_t0[i]) ||
+                                                differs(cloth.positions_t1[i], m_positions_t1[i]));
+      }
+    }
   }
   m_valid = true;
   m_positions_t0 = cloth.positions_t0;

@@ -62,7 +62,10 @@ class TriangleBoxKey {
  public:
   /// True when `cloth` (both position sets, triangles) equals, bit for bit, that of the last call that
   /// returned false; else remembers it and returns false.
-  bool same_as_last(const ClothMesh& cloth);
+  /// @param moved  when not null and the result is false: M flags, set for the nodes whose position at either
+  ///        end differs from the remembered one (all of them when the node count or the triangles changed,
+  ///        or on the first call)
+  bool same_as_last(const ClothMesh& cloth, std::vector<std::uint8_t>* moved = nullptr);
 
  private:
   bool m_valid = false;

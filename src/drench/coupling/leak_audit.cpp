@@ -5,7 +5,6 @@
 #include <cmath>
 
 #include <drench/ccd/ccd_exact_reference.hpp>
-#include <drench/common/key_index_table.hpp>
 #include <drench/common/parallel.hpp>
 
 namespace drench {
@@ -115,68 +114,86 @@ void LeakAudit::update_grid(const ClothMesh& cloth) {
   // table's top beside a cloth's small ones) then does not make every cell large, which made every particle
   // near a body test all its faces (test RigidBodies.ABallOfTwiceTheWatersDensitySinks). A triangle over
   // 4,096 cells is tested by every particle instead.
+  // Nothing moved since the last step (bit for bit): the grid stands.
+  if (m_built_for.same_as_last(cloth, &m_moved)) return;
   const std::size_t f = cloth.triangles.size();
-  m_new_boxes.resize(f);
+  // Only the faces with a moved node get new boxes: most of a game's level never moves, and every face's
+  // box was a third of the upkeep (issue 41's profile).
+  const bool all_faces = m_boxes.size() != f || m_sizes.size() != f || m_ranges.size() != f;
+  m_boxes.resize(f);
   m_sizes.resize(f);
+  m_face_moved.assign(f, 0);
   const Vec3Array& a = cloth.positions_t0;
   const Vec3Array& b = cloth.positions_t1;
   for (std::size_t t = 0; t < f; ++t) {
     const Triangle& tri = cloth.triangles[t];
-    m_new_boxes[t] = bounds_of({&a[tri[0]], &a[tri[1]], &a[tri[2]], &b[tri[0]], &b[tri[1]], &b[tri[2]]});
-    m_sizes[t] = (m_new_boxes[t].hi - m_new_boxes[t].lo).maxCoeff();
+    if (!all_faces && !m_moved[tri[0]] && !m_moved[tri[1]] && !m_moved[tri[2]]) continue;
+    m_face_moved[t] = 1;
+    m_boxes[t] = bounds_of({&a[tri[0]], &a[tri[1]], &a[tri[2]], &b[tri[0]], &b[tri[1]], &b[tri[2]]});
+    m_sizes[t] = (m_boxes[t].hi - m_boxes[t].lo).maxCoeff();
   }
-  std::nth_element(m_sizes.begin(), m_sizes.begin() + static_cast<long>(f / 2), m_sizes.end());
-  double median = m_sizes[f / 2];
+  m_median_scratch = m_sizes;
+  std::nth_element(m_median_scratch.begin(), m_median_scratch.begin() + static_cast<long>(f / 2),
+                   m_median_scratch.end());
+  double median = m_median_scratch[f / 2];
   if (!(median > 1e-9)) median = 1e-9;  // also a NaN median
-  const bool refile_all = m_boxes.size() != f || !(median <= 2.0 * m_cell && median >= 0.5 * m_cell);
-  m_changed.assign(f, 0);
-  std::size_t changed = 0;
-  for (std::size_t t = 0; t < f; ++t) {
-    const Bounds& box = m_new_boxes[t];
-    // A box with a NaN never equals itself: always filed again (as oversized, where no test passes).
-    if (refile_all || !(box.lo == m_boxes[t].lo && box.hi == m_boxes[t].hi)) {
-      m_changed[t] = 1;
-      ++changed;
-    }
-  }
-  if (changed == 0) return;
-  std::swap(m_boxes, m_new_boxes);
+  const bool refile_all = all_faces || !(median <= 2.0 * m_cell && median >= 0.5 * m_cell);
   if (refile_all) {
     m_cell = median;
-    m_entries.clear();
+    m_grid.clear();
     m_oversized.clear();
-  } else {
-    const auto stale = [&](Index t) { return m_changed[t] != 0; };
-    m_entries.erase(std::remove_if(m_entries.begin(), m_entries.end(),
-                                   [&](const auto& entry) { return stale(entry.second); }),
-                    m_entries.end());
-    m_oversized.erase(std::remove_if(m_oversized.begin(), m_oversized.end(), stale), m_oversized.end());
-  }
-  const double cell = m_cell;
-  const auto cell_of = [cell](const Vec3& x) { return Eigen::Array3d((x / cell).array().floor()); };
-  // The changed triangles' entries, sorted and merged into the kept ones (sorted): within a cell the
-  // triangles stay in ascending order, as a fresh filing gives them.
-  const std::size_t kept = m_entries.size();
-  for (std::size_t t = 0; t < f; ++t) {
-    if (!m_changed[t]) continue;
-    const Eigen::Array3d lo = cell_of(m_boxes[t].lo), hi = cell_of(m_boxes[t].hi);
-    // `!(... <= ...)` also sends a box with a NaN here, where its bounds test never passes.
-    if (!((hi - lo + 1.0).prod() <= 4096.0)) {
-      m_oversized.push_back(static_cast<Index>(t));
-      continue;
+    m_ranges.resize(f);
+    for (std::size_t t = 0; t < f; ++t) {
+      m_ranges[t] = cell_range(m_boxes[t]);
+      file(static_cast<Index>(t), m_ranges[t]);
     }
-    for (double z = lo[2]; z <= hi[2]; z += 1.0)
-      for (double y = lo[1]; y <= hi[1]; y += 1.0)
-        for (double x = lo[0]; x <= hi[0]; x += 1.0)
-          m_entries.emplace_back(cell_key(Eigen::Array3d(x, y, z)), static_cast<Index>(t));
+    return;
   }
-  std::sort(m_entries.begin() + static_cast<std::ptrdiff_t>(kept), m_entries.end());
-  std::inplace_merge(m_entries.begin(), m_entries.begin() + static_cast<std::ptrdiff_t>(kept),
-                     m_entries.end());
-  std::sort(m_oversized.begin(), m_oversized.end());
-  // Each cell's run of entries, found through a hash table: a std::unordered_map of vectors, allocated
-  // afresh every step, was a fifth of the audit (issue 41's profile).
-  index_key_runs(m_entries, m_cell_begin, m_grid);
+  // A triangle is filed again only when its box now covers other cells: a cloth's triangle moves by a small
+  // part of a cell per step, and a moving body's box by a few cells, so most keep their cells even when
+  // their boxes changed. It leaves the lists of its old cells and joins those of its new ones, each list
+  // kept ascending: the filing is the one a fresh grid of the same cell would make.
+  for (std::size_t t = 0; t < f; ++t) {
+    if (!m_face_moved[t]) continue;
+    const CellRange range = cell_range(m_boxes[t]);
+    // A box with a NaN has a NaN range, which never equals itself: always filed again (as oversized, where
+    // no test passes).
+    if ((range.lo == m_ranges[t].lo).all() && (range.hi == m_ranges[t].hi).all()) continue;
+    unfile(static_cast<Index>(t), m_ranges[t]);
+    m_ranges[t] = range;
+    file(static_cast<Index>(t), range);
+  }
+}
+
+LeakAudit::CellRange LeakAudit::cell_range(const Bounds& box) const {
+  return {(box.lo / m_cell).array().floor(), (box.hi / m_cell).array().floor()};
+}
+
+void LeakAudit::file(Index t, const CellRange& range) {
+  const Eigen::Array3d& lo = range.lo;
+  const Eigen::Array3d& hi = range.hi;
+  // `!(... <= ...)` also sends a box with a NaN here, where its bounds test never passes.
+  if (!((hi - lo + 1.0).prod() <= 4096.0)) {
+    m_oversized.insert(std::upper_bound(m_oversized.begin(), m_oversized.end(), t), t);
+    return;
+  }
+  for (double z = lo[2]; z <= hi[2]; z += 1.0)
+    for (double y = lo[1]; y <= hi[1]; y += 1.0)
+      for (double x = lo[0]; x <= hi[0]; x += 1.0)
+        m_grid.add(cell_key(Eigen::Array3d(x, y, z)), t);
+}
+
+void LeakAudit::unfile(Index t, const CellRange& range) {
+  const Eigen::Array3d& lo = range.lo;
+  const Eigen::Array3d& hi = range.hi;
+  if (!((hi - lo + 1.0).prod() <= 4096.0)) {
+    m_oversized.erase(std::lower_bound(m_oversized.begin(), m_oversized.end(), t));
+    return;
+  }
+  for (double z = lo[2]; z <= hi[2]; z += 1.0)
+    for (double y = lo[1]; y <= hi[1]; y += 1.0)
+      for (double x = lo[0]; x <= hi[0]; x += 1.0)
+        m_grid.remove(cell_key(Eigen::Array3d(x, y, z)), t);
 }
 
 std::uint64_t LeakAudit::audit(const Vec3Array& particles_t0, const Vec3Array& particles_t1,
@@ -230,11 +247,9 @@ std::uint64_t LeakAudit::audit(const Vec3Array& particles_t0, const Vec3Array& p
         for (double y = lo[1]; y <= hi[1] && !flags[p]; y += 1.0) {
           for (double x = lo[0]; x <= hi[0] && !flags[p]; x += 1.0) {
             const Eigen::Array3d here(x, y, z);
-            const std::int64_t cell_index = m_grid.find(cell_key(here));
-            if (cell_index < 0) continue;
-            for (std::uint32_t e = m_cell_begin[static_cast<std::size_t>(cell_index)];
-                 e < m_cell_begin[static_cast<std::size_t>(cell_index) + 1]; ++e) {
-              const Index t = m_entries[e].second;
+            const std::vector<Index>* list = m_grid.find(cell_key(here));
+            if (!list) continue;
+            for (const Index t : *list) {
               const Bounds& tb = boxes[t];
               if (apart(tb)) continue;
               // The pair's one cell: where the overlap of the two boxes begins.

@@ -8,8 +8,9 @@
 #include <utility>
 #include <vector>
 
-#include <drench/common/key_index_table.hpp>
+#include <drench/common/cell_lists.hpp>
 #include <drench/common/types.hpp>
+#include <drench/coupling/broad_phase.hpp>
 #include <drench/coupling/cloth_mesh.hpp>
 
 namespace drench {
@@ -26,15 +27,21 @@ struct LeakAuditStats {
 };
 
 /// The leak audit of a run, step after step: audit_leaks with its grid of triangles kept from one step to the
-/// next. Only the triangles whose swept box changed (bit for bit) since the last step are filed again: in a
-/// game's level most never move (the ground's 3,200 faces, a table), and filing every face afresh each step
-/// was most of the audit's time (issue 41's profile). The grid's cell, the median triangle's box size as in
-/// audit_leaks, is kept while that median stays within a factor 2 of it; the cell decides only how fast
-/// pairs are found, and which triangle is named when a particle crosses several, never whether it leaked.
+/// next. Only the triangles whose swept box now covers other cells than those they are filed in are filed
+/// again: in a game's level most never move (the ground's 3,200 faces, a table), a cloth's move by a small
+/// part of a cell per step, and filing every face afresh each step was most of the audit's time (issue 41's
+/// profile); the filing is then the one a fresh grid of the same cell would make. The grid's cell, the median
+/// triangle's box size as in audit_leaks, is kept while that median stays within a factor 2 of it; the cell
+/// decides only how fast pairs are found, and which triangle is named when a particle crosses several, never
+/// whether it leaked.
 namespace leak_audit_detail {
 /// A swept box (unit: m).
 struct Bounds {
   Vec3 lo, hi;
+};
+/// The grid cells a box covers, [lo, hi] per axis (integer coordinates as doubles).
+struct CellRange {
+  Eigen::Array3d lo = Eigen::Array3d::Zero(), hi = Eigen::Array3d::Zero();
 };
 }  // namespace leak_audit_detail
 
@@ -46,18 +53,26 @@ class LeakAudit {
 
  private:
   using Bounds = leak_audit_detail::Bounds;
+  using CellRange = leak_audit_detail::CellRange;
   /// Brings the grid to `cloth`'s swept triangle boxes.
   void update_grid(const ClothMesh& cloth);
+  /// The cells of the grid that `box` covers.
+  CellRange cell_range(const Bounds& box) const;
+  /// Files triangle t in the cells of `range`, or with the oversized ones when they are over 4,096.
+  void file(Index t, const CellRange& range);
+  /// Takes triangle t out of where file(t, range) put it.
+  void unfile(Index t, const CellRange& range);
 
-  double m_cell = 0.0;                                     // edge of the grid's cells (unit: m)
-  std::vector<Bounds> m_boxes;                             // per triangle, its box as filed
-  std::vector<Bounds> m_new_boxes;                         // scratch of update_grid
-  std::vector<double> m_sizes;                             // scratch: the boxes' largest extents
-  std::vector<std::uint8_t> m_changed;                     // scratch: triangles to file again
-  std::vector<std::pair<std::uint64_t, Index>> m_entries;  // (cell key, triangle), ascending
-  std::vector<std::uint32_t> m_cell_begin;  // first entry of each distinct key; one extra end entry
-  KeyIndexTable m_grid;                     // the distinct keys of m_entries, ascending
-  std::vector<Index> m_oversized;           // triangles over 4,096 cells, ascending: every particle's
+  double m_cell = 0.0;                     // edge of the grid's cells (unit: m)
+  TriangleBoxKey m_built_for;              // the mesh the grid was last brought to
+  std::vector<std::uint8_t> m_moved;       // scratch: the nodes moved since then
+  std::vector<std::uint8_t> m_face_moved;  // scratch: the triangles with such a node
+  std::vector<Bounds> m_boxes;             // per triangle, its swept box
+  std::vector<double> m_sizes;             // per triangle, its box's largest extent (unit: m)
+  std::vector<double> m_median_scratch;    // scratch: m_sizes, partly sorted for the median
+  std::vector<CellRange> m_ranges;         // per triangle, the cells it is filed in
+  CellLists<Index> m_grid;                 // each cell key's triangles, ascending
+  std::vector<Index> m_oversized;          // triangles over 4,096 cells, ascending: every particle's
 };
 
 /// A leak is a transversal crossing: at some time of the step the particle lies in a closed triangle and its

@@ -125,13 +125,23 @@ void RigidBoundary::place(const std::vector<RigidSurface>& surfaces, Vec3Array& 
     const Body& body = it->second;
     m_placed[s] = &body;
     const Vec3Array& x = surface.positions_t0;
-    for (const Sample& sample : body.samples) {
+    // One normal per face, not per sample: a face carries a dozen samples or more, and the cross product
+    // and square root per sample were most of placing them (issue 41's profile). The same bits either way.
+    m_face_normals.resize(surface.triangles.size());
+    for (std::size_t f = 0; f < surface.triangles.size(); ++f)
+      m_face_normals[f] = outward_normal(x, surface.triangles[f]);
+    const std::size_t first = positions.size();
+    positions.resize(first + body.samples.size());
+    volumes.resize(first + body.samples.size());
+    normals.resize(first + body.samples.size());
+    for (std::size_t k = 0; k < body.samples.size(); ++k) {
+      const Sample& sample = body.samples[k];
       const Triangle& t = surface.triangles[sample.triangle];
-      const Vec3 n = outward_normal(x, t);
-      positions.push_back(sample.weights[0] * x[t[0]] + sample.weights[1] * x[t[1]] +
-                          sample.weights[2] * x[t[2]] - m_inset * n);
-      volumes.push_back(sample.volume);
-      normals.push_back(n);
+      const Vec3& n = m_face_normals[sample.triangle];
+      positions[first + k] = sample.weights[0] * x[t[0]] + sample.weights[1] * x[t[1]] +
+                             sample.weights[2] * x[t[2]] - m_inset * n;
+      volumes[first + k] = sample.volume;
+      normals[first + k] = n;
     }
   }
   // Bodies gone from the world: a new body at the same address is sampled afresh.

@@ -58,6 +58,7 @@ class RigidBoundary {
   Scalar m_inset;
   std::unordered_map<std::uint64_t, Body> m_bodies;
   std::vector<const Body*> m_placed;  // per surface of the last place(), null when not dynamic
+  Vec3Array m_face_normals;           // place(): scratch, the outward normals of one surface's faces
 };
 
 }  // namespace drench

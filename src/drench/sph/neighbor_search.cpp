@@ -29,17 +29,9 @@ std::uint64_t spread_bits(std::uint64_t v) {
   return v;
 }
 
-/// The bits of a Morton key that hold one axis' coordinate (x; shifted by 1 and 2, y and z).
-constexpr std::uint64_t kAxisBits = 0x1249249249249249ULL;
-
-/// The key of the cell `step` (-1, 0 or 1) cells along the axis whose bits are `mask` from the cell of
-/// `key`, without spreading the coordinates again: the masked bits are incremented or decremented as one
-/// number, the carry passing over the other axes' bits. The coordinate must stay in [0, 2^21): cell_of
-/// clamps to [1, 2^21 - 2], so one step never leaves it.
-std::uint64_t morton_step(std::uint64_t key, std::uint64_t mask, int step) {
-  if (step > 0) return (((key | ~mask) + 1) & mask) | (key & ~mask);
-  if (step < 0) return (((key & mask) - 1) & mask) | (key & ~mask);
-  return key;
+/// The key of the row of cells (y, z) along x, in the hashed layout: ordered by z, then y.
+std::uint64_t row_key(int y, int z) {
+  return (static_cast<std::uint64_t>(z) << kCellBits) | static_cast<std::uint64_t>(y);
 }
 
 /// scan_runs with scan_candidates_lanes, compiled for each copy of DRENCH_SIMD_CLONES: the CPUs without AVX2.
@@ -141,9 +133,26 @@ void NeighborSearch::build(const Vec3Array& points) {
   if (m_dense) {
     build_dense(cells, lo, dims);
   } else {
-    build_hashed(points);
+    build_hashed(cells);
   }
   m_count = n;
+  // Where a query can have neighbors: within the radius of the finite points' box (a NaN point is nobody's
+  // neighbor). Two radii, so that no rounding of the bound can reject a query with a neighbor.
+  Vec3 box_lo = Vec3::Constant(std::numeric_limits<Scalar>::infinity());
+  Vec3 box_hi = -box_lo;
+  for (const Vec3& x : points) {
+    if (!x.allFinite()) continue;
+    box_lo = box_lo.cwiseMin(x);
+    box_hi = box_hi.cwiseMax(x);
+  }
+  m_reach_lo = box_lo.array() - 2.0 * m_radius;
+  m_reach_hi = box_hi.array() + 2.0 * m_radius;
+  // Each sorted point's cell, for find_self, which takes the queries in this order.
+  m_sorted_cells.resize(n);
+  parallel_for(n, kLightChunk, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t k = begin; k < end; ++k)
+      m_sorted_cells[k] = cells[m_sorted_index[k]];
+  });
   // kScanPadding entries after the last point: the scans read runs of cells in place, whole groups.
   m_sorted_index.resize(n + kScanPadding, 0);
   m_xs.resize(n + kScanPadding);
@@ -180,28 +189,56 @@ void NeighborSearch::build_dense(const std::vector<Vec3i>& cells, const Vec3i& l
   m_cells.clear();
 }
 
-void NeighborSearch::build_hashed(const Vec3Array& points) {
-  m_sorted_index = z_order(points);
-  const std::size_t n = points.size();
-  std::vector<std::uint64_t> keys;
-  m_cell_begin.clear();
-  for (std::size_t k = 0; k < n; ++k) {
-    const std::uint64_t key = cell_key(points[m_sorted_index[k]]);
-    if (keys.empty() || keys.back() != key) {
-      keys.push_back(key);
-      m_cell_begin.push_back(static_cast<std::uint32_t>(k));
+void NeighborSearch::build_hashed(const std::vector<Vec3i>& cells) {
+  // Sorted by row (z, then y), then x, then index, as the dense grid's linear index sorts them: the three
+  // cells x - 1 .. x + 1 of a row are then one run of sorted points, and a query looks up the nine rows about
+  // its cell, not 27 cells. The hashed grid held sparse water (a jet, spray, a film on the ground) at 1.5
+  // points per cell in issue 41's level, where the 27 lookups per cell were most of the search.
+  const std::size_t n = cells.size();
+  std::vector<std::pair<std::uint64_t, Index>> keyed(n);
+  parallel_for(n, kLightChunk, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t i = begin; i < end; ++i) {
+      const Vec3i& c = cells[i];
+      keyed[i] = {(row_key(c.y(), c.z()) << kCellBits) | static_cast<std::uint64_t>(c.x()),
+                  static_cast<Index>(i)};
     }
+  });
+  std::sort(keyed.begin(), keyed.end());
+  m_sorted_index.resize(n);
+  std::vector<std::uint64_t> rows;
+  m_cell_begin.clear();
+  m_cell_x.clear();
+  m_row_first.clear();
+  for (std::size_t k = 0; k < n; ++k) {
+    m_sorted_index[k] = keyed[k].second;
+    const std::uint64_t key = keyed[k].first;
+    if (k > 0 && keyed[k - 1].first == key) continue;
+    const std::uint64_t row = key >> kCellBits;
+    if (rows.empty() || rows.back() != row) {
+      rows.push_back(row);
+      m_row_first.push_back(static_cast<std::uint32_t>(m_cell_x.size()));
+    }
+    m_cell_x.push_back(static_cast<int>(key & static_cast<std::uint64_t>(kCellMax)));
+    m_cell_begin.push_back(static_cast<std::uint32_t>(k));
   }
   m_cell_begin.push_back(static_cast<std::uint32_t>(n));
-  m_cells.build(std::move(keys));
+  m_row_first.push_back(static_cast<std::uint32_t>(m_cell_x.size()));
+  m_cells.build(std::move(rows));
 }
 
-bool NeighborSearch::key_range(std::uint64_t key, std::uint32_t& begin, std::uint32_t& end) const {
-  const std::int64_t c = m_cells.find(key);
-  if (c < 0) return false;
-  begin = m_cell_begin[static_cast<std::size_t>(c)];
-  end = m_cell_begin[static_cast<std::size_t>(c) + 1];
-  return begin < end;
+bool NeighborSearch::hashed_row_range(const Vec3i& cell, std::uint32_t& begin, std::uint32_t& end) const {
+  const std::int64_t row = m_cells.find(row_key(cell.y(), cell.z()));
+  if (row < 0) return false;
+  const int* first = m_cell_x.data() + m_row_first[static_cast<std::size_t>(row)];
+  const int* last = m_cell_x.data() + m_row_first[static_cast<std::size_t>(row) + 1];
+  const int* from = std::lower_bound(first, last, cell.x() - 1);
+  const int* to = from;
+  while (to != last && *to <= cell.x() + 1)
+    ++to;
+  if (from == to) return false;
+  begin = m_cell_begin[static_cast<std::size_t>(from - m_cell_x.data())];
+  end = m_cell_begin[static_cast<std::size_t>(to - m_cell_x.data())];
+  return true;
 }
 
 bool NeighborSearch::row_range(const Vec3i& cell, int count, std::uint32_t& begin, std::uint32_t& end) const {
@@ -219,34 +256,153 @@ bool NeighborSearch::row_range(const Vec3i& cell, int count, std::uint32_t& begi
 void NeighborSearch::candidate_runs(const Vec3i& cell, CandidateRuns& out) const {
   out.runs = 0;
   out.total = 0;
-  const auto add = [&](std::uint32_t b, std::uint32_t e) {
-    out.begin[out.runs] = b;
-    out.end[out.runs] = e;
-    ++out.runs;
-    out.total += e - b;
-  };
-  // Hashed: the 27 keys from the centre's by masked steps, the same keys key_of_cell would give each cell
-  // (spreading the bits of every neighbor was a quarter of the lookups' time in issue 41's level).
-  const std::uint64_t centre = m_dense ? 0 : key_of_cell(cell);
+  if (m_dense) {
+    // A query more than a cell off the grid (the fluid's particles far from a body's boundary points) has no
+    // candidates: said at once, not by nine empty rows.
+    const Vec3i local = cell - m_lo;
+    if ((local.array() < -1).any() || (local.array() > m_dims.array()).any()) return;
+  }
+  // Nine rows of three cells along x, in the order z, y: each row one run in either layout.
   for (int dz = -1; dz <= 1; ++dz) {
-    const std::uint64_t key_z = morton_step(centre, kAxisBits << 2, dz);
     for (int dy = -1; dy <= 1; ++dy) {
       std::uint32_t b, e;
-      if (m_dense) {
-        if (row_range(cell + Vec3i(-1, dy, dz), 3, b, e)) add(b, e);
-      } else {
-        const std::uint64_t key_zy = morton_step(key_z, kAxisBits << 1, dy);
-        for (int dx = -1; dx <= 1; ++dx) {
-          if (key_range(morton_step(key_zy, kAxisBits, dx), b, e)) add(b, e);
-        }
-      }
+      const Vec3i row_cell = cell + Vec3i(-1, dy, dz);
+      const bool found =
+          m_dense ? row_range(row_cell, 3, b, e) : hashed_row_range(cell + Vec3i(0, dy, dz), b, e);
+      if (!found) continue;
+      out.begin[out.runs] = b;
+      out.end[out.runs] = e;
+      ++out.runs;
+      out.total += e - b;
     }
   }
 }
 
+void NeighborSearch::rows_along(const Vec3i& cell, RowCursor& rows, CandidateRuns& out) const {
+  // The cells come in the sorted order: along a row, x only grows, and the nine rows about it stay the same.
+  // They are looked up once per row of cells, and each row's cursor moves on from where the last cell left
+  // it, rather than nine lookups and searches per cell (candidate_runs, which gives the same runs).
+  if (!rows.valid || cell.y() != rows.y || cell.z() != rows.z || cell.x() < rows.x) {
+    int r = 0;
+    for (int dz = -1; dz <= 1; ++dz) {
+      for (int dy = -1; dy <= 1; ++dy, ++r) {
+        const std::int64_t row = m_cells.find(row_key(cell.y() + dy, cell.z() + dz));
+        if (row < 0) {
+          rows.from[r] = rows.last[r] = nullptr;
+          continue;
+        }
+        rows.from[r] = m_cell_x.data() + m_row_first[static_cast<std::size_t>(row)];
+        rows.last[r] = m_cell_x.data() + m_row_first[static_cast<std::size_t>(row) + 1];
+      }
+    }
+    rows.valid = true;
+    rows.y = cell.y();
+    rows.z = cell.z();
+  }
+  rows.x = cell.x();
+  out.runs = 0;
+  out.total = 0;
+  for (int r = 0; r < 9; ++r) {
+    const int*& from = rows.from[r];
+    const int* last = rows.last[r];
+    while (from != last && *from < cell.x() - 1)
+      ++from;
+    const int* to = from;
+    while (to != last && *to <= cell.x() + 1)
+      ++to;
+    if (from == to) continue;
+    const std::uint32_t b = m_cell_begin[static_cast<std::size_t>(from - m_cell_x.data())];
+    const std::uint32_t e = m_cell_begin[static_cast<std::size_t>(to - m_cell_x.data())];
+    out.begin[out.runs] = b;
+    out.end[out.runs] = e;
+    ++out.runs;
+    out.total += e - b;
+  }
+}
+
+std::size_t NeighborSearch::scan(const CandidateRuns& runs, const Vec3& x, Index self, Index* dst) const {
+  const Scalar r2 = m_radius * m_radius;
+  switch (m_scan) {
+#if DRENCH_HAS_AVX512_SCAN
+    case CandidateScan::kAvx512Compress:
+      return scan_runs_compress(m_xs.data(), m_ys.data(), m_zs.data(), m_sorted_index.data(), runs.begin,
+                                runs.end, runs.runs, x, r2, self, dst);
+#endif
+#if DRENCH_HAS_AVX2_SCAN
+    case CandidateScan::kAvx2Permute:
+      return scan_runs_permute(m_xs.data(), m_ys.data(), m_zs.data(), m_sorted_index.data(), runs.begin,
+                               runs.end, runs.runs, x, r2, self, dst);
+#endif
+    default:
+      return scan_runs_lanes(m_xs.data(), m_ys.data(), m_zs.data(), m_sorted_index.data(), runs.begin,
+                             runs.end, runs.runs, x, r2, self, dst);
+  }
+}
+
+void NeighborSearch::find_self(NeighborList& out) const {
+  const std::size_t m = m_count;
+  out.offsets.assign(m + 1, 0);
+  if (m == 0) {
+    out.indices.clear();
+    return;
+  }
+  // The queries in the sorted order, where the points of a cell are contiguous: the runs of a cell's 27
+  // neighbours are looked up once per cell, and no query's cell is computed again. In the caller's order
+  // a z-order sorted some sub-steps ago kept runs of only 1.2 queries per cell in issue 41's level, and
+  // looking the runs up again for nearly every query was half the search. Each thread gathers the lists of
+  // the chunks it takes into its own buffer and remembers where each query's list starts; the lists are then
+  // copied to their place in query order, the same for any thread count and any deal.
+  const int threads = thread_count();
+  std::vector<IndexArray>& buffers = m_thread_buffers;
+  if (buffers.size() < static_cast<std::size_t>(threads)) buffers.resize(static_cast<std::size_t>(threads));
+  m_query_owner.resize(m);
+  m_query_start.resize(m);
+  std::vector<std::size_t> used_by(static_cast<std::size_t>(threads), 0);
+  const auto gather = [&](std::size_t chunk_begin, std::size_t chunk_end, int thread) {
+    IndexArray& local = buffers[static_cast<std::size_t>(thread)];
+    std::size_t used = used_by[static_cast<std::size_t>(thread)];
+    CandidateRuns runs;
+    RowCursor rows;
+    bool buffered = false;
+    Vec3i buffered_cell = Vec3i::Zero();
+    for (std::size_t k = chunk_begin; k < chunk_end; ++k) {
+      const Vec3i& c = m_sorted_cells[k];
+      if (!buffered || c != buffered_cell) {
+        if (m_dense) {
+          candidate_runs(c, runs);
+        } else {
+          rows_along(c, rows, runs);
+        }
+        buffered = true;
+        buffered_cell = c;
+      }
+      const Index i = m_sorted_index[k];
+      const std::size_t room = used + runs.total + kScanPadding;
+      if (local.size() < room) local.resize(std::max(2 * local.size(), room));
+      const std::size_t first = used;
+      used += scan(runs, Vec3(m_xs[k], m_ys[k], m_zs[k]), i, local.data() + used);
+      out.offsets[i + 1] = static_cast<std::uint32_t>(used - first);
+      m_query_owner[i] = thread;
+      m_query_start[i] = first;
+    }
+    used_by[static_cast<std::size_t>(thread)] = used;
+  };
+  parallel_for_slots(m, kParticleChunk, threads, gather);
+  for (std::size_t i = 0; i < m; ++i)
+    out.offsets[i + 1] += out.offsets[i];
+  out.indices.resize(out.offsets[m]);
+  parallel_for(m, kLightChunk, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t i = begin; i < end; ++i) {
+      const auto from = buffers[static_cast<std::size_t>(m_query_owner[i])].begin() +
+                        static_cast<std::ptrdiff_t>(m_query_start[i]);
+      std::copy(from, from + static_cast<std::ptrdiff_t>(out.offsets[i + 1] - out.offsets[i]),
+                out.indices.begin() + static_cast<std::ptrdiff_t>(out.offsets[i]));
+    }
+  });
+}
+
 void NeighborSearch::find(const Vec3Array& queries, NeighborList& out, bool exclude_self) const {
   const std::size_t m = queries.size();
-  const Scalar r2 = m_radius * m_radius;
   out.offsets.assign(m + 1, 0);
   if (m_count == 0 || m == 0) {
     out.indices.clear();
@@ -268,57 +424,42 @@ void NeighborSearch::find(const Vec3Array& queries, NeighborList& out, bool excl
   std::vector<std::size_t> chunk_start(chunks);
   // Per thread: the buffer is grown ahead of the writes; only its first `used` entries are this call's.
   std::vector<std::size_t> used_by(static_cast<std::size_t>(threads), 0);
-  parallel_for_slots(
-      m, kParticleChunk, threads, [&](std::size_t chunk_begin, std::size_t chunk_end, int thread) {
-        const std::size_t k = chunk_begin / kParticleChunk;
-        IndexArray& local = buffers[static_cast<std::size_t>(thread)];
-        std::size_t used = used_by[static_cast<std::size_t>(thread)];
-        CandidateRuns runs;
-        chunk_owner[k] = thread;
-        chunk_start[k] = used;
-        // Each query scans the runs of its 27 cells in place in the sorted arrays (nine rows in the dense
-        // grid); the runs are looked up once per run of queries in one cell. Copying the candidates into one
-        // array per run of queries first was rejected: particles drift between sorts, so a copy serves only
-        // about three queries, and the eight-lane scans do better in place (bench_dam_break pcisph_59k; on
-        // the sorted block of bench_neighbor_search they are even, and only the four-lane scan, for CPUs
-        // without AVX2, loses a little). A row-by-row scan that skipped cells beyond the radius was slower
-        // still.
-        bool buffered = false;
-        Vec3i buffered_cell = Vec3i::Zero();
-        for (std::size_t i = chunk_begin; i < chunk_end; ++i) {
-          const Vec3& x = queries[i];
-          const Vec3i c = cell_of(x);
-          if (!buffered || c != buffered_cell) {
-            candidate_runs(c, runs);
-            buffered = true;
-            buffered_cell = c;
-          }
-          const Index self = exclude_self ? static_cast<Index>(i) : kNoIndex;
-          const std::size_t room = used + runs.total + kScanPadding;
-          if (local.size() < room) local.resize(std::max(2 * local.size(), room));
-          const std::size_t first = used;
-          Index* dst = local.data() + used;
-          switch (m_scan) {
-#if DRENCH_HAS_AVX512_SCAN
-            case CandidateScan::kAvx512Compress:
-              used += scan_runs_compress(m_xs.data(), m_ys.data(), m_zs.data(), m_sorted_index.data(),
-                                         runs.begin, runs.end, runs.runs, x, r2, self, dst);
-              break;
-#endif
-#if DRENCH_HAS_AVX2_SCAN
-            case CandidateScan::kAvx2Permute:
-              used += scan_runs_permute(m_xs.data(), m_ys.data(), m_zs.data(), m_sorted_index.data(),
-                                        runs.begin, runs.end, runs.runs, x, r2, self, dst);
-              break;
-#endif
-            default:
-              used += scan_runs_lanes(m_xs.data(), m_ys.data(), m_zs.data(), m_sorted_index.data(),
-                                      runs.begin, runs.end, runs.runs, x, r2, self, dst);
-          }
-          out.offsets[i + 1] = static_cast<std::uint32_t>(used - first);
-        }
-        used_by[static_cast<std::size_t>(thread)] = used;
-      });
+  const auto gather = [&](std::size_t chunk_begin, std::size_t chunk_end, int thread) {
+    const std::size_t k = chunk_begin / kParticleChunk;
+    IndexArray& local = buffers[static_cast<std::size_t>(thread)];
+    std::size_t used = used_by[static_cast<std::size_t>(thread)];
+    CandidateRuns runs;
+    chunk_owner[k] = thread;
+    chunk_start[k] = used;
+    // Each query scans the runs of its nine rows of three cells in place in the sorted arrays; the runs are
+    // looked up once per run of queries in one cell. Copying the candidates into one array per run of
+    // queries first was rejected: particles drift between sorts, so a copy serves only about three queries,
+    // and the eight-lane scans do better in place (bench_dam_break pcisph_59k; on the sorted block of
+    // bench_neighbor_search they are even, and only the four-lane scan, for CPUs without AVX2, loses a
+    // little). A row-by-row scan that skipped cells beyond the radius was slower still.
+    bool buffered = false;
+    Vec3i buffered_cell = Vec3i::Zero();
+    for (std::size_t i = chunk_begin; i < chunk_end; ++i) {
+      const Vec3& x = queries[i];
+      // Out of reach of every point (the fluid's particles far from a body's boundary points): no cell to
+      // look at. A NaN query fails both tests and is searched, finding nothing.
+      if ((x.array() <= m_reach_lo.array()).any() || (x.array() >= m_reach_hi.array()).any()) continue;
+      const Vec3i c = cell_of(x);
+      if (!buffered || c != buffered_cell) {
+        candidate_runs(c, runs);
+        buffered = true;
+        buffered_cell = c;
+      }
+      const Index self = exclude_self ? static_cast<Index>(i) : kNoIndex;
+      const std::size_t room = used + runs.total + kScanPadding;
+      if (local.size() < room) local.resize(std::max(2 * local.size(), room));
+      const std::size_t first = used;
+      used += scan(runs, x, self, local.data() + used);
+      out.offsets[i + 1] = static_cast<std::uint32_t>(used - first);
+    }
+    used_by[static_cast<std::size_t>(thread)] = used;
+  };
+  parallel_for_slots(m, kParticleChunk, threads, gather);
   for (std::size_t i = 0; i < m; ++i)
     out.offsets[i + 1] += out.offsets[i];
   // The copy is parallel too: a serial concatenation was a tenth of WCSPH's sub-step on two threads

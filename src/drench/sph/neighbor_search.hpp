@@ -40,9 +40,10 @@ enum class CandidateScan {
 /// Uniform-grid neighbor search. `build` sorts the source points into cells; `find` answers, for every query
 /// point, all source points at distance strictly less than the support radius. When the points' bounding box
 /// holds few enough cells (at most 128 per point and 2^24 in all, or at most 4 per point plus 4,096), cells
-/// live in a dense array filled by a counting sort; otherwise (a jet spread far) in an open-addressing hash
-/// of their Morton keys, so the domain is unbounded (up to 2^20 cells from the origin on each axis; farther
-/// points are clamped into the outermost cells, which stays correct but slow).
+/// live in a dense array filled by a counting sort; otherwise (a jet spread far) in rows along x found
+/// through an open-addressing hash of their (y, z), so the domain is unbounded (up to 2^20 cells from the
+/// origin on each axis; farther points are clamped into the outermost cells, which stays correct but slow).
+/// Both layouts sort the points by row, then x, then index, so they give the same lists in the same order.
 class NeighborSearch {
  public:
   /// @param support_radius  search radius and cell size (unit: m), > 0
@@ -58,6 +59,11 @@ class NeighborSearch {
   /// @param queries  M points (unit: m, finite)
   /// @param exclude_self  skip source index i for query i (queries and sources are the same set)
   void find(const Vec3Array& queries, NeighborList& out, bool exclude_self) const;
+
+  /// find(points, out, true) for the points of the last build: the same lists, found faster, since each
+  /// point's cell is known and the points of a cell are taken together. Not to be called concurrently on one
+  /// object.
+  void find_self(NeighborList& out) const;
 
   /// Permutation that orders `points` along the z-order curve of their cells (ties by index): new position k
   /// holds old index order[k].
@@ -80,41 +86,64 @@ class NeighborSearch {
 
  private:
   /// Where the candidates of a query lie in the sorted arrays (m_xs, ...): the runs [begin[r], end[r]),
-  /// r < runs, in find()'s order (nine rows of three cells in the dense grid, up to 27 cells in the hashed
-  /// one), `total` points in all.
+  /// r < runs, in find()'s order (nine rows of three cells, in either layout), `total` points in all.
   struct CandidateRuns {
-    std::uint32_t begin[27];
-    std::uint32_t end[27];
+    std::uint32_t begin[9];
+    std::uint32_t end[9];
     int runs = 0;
     std::uint32_t total = 0;
   };
 
   /// out = the runs of sorted points in the 27 cells around `cell`, in find()'s order (empty runs left out).
   void candidate_runs(const Vec3i& cell, CandidateRuns& out) const;
+
+  /// Hashed mode: the nine rows about a row of cells, each with a cursor at the first cell not left of the
+  /// last query's x - 1.
+  struct RowCursor {
+    bool valid = false;
+    int x = 0, y = 0, z = 0;  // the cell of the last query
+    const int* from[9];       // into m_cell_x; null, with last, for an empty row
+    const int* last[9];
+  };
+  /// Hashed mode: candidate_runs(cell, out) for cells taken in the sorted order, as find_self takes them,
+  /// with `rows` kept from the previous cell.
+  void rows_along(const Vec3i& cell, RowCursor& rows, CandidateRuns& out) const;
   std::uint64_t key_of_cell(const Vec3i& cell) const;
   Vec3i cell_of(const Vec3& x) const;
-  /// Hashed mode only: the sorted-point range of the cell of Morton key `key`; false when empty or unknown.
-  bool key_range(std::uint64_t key, std::uint32_t& begin, std::uint32_t& end) const;
+  /// Hashed mode only: the sorted-point range of the cells x - 1 .. x + 1 of the row of `cell`; false when
+  /// empty.
+  bool hashed_row_range(const Vec3i& cell, std::uint32_t& begin, std::uint32_t& end) const;
   /// Dense mode only: the sorted-point range of `count` cells from `cell` along +x (clipped to the grid);
   /// false when empty.
   bool row_range(const Vec3i& cell, int count, std::uint32_t& begin, std::uint32_t& end) const;
   void build_dense(const std::vector<Vec3i>& cells, const Vec3i& lo, const Vec3i& dims);
-  void build_hashed(const Vec3Array& points);
+  /// @param cells  the cell of every point (cell_of)
+  void build_hashed(const std::vector<Vec3i>& cells);
+  /// Appends to dst the original indices of the candidates of `runs` within the radius of x, but `self`, with
+  /// the CPU's scan (m_scan); returns how many. dst has room for runs.total + kScanPadding.
+  std::size_t scan(const CandidateRuns& runs, const Vec3& x, Index self, Index* dst) const;
 
   Scalar m_radius;
   Scalar m_inv_cell;
   // Source points in sorted (cell) order, one array per coordinate (the scans read runs of them in place),
   // and the original index of each.
   ScalarArray m_xs, m_ys, m_zs;
-  IndexArray m_sorted_index;                // n entries, then kScanPadding
-  std::size_t m_count = 0;                  // source points of the last build
-  KeyIndexTable m_cells;                    // hashed mode: the distinct keys, ascending, and their table
+  IndexArray m_sorted_index;          // n entries, then kScanPadding
+  std::vector<Vec3i> m_sorted_cells;  // n: the cell of each sorted point
+  Vec3 m_reach_lo = Vec3::Zero();     // the finite points' box grown by two radii (unit: m)
+  Vec3 m_reach_hi = Vec3::Zero();
+  std::size_t m_count = 0;  // source points of the last build
+  KeyIndexTable m_cells;    // hashed mode: the distinct rows (z, y), ascending, and their table
   std::vector<std::uint32_t> m_cell_begin;  // first sorted point of each cell; one extra end entry
+  std::vector<int> m_cell_x;                // hashed mode: the x of each distinct cell, ascending in its row
+  std::vector<std::uint32_t> m_row_first;   // hashed mode: the first cell of each row; one extra end entry
   bool m_dense = false;
   CandidateScan m_scan = CandidateScan::kFourLanes;
   Vec3i m_lo = Vec3i::Zero();                        // dense mode: first cell of the grid
   Vec3i m_dims = Vec3i::Zero();                      // dense mode: cells per axis
   mutable std::vector<IndexArray> m_thread_buffers;  // find(): one result buffer per thread, kept for reuse
+  mutable std::vector<int> m_query_owner;            // find_self(): the thread that listed each query
+  mutable std::vector<std::size_t> m_query_start;    // find_self(): where in its buffer its list starts
 };
 
 }  // namespace drench

@@ -66,13 +66,12 @@ VerletNeighborLists::VerletNeighborLists(const CubicSplineKernel& kernel, Scalar
       m_wide_boundary(m_support + max_skin) {
   assert(max_skin >= 0.0);
   m_exact_boundary.build(m_boundary_points);
-  if (max_skin > 0.0) m_wide_boundary.build(m_boundary_points);
 }
 
 void VerletNeighborLists::set_boundary_points(Vec3Array boundary) {
   m_boundary_points = std::move(boundary);
   m_exact_boundary.build(m_boundary_points);
-  if (m_wide_boundary.support_radius() > m_support) m_wide_boundary.build(m_boundary_points);
+  m_wide_boundary_built = false;
   m_skin = 0.0;  // the kept candidates name the old points
 }
 
@@ -103,14 +102,20 @@ bool VerletNeighborLists::update(const Vec3Array& positions, const std::vector<s
     m_ids = ids;
     m_positions = positions;
     m_wide_fluid.build(positions);
-    m_wide_fluid.find(positions, m_fluid_candidates, /*exclude_self=*/true);
+    m_wide_fluid.find_self(m_fluid_candidates);
+    // Built here, when a skin first needs it: a moving body's points change every step, and a solver that
+    // never keeps a skin (PBF, PCISPH) would pay a second grid of them per step for nothing (issue 41).
+    if (!m_wide_boundary_built) {
+      m_wide_boundary.build(m_boundary_points);
+      m_wide_boundary_built = true;
+    }
     m_wide_boundary.find(positions, m_boundary_candidates, /*exclude_self=*/false);
     filter(m_fluid_candidates, positions, positions, m_fluid, m_fluid_factors);
     filter(m_boundary_candidates, positions, m_boundary_points, m_boundary, m_boundary_factors);
   } else {
     // Exactly the neighbors: nothing to filter, and no candidates are kept.
     m_exact_fluid.build(positions);
-    m_exact_fluid.find(positions, m_fluid, /*exclude_self=*/true);
+    m_exact_fluid.find_self(m_fluid);
     m_exact_boundary.find(positions, m_boundary, /*exclude_self=*/false);
     gradient_factors(m_fluid, positions, positions, m_fluid_factors);
     gradient_factors(m_boundary, positions, m_boundary_points, m_boundary_factors);

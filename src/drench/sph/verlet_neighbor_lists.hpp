@@ -70,13 +70,14 @@ class VerletNeighborLists {
   CubicSplineKernel m_kernel;  // a copy: a reference into the owner would dangle when the owner is moved
   Scalar m_support;
   Vec3Array m_boundary_points;
-  NeighborSearch m_exact_fluid;      // cells of the support: rebuilds without a skin, and z_order
-  NeighborSearch m_exact_boundary;   // built once
-  NeighborSearch m_wide_fluid;       // cells of support + max_skin
-  NeighborSearch m_wide_boundary;    // built once, when max_skin > 0
-  Scalar m_skin = 0.0;               // of the last rebuild (unit: m); 0: no candidates are kept
-  std::vector<std::uint32_t> m_ids;  // at the last rebuild with a skin
-  Vec3Array m_positions;             // at the last rebuild with a skin (unit: m)
+  NeighborSearch m_exact_fluid;        // cells of the support: rebuilds without a skin, and z_order
+  NeighborSearch m_exact_boundary;     // built once
+  NeighborSearch m_wide_fluid;         // cells of support + max_skin
+  NeighborSearch m_wide_boundary;      // built for the boundary points when a rebuild with a skin needs it
+  bool m_wide_boundary_built = false;  // m_wide_boundary holds m_boundary_points
+  Scalar m_skin = 0.0;                 // of the last rebuild (unit: m); 0: no candidates are kept
+  std::vector<std::uint32_t> m_ids;    // at the last rebuild with a skin
+  Vec3Array m_positions;               // at the last rebuild with a skin (unit: m)
   NeighborList m_fluid_candidates;
   NeighborList m_boundary_candidates;
   NeighborList m_fluid;
