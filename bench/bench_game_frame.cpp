@@ -7,7 +7,9 @@
 //   build-bench/bench/bench_game_frame [--frames 600] [--warmup 60] [--solvers dfsph,pcisph,pbf] [--busy N]
 //       [--broad-phase grid|fcl] [--benchmark_filter=...] --benchmark_out=game_frame.json
 //       --benchmark_out_format=json
-// bench/game_frame.py runs it and writes bench/results/<machine>/game_frame.csv.
+// bench/game_frame.py runs it and writes bench/results/<machine>/game_frame.csv. Built in a build directory
+// configured with -DDRENCH_POOL_STATS=ON it also counts, per frame, the parallel and serial loops of drench's
+// thread pool and how long their ends waited for a late worker (pool_* counters, detail::pool_stats).
 //
 // One benchmark iteration is one frame (Iterations(frames), UseManualTime with the frame's wall time): the
 // frame count is fixed, not chosen by Google Benchmark, the world is built and warmed up outside the timed
@@ -129,6 +131,7 @@ void game_frame(benchmark::State& state, const std::string& name, drench::Pressu
   }
 
   const drench::FluidStatistics fluid_before = coupled.simulation().fluid().statistics();
+  drench::detail::reset_pool_stats();
   std::vector<std::vector<double>> stages(7);
   std::size_t particles_max = 0;
   for (auto _ : state) {
@@ -146,6 +149,30 @@ void game_frame(benchmark::State& state, const std::string& name, drench::Pressu
       stages[k].push_back(values[k]);
     particles_max = std::max(particles_max, coupled.particles().size());
     if (!report.ok()) blow_up(report);
+  }
+
+  // The pool's loops over the timed frames, per frame (a DRENCH_POOL_STATS build only): how many parallel
+  // and serial loops a frame runs, and how long the callers waited at their ends for a late worker.
+  const drench::detail::PoolStats pool = drench::detail::pool_stats();
+  if (pool.counted) {
+    const double per_frame = 1.0 / static_cast<double>(std::max<std::size_t>(1, stages[0].size()));
+    const auto share = [](std::uint64_t part, std::uint64_t whole) {
+      return whole == 0 ? 0.0 : static_cast<double>(part) / static_cast<double>(whole);
+    };
+    state.counters["pool_loops"] = per_frame * static_cast<double>(pool.parallel_loops);
+    state.counters["pool_serial_loops"] = per_frame * static_cast<double>(pool.serial_loops);
+    state.counters["pool_loop_ms"] = 1e3 * per_frame * pool.loop_seconds;
+    state.counters["pool_wait_ms"] = 1e3 * per_frame * pool.wait_seconds;
+    state.counters["pool_serial_ms"] = 1e3 * per_frame * pool.serial_seconds;
+    state.counters["pool_waits"] = per_frame * static_cast<double>(pool.waits);
+    state.counters["pool_blocked_waits"] = per_frame * static_cast<double>(pool.blocked_waits);
+    state.counters["pool_long_waits"] = per_frame * static_cast<double>(pool.long_waits);
+    state.counters["pool_max_wait_ms"] = 1e3 * pool.max_wait_seconds;
+    state.counters["pool_solo_stretches"] = per_frame * static_cast<double>(pool.solo_stretches);
+    state.counters["pool_light_loops"] = per_frame * static_cast<double>(pool.light_loops);
+    state.counters["pool_light_ms"] = 1e3 * per_frame * pool.light_seconds;
+    state.counters["pool_caller_chunk_share"] = share(pool.caller_chunks, pool.chunks);
+    state.counters["pool_caller_alone_share"] = share(pool.caller_alone_loops, pool.parallel_loops);
   }
 
   const char* names[] = {"emit", "fluid", "cloth", "rigid", "coupling", "other", "total"};

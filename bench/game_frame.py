@@ -60,6 +60,9 @@ def row_of(benchmark, blow_ups):
     for stage in STAGES:
         row[f"{stage}_ms_median"] = round(benchmark[f"{stage}_ms_median"], 3)
         row[f"{stage}_ms_p99"] = round(benchmark[f"{stage}_ms_p99"], 3)
+    # A build configured with -DDRENCH_POOL_STATS=ON adds the pool's loops and waits per frame (pool_*).
+    for key in sorted(k for k in benchmark if k.startswith("pool_")):
+        row[key] = round(benchmark[key], 4)
     return row
 
 

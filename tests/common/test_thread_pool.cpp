@@ -1,9 +1,11 @@
 // drench's parallel loops (common/parallel.hpp): the thread count decides how many threads run chunks, bad
 // counts are refused naming the value, every index is visited once, nested and concurrent loops complete,
-// an exception in a body reaches the caller, and reductions fold in chunk order.
+// an exception in a body reaches the caller, reductions fold in chunk order, light loops up to kLightSerial
+// stay on the caller, and the rule that runs loops on their callers alone after a late worker.
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <condition_variable>
@@ -192,6 +194,78 @@ TEST(ThreadPool, SlotsStayBelowTheGivenBound) {
   });
   EXPECT_GE(highest.load(), 0);
   EXPECT_LT(highest.load(), 2);
+}
+
+TEST(ThreadPool, LightLoopsUpToTheThresholdRunOnTheCallerAlone) {
+  const ThreadCountScope scope(2);
+  // Each chunk's first element waits (up to 2 s) for a chunk on another thread: a light loop at the
+  // threshold never gets one; a larger one gets its worker, however loaded the machine is.
+  const auto threads_of = [](std::size_t n, std::chrono::milliseconds patience) {
+    std::mutex mutex;
+    std::condition_variable arrived;
+    std::set<std::thread::id> ids;
+    parallel_for(n, kLightChunk, [&](std::size_t begin, std::size_t) {
+      std::unique_lock<std::mutex> lock(mutex);
+      ids.insert(std::this_thread::get_id());
+      arrived.notify_all();
+      if (begin == 0) arrived.wait_for(lock, patience, [&] { return ids.size() > 1; });
+    });
+    return ids.size();
+  };
+  EXPECT_EQ(threads_of(kLightSerial, std::chrono::milliseconds(20)), 1u);
+  EXPECT_EQ(threads_of(kLightSerial + kLightChunk, std::chrono::seconds(10)), 2u);
+}
+
+using Clock = detail::LateWorkerPolicy::Clock;
+using Policy = detail::LateWorkerPolicy;
+
+TEST(LateWorkerPolicy, AWaitWithinTheLimitStartsNoStretch) {
+  Policy policy;
+  const Clock::time_point now = Clock::time_point{} + std::chrono::seconds(10);
+  EXPECT_FALSE(policy.on_wait(Policy::kLateWait, now));
+  EXPECT_EQ(policy.solo_until(), Clock::time_point{});
+}
+
+TEST(LateWorkerPolicy, ALateWaitStartsTheShortestStretch) {
+  Policy policy;
+  const Clock::time_point now = Clock::time_point{} + std::chrono::seconds(10);
+  EXPECT_TRUE(policy.on_wait(Policy::kLateWait + std::chrono::microseconds(1), now));
+  EXPECT_EQ(policy.solo_until(), now + Policy::kMinSolo);
+}
+
+TEST(LateWorkerPolicy, LateWaitsRightAfterAStretchDoubleItUpToTheLongest) {
+  Policy policy;
+  Clock::time_point now = Clock::time_point{} + std::chrono::seconds(10);
+  const Clock::duration late = std::chrono::milliseconds(2);
+  ASSERT_TRUE(policy.on_wait(late, now));
+  Clock::duration expected = Policy::kMinSolo;
+  for (int k = 0; k < 10; ++k) {
+    // The first parallel loop after the stretch is late again (a lasting busy thread).
+    now = policy.solo_until() + std::chrono::microseconds(100);
+    ASSERT_TRUE(policy.on_wait(late, now));
+    expected = std::min<Clock::duration>(2 * expected, Policy::kMaxSolo);
+    EXPECT_EQ(policy.solo_until() - now, expected) << "stretch " << k + 1;
+  }
+  EXPECT_EQ(policy.solo_until() - now, Policy::kMaxSolo);
+}
+
+TEST(LateWorkerPolicy, ALateWaitLongAfterTheLastStretchStartsAShortOne) {
+  Policy policy;
+  Clock::time_point now = Clock::time_point{} + std::chrono::seconds(10);
+  const Clock::duration late = std::chrono::milliseconds(2);
+  Clock::duration last = Clock::duration::zero();
+  for (int k = 0; k < 4; ++k) {
+    ASSERT_TRUE(policy.on_wait(late, now));
+    last = policy.solo_until() - now;
+    now = policy.solo_until() + std::chrono::microseconds(100);
+  }
+  ASSERT_EQ(last, 8 * Policy::kMinSolo);
+  // The busy threads left: a late wait a second later is a passing load.
+  now += std::chrono::seconds(1);
+  ASSERT_TRUE(policy.on_wait(late, now));
+  EXPECT_EQ(policy.solo_until() - now, Policy::kMinSolo);
+  policy.reset();
+  EXPECT_EQ(policy.solo_until(), Clock::time_point{});
 }
 
 }  // namespace

@@ -6,10 +6,13 @@
 /// wait policy can only be set in the environment before the program loads it, so a library cannot choose it
 /// for the program that embeds it. Beside one busy thread on a 2-core machine a jet on a cloth ran 5.7x
 /// slower on two threads than on one. This pool's idle threads spin for at most 50 us (parallel.cpp's
-/// kSpinTime), then block.
+/// kSpinTime), then block; after a worker came late to a loop's end (preempted by another busy thread), the
+/// loops run on their callers alone for a while (detail::LateWorkerPolicy).
 
 #include <algorithm>
+#include <chrono>
 #include <cstddef>
+#include <cstdint>
 #include <type_traits>
 #include <utility>
 #include <vector>
@@ -48,6 +51,77 @@ using ChunkFunction = void (*)(void* body, std::size_t begin, std::size_t end, i
 /// chunks not yet started are skipped.
 void run_chunks(std::size_t n, std::size_t grain, int slots, ChunkFunction fn, void* body);
 
+/// When the pool's loops run on their callers alone, the workers sleeping: beside busy threads (a game's, a
+/// renderer's) a worker that the scheduler preempts while it holds a chunk stops the whole loop until its
+/// core is given back, a time slice of the other thread (about a millisecond or more: EEVDF's base slice is
+/// 0.75 ms times 1 + log2(CPUs)), and a sub-step runs some tens of loops. A caller that waited longer than
+/// kLateWait at a loop's end (a chunk takes some tens of microseconds) starts a stretch of loops on callers
+/// alone: kMinSolo at first, so that a passing load (another program's burst) costs little; a late wait soon
+/// after a stretch ended (within the stretch's length) doubles the next, up to kMaxSolo, so that a lasting
+/// busy thread costs one late wait per kMaxSolo. Results do not change: every loop gives the same bits on
+/// any number of threads. Times are passed in, so that the rule is tested without a clock.
+class LateWorkerPolicy {
+ public:
+  using Clock = std::chrono::steady_clock;
+  static constexpr Clock::duration kLateWait = std::chrono::microseconds(500);
+  static constexpr Clock::duration kMinSolo = std::chrono::milliseconds(4);
+  static constexpr Clock::duration kMaxSolo = std::chrono::milliseconds(128);
+
+  /// A caller waited `waited` at a loop's end for the workers, the wait ending at `now`. True when that
+  /// starts a stretch (then solo_until() is its end).
+  bool on_wait(Clock::duration waited, Clock::time_point now) {
+    if (waited <= kLateWait) return false;
+    const bool again = m_solo_end != Clock::time_point{} && now - m_solo_end < m_solo_time;
+    m_solo_time = again ? std::min<Clock::duration>(2 * m_solo_time, kMaxSolo) : kMinSolo;
+    m_solo_end = now + m_solo_time;
+    return true;
+  }
+
+  /// The end of the last stretch (Clock::time_point{} before the first): loops started before it run on
+  /// their callers alone.
+  Clock::time_point solo_until() const { return m_solo_end; }
+
+  /// Forgets the stretches (a new thread count starts afresh).
+  void reset() {
+    m_solo_time = kMinSolo;
+    m_solo_end = Clock::time_point{};
+  }
+
+ private:
+  Clock::duration m_solo_time = kMinSolo;
+  Clock::time_point m_solo_end{};
+};
+
+/// What the pool did since the last reset_pool_stats, counted only in a build configured with
+/// DRENCH_POOL_STATS=ON (a measuring option: it compiles two clock reads per loop into parallel.cpp alone);
+/// in any other build every field stays 0 and `counted` false. For bench/bench_game_frame's counters: how
+/// many loops a frame runs, and how long their ends wait for a thread that another busy thread keeps off its
+/// core.
+struct PoolStats {
+  bool counted = false;              ///< the build counts (DRENCH_POOL_STATS)
+  std::uint64_t parallel_loops = 0;  ///< loops dealt to the pool's threads
+  std::uint64_t serial_loops = 0;    ///< loops outside any other run on their caller alone (one chunk, ...)
+  std::uint64_t chunks = 0;          ///< chunks of the parallel loops
+  std::uint64_t caller_chunks = 0;   ///< of those, taken by the calling thread
+  std::uint64_t caller_alone_loops = 0;  ///< parallel loops whose every chunk the caller took (workers late)
+  std::uint64_t waits = 0;           ///< parallel loops whose caller waited for a worker after its last chunk
+  std::uint64_t blocked_waits = 0;   ///< of those, waits that outlasted the spin and blocked
+  std::uint64_t long_waits = 0;      ///< of those, waits over 1 ms (a worker off its core)
+  double loop_seconds = 0.0;         ///< wall time of the parallel loops, start to end (unit: s)
+  double wait_seconds = 0.0;         ///< of it, the callers' waits after their last chunk (unit: s)
+  double max_wait_seconds = 0.0;     ///< the longest such wait (unit: s)
+  double serial_seconds = 0.0;       ///< wall time of the serial loops (unit: s)
+  std::uint64_t solo_stretches = 0;  ///< stretches of loops on the caller alone begun after a late wait
+  std::uint64_t light_loops = 0;     ///< parallel loops of grain kLightChunk
+  double light_seconds = 0.0;        ///< their wall time (unit: s)
+};
+
+/// The pool's counts since the last reset (all 0 unless built with DRENCH_POOL_STATS).
+PoolStats pool_stats();
+
+/// Sets the pool's counts to 0.
+void reset_pool_stats();
+
 template <class Body>
 void call_chunk(void* body, std::size_t begin, std::size_t end, int slot) {
   Body& b = *static_cast<Body*>(body);
@@ -72,8 +146,16 @@ inline constexpr std::size_t kParticleChunk = 256;
 /// Elements per chunk of light loops (a few nanoseconds per element: copies, an equation of state, an
 /// integration step): large enough that taking a chunk (one atomic add) costs under a percent of it, small
 /// enough that a thread slowed by another busy thread on its core takes fewer chunks instead of holding up
-/// the loop's end. A loop of at most this many elements runs on the calling thread alone, waking nobody.
+/// the loop's end. A loop of at most kLightSerial elements runs on the calling thread alone, waking nobody.
 inline constexpr std::size_t kLightChunk = 2048;
+
+/// Light loops (grain kLightChunk) of at most this many elements run on the calling thread alone. A light
+/// loop of 2 to 16 chunks took 1.2-1.3x as long on two threads as on one (Vec3 axpy, 2-core VM, median of
+/// 2,000 loops); bench_game_frame's 4,000-particle level ran 370 light loops per DFSPH frame, 31-38 ms on two
+/// threads against 12-14 ms on the caller alone (DRENCH_POOL_STATS counters): waking a worker and moving
+/// the chunk's cache lines to its core cost more than the chunk. Larger ones (the 59K dam break's 29
+/// chunks) stay parallel.
+inline constexpr std::size_t kLightSerial = 8 * kLightChunk;
 
 /// Calls body(begin, end) (or body(begin, end, slot)) for the chunks [k grain, min(n, (k + 1) grain)) of
 /// [0, n), each chunk going to the next free thread; returns when all are done. The body must write results
@@ -81,7 +163,9 @@ inline constexpr std::size_t kLightChunk = 2048;
 /// same for any thread count and any deal. `slot` in [0, thread_count()) names the participant running the
 /// chunk, for per-thread scratch space: no two chunks run at once with the same slot. A loop started inside
 /// a body, or while another thread's loop holds the pool (two user threads, e.g. render/'s LiveSimulation and
-/// LiveSurface), runs serially on its caller, chunk by chunk in order. An exception thrown by the body
+/// LiveSurface), a light loop of at most kLightSerial elements, and the loops of a stretch after a worker
+/// came late (detail::LateWorkerPolicy) run serially on their caller, chunk by chunk in order, with the same
+/// results. An exception thrown by the body
 /// reaches the caller, after the chunks already running have finished (the others are skipped).
 /// @param n  elements; 0 calls nothing
 /// @param grain  elements per chunk, > 0
