@@ -9,6 +9,8 @@
 #include <cstdint>
 #include <vector>
 
+#include <drench/common/key_index_table.hpp>
+
 namespace drench {
 
 /// Each key's indices in ascending order (a fresh filing's order), in an open-addressing table (linear
@@ -75,15 +77,7 @@ class CellLists {
     }
   }
 
-  /// splitmix64's finaliser, as KeyIndexTable's: neighbouring cells' keys differ in few bits.
-  static std::uint64_t mix(std::uint64_t key) {
-    key ^= key >> 30;
-    key *= 0xbf58476d1ce4e5b9ULL;
-    key ^= key >> 27;
-    key *= 0x94d049bb133111ebULL;
-    key ^= key >> 31;
-    return key;
-  }
+  static std::uint64_t mix(std::uint64_t key) { return mix_cell_key(key); }
 
   std::vector<std::uint64_t> m_keys;
   std::vector<std::vector<Index>> m_lists;

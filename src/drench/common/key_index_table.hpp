@@ -9,6 +9,17 @@
 
 namespace drench {
 
+/// splitmix64's finaliser: neighbouring cells' keys (Morton codes, or products of coordinates) differ in few
+/// bits, so hash tables of cells mix them before masking them to a slot.
+inline std::uint64_t mix_cell_key(std::uint64_t key) {
+  key ^= key >> 30;
+  key *= 0xbf58476d1ce4e5b9ULL;
+  key ^= key >> 27;
+  key *= 0x94d049bb133111ebULL;
+  key ^= key >> 31;
+  return key;
+}
+
 class KeyIndexTable {
  public:
   /// Takes `keys` (distinct, in any order; they keep it) and indexes them. The table is at most half full,
@@ -42,16 +53,7 @@ class KeyIndexTable {
   }
 
  private:
-  /// splitmix64's finaliser: neighbouring cells' keys (Morton codes, or products of coordinates) differ in
-  /// few bits, so they need mixing before the mask.
-  static std::uint64_t mix(std::uint64_t key) {
-    key ^= key >> 30;
-    key *= 0xbf58476d1ce4e5b9ULL;
-    key ^= key >> 27;
-    key *= 0x94d049bb133111ebULL;
-    key ^= key >> 31;
-    return key;
-  }
+  static std::uint64_t mix(std::uint64_t key) { return mix_cell_key(key); }
 
   std::vector<std::uint64_t> m_keys;
   std::vector<std::int64_t> m_slots =
