@@ -58,10 +58,6 @@ std::vector<Contact> find_contacts(const StepContext& ctx, const std::vector<std
   // (water landing on a flat plate drifted, Coupler.ADropletLandingOnAStaticPlateGainsNoSidewaysMomentum).
   // As A holds the feature, distance_A <= distance_B, equal only where the closest points coincide: a
   // particle off a convex crease keeps its edge contact.
-  std::vector<double> distance(pairs.size(), 0.0);
-  for (std::size_t k = 0; k < pairs.size(); ++k) {
-    if (keep[k]) distance[k] = thickness - candidates[k].overlap;
-  }
   const auto holds_feature = [&](const Contact& b, Index t) {
     const Triangle& tri = cloth.triangles[b.triangle];
     const Triangle& other = cloth.triangles[t];
@@ -81,7 +77,8 @@ std::vector<Contact> find_contacts(const StepContext& ctx, const std::vector<std
       bool shadowed = false;
       if (c.weights.minCoeff() <= 0.0) {
         for (std::size_t other = first; other < last && !shadowed; ++other) {
-          shadowed = other != k && keep[other] && distance[other] < distance[k] * (1.0 - 1e-9) &&
+          shadowed = other != k && keep[other] &&
+                     thickness - candidates[other].overlap < (thickness - c.overlap) * (1.0 - 1e-9) &&
                      holds_feature(c, candidates[other].triangle);
         }
       }
