@@ -97,7 +97,9 @@ double quantile(std::vector<double> values, double q) {
 /// fluid, cloth, rigid, coupling, other = total less the named ones, total); leaks over the whole run
 /// (warm-up included; the target is 0); the fastest particle and node at the end of any step of the run
 /// (unit: m/s); particles at the end and at most; the fluid's CFL sub-steps per frame and mean density error
-/// over the timed frames; the time of a blow-up (0: none), after which nothing more is stepped.
+/// over the timed frames; the continuous handling's CCD rounds, impacts, fail-safe particles and sub-step
+/// obstacle stops per frame, and the shares of frames that reached its fail-safe and its impact zones; the
+/// time of a blow-up (0: none), after which nothing more is stepped.
 void game_frame(benchmark::State& state, const std::string& name, drench::PressureSolverKind solver,
                 int threads, int busy, long warmup, std::optional<drench::BroadPhaseKind> broad_phase) {
   drench::set_thread_count(threads);
@@ -110,10 +112,26 @@ void game_frame(benchmark::State& state, const std::string& name, drench::Pressu
   const BusyThreads spinning(busy);
 
   std::uint64_t leaks = 0, failed_frames = 0;
+  // The continuous handling's work over the timed frames: how often a frame needs its last resorts tells
+  // whether its rounds (coupling.max_ccd_iterations) suffice for the level.
+  struct {
+    std::uint64_t rounds = 0, impacts = 0, failsafe_particles = 0, failsafe_frames = 0, zone_frames = 0,
+                  obstacle_stops = 0;
+  } ccd;
+  bool timing = false;
   const auto checked_step = [&]() {
     drench::bullet::CoupledStepReport report = coupled.step();
     leaks += report.leak_stats.leaks;
     if (report.failed()) ++failed_frames;
+    if (timing) {
+      const drench::CouplingStepStats& c = report.coupling_stats;
+      ccd.rounds += c.ccd_iterations;
+      ccd.impacts += c.ccd_impacts;
+      ccd.failsafe_particles += c.failsafe_activations;
+      ccd.obstacle_stops += c.obstacle_stops;
+      if (report.coupling & drench::COUPLING_FAILSAFE_USED) ++ccd.failsafe_frames;
+      if (report.coupling & drench::COUPLING_ZONES_STOPPED) ++ccd.zone_frames;
+    }
     return report;
   };
   // A blow-up stops the stepping: the iterations left pass without a step, with time 0, so that the
@@ -134,6 +152,7 @@ void game_frame(benchmark::State& state, const std::string& name, drench::Pressu
   drench::detail::reset_pool_stats();
   std::vector<std::vector<double>> stages(7);
   std::size_t particles_max = 0;
+  timing = true;
   for (auto _ : state) {
     if (blew_up_at > 0.0) {
       state.SetIterationTime(0.0);
@@ -196,6 +215,13 @@ void game_frame(benchmark::State& state, const std::string& name, drench::Pressu
   state.counters["particles_max"] = static_cast<double>(particles_max);
   state.counters["fluid_substeps_per_frame"] =
       substeps / static_cast<double>(std::max<std::size_t>(1, stages[0].size()));
+  const double frames_done = static_cast<double>(std::max<std::size_t>(1, stages[0].size()));
+  state.counters["ccd_rounds_per_frame"] = static_cast<double>(ccd.rounds) / frames_done;
+  state.counters["ccd_impacts_per_frame"] = static_cast<double>(ccd.impacts) / frames_done;
+  state.counters["failsafe_particles_per_frame"] = static_cast<double>(ccd.failsafe_particles) / frames_done;
+  state.counters["failsafe_frame_share"] = static_cast<double>(ccd.failsafe_frames) / frames_done;
+  state.counters["zone_frame_share"] = static_cast<double>(ccd.zone_frames) / frames_done;
+  state.counters["obstacle_stops_per_frame"] = static_cast<double>(ccd.obstacle_stops) / frames_done;
   state.counters["density_error_mean"] =
       substeps > 0 ? (fluid.density_error_sum - fluid_before.density_error_sum) / substeps : 0.0;
 }

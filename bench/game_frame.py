@@ -11,7 +11,8 @@ each solver with drench on 1 thread and on its default (the CPUs), alone and bes
 (--busy: that many instead).
 Each row: the median and 99th percentile ms per frame of each stage (CoupledStepReport::seconds: emit, fluid,
 cloth, rigid, coupling, other, total) over the timed frames, the leaks of the whole run (target 0), the fastest
-particle, the fluid's sub-steps per frame. The benchmarks run one after another, in the order solver, threads,
+particle, the fluid's sub-steps per frame, how often the continuous handling reached its fail-safe and its
+impact zones (shares of the timed frames). The benchmarks run one after another, in the order solver, threads,
 condition; the machine's load before and after goes into the CSV's notes.
 """
 
@@ -53,6 +54,12 @@ def row_of(benchmark, blow_ups):
            "fastest_node_mps": round(benchmark["fastest_node_mps"], 3),
            "fluid_substeps_per_frame": round(benchmark["fluid_substeps_per_frame"], 2),
            "density_error_mean": float(f"{benchmark['density_error_mean']:.3g}"),
+           # The continuous handling's last resorts (sec. 3.3's rounds, then the fail-safe, then impact zones):
+           # how often the level needs them.
+           "ccd_rounds_per_frame": round(benchmark.get("ccd_rounds_per_frame", float("nan")), 2),
+           "failsafe_frame_share": round(benchmark.get("failsafe_frame_share", float("nan")), 3),
+           "zone_frame_share": round(benchmark.get("zone_frame_share", float("nan")), 3),
+           "failsafe_particles_per_frame": round(benchmark.get("failsafe_particles_per_frame", float("nan")), 2),
            "mean_ms": round(benchmark["real_time"], 3),
            # The calling thread's CPU time per frame: beside other load, a frame's wall time over it tells how
            # much of a core drench's first thread got (about 1 for one thread on a quiet machine).
