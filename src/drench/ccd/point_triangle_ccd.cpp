@@ -271,6 +271,29 @@ bool certainly_one_signed(const VertexFaceQuery& q) {
     const double coef[2] = {d0.value, d1.value}, err[2] = {d0.error, d1.error};
     return one_signed(coef, err, 2);
   }
+  // First with one error bound for all four coefficients, from the largest coordinates: four cross products
+  // and six dot products instead of eight determinants with their own bounds (a third of the cost), and it
+  // decides nearly every query the tighter bounds below would (a particle near a face, far from its plane
+  // compared with rounding). Each coefficient (times 3) is three determinants det[b, c, p] = p . (b x c),
+  // whose six terms sum in magnitude to at most 2 |p|_1 |b|_inf |c|_inf; along every term the inputs round
+  // once (the differences), the cross products twice and their sum once, the dot products three times, the
+  // last sum once: 10 u of that magnitude, covered by 32 u.
+  {
+    const Vec3 n00 = b0.cross(c0), n11 = b1.cross(c1);
+    const Vec3 mixed = b0.cross(c1) + b1.cross(c0);
+    const double coef[4] = {3 * p0.dot(n00), p0.dot(mixed) + p1.dot(n00), p1.dot(mixed) + p0.dot(n11),
+                            3 * p1.dot(n11)};
+    const double size_b = std::max(b0.cwiseAbs().maxCoeff(), b1.cwiseAbs().maxCoeff());
+    const double size_c = std::max(c0.cwiseAbs().maxCoeff(), c1.cwiseAbs().maxCoeff());
+    const double size_p = std::max(p0.cwiseAbs().sum(), p1.cwiseAbs().sum());
+    const double margin = 32.0 * kUnitRoundoff * 6.0 * (size_p * size_b * size_c) * kGrow + kTiny;
+    bool positive = true, negative = true;
+    for (const double x : coef) {
+      positive = positive && x > margin;
+      negative = negative && x < -margin;
+    }
+    if (positive || negative) return true;
+  }
   const PlainDet d[8] = {plain_det3(b0, c0, p0), plain_det3(b1, c0, p0), plain_det3(b0, c1, p0),
                          plain_det3(b0, c0, p1), plain_det3(b0, c1, p1), plain_det3(b1, c0, p1),
                          plain_det3(b1, c1, p0), plain_det3(b1, c1, p1)};
@@ -336,6 +359,22 @@ Bernstein<4> deflate(const Bernstein<4>& b, bool at_end) {
   const std::array<Ev, 3> q = at_end ? std::array<Ev, 3>{b[0], three_halves * b[1], three * b[2]}
                                      : std::array<Ev, 3>{three * b[1], three_halves * b[2], b[3]};
   return {q[0], divide(q[0] + exact(2.0) * q[1], 3.0), divide(exact(2.0) * q[1] + q[2], 3.0), q[2]};
+}
+
+/// A point that starts on a vertex (a mesh vertex tested against its own triangle, or a particle resting on
+/// a node) touches at t = 0: decided by exact comparison, before any rounding. True and `r` set when so.
+bool starts_on_vertex(const VertexFaceQuery& q, CcdResult& r) {
+  const std::array<const Vec3*, 3> vertices_t0 = {&q.a_t0, &q.b_t0, &q.c_t0};
+  for (int i = 0; i < 3; ++i) {
+    if (q.p_t0 == *vertices_t0[i]) {
+      r = CcdResult{};
+      r.hit = true;
+      r.toi = 0.0;
+      r.barycentric[i] = 1.0;
+      return true;
+    }
+  }
+  return false;
 }
 
 enum class Verdict { NO_CONTACT, CONTACT, UNDECIDED };
@@ -464,6 +503,12 @@ CcdResult earliest_root(const VertexFaceQuery& q, const Span& s, const CcdSettin
 void check_query_finite(const VertexFaceQuery& query) {
   const Vec3* vertices[8] = {&query.p_t0, &query.a_t0, &query.b_t0, &query.c_t0,
                              &query.p_t1, &query.a_t1, &query.b_t1, &query.c_t1};
+  // x - x is 0 for every finite x and NaN otherwise: one comparison clears the usual query (the
+  // per-coordinate search below cost as much as the cheap rejections of a query, issue 41).
+  double zero = 0.0;
+  for (const Vec3* v : vertices)
+    zero += ((*v)[0] - (*v)[0]) + ((*v)[1] - (*v)[1]) + ((*v)[2] - (*v)[2]);
+  if (zero == 0.0) return;
   static const char* const names[8] = {"p_t0", "a_t0", "b_t0", "c_t0", "p_t1", "a_t1", "b_t1", "c_t1"};
   for (int v = 0; v < 8; ++v) {
     for (int k = 0; k < 3; ++k) {
@@ -478,19 +523,8 @@ void check_query_finite(const VertexFaceQuery& query) {
 
 CcdResult point_triangle_ccd(const VertexFaceQuery& query, const CcdSettings& settings) {
   check_query_finite(query);
-  // A point that starts on a vertex (a mesh vertex tested against its own triangle, or a particle resting on
-  // a node) touches at t = 0: decided by exact comparison, before any rounding.
-  const std::array<const Vec3*, 3> vertices_t0 = {&query.a_t0, &query.b_t0, &query.c_t0};
-  for (int i = 0; i < 3; ++i) {
-    if (query.p_t0 == *vertices_t0[i]) {
-      CcdResult r;
-      r.hit = true;
-      r.toi = 0.0;
-      r.barycentric[i] = 1.0;
-      return r;
-    }
-  }
-
+  CcdResult on_vertex;
+  if (starts_on_vertex(query, on_vertex)) return on_vertex;
   if (certainly_one_signed(query)) return CcdResult{};  // never coplanar
   if (certainly_beside(query)) return CcdResult{};      // never inside the triangle
 
@@ -555,6 +589,81 @@ CcdResult point_triangle_ccd(const VertexFaceQuery& query, const CcdSettings& se
   if (contact_at_end) return contact_at(query, 1.0, CcdPath::FILTER);
   if (undecided_at_end) return exact_from(query, 1.0, settings);
   return CcdResult{};
+}
+
+namespace {
+
+/// Sign of a plain determinant when its error bound leaves it certain, else 0; the margin as in
+/// certainly_one_signed.
+int certain_sign(const PlainDet& d) {
+  const double margin = d.error * kGrow + 4.0 * kUnitRoundoff * std::abs(d.value);
+  return d.value > margin ? 1 : d.value < -margin ? -1 : 0;
+}
+
+/// Bit position of the time grid the general filter brackets a time of impact on: bisect_monotone halves
+/// until the bracket is at most half the tolerance, so its ends are multiples of the largest power of two
+/// 2^-bits <= toi_tolerance / 2, whatever interval it started from. 0 when the tolerance is outside the range
+/// this path reproduces.
+int bracket_bits(double toi_tolerance) {
+  int bits = 0;
+  double cell = 1.0;
+  while (cell > 0.5 * toi_tolerance && bits <= 40) {
+    cell *= 0.5;
+    ++bits;
+  }
+  return bits >= 4 && bits <= 40 ? bits : 0;
+}
+
+}  // namespace
+
+CcdResult point_static_triangle_ccd(const Vec3& p_t0, const Vec3& p_t1, const Vec3& a, const Vec3& b,
+                                    const Vec3& c, const CcdSettings& settings) {
+  const VertexFaceQuery query{p_t0, a, b, c, p_t1, a, b, c};
+  check_query_finite(query);
+  CcdResult on_vertex;
+  if (starts_on_vertex(query, on_vertex)) return on_vertex;
+  // Eq. 6 at the ends: f(t) = (1 - t) f0 + t f1, the plane being fixed.
+  const Vec3 ab = b - a, ac = c - a;
+  const PlainDet f0 = plain_det3(ab, ac, p_t0 - a), f1 = plain_det3(ab, ac, p_t1 - a);
+  const int side_t0 = certain_sign(f0), side_t1 = certain_sign(f1);
+  if (side_t0 != 0 && side_t0 == side_t1) return CcdResult{};  // never in the plane
+  if (side_t0 * side_t1 < 0) {
+    // The point passes the plane once, inside the step. The line p_t0 p_t1 meets the closed triangle exactly
+    // when its orientations against the three edges, det[p_t1 - p_t0, u - p_t0, w - p_t0] for the edges uw,
+    // share a sign (or vanish): two certain opposite signs, and it passes beside the triangle.
+    const Vec3 d = p_t1 - p_t0, pa = a - p_t0, pb = b - p_t0, pc = c - p_t0;
+    const int edge[3] = {certain_sign(plain_det3(d, pa, pb)), certain_sign(plain_det3(d, pb, pc)),
+                         certain_sign(plain_det3(d, pc, pa))};
+    const int positive = (edge[0] > 0) + (edge[1] > 0) + (edge[2] > 0);
+    const int negative = (edge[0] < 0) + (edge[1] < 0) + (edge[2] < 0);
+    if (positive > 0 && negative > 0) return CcdResult{};
+    const int bits = bracket_bits(settings.toi_tolerance);
+    if ((positive == 3 || negative == 3) && bits > 0) {
+      // Strictly inside the face at the root t = |f0| / (|f0| + |f1|). Each |f| is within its margin e of the
+      // exact value, which moves t by at most (e0 + e1) / (|f0| + |f1| - e0 - e1); the division and the sum
+      // add 2 u. The general filter would bracket the root on the grid of bracket_bits and step its lower
+      // end down by two ulps, unless the bracket starts its filter interval (a multiple of 2^-12 there, as
+      // intervals that deep come only from near-degenerate queries) or its bisection meets the root within
+      // its own rounding (a wider bound than this one): those, and a root this close to a grid line, go to
+      // the general filter, so the result is the one it gives.
+      const double x = std::abs(f0.value), y = std::abs(f1.value);
+      const double e0 = f0.error * kGrow + 4.0 * kUnitRoundoff * x;
+      const double e1 = f1.error * kGrow + 4.0 * kUnitRoundoff * y;
+      const double t = x / (x + y);
+      const double spread = ((e0 + e1) / (x + y - e0 - e1) + 4.0 * kUnitRoundoff) * kGrow;
+      const double margin = 256.0 * spread + 0x1p-50;
+      const double scale = std::ldexp(1.0, bits);
+      const double cell = std::floor(t * scale);
+      const bool one_cell =
+          std::floor((t - margin) * scale) == cell && std::floor((t + margin) * scale) == cell;
+      const double lower = cell / scale;
+      if (one_cell && std::fmod(lower, 0x1p-12) != 0.0) {
+        const double toi = std::nextafter(std::nextafter(lower, 0.0), 0.0);
+        return contact_at(query, toi, CcdPath::FILTER);
+      }
+    }
+  }
+  return point_triangle_ccd(query, settings);
 }
 
 }  // namespace drench::ccd
