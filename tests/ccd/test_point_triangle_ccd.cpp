@@ -352,5 +352,68 @@ TEST(PointStaticTriangleCcd, RejectsNonFiniteCoordinates) {
                InvalidQueryError);
 }
 
+/// Runs `count` queries through transversal_crossing and transversal_crossing_exact: the same answer, both
+/// answers present.
+void expect_crossing_agreement(const std::string& family, int count,
+                               const std::function<VertexFaceQuery()>& make, bool both_answers = true) {
+  int crossings = 0;
+  int exact_path = 0;
+  for (int i = 0; i < count; ++i) {
+    const VertexFaceQuery q = make();
+    CcdPath path = CcdPath::FILTER;
+    const bool crossing = transversal_crossing(q, &path);
+    ASSERT_EQ(crossing, transversal_crossing_exact(q)) << family << " query " << i;
+    crossings += crossing;
+    exact_path += path == CcdPath::EXACT;
+  }
+  if (both_answers) {
+    EXPECT_GT(crossings, 0) << family;
+    EXPECT_LT(crossings, count) << family;
+  }
+  ::testing::Test::RecordProperty(family + "_crossings", crossings);
+  ::testing::Test::RecordProperty(family + "_exact_path", exact_path);
+}
+
+TEST(TransversalCrossing, AgreesWithExactOnGenericQueries) {
+  QueryGenerator gen(31);
+  expect_crossing_agreement("aimed", 2000, [&] { return gen.aimed(); });
+  expect_crossing_agreement("tiny_motion", 500, [&] { return gen.tiny_motion(); });
+  expect_crossing_agreement("scaled_1e-3_translated", 500,
+                            [&] { return transformed(gen.aimed(), 1e-3, Vec3(10, -10, 10)); });
+}
+
+TEST(TransversalCrossing, AgreesWithExactOnDegenerateQueries) {
+  // Grid queries cross exactly through edges and vertices, touch and turn back, start or end in the plane;
+  // coplanar and zero-area ones never cross (the plane's side never changes, or there is no face).
+  QueryGenerator gen(32);
+  expect_crossing_agreement("grid", 2000, [&] { return gen.grid(); });
+  expect_crossing_agreement(
+      "coplanar", 300, [&] { return gen.coplanar(); }, false);
+  expect_crossing_agreement("zero_area", 500, [&] { return gen.zero_area(); });
+  expect_crossing_agreement(
+      "through_edge_or_vertex", 300, [&] { return gen.through_edge_or_vertex(); }, false);
+  expect_crossing_agreement(
+      "tangential_touch", 2, [n = 0]() mutable { return tangential_touch(n++ * 1e-3); }, false);
+}
+
+TEST(TransversalCrossing, AgreesWithExactWhereTheFilterOverflows) {
+  QueryGenerator gen(33);
+  expect_crossing_agreement("scaled_1e100", 100,
+                            [&] { return transformed(gen.aimed(), 1e100, Vec3::Zero()); });
+}
+
+TEST(TransversalCrossing, DecidesAGenericCrossingAndMissWithoutTheExactReference) {
+  // Through a triangle that tilts during the step, and past its edge: both decided by the filter.
+  VertexFaceQuery q = static_triangle(Vec3(0.25, 0.25, 1), Vec3(0.25, 0.25, -1));
+  q.c_t1.z() = 0.1;
+  CcdPath path = CcdPath::EXACT;
+  EXPECT_TRUE(transversal_crossing(q, &path));
+  EXPECT_EQ(path, CcdPath::FILTER);
+  q.p_t0 = Vec3(0.8, 0.8, 1);
+  q.p_t1 = Vec3(-0.1, 0.9, -1);
+  EXPECT_FALSE(transversal_crossing(q, &path));
+  EXPECT_EQ(path, CcdPath::FILTER);
+}
+
 }  // namespace
 }  // namespace drench::ccd

@@ -666,4 +666,50 @@ CcdResult point_static_triangle_ccd(const Vec3& p_t0, const Vec3& p_t1, const Ve
   return point_triangle_ccd(query, settings);
 }
 
+bool transversal_crossing(const VertexFaceQuery& query, CcdPath* path) {
+  check_query_finite(query);
+  if (path) *path = CcdPath::FILTER;
+  const auto exact = [&] {
+    if (path) *path = CcdPath::EXACT;
+    return transversal_crossing_exact(query);
+  };
+  if (certainly_one_signed(query) || certainly_beside(query)) return false;
+  Span root;
+  root.t_lo = 0.0;
+  root.t_hi = 1.0;
+  std::array<V3, 3> normal;
+  root.f = coplanarity(query, normal);
+  if (!all_finite(root.f)) return exact();
+  if (certainly_positive(root.f) || certainly_negative(root.f)) return false;
+  root.g = inside_tests(query, normal);
+  for (const auto& g : root.g) {
+    if (!all_finite(g)) return exact();
+  }
+  // Any span where the filter certifies a contact holds a crossing: eq. 6 certainly changes sign between its
+  // ends, so it has a root of odd multiplicity strictly inside (0, 1), and there the point is strictly inside
+  // a face of nonzero area. Spans certified free of contact hold none. The order does not matter; the budget
+  // is point_triangle_ccd's.
+  const int budget = CcdSettings{}.max_filter_intervals;
+  std::array<Span, kMaxDepth + 1> stack;
+  std::array<int, kMaxDepth + 1> depth;
+  int top = 0;
+  stack[top] = root;
+  depth[top++] = 0;
+  for (int splits = 0; top > 0;) {
+    --top;
+    const Verdict verdict = classify(stack[top]);
+    if (verdict == Verdict::NO_CONTACT) continue;
+    if (verdict == Verdict::CONTACT) return true;
+    const Span s = stack[top];
+    const int d = depth[top];
+    if (++splits > budget || d >= kMaxDepth || !exact_split(s.t_lo, 0.5 * (s.t_lo + s.t_hi), s.t_hi, 0.5)) {
+      return exact();
+    }
+    s.split(stack[top + 1], stack[top]);
+    depth[top++] = d + 1;
+    depth[top++] = d + 1;
+  }
+  return false;
+}
+
 }  // namespace drench::ccd

@@ -76,6 +76,16 @@ CcdResult point_triangle_ccd(const VertexFaceQuery& query, const CcdSettings& se
 CcdResult point_static_triangle_ccd(const Vec3& p_t0, const Vec3& p_t1, const Vec3& a, const Vec3& b,
                                     const Vec3& c, const CcdSettings& settings = {});
 
+/// Whether the point crosses the triangle transversally during the step, decided exactly: the same answer as
+/// transversal_crossing_exact (ccd_exact_reference.hpp, which defines the question), from the certified
+/// filter of point_triangle_ccd where it can decide (a sign change of eq. 6 where every inside test is
+/// certainly positive: a crossing; no such time: none) and from the exact reference otherwise. The leak
+/// audit asks this of every pair it cannot clear cheaply (coupling/leak_audit.hpp).
+/// @param query  point and triangle at both ends of the step; every coordinate finite
+/// @param path  when not null, receives how the answer was reached (EXACT: the rational reference ran)
+/// @throws InvalidQueryError when a coordinate is NaN or infinite
+bool transversal_crossing(const VertexFaceQuery& query, CcdPath* path = nullptr);
+
 /// Throws InvalidQueryError naming the first NaN or infinite coordinate of the query.
 void check_query_finite(const VertexFaceQuery& query);
 

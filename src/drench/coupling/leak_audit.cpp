@@ -4,7 +4,7 @@
 #include <chrono>
 #include <cmath>
 
-#include <drench/ccd/ccd_exact_reference.hpp>
+#include <drench/ccd/point_triangle_ccd.hpp>
 #include <drench/common/parallel.hpp>
 
 namespace drench {
@@ -224,9 +224,11 @@ std::uint64_t LeakAudit::audit(const Vec3Array& particles_t0, const Vec3Array& p
         const Vec3 x1[4] = {particles_t1[p], cloth.positions_t1[tri[0]], cloth.positions_t1[tri[1]],
                             cloth.positions_t1[tri[2]]};
         if (certainly_one_signed(x0, x1) || certainly_beside(x0, x1)) return false;
-        ++exact_per[p];
         const ccd::VertexFaceQuery q{x0[0], x0[1], x0[2], x0[3], x1[0], x1[1], x1[2], x1[3]};
-        return ccd::transversal_crossing_exact(q);
+        ccd::CcdPath path = ccd::CcdPath::FILTER;
+        const bool crossing = ccd::transversal_crossing(q, &path);
+        exact_per[p] += path == ccd::CcdPath::EXACT;
+        return crossing;
       };
       // Written so that a box with a NaN is apart from every other.
       const auto apart = [&](const Bounds& tb) {
