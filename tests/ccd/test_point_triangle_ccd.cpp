@@ -306,6 +306,21 @@ TEST(PointStaticTriangleCcd, MatchesTheGeneralSolverOnAimedQueries) {
                           [&] { return transformed(gen.aimed_at_static(), 1e-2, Vec3(1e3, 1, -1e3)); });
 }
 
+TEST(PointStaticTriangleCcd, MatchesTheGeneralSolverWhereItsDeterminantsOverflowOrUnderflow) {
+  // Near 1e100 the determinants overflow, near 1e-100 they fall below the bounds' absolute term: the static
+  // path must hand these on rather than decide on infinities or zeros.
+  QueryGenerator gen(24);
+  expect_static_agreement("aimed_at_static_1e100", 200, 0,
+                          [&] { return transformed(gen.aimed_at_static(), 1e100, Vec3::Zero()); });
+  expect_static_agreement("aimed_at_static_1e-100", 200, 0,
+                          [&] { return transformed(gen.aimed_at_static(), 1e-100, Vec3::Zero()); });
+  // Just inside the range where the static path answers itself.
+  expect_static_agreement("aimed_at_static_1e55", 300, 0,
+                          [&] { return transformed(gen.aimed_at_static(), 1e55, Vec3::Zero()); });
+  expect_static_agreement("aimed_at_static_1e-26", 300, 0,
+                          [&] { return transformed(gen.aimed_at_static(), 1e-26, Vec3::Zero()); });
+}
+
 TEST(PointStaticTriangleCcd, MatchesTheGeneralSolverForParticlesNearACloth) {
   QueryGenerator gen(22);
   expect_static_agreement("near_static_face", 5000, 0, [&] { return gen.near_static_face(); });

@@ -680,7 +680,12 @@ CcdResult point_static_triangle_ccd(const Vec3& p_t0, const Vec3& p_t1, const Ve
     const int negative = (edge[0] < 0) + (edge[1] < 0) + (edge[2] < 0);
     if (positive > 0 && negative > 0) return CcdResult{};
     const double scale = bracket_scale(settings.toi_tolerance);
-    if ((positive == 3 || negative == 3) && scale > 0.0) {
+    // Outside this range of lengths the general filter's quartics overflow or sink below its bounds'
+    // absolute term, and the exact reference brackets the time instead (still correct, another bracket).
+    const double length = std::max({ab.cwiseAbs().maxCoeff(), ac.cwiseAbs().maxCoeff(),
+                                    ap0.cwiseAbs().maxCoeff(), ap1.cwiseAbs().maxCoeff()});
+    const bool in_range = length >= 0x1p-90 && length <= 0x1p190;
+    if ((positive == 3 || negative == 3) && scale > 0.0 && in_range) {
       // Strictly inside the face at the root t = |f0| / (|f0| + |f1|). Each |f| is within its margin e of the
       // exact value, which moves t by at most (e0 + e1) / (|f0| + |f1| - e0 - e1); the division and the sum
       // add 2 u. The general filter brackets the root on the grid of bracket_scale and steps the lower end
