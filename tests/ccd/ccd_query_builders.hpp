@@ -63,6 +63,38 @@ class QueryGenerator {
     return q;
   }
 
+  /// aimed() with a triangle that does not move: the point passes the target point (inside the triangle or
+  /// slightly outside) at a random time.
+  VertexFaceQuery aimed_at_static() {
+    VertexFaceQuery q;
+    q.a_t0 = q.a_t1 = vec(-1, 1);
+    q.b_t0 = q.b_t1 = vec(-1, 1);
+    q.c_t0 = q.c_t1 = vec(-1, 1);
+    const double t = uniform(0.0, 1.0);
+    const double u = uniform(-0.2, 1.0);
+    const double v = uniform(-0.2, 1.0 - u);
+    const Vec3 target = (1 - u - v) * q.a_t0 + u * q.b_t0 + v * q.c_t0;
+    q.p_t0 = target + vec(-1, 1);
+    q.p_t1 = t > 0.01 ? Vec3(q.p_t0 + (target - q.p_t0) / t) : Vec3(target + vec(-1, 1));
+    return q;
+  }
+
+  /// A particle near a still cloth face, as the fluid's sub-steps test them: a face of about 5 cm, the point
+  /// within 2 mm of its plane at the start, over or beside the face, moving up to 2 mm in any direction.
+  VertexFaceQuery near_static_face() {
+    VertexFaceQuery q;
+    const Vec3 origin = vec(-1, 1);
+    q.a_t0 = q.a_t1 = origin + 0.05 * vec(-1, 1);
+    q.b_t0 = q.b_t1 = origin + 0.05 * vec(-1, 1);
+    q.c_t0 = q.c_t1 = origin + 0.05 * vec(-1, 1);
+    const Vec3 n = (q.b_t0 - q.a_t0).cross(q.c_t0 - q.a_t0).normalized();
+    const double u = uniform(-0.3, 1.0);
+    const double v = uniform(-0.3, 1.0 - u);
+    q.p_t0 = (1 - u - v) * q.a_t0 + u * q.b_t0 + v * q.c_t0 + uniform(-0.002, 0.002) * n;
+    q.p_t1 = q.p_t0 + 0.002 * vec(-1, 1);
+    return q;
+  }
+
   /// Everything on the k / 4 grid: exact contacts on vertices and edges, coplanar starts and ends.
   VertexFaceQuery grid() {
     VertexFaceQuery q;

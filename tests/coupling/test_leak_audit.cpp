@@ -160,6 +160,32 @@ TEST(LeakAudit, DecidesACrossingBesideTheTriangleWithoutTheExactReference) {
   }
 }
 
+// A particle whose path runs from beyond one edge of the triangle to beyond another, crossing the plane
+// beside it, and one crossing the triangle on a slant: the audit's own tests decide neither (no one edge has
+// the particle beyond it at both ends), the CCD filter decides both, without the exact reference.
+TEST(LeakAudit, DecidesSlantingPathsWithoutTheExactReference) {
+  ClothMesh mesh;
+  mesh.positions_t0 = {Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 0, 1)};
+  mesh.positions_t1 = mesh.positions_t0;
+  mesh.inverse_masses = {0, 0, 0};
+  mesh.triangles = {{0, 1, 2}};
+  for (double tilt : {0.0, 0.02}) {
+    mesh.positions_t1[2].y() = tilt;
+    // Past the corner at (1, 0, 0): in the plane near t = 5/12 at z < 0.
+    LeakAuditStats beside;
+    EXPECT_EQ(audit_leaks(Vec3Array{Vec3(0.5, 0.05, -0.3)}, Vec3Array{Vec3(1.3, -0.07, 0.25)}, mesh, beside),
+              0u)
+        << "tilt " << tilt;
+    EXPECT_EQ(beside.pairs, 1u) << "tilt " << tilt;
+    EXPECT_EQ(beside.exact_checks, 0u) << "tilt " << tilt;
+    LeakAuditStats through;
+    EXPECT_EQ(audit_leaks(Vec3Array{Vec3(0.2, 0.05, -0.1)}, Vec3Array{Vec3(0.4, -0.07, 0.5)}, mesh, through),
+              1u)
+        << "tilt " << tilt;
+    EXPECT_EQ(through.exact_checks, 0u) << "tilt " << tilt;
+  }
+}
+
 // A LeakAudit kept over the steps of a run files again only the faces that moved to other cells: over steps
 // where a cloth waves above a still floor of larger faces, then shrinks to a tenth (a new cell size), then
 // has a NaN node, it flags exactly the particles a fresh audit flags, with the same pair counts.

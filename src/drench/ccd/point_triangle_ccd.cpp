@@ -271,15 +271,54 @@ bool certainly_one_signed(const VertexFaceQuery& q) {
     const double coef[2] = {d0.value, d1.value}, err[2] = {d0.error, d1.error};
     return one_signed(coef, err, 2);
   }
-  const PlainDet d[8] = {plain_det3(b0, c0, p0), plain_det3(b1, c0, p0), plain_det3(b0, c1, p0),
-                         plain_det3(b0, c0, p1), plain_det3(b0, c1, p1), plain_det3(b1, c0, p1),
-                         plain_det3(b1, c1, p0), plain_det3(b1, c1, p1)};
-  // Bernstein coefficients times 3 (the sign is what matters).
-  const double coef[4] = {3 * d[0].value, d[1].value + d[2].value + d[3].value,
-                          d[4].value + d[5].value + d[6].value, 3 * d[7].value};
-  const double err[4] = {3 * d[0].error, d[1].error + d[2].error + d[3].error,
-                         d[4].error + d[5].error + d[6].error, 3 * d[7].error};
-  return one_signed(coef, err, 4);
+  // The eight determinants det[b, c, p] = p . (b x c) share their cross products: four of them and six dot
+  // products give the coefficients (times 3). Along every term the inputs round once (the differences), a
+  // cross product twice and the sum of two once, a dot product three times, the last sum or the factor 3
+  // once: at most 10 roundings, so 10 u (1 + 10 u) of the terms' magnitude bounds the error, and 16 u covers
+  // it and the rounding of the magnitudes. In plain doubles (Eigen's small temporaries cost a third more
+  // here), this is half the instructions of eight determinants with their own bounds (issue 41).
+  using D3 = std::array<double, 3>;
+  const auto cross = [](const D3& u, const D3& v) {
+    return D3{u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};
+  };
+  const auto abs_cross = [](const D3& u, const D3& v) {  // of absolute values: the terms' magnitudes
+    return D3{u[1] * v[2] + u[2] * v[1], u[2] * v[0] + u[0] * v[2], u[0] * v[1] + u[1] * v[0]};
+  };
+  const auto dot = [](const D3& u, const D3& v) { return u[0] * v[0] + u[1] * v[1] + u[2] * v[2]; };
+  const auto sum = [](const D3& u, const D3& v) { return D3{u[0] + v[0], u[1] + v[1], u[2] + v[2]}; };
+  const auto d3 = [](const Vec3& v) { return D3{v[0], v[1], v[2]}; };
+  const auto abs3 = [](const D3& v) { return D3{std::abs(v[0]), std::abs(v[1]), std::abs(v[2])}; };
+  const D3 b0_ = d3(b0), c0_ = d3(c0), p0_ = d3(p0), b1_ = d3(b1), c1_ = d3(c1), p1_ = d3(p1);
+  const D3 n00 = cross(b0_, c0_), n11 = cross(b1_, c1_), mixed = sum(cross(b0_, c1_), cross(b1_, c0_));
+  const double coef[4] = {3 * dot(p0_, n00), dot(p0_, mixed) + dot(p1_, n00), dot(p1_, mixed) + dot(p0_, n11),
+                          3 * dot(p1_, n11)};
+  // Mixed signs: eq. 6 may vanish, nothing to certify.
+  const bool all_positive = coef[0] > 0.0 && coef[1] > 0.0 && coef[2] > 0.0 && coef[3] > 0.0;
+  const bool all_negative = coef[0] < 0.0 && coef[1] < 0.0 && coef[2] < 0.0 && coef[3] < 0.0;
+  if (!all_positive && !all_negative) return false;
+  // One bound for all four first, from the largest coordinates: the six terms of det[b, c, p] sum in
+  // magnitude to at most 2 |p|_1 |b|_inf |c|_inf, and a coefficient (times 3) holds three determinants. It
+  // decides nearly every query the bounds per coefficient below would (a particle near a face, far from its
+  // plane compared with rounding), for a quarter of their cost.
+  const auto max3 = [](const D3& v) { return std::max({std::abs(v[0]), std::abs(v[1]), std::abs(v[2])}); };
+  const auto sum3 = [](const D3& v) { return std::abs(v[0]) + std::abs(v[1]) + std::abs(v[2]); };
+  const double largest =
+      std::max(sum3(p0_), sum3(p1_)) * std::max(max3(b0_), max3(b1_)) * std::max(max3(c0_), max3(c1_));
+  const double margin = 16.0 * kUnitRoundoff * 6.0 * largest * kGrow + kTiny;
+  if (std::abs(coef[0]) > margin && std::abs(coef[1]) > margin && std::abs(coef[2]) > margin &&
+      std::abs(coef[3]) > margin) {
+    return true;
+  }
+  const D3 ab0 = abs3(b0_), ac0 = abs3(c0_), ap0 = abs3(p0_), ab1 = abs3(b1_), ac1 = abs3(c1_),
+           ap1 = abs3(p1_);
+  const D3 m00 = abs_cross(ab0, ac0), m11 = abs_cross(ab1, ac1),
+           m_mixed = sum(abs_cross(ab0, ac1), abs_cross(ab1, ac0));
+  const double magnitude[4] = {3 * dot(ap0, m00), dot(ap0, m_mixed) + dot(ap1, m00),
+                               dot(ap1, m_mixed) + dot(ap0, m11), 3 * dot(ap1, m11)};
+  for (int k = 0; k < 4; ++k) {
+    if (!(std::abs(coef[k]) > 16.0 * kUnitRoundoff * magnitude[k] * kGrow + kTiny)) return false;
+  }
+  return true;
 }
 
 /// True when the point is certainly outside the triangle at every time of the step, beyond one of its edges:
@@ -336,6 +375,22 @@ Bernstein<4> deflate(const Bernstein<4>& b, bool at_end) {
   const std::array<Ev, 3> q = at_end ? std::array<Ev, 3>{b[0], three_halves * b[1], three * b[2]}
                                      : std::array<Ev, 3>{three * b[1], three_halves * b[2], b[3]};
   return {q[0], divide(q[0] + exact(2.0) * q[1], 3.0), divide(exact(2.0) * q[1] + q[2], 3.0), q[2]};
+}
+
+/// A point that starts on a vertex (a mesh vertex tested against its own triangle, or a particle resting on
+/// a node) touches at t = 0: decided by exact comparison, before any rounding. True and `r` set when so.
+bool starts_on_vertex(const VertexFaceQuery& q, CcdResult& r) {
+  const std::array<const Vec3*, 3> vertices_t0 = {&q.a_t0, &q.b_t0, &q.c_t0};
+  for (int i = 0; i < 3; ++i) {
+    if (q.p_t0 == *vertices_t0[i]) {
+      r = CcdResult{};
+      r.hit = true;
+      r.toi = 0.0;
+      r.barycentric[i] = 1.0;
+      return true;
+    }
+  }
+  return false;
 }
 
 enum class Verdict { NO_CONTACT, CONTACT, UNDECIDED };
@@ -461,7 +516,16 @@ CcdResult earliest_root(const VertexFaceQuery& q, const Span& s, const CcdSettin
 
 }  // namespace
 
-void check_query_finite(const VertexFaceQuery& query) {
+namespace {
+
+/// 0 when every coordinate is finite, NaN otherwise: x - x is 0 for every finite x and NaN for the rest, so
+/// one comparison clears the usual query (a search per coordinate cost as much as the cheap rejections of a
+/// query, issue 41).
+inline double finite_zero(const Vec3& v) {
+  return ((v[0] - v[0]) + (v[1] - v[1])) + (v[2] - v[2]);
+}
+
+[[gnu::cold, gnu::noinline]] void throw_non_finite(const VertexFaceQuery& query) {
   const Vec3* vertices[8] = {&query.p_t0, &query.a_t0, &query.b_t0, &query.c_t0,
                              &query.p_t1, &query.a_t1, &query.b_t1, &query.c_t1};
   static const char* const names[8] = {"p_t0", "a_t0", "b_t0", "c_t0", "p_t1", "a_t1", "b_t1", "c_t1"};
@@ -476,21 +540,23 @@ void check_query_finite(const VertexFaceQuery& query) {
   }
 }
 
-CcdResult point_triangle_ccd(const VertexFaceQuery& query, const CcdSettings& settings) {
-  check_query_finite(query);
-  // A point that starts on a vertex (a mesh vertex tested against its own triangle, or a particle resting on
-  // a node) touches at t = 0: decided by exact comparison, before any rounding.
-  const std::array<const Vec3*, 3> vertices_t0 = {&query.a_t0, &query.b_t0, &query.c_t0};
-  for (int i = 0; i < 3; ++i) {
-    if (query.p_t0 == *vertices_t0[i]) {
-      CcdResult r;
-      r.hit = true;
-      r.toi = 0.0;
-      r.barycentric[i] = 1.0;
-      return r;
-    }
-  }
+inline void check_finite(const VertexFaceQuery& q) {
+  const double zero =
+      ((finite_zero(q.p_t0) + finite_zero(q.a_t0)) + (finite_zero(q.b_t0) + finite_zero(q.c_t0))) +
+      ((finite_zero(q.p_t1) + finite_zero(q.a_t1)) + (finite_zero(q.b_t1) + finite_zero(q.c_t1)));
+  if (!(zero == 0.0)) throw_non_finite(q);
+}
 
+}  // namespace
+
+void check_query_finite(const VertexFaceQuery& query) {
+  check_finite(query);
+}
+
+CcdResult point_triangle_ccd(const VertexFaceQuery& query, const CcdSettings& settings) {
+  check_finite(query);
+  CcdResult on_vertex;
+  if (starts_on_vertex(query, on_vertex)) return on_vertex;
   if (certainly_one_signed(query)) return CcdResult{};  // never coplanar
   if (certainly_beside(query)) return CcdResult{};      // never inside the triangle
 
@@ -555,6 +621,142 @@ CcdResult point_triangle_ccd(const VertexFaceQuery& query, const CcdSettings& se
   if (contact_at_end) return contact_at(query, 1.0, CcdPath::FILTER);
   if (undecided_at_end) return exact_from(query, 1.0, settings);
   return CcdResult{};
+}
+
+namespace {
+
+/// Sign of a plain determinant when its error bound leaves it certain, else 0; the margin as in
+/// certainly_one_signed.
+int certain_sign(const PlainDet& d) {
+  const double margin = d.error * kGrow + 4.0 * kUnitRoundoff * std::abs(d.value);
+  return d.value > margin ? 1 : d.value < -margin ? -1 : 0;
+}
+
+/// 2^bits for the time grid the general filter brackets a time of impact on: bisect_monotone halves until the
+/// bracket is at most half the tolerance, so its ends are multiples of the largest power of two 2^-bits <=
+/// toi_tolerance / 2, whatever interval it started from. 0 when the tolerance is outside the range this path
+/// reproduces.
+double bracket_scale(double toi_tolerance) {
+  int bits = 0;
+  double cell = 1.0;
+  while (cell > 0.5 * toi_tolerance && bits <= 40) {
+    cell *= 0.5;
+    ++bits;
+  }
+  return bits >= 13 && bits <= 40 ? 1.0 / cell : 0.0;
+}
+
+}  // namespace
+
+CcdResult point_static_triangle_ccd(const Vec3& p_t0, const Vec3& p_t1, const Vec3& a, const Vec3& b,
+                                    const Vec3& c, const CcdSettings& settings) {
+  const auto query = [&] { return VertexFaceQuery{p_t0, a, b, c, p_t1, a, b, c}; };
+  const double zero =
+      ((finite_zero(p_t0) + finite_zero(p_t1)) + (finite_zero(a) + finite_zero(b))) + finite_zero(c);
+  if (!(zero == 0.0)) throw_non_finite(query());
+  CcdResult on_vertex;
+  if ((p_t0 == a || p_t0 == b || p_t0 == c) && starts_on_vertex(query(), on_vertex)) return on_vertex;
+  // Eq. 6 at the ends: f(t) = (1 - t) f0 + t f1, the plane being fixed.
+  // Both ends share the normal: f = (p - a) . n, n = (b - a) x (c - a), with plain_det3's bound (the same six
+  // roundings along each term), the terms' magnitudes from the same products in absolute values.
+  const Vec3 ab = b - a, ac = c - a, ap0 = p_t0 - a, ap1 = p_t1 - a;
+  const Vec3 n = ab.cross(ac);
+  const Vec3 ab_abs = ab.cwiseAbs(), ac_abs = ac.cwiseAbs();
+  const Vec3 n_terms(ab_abs.y() * ac_abs.z() + ab_abs.z() * ac_abs.y(),
+                     ab_abs.z() * ac_abs.x() + ab_abs.x() * ac_abs.z(),
+                     ab_abs.x() * ac_abs.y() + ab_abs.y() * ac_abs.x());
+  const PlainDet f0{ap0.dot(n), 16.0 * kUnitRoundoff * ap0.cwiseAbs().dot(n_terms) + kTiny};
+  const PlainDet f1{ap1.dot(n), 16.0 * kUnitRoundoff * ap1.cwiseAbs().dot(n_terms) + kTiny};
+  const int side_t0 = certain_sign(f0), side_t1 = certain_sign(f1);
+  if (side_t0 != 0 && side_t0 == side_t1) return CcdResult{};  // never in the plane
+  if (side_t0 * side_t1 < 0) {
+    // The point passes the plane once, inside the step. The line p_t0 p_t1 meets the closed triangle exactly
+    // when its orientations against the three edges, det[p_t1 - p_t0, u - p_t0, w - p_t0] for the edges uw,
+    // share a sign (or vanish): two certain opposite signs, and it passes beside the triangle.
+    const Vec3 d = p_t1 - p_t0, pa = a - p_t0, pb = b - p_t0, pc = c - p_t0;
+    const int edge[3] = {certain_sign(plain_det3(d, pa, pb)), certain_sign(plain_det3(d, pb, pc)),
+                         certain_sign(plain_det3(d, pc, pa))};
+    const int positive = (edge[0] > 0) + (edge[1] > 0) + (edge[2] > 0);
+    const int negative = (edge[0] < 0) + (edge[1] < 0) + (edge[2] < 0);
+    if (positive > 0 && negative > 0) return CcdResult{};
+    const double scale = bracket_scale(settings.toi_tolerance);
+    // Outside this range of lengths the general filter's quartics overflow or sink below its bounds'
+    // absolute term, and the exact reference brackets the time instead (still correct, another bracket).
+    const double length = std::max({ab.cwiseAbs().maxCoeff(), ac.cwiseAbs().maxCoeff(),
+                                    ap0.cwiseAbs().maxCoeff(), ap1.cwiseAbs().maxCoeff()});
+    const bool in_range = length >= 0x1p-90 && length <= 0x1p190;
+    if ((positive == 3 || negative == 3) && scale > 0.0 && in_range) {
+      // Strictly inside the face at the root t = |f0| / (|f0| + |f1|). Each |f| is within its margin e of the
+      // exact value, which moves t by at most (e0 + e1) / (|f0| + |f1| - e0 - e1); the division and the sum
+      // add 2 u. The general filter brackets the root on the grid of bracket_scale and steps the lower end
+      // down by two ulps, except where its bisection meets the root within its own rounding (a wider bound
+      // than this one, hence the factor 256) or where the bracket's lower end starts the filter interval the
+      // contact was certified on (then it is not stepped down). Those intervals start on multiples of 2^-12
+      // unless the query is near-degenerate: such roots, and roots this close to a grid line, go to the
+      // general filter, so the result is the one it gives.
+      const double x = std::abs(f0.value), y = std::abs(f1.value);
+      const double e0 = f0.error * kGrow + 4.0 * kUnitRoundoff * x;
+      const double e1 = f1.error * kGrow + 4.0 * kUnitRoundoff * y;
+      const double t = x / (x + y);
+      const double spread = ((e0 + e1) / (x + y - e0 - e1) + 4.0 * kUnitRoundoff) * kGrow;
+      const double margin = 256.0 * spread + 0x1p-50;
+      const double cell = std::floor(t * scale);  // scaling by a power of two is exact
+      const bool one_cell =
+          std::floor((t - margin) * scale) == cell && std::floor((t + margin) * scale) == cell;
+      const double lower = cell / scale;
+      if (one_cell && std::floor(lower * 0x1p12) != lower * 0x1p12) {
+        const double toi = std::nextafter(std::nextafter(lower, 0.0), 0.0);
+        return contact_at(query(), toi, CcdPath::FILTER);
+      }
+    }
+  }
+  return point_triangle_ccd(query(), settings);
+}
+
+bool transversal_crossing(const VertexFaceQuery& query, CcdPath* path) {
+  check_finite(query);
+  if (path) *path = CcdPath::FILTER;
+  const auto exact = [&] {
+    if (path) *path = CcdPath::EXACT;
+    return transversal_crossing_exact(query);
+  };
+  if (certainly_one_signed(query) || certainly_beside(query)) return false;
+  Span root;
+  root.t_lo = 0.0;
+  root.t_hi = 1.0;
+  std::array<V3, 3> normal;
+  root.f = coplanarity(query, normal);
+  if (!all_finite(root.f)) return exact();
+  if (certainly_positive(root.f) || certainly_negative(root.f)) return false;
+  root.g = inside_tests(query, normal);
+  for (const auto& g : root.g) {
+    if (!all_finite(g)) return exact();
+  }
+  // Any span where the filter certifies a contact holds a crossing: eq. 6 certainly changes sign between its
+  // ends, so it has a root of odd multiplicity strictly inside (0, 1), and there the point is strictly inside
+  // a face of nonzero area. Spans certified free of contact hold none. The order does not matter; the budget
+  // is point_triangle_ccd's.
+  const int budget = CcdSettings{}.max_filter_intervals;
+  std::array<Span, kMaxDepth + 1> stack;
+  std::array<int, kMaxDepth + 1> depth;
+  int top = 0;
+  stack[top] = root;
+  depth[top++] = 0;
+  for (int splits = 0; top > 0;) {
+    --top;
+    const Verdict verdict = classify(stack[top]);
+    if (verdict == Verdict::NO_CONTACT) continue;
+    if (verdict == Verdict::CONTACT) return true;
+    const Span s = stack[top];
+    const int d = depth[top];
+    if (++splits > budget || d >= kMaxDepth || !exact_split(s.t_lo, 0.5 * (s.t_lo + s.t_hi), s.t_hi, 0.5)) {
+      return exact();
+    }
+    s.split(stack[top + 1], stack[top]);
+    depth[top++] = d + 1;
+    depth[top++] = d + 1;
+  }
+  return false;
 }
 
 }  // namespace drench::ccd

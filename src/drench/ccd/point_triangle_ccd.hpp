@@ -62,6 +62,30 @@ struct CcdResult {
 /// @return the decision, never NaN: toi in [0, 1], barycentric weights in [0, 1]
 CcdResult point_triangle_ccd(const VertexFaceQuery& query, const CcdSettings& settings = {});
 
+/// point_triangle_ccd for a triangle that does not move during the step (a_t1 = a_t0, ...): the same result,
+/// bit for bit except where the general filter would bracket the time of impact by another route (a root
+/// within rounding of a bracket boundary, or a near-degenerate query; then both are still correct to within
+/// toi_tolerance). The plane is fixed, so eq. 6 is linear in t: the sides of the two ends, then three
+/// orientations of the segment against the edges (Shewchuk 1997's orient3d with a certified error bound)
+/// decide a crossing, and the crossing time is the root of a line. Queries within rounding of an edge, a
+/// vertex or the plane go to the general filter. Used by the fluid's sub-step against the cloth at rest
+/// (coupling/cloth_obstacle.hpp), where most hits are particles crossing a face's interior.
+/// @param p_t0, p_t1  point at the start and the end of the step (unit: m); finite
+/// @param a, b, c  triangle vertices during the whole step (unit: m); finite
+/// @throws InvalidQueryError when a coordinate is NaN or infinite
+CcdResult point_static_triangle_ccd(const Vec3& p_t0, const Vec3& p_t1, const Vec3& a, const Vec3& b,
+                                    const Vec3& c, const CcdSettings& settings = {});
+
+/// Whether the point crosses the triangle transversally during the step, decided exactly: the same answer as
+/// transversal_crossing_exact (ccd_exact_reference.hpp, which defines the question), from the certified
+/// filter of point_triangle_ccd where it can decide (a sign change of eq. 6 where every inside test is
+/// certainly positive: a crossing; no such time: none) and from the exact reference otherwise. The leak
+/// audit asks this of every pair it cannot clear cheaply (coupling/leak_audit.hpp).
+/// @param query  point and triangle at both ends of the step; every coordinate finite
+/// @param path  when not null, receives how the answer was reached (EXACT: the rational reference ran)
+/// @throws InvalidQueryError when a coordinate is NaN or infinite
+bool transversal_crossing(const VertexFaceQuery& query, CcdPath* path = nullptr);
+
 /// Throws InvalidQueryError naming the first NaN or infinite coordinate of the query.
 void check_query_finite(const VertexFaceQuery& query);
 

@@ -48,8 +48,8 @@ void ClothObstacle::apply(const Vec3Array& positions_before, ParticleSet& partic
       const auto [p, t] = m_pairs[k];
       const Triangle& tri = m_static.triangles[t];
       const Vec3Array& x = m_static.positions_t0;
-      hits[k] = ccd::point_triangle_ccd({positions_before[p], x[tri[0]], x[tri[1]], x[tri[2]],
-                                         particles.positions[p], x[tri[0]], x[tri[1]], x[tri[2]]});
+      hits[k] = ccd::point_static_triangle_ccd(positions_before[p], particles.positions[p], x[tri[0]],
+                                               x[tri[1]], x[tri[2]]);
     }
   });
   // In particle order, the earliest hit of each particle; its approach along the triangle's normal is stopped

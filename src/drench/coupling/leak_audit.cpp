@@ -1,10 +1,11 @@
 #include <drench/coupling/leak_audit.hpp>
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 
-#include <drench/ccd/ccd_exact_reference.hpp>
+#include <drench/ccd/point_triangle_ccd.hpp>
 #include <drench/common/parallel.hpp>
 
 namespace drench {
@@ -21,47 +22,43 @@ Bounds bounds_of(std::initializer_list<const Vec3*> points) {
   return b;
 }
 
-/// det[u; v; w] and a bound on its rounding error. u, v, w are differences of input doubles (one rounding
-/// each, relative 2^-53) and the determinant adds at most 5 roundings per term: |error| <= 16 u sum |terms|
-/// covers it with a margin (Shewchuk 1997's orient3d error bound is 7.8 u for exact inputs).
-struct Det {
-  double value;
-  double error;
-};
-
-Det det3(const Vec3& u, const Vec3& v, const Vec3& w) {
-  const double t[6] = {u.x() * v.y() * w.z(), u.y() * v.z() * w.x(), u.z() * v.x() * w.y(),
-                       u.z() * v.y() * w.x(), u.x() * v.z() * w.y(), u.y() * v.x() * w.z()};
-  const double value = ((t[0] + t[1]) + t[2]) - ((t[3] + t[4]) + t[5]);
-  double magnitude = 0.0;
-  for (double x : t)
-    magnitude += std::abs(x);
-  return {value, 16.0 * 0x1p-53 * magnitude + 0x1p-1000};
-}
-
 /// True when eq. 6, f(t) = det[b - a, c - a, p - a](t), certainly keeps one sign on [0, 1]: its Bernstein
 /// coefficients, from the blossom of the trilinear determinant, are all certainly of that sign. Then the
-/// point never reaches the triangle's plane, and cannot cross the triangle.
+/// point never reaches the triangle's plane, and cannot cross the triangle. The eight determinants
+/// det[b, c, p] = p . (b x c) share four cross products; six dot products give the coefficients (times 3).
+/// Along every term the inputs round once (the differences), a cross product twice and the sum of two once,
+/// a dot product three times, the last sum or the factor 3 once: at most 10 roundings, so 10 u (1 + 10 u) of
+/// the terms' magnitude (the same products in absolute values) bounds the error; 16 u covers it.
 bool certainly_one_signed(const Vec3* x0, const Vec3* x1) {
-  // x[0] = p, x[1..3] = a, b, c.
-  const Vec3 b0 = x0[2] - x0[1], c0 = x0[3] - x0[1], p0 = x0[0] - x0[1];
-  const Vec3 b1 = x1[2] - x1[1], c1 = x1[3] - x1[1], p1 = x1[0] - x1[1];
-  const Det d[8] = {det3(b0, c0, p0), det3(b1, c0, p0), det3(b0, c1, p0), det3(b0, c0, p1),
-                    det3(b0, c1, p1), det3(b1, c0, p1), det3(b1, c1, p0), det3(b1, c1, p1)};
-  // Bernstein coefficients times 3 (the sign is what matters): 3 f0, f(1,0,0)+..., ..., 3 f1.
-  const double coef[4] = {3 * d[0].value, d[1].value + d[2].value + d[3].value,
-                          d[4].value + d[5].value + d[6].value, 3 * d[7].value};
-  const double err[4] = {3 * d[0].error, d[1].error + d[2].error + d[3].error,
-                         d[4].error + d[5].error + d[6].error, 3 * d[7].error};
-  bool positive = true;
-  bool negative = true;
+  // x[0] = p, x[1..3] = a, b, c. Plain doubles: Eigen's small temporaries cost a third more here.
+  using D3 = std::array<double, 3>;
+  const auto diff = [](const Vec3& u, const Vec3& v) { return D3{u[0] - v[0], u[1] - v[1], u[2] - v[2]}; };
+  const auto cross = [](const D3& u, const D3& v) {
+    return D3{u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};
+  };
+  const auto dot = [](const D3& u, const D3& v) { return u[0] * v[0] + u[1] * v[1] + u[2] * v[2]; };
+  const auto sum = [](const D3& u, const D3& v) { return D3{u[0] + v[0], u[1] + v[1], u[2] + v[2]}; };
+  const D3 b0 = diff(x0[2], x0[1]), c0 = diff(x0[3], x0[1]), p0 = diff(x0[0], x0[1]);
+  const D3 b1 = diff(x1[2], x1[1]), c1 = diff(x1[3], x1[1]), p1 = diff(x1[0], x1[1]);
+  const D3 n00 = cross(b0, c0), n11 = cross(b1, c1), mixed = sum(cross(b0, c1), cross(b1, c0));
+  const double coef[4] = {3 * dot(p0, n00), dot(p0, mixed) + dot(p1, n00), dot(p1, mixed) + dot(p0, n11),
+                          3 * dot(p1, n11)};
+  const bool positive = coef[0] > 0.0 && coef[1] > 0.0 && coef[2] > 0.0 && coef[3] > 0.0;
+  const bool negative = coef[0] < 0.0 && coef[1] < 0.0 && coef[2] < 0.0 && coef[3] < 0.0;
+  if (!positive && !negative) return false;
+  const auto abs3 = [](const D3& v) { return D3{std::abs(v[0]), std::abs(v[1]), std::abs(v[2])}; };
+  const auto abs_cross = [](const D3& u, const D3& v) {  // of absolute values
+    return D3{u[1] * v[2] + u[2] * v[1], u[2] * v[0] + u[0] * v[2], u[0] * v[1] + u[1] * v[0]};
+  };
+  const D3 ab0 = abs3(b0), ac0 = abs3(c0), ap0 = abs3(p0), ab1 = abs3(b1), ac1 = abs3(c1), ap1 = abs3(p1);
+  const D3 m00 = abs_cross(ab0, ac0), m11 = abs_cross(ab1, ac1),
+           m_mixed = sum(abs_cross(ab0, ac1), abs_cross(ab1, ac0));
+  const double magnitude[4] = {3 * dot(ap0, m00), dot(ap0, m_mixed) + dot(ap1, m00),
+                               dot(ap1, m_mixed) + dot(ap0, m11), 3 * dot(ap1, m11)};
   for (int k = 0; k < 4; ++k) {
-    // The sums above round too: a further 3 u of their magnitude, covered by the generous factor.
-    const double margin = err[k] * (1.0 + 1e-10) + 4.0 * 0x1p-53 * std::abs(coef[k]);
-    positive = positive && coef[k] > margin;
-    negative = negative && coef[k] < -margin;
+    if (!(std::abs(coef[k]) > 16.0 * 0x1p-53 * magnitude[k] * (1.0 + 1e-10) + 0x1p-1000)) return false;
   }
-  return positive || negative;
+  return true;
 }
 
 /// True when the point certainly stays outside the triangle at every time of the step, beside one of its
@@ -224,9 +221,11 @@ std::uint64_t LeakAudit::audit(const Vec3Array& particles_t0, const Vec3Array& p
         const Vec3 x1[4] = {particles_t1[p], cloth.positions_t1[tri[0]], cloth.positions_t1[tri[1]],
                             cloth.positions_t1[tri[2]]};
         if (certainly_one_signed(x0, x1) || certainly_beside(x0, x1)) return false;
-        ++exact_per[p];
         const ccd::VertexFaceQuery q{x0[0], x0[1], x0[2], x0[3], x1[0], x1[1], x1[2], x1[3]};
-        return ccd::transversal_crossing_exact(q);
+        ccd::CcdPath path = ccd::CcdPath::FILTER;
+        const bool crossing = ccd::transversal_crossing(q, &path);
+        exact_per[p] += path == ccd::CcdPath::EXACT;
+        return crossing;
       };
       // Written so that a box with a NaN is apart from every other.
       const auto apart = [&](const Bounds& tb) {

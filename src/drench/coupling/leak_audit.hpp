@@ -2,7 +2,9 @@
 /// The leak audit: counts particles that cross the cloth during a step, judged on the final motion (start
 /// positions to end positions after every correction, linear in between). Independent of the coupler on
 /// purpose: its own broad phase, its own floating-point filter with a certified error bound, and the exact
-/// rational reference (ccd_exact_reference.hpp) whenever that filter cannot decide.
+/// rational reference (ccd_exact_reference.hpp) whenever that filter cannot decide. Between the two sits the
+/// CCD's certified Bernstein filter (ccd::transversal_crossing, checked against the exact reference by its
+/// own tests): a pair it decides costs about 1/40 of the exact reference's instructions (issue 41).
 
 #include <cstdint>
 #include <utility>
@@ -18,7 +20,7 @@ namespace drench {
 struct LeakAuditStats {
   std::uint64_t leaks = 0;         ///< particles that crossed a triangle (each at most once per step)
   std::uint64_t pairs = 0;         ///< particle-triangle pairs whose swept boxes overlap
-  std::uint64_t exact_checks = 0;  ///< pairs the filter left to the exact reference
+  std::uint64_t exact_checks = 0;  ///< pairs the filters left to the exact reference
   double seconds = 0.0;            ///< wall time (unit: s)
   /// A leak of the latest step that had any: the particle of lowest index in that step's arrays and a
   /// triangle it crossed; -1 while none leaked.
