@@ -48,6 +48,19 @@ class CubicSplineKernel {
     return apart ? f : 0.0;
   }
 
+  /// w = value(sqrt(r2)) and f = gradient_factor(r2), the same bits, with one square root: a pass that needs
+  /// both per pair (PBF's density and constraint gradients) takes the root once.
+  void value_and_gradient_factor(Scalar r2, Scalar& w, Scalar& f) const {
+    const bool apart = r2 > 0.0;
+    const Scalar r = std::sqrt(r2);
+    const Scalar q = r * m_inv_h;
+    const Scalar a = std::max(2.0 - q, 0.0);
+    const Scalar b = std::max(1.0 - q, 0.0);
+    w = m_quarter_sigma * (a * a * a - 4.0 * b * b * b);
+    const Scalar g = 3.0 * m_quarter_sigma * (4.0 * b * b - a * a) * m_inv_h / (apart ? r : 1.0);
+    f = apart ? g : 0.0;
+  }
+
  private:
   Scalar m_h;
   Scalar m_inv_h;
