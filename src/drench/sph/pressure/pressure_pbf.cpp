@@ -176,6 +176,17 @@ template <class Group>
   return Vec3(Group::sum(sx), Group::sum(sy), Group::sum(sz));
 }
 
+/// True when every neighbor j of i in `list` has w_j = 0 (lambda_j = 0: not compressed). With w_i = 0 too,
+/// every term of i's move is a zero, and their sum is +0 (the sums start at +0, and +0 + -0 = +0): the move
+/// is known without the sum. Spray and the free surface are not compressed, and their moves were most of the
+/// game-like level's move pass (issue 41).
+[[gnu::always_inline]] inline bool at_rest(const NeighborList& list, std::size_t i,
+                                           const PackedPointArray& x_w) {
+  for (const Index* j = list.begin(i); j != list.end(i); ++j)
+    if (x_w[*j].w != 0.0) return false;
+  return true;
+}
+
 /// dp_i of eq. 12 for the particles [begin, end): -sum_j m_j (w_i + w_j) grad W_ij - w_i sum_b Psi_b
 /// grad W_ib, with w = -lambda / rho0 in `x_w` and the gradient factors pbf_constraint kept at its positions.
 /// Compiled per CPU as pbf_constraint, eight neighbors at a time in a fixed order.
@@ -187,6 +198,10 @@ DRENCH_SIMD_CLONES void pbf_moves(const FluidContext& ctx, const PackedPointArra
     using Group = decltype(lanes);
     for (std::size_t i = begin; i < end; ++i) {
       const PackedPoint& pi = x_w[i];
+      if (pi.w == 0.0 && at_rest(ctx.fluid_neighbors, i, x_w)) {
+        out[i - begin] = -Vec3::Zero();  // the sum's bits: +0 in every lane, negated
+        continue;
+      }
       Vec3 move =
           -kept_gradient_sum<Group>(ctx.fluid_neighbors, i, pi, x_w.data(), fluid_factors, pi.w, mass);
       if (pi.w != 0.0)
@@ -295,6 +310,10 @@ PressureStats PressurePbf::project(const FluidContext& ctx, Scalar dt) {
       }
       for (std::size_t i = begin; i < end; ++i) {
         const PackedPoint& pi = m_lambda_points[i];
+        if (pi.w == 0.0 && at_rest(fn, i, m_lambda_points)) {
+          m_moves[i] = Vec3::Zero();  // the loop's bits: +0 minus zeros stays +0
+          continue;
+        }
         const Vec3 xi(pi.x, pi.y, pi.z);
         Vec3 move = Vec3::Zero();
         // The gradient factors pbf_constraint kept at these positions: the same bits as taking them here.
