@@ -48,17 +48,24 @@ class CubicSplineKernel {
     return apart ? f : 0.0;
   }
 
-  /// w = value(sqrt(r2)) and f = gradient_factor(r2), the same bits, with one square root: a pass that needs
-  /// both per pair (PBF's density and constraint gradients) takes the root once.
-  void value_and_gradient_factor(Scalar r2, Scalar& w, Scalar& f) const {
-    const bool apart = r2 > 0.0;
-    const Scalar r = std::sqrt(r2);
-    const Scalar q = r * m_inv_h;
-    const Scalar a = std::max(2.0 - q, 0.0);
-    const Scalar b = std::max(1.0 - q, 0.0);
+  /// w = value(sqrt(r2)) and f = gradient_factor(r2) for each lane of `r2`, a GCC vector of doubles (four or
+  /// eight lanes), the same bits as those two, in vector arithmetic and with one square root: PBF's density
+  /// and constraint gradients need both per pair, and a loop over lanes through memory made GCC spill its
+  /// sums (pressure/pressure_pbf.cpp).
+  template <class V>
+  [[gnu::always_inline]] void value_and_gradient_factor_lanes(const V& r2, V& w, V& f) const {
+    V r;
+    for (unsigned l = 0; l < sizeof(V) / sizeof(Scalar); ++l)
+      r[l] = std::sqrt(r2[l]);
+    const V q = r * m_inv_h;
+    const V a_free = 2.0 - q, b_free = 1.0 - q;
+    // std::max(x, 0.0) is (x < 0.0) ? 0.0 : x, lane by lane.
+    const V a = a_free < 0.0 ? V{} : a_free;
+    const V b = b_free < 0.0 ? V{} : b_free;
     w = m_quarter_sigma * (a * a * a - 4.0 * b * b * b);
-    const Scalar g = 3.0 * m_quarter_sigma * (4.0 * b * b - a * a) * m_inv_h / (apart ? r : 1.0);
-    f = apart ? g : 0.0;
+    const auto apart = r2 > 0.0;
+    const V g = 3.0 * m_quarter_sigma * (4.0 * b * b - a * a) * m_inv_h / (apart ? r : V{} + 1.0);
+    f = apart ? g : V{};
   }
 
  private:

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <type_traits>
 
 #include <drench/common/parallel.hpp>
 #include <drench/sph/packed_lanes.hpp>
@@ -38,17 +39,46 @@ template <class Group, class Body>
   body(padded, n, active, count);
 }
 
+/// The kernel's value and gradient factor of every lane (CubicSplineKernel::value_and_gradient_factor_lanes),
+/// for each eight-lane vector type: a HalvesGroup vector as its two halves.
+[[gnu::always_inline]] inline void kernel_lanes(const CubicSplineKernel& k, const Wide& r2, Wide& w,
+                                                Wide& f) {
+  k.value_and_gradient_factor_lanes(r2, w, f);
+}
+[[gnu::always_inline]] inline void kernel_lanes(const CubicSplineKernel& k, const Halves& r2, Halves& w,
+                                                Halves& f) {
+  k.value_and_gradient_factor_lanes(r2.lo, w.lo, f.lo);
+  k.value_and_gradient_factor_lanes(r2.hi, w.hi, f.hi);
+}
+
 /// Keeps the first `count` lanes of f at out[0 .. count): a group's last lanes past i's neighbors are the
-/// next particle's entries, which another chunk's thread may be writing.
-template <class Vec>
-[[gnu::always_inline]] inline void store_lanes(const Vec& f, std::uint32_t count, Scalar* out) {
-  if (count * sizeof(Scalar) == sizeof(Vec)) {
-    std::memcpy(out, &f, sizeof(Vec));
+/// next particle's entries, which another chunk's thread may be writing. Per half for Halves, so that GCC
+/// keeps the halves in registers.
+[[gnu::always_inline]] inline void store_lanes(const Wide& f, std::uint32_t count, Scalar* out) {
+  if (count == kWide) {
+    std::memcpy(out, &f, sizeof(Wide));
     return;
   }
-  Scalar lanes[sizeof(Vec) / sizeof(Scalar)];
-  std::memcpy(lanes, &f, sizeof(Vec));
-  std::copy_n(lanes, count, out);
+  for (std::uint32_t l = 0; l < count; ++l)
+    out[l] = f[l];
+}
+[[gnu::always_inline]] inline void store_lanes(const Halves& f, std::uint32_t count, Scalar* out) {
+  if (count == kWide) {
+    std::memcpy(out, &f.lo, sizeof(Lanes));
+    std::memcpy(out + kLanes, &f.hi, sizeof(Lanes));
+    return;
+  }
+  for (std::uint32_t l = 0; l < count; ++l)
+    out[l] = l < kLanes ? f.lo[l] : f.hi[l - kLanes];
+}
+
+/// The eight factors at `factors`, as load_lanes' counterpart of store_lanes.
+[[gnu::always_inline]] inline void load_lanes(const Scalar* factors, Wide& f) {
+  std::memcpy(&f, factors, sizeof(Wide));
+}
+[[gnu::always_inline]] inline void load_lanes(const Scalar* factors, Halves& f) {
+  std::memcpy(&f.lo, factors, sizeof(Lanes));
+  std::memcpy(&f.hi, factors + kLanes, sizeof(Lanes));
 }
 
 /// Gradient factors of the padding past the last list entry: pbf_moves reads whole groups of them in place.
@@ -70,11 +100,12 @@ DRENCH_SIMD_CLONES void pbf_constraint(const FluidContext& ctx, const PackedPoin
                                        Scalar* boundary_factors) {
   const CubicSplineKernel& kernel = ctx.kernel;
   const Scalar self = kernel.value(0.0);
-  const bool scorr = scorr_moves != nullptr && scorr_scale > 0.0;
-  with_group_of_copy<HalvesGroup, WideGroup>([&](auto lanes) __attribute__((always_inline)) {
+  // The artificial pressure's sums exist only in the loop that takes them: eight more accumulators in every
+  // iteration's loop made GCC spill the others.
+  const auto rows = [&](auto lanes, auto with_scorr) __attribute__((always_inline)) {
     using Group = decltype(lanes);
     using V = typename Group::Vec;
-    constexpr std::uint32_t kCount = Group::kGroupLanes;
+    constexpr bool kScorr = decltype(with_scorr)::value;
     for (std::size_t i = begin; i < end; ++i) {
       const PackedPoint& xi = x_mass[i];
       V rho = {}, gx = {}, gy = {}, gz = {}, squares = {}, sx = {}, sy = {}, sz = {};
@@ -86,14 +117,8 @@ DRENCH_SIMD_CLONES void pbf_constraint(const FluidContext& ctx, const PackedPoin
                 Group::load(x_mass.data(), group, p);
                 const V dx = xi.x - p.x, dy = xi.y - p.y, dz = xi.z - p.z;
                 const V r2 = dx * dx + dy * dy + dz * dz;
-                Scalar w_lanes[kCount], f_lanes[kCount];
-                Scalar r2_lanes[kCount];
-                std::memcpy(r2_lanes, &r2, sizeof(V));
-                for (std::uint32_t l = 0; l < kCount; ++l)
-                  kernel.value_and_gradient_factor(r2_lanes[l], w_lanes[l], f_lanes[l]);
                 V w, f;
-                std::memcpy(&w, w_lanes, sizeof(V));
-                std::memcpy(&f, f_lanes, sizeof(V));
+                kernel_lanes(kernel, r2, w, f);
                 store_lanes(f, count, fluid_factors + n);
                 V term, c;
                 Group::select(active, p.w * w, term);
@@ -102,8 +127,8 @@ DRENCH_SIMD_CLONES void pbf_constraint(const FluidContext& ctx, const PackedPoin
                 gx += c * dx;
                 gy += c * dy;
                 gz += c * dz;
-                squares += (c * c) * (dx * dx + dy * dy + dz * dz);
-                if (scorr) {
+                squares += (c * c) * r2;
+                if constexpr (kScorr) {
                   const V ratio = inv_w_dq * w;
                   V power = ratio;
                   for (int k = 1; k < scorr_n; ++k)
@@ -123,23 +148,17 @@ DRENCH_SIMD_CLONES void pbf_constraint(const FluidContext& ctx, const PackedPoin
                 Group::load(ctx.boundary.data(), group, p);
                 const V dx = xi.x - p.x, dy = xi.y - p.y, dz = xi.z - p.z;
                 const V r2 = dx * dx + dy * dy + dz * dz;
-                Scalar w_lanes[kCount], f_lanes[kCount];
-                Scalar r2_lanes[kCount];
-                std::memcpy(r2_lanes, &r2, sizeof(V));
-                for (std::uint32_t l = 0; l < kCount; ++l)
-                  kernel.value_and_gradient_factor(r2_lanes[l], w_lanes[l], f_lanes[l]);
                 V w, f;
-                std::memcpy(&w, w_lanes, sizeof(V));
-                std::memcpy(&f, f_lanes, sizeof(V));
+                kernel_lanes(kernel, r2, w, f);
                 store_lanes(f, count, boundary_factors + n);
-                V term, s;
+                V term, c;
                 Group::select(active, p.w * w, term);
                 boundary_rho += term;
                 // gradient_sum's term with alpha 0 and scale 1 / rho0: the same bits as before the fusion.
-                Group::select(active, inv_rho0 * ((0.0 + p.w) * f), s);
-                bx += s * (xi.x - p.x);
-                by += s * (xi.y - p.y);
-                bz += s * (xi.z - p.z);
+                Group::select(active, inv_rho0 * ((0.0 + p.w) * f), c);
+                bx += c * dx;
+                by += c * dy;
+                bz += c * dz;
               });
       densities[i - begin] = Group::sum(rho) + Group::sum(boundary_rho) + xi.w * self;
       const Vec3 gradient = Vec3(Group::sum(gx), Group::sum(gy), Group::sum(gz)) +
@@ -147,6 +166,13 @@ DRENCH_SIMD_CLONES void pbf_constraint(const FluidContext& ctx, const PackedPoin
       denominators[i - begin] = Group::sum(squares) + gradient.squaredNorm();
       if (scorr_moves)
         scorr_moves[i - begin] = -scorr_scale * Vec3(Group::sum(sx), Group::sum(sy), Group::sum(sz));
+    }
+  };
+  with_group_of_copy<HalvesGroup, WideGroup>([&](auto lanes) __attribute__((always_inline)) {
+    if (scorr_moves != nullptr && scorr_scale > 0.0) {
+      rows(lanes, std::true_type{});
+    } else {
+      rows(lanes, std::false_type{});
     }
   });
 }
@@ -167,7 +193,7 @@ template <class Group>
             typename Group::Points p;
             Group::load(sources, group, p);
             typename Group::Vec f, s;
-            std::memcpy(&f, factors + n, sizeof(f));
+            load_lanes(factors + n, f);
             Group::select(active, scale * ((alpha + p.w) * f), s);
             sx += s * (xi.x - p.x);
             sy += s * (xi.y - p.y);
