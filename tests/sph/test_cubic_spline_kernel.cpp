@@ -1,7 +1,9 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
 #include <random>
+#include <vector>
 
 #include <drench/sph/cubic_spline_kernel.hpp>
 
@@ -107,6 +109,37 @@ TEST(CubicSplineKernel, VanishesAtAndBeyondSupportRadius) {
   EXPECT_EQ(kernel.value(0.05), 0.0);
   EXPECT_TRUE(kernel.gradient(Vec3(0.02, 0, 0)).isZero());
   EXPECT_GT(kernel.value(0.0199), 0.0);
+}
+
+TEST(CubicSplineKernel, VectorLanesGiveTheBitsOfValueAndGradientFactor) {
+  // PBF's constraint pass takes W and grad W in vector lanes (value_and_gradient_factor_lanes) and must
+  // match the scalar value(sqrt(r2)) and gradient_factor(r2) bit for bit, at r = 0 (coincident particles),
+  // on both polynomial pieces, at q = 1 and q = 2 exactly, beyond the support, and for a NaN distance.
+  typedef Scalar Four __attribute__((vector_size(4 * sizeof(Scalar))));
+  const CubicSplineKernel kernel(0.01);
+  const Scalar h = kernel.smoothing_length();
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<Scalar> q2(0.0, 5.0);
+  std::vector<Scalar> cases = {0.0, 1e-300, h * h, 4.0 * h * h, 5.0 * h * h, std::nan("")};
+  for (int k = 0; k < 200; ++k)
+    cases.push_back(q2(rng) * h * h);
+  while (cases.size() % 4 != 0)
+    cases.push_back(0.5 * h * h);
+  for (std::size_t first = 0; first < cases.size(); first += 4) {
+    const Four r2 = {cases[first], cases[first + 1], cases[first + 2], cases[first + 3]};
+    Four w, f;
+    kernel.value_and_gradient_factor_lanes(r2, w, f);
+    for (int l = 0; l < 4; ++l) {
+      const Scalar value = kernel.value(std::sqrt(r2[l]));
+      const Scalar factor = kernel.gradient_factor(r2[l]);
+      if (std::isnan(value)) {
+        EXPECT_TRUE(std::isnan(w[l])) << "r2 " << r2[l];
+      } else {
+        EXPECT_EQ(std::memcmp(&w[l], &value, sizeof(Scalar)), 0) << "W at r2 " << r2[l];
+      }
+      EXPECT_EQ(std::memcmp(&f[l], &factor, sizeof(Scalar)), 0) << "gradient factor at r2 " << r2[l];
+    }
+  }
 }
 
 }  // namespace

@@ -129,5 +129,25 @@ TEST(VerletNeighborLists, WithoutASkinSearchEveryTime) {
   }
 }
 
+TEST(VerletNeighborLists, FluidGradientFactorsTurnedOffLeaveTheListsExact) {
+  // Off for PBF: the lists and the boundary's factors stay exact on each path (the exact search, a rebuild
+  // with a skin, a reuse of its candidates), and the fluid's factors are not taken.
+  Vec3Array points = random_points(700, Vec3(0, 0, 0), Vec3(0.3, 0.3, 0.3), 71);
+  const Vec3Array boundary = random_points(200, Vec3(0, -0.04, 0), Vec3(0.3, 0.0, 0.3), 72);
+  const auto ids = sequential_ids(points.size());
+  VerletNeighborLists lists(kKernel, kSkin, boundary);
+  lists.set_fluid_gradient_factors(false);
+  const bool rebuilds[] = {true, true, false};
+  for (int update = 0; update < 3; ++update) {
+    EXPECT_EQ(lists.update(points, ids, update == 0 ? 0.0 : kSkin), rebuilds[update]) << "update " << update;
+    expect_same_sets(lists.fluid(), brute_force(points, points, kRadius, true));
+    expect_same_sets(lists.boundary(), brute_force(points, boundary, kRadius, false));
+    expect_gradient_factors(lists.boundary(), lists.boundary_gradient_factors(), points, boundary);
+    EXPECT_TRUE(lists.fluid_gradient_factors().empty());
+    for (Vec3& p : points)
+      p += Vec3(0.0005, 0.0, 0.0);
+  }
+}
+
 }  // namespace
 }  // namespace drench

@@ -112,6 +112,9 @@ FluidSolver::FluidSolver(const FluidSettings& settings, const Vec3& gravity, Bou
     m_viscosity = make_viscosity(settings.viscosity, speed_of_sound);
     ++m_viscosity_counter.constructed;
   }
+  // PBF takes the kernel's gradients at its iterations' positions; of its forces, only surface tension reads
+  // the lists' fluid gradient factors.
+  if (m_pbf && !surface_tension) m_neighbors.set_fluid_gradient_factors(false);
   if (surface_tension) {
     if (!(surface_tension->sigma >= 0.0 && std::isfinite(surface_tension->sigma))) {
       throw std::invalid_argument("surface_tension.sigma must be >= 0 and finite (N/m), got " +

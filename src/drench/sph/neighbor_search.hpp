@@ -113,9 +113,6 @@ class NeighborSearch {
   /// Hashed mode only: the sorted-point range of the cells x - 1 .. x + 1 of the row of `cell`; false when
   /// empty.
   bool hashed_row_range(const Vec3i& cell, std::uint32_t& begin, std::uint32_t& end) const;
-  /// Dense mode only: the sorted-point range of `count` cells from `cell` along +x (clipped to the grid);
-  /// false when empty.
-  bool row_range(const Vec3i& cell, int count, std::uint32_t& begin, std::uint32_t& end) const;
   void build_dense(const std::vector<Vec3i>& cells, const Vec3i& lo, const Vec3i& dims);
   /// @param cells  the cell of every point (cell_of)
   void build_hashed(const std::vector<Vec3i>& cells);

@@ -35,8 +35,9 @@ DRENCH_SIMD_CLONES void gradient_factor_rows(const CubicSplineKernel& kernel, co
 
 /// The kept pairs of the particles [begin, end) moved to their place in the filtered list: particle i's kept
 /// indices and squared distances (unit: m^2) start at candidate_offsets[i] in kept and kept_r2, and go to
-/// out_offsets[i] in out_indices, with their gradient factors rounded to float in out_factors. Compiled per
-/// CPU as gradient_factor_rows, and called per chunk (one dispatch per chunk, as for_each_chunk's loops).
+/// out_offsets[i] in out_indices, with their gradient factors rounded to float in out_factors (unless null).
+/// Compiled per CPU as gradient_factor_rows, and called per chunk (one dispatch per chunk, as
+/// for_each_chunk's loops).
 DRENCH_SIMD_CLONES void move_kept_rows(const CubicSplineKernel& kernel,
                                        const std::uint32_t* candidate_offsets,
                                        const std::uint32_t* out_offsets, const Index* kept,
@@ -46,6 +47,7 @@ DRENCH_SIMD_CLONES void move_kept_rows(const CubicSplineKernel& kernel,
     const std::uint32_t first = candidate_offsets[i];
     const std::uint32_t count = out_offsets[i + 1] - out_offsets[i];
     std::copy_n(kept + first, count, out_indices + out_offsets[i]);
+    if (!out_factors) continue;
     const Scalar* r2 = kept_r2 + first;
     float* factors = out_factors + out_offsets[i];
 #pragma omp simd
@@ -93,7 +95,7 @@ bool VerletNeighborLists::update(const Vec3Array& positions, const std::vector<s
                                  Scalar skin) {
   assert(skin >= 0.0 && skin <= m_wide_fluid.support_radius() - m_support + 1e-12 * m_support);
   if (m_skin > 0.0 && ids == m_ids && !moved_beyond_half_skin(positions)) {
-    filter(m_fluid_candidates, positions, positions, m_fluid, m_fluid_factors);
+    filter(m_fluid_candidates, positions, positions, m_fluid, m_fluid_factors, m_want_fluid_factors);
     filter(m_boundary_candidates, positions, m_boundary_points, m_boundary, m_boundary_factors);
     return false;
   }
@@ -110,14 +112,18 @@ bool VerletNeighborLists::update(const Vec3Array& positions, const std::vector<s
       m_wide_boundary_built = true;
     }
     m_wide_boundary.find(positions, m_boundary_candidates, /*exclude_self=*/false);
-    filter(m_fluid_candidates, positions, positions, m_fluid, m_fluid_factors);
+    filter(m_fluid_candidates, positions, positions, m_fluid, m_fluid_factors, m_want_fluid_factors);
     filter(m_boundary_candidates, positions, m_boundary_points, m_boundary, m_boundary_factors);
   } else {
     // Exactly the neighbors: nothing to filter, and no candidates are kept.
     m_exact_fluid.build(positions);
     m_exact_fluid.find_self(m_fluid);
     m_exact_boundary.find(positions, m_boundary, /*exclude_self=*/false);
-    gradient_factors(m_fluid, positions, positions, m_fluid_factors);
+    if (m_want_fluid_factors) {
+      gradient_factors(m_fluid, positions, positions, m_fluid_factors);
+    } else {
+      m_fluid_factors.clear();
+    }
     gradient_factors(m_boundary, positions, m_boundary_points, m_boundary_factors);
   }
   return true;
@@ -133,7 +139,7 @@ void VerletNeighborLists::gradient_factors(const NeighborList& list, const Vec3A
 }
 
 void VerletNeighborLists::filter(const NeighborList& candidates, const Vec3Array& x, const Vec3Array& sources,
-                                 NeighborList& out, GradientFactorArray& out_factors) {
+                                 NeighborList& out, GradientFactorArray& out_factors, bool factors) {
   const std::size_t n = x.size();
   const Scalar r2_max = m_support * m_support;
   out.offsets.assign(n + 1, 0);
@@ -169,10 +175,10 @@ void VerletNeighborLists::filter(const NeighborList& candidates, const Vec3Array
   for (std::size_t i = 0; i < n; ++i)
     out.offsets[i + 1] += out.offsets[i];
   out.indices.resize(out.offsets[n]);
-  out_factors.resize(out.offsets[n]);
+  out_factors.resize(factors ? out.offsets[n] : 0);
   for_each_chunk(n, [&](std::size_t begin, std::size_t end) {
     move_kept_rows(m_kernel, candidates.offsets.data(), out.offsets.data(), m_kept.data(), m_kept_r2.data(),
-                   begin, end, out.indices.data(), out_factors.data());
+                   begin, end, out.indices.data(), factors ? out_factors.data() : nullptr);
   });
 }
 

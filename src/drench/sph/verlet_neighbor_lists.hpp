@@ -40,12 +40,18 @@ class VerletNeighborLists {
   /// the next update() searches afresh.
   void set_boundary_points(Vec3Array boundary);
 
+  /// Whether update() takes fluid_gradient_factors() (default true). Off, they stay empty: PBF takes the
+  /// kernel's gradients at its iterations' positions, so without surface tension no one reads them, and they
+  /// were 1% of issue 41's level (callgrind).
+  void set_fluid_gradient_factors(bool wanted) { m_want_fluid_factors = wanted; }
+
   const NeighborList& fluid() const { return m_fluid; }
   const NeighborList& boundary() const { return m_boundary; }
   /// The boundary points: given at construction, or by the last set_boundary_points (unit: m).
   const Vec3Array& boundary_points() const { return m_boundary_points; }
   /// For every entry of fluid().indices, f with grad W(x_i - x_j) = f (x_i - x_j) at the positions of the
-  /// last update (unit: 1/m^5), rounded to float (GradientFactorArray). Computed in the filter's pass, where
+  /// last update (unit: 1/m^5), rounded to float (GradientFactorArray); empty when set_fluid_gradient_factors
+  /// turned them off. Computed in the filter's pass, where
   /// the distance is at hand: a pass of its own re-read the lists and gathered the positions again, on a
   /// sub-step bound by memory traffic.
   const GradientFactorArray& fluid_gradient_factors() const { return m_fluid_factors; }
@@ -59,10 +65,10 @@ class VerletNeighborLists {
  private:
   /// True when some particle moved more than skin / 2 since the rebuild.
   bool moved_beyond_half_skin(const Vec3Array& positions) const;
-  /// out = the candidates within the support, out_factors their kernel gradient factors: queries `x`,
-  /// sources `sources`.
+  /// out = the candidates within the support, out_factors their kernel gradient factors (left empty when not
+  /// `factors`): queries `x`, sources `sources`.
   void filter(const NeighborList& candidates, const Vec3Array& x, const Vec3Array& sources, NeighborList& out,
-              GradientFactorArray& out_factors);
+              GradientFactorArray& out_factors, bool factors = true);
   /// out_factors = the kernel gradient factors of the pairs of `list` (all within the support).
   void gradient_factors(const NeighborList& list, const Vec3Array& x, const Vec3Array& sources,
                         GradientFactorArray& out_factors) const;
@@ -70,6 +76,7 @@ class VerletNeighborLists {
   CubicSplineKernel m_kernel;  // a copy: a reference into the owner would dangle when the owner is moved
   Scalar m_support;
   Vec3Array m_boundary_points;
+  bool m_want_fluid_factors = true;    // set_fluid_gradient_factors
   NeighborSearch m_exact_fluid;        // cells of the support: rebuilds without a skin, and z_order
   NeighborSearch m_exact_boundary;     // built once
   NeighborSearch m_wide_fluid;         // cells of support + max_skin

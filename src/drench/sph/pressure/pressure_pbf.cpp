@@ -2,7 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <limits>
+#include <type_traits>
 
 #include <drench/common/parallel.hpp>
 #include <drench/sph/packed_lanes.hpp>
@@ -10,56 +12,123 @@
 namespace drench {
 namespace {
 
-/// dp_i of eq. 12 for the particles [begin, end): -sum_j m_j (w_i + w_j) grad W_ij - w_i sum_b Psi_b
-/// grad W_ib, with w = -lambda / rho0 in `x_w` and the gradients at its positions. Compiled per CPU as the
-/// other pair loops (sph/packed_lanes.hpp), eight neighbors at a time in a fixed order.
-/// @param mass  every particle's mass (unit: kg), > 0 (FluidContext::uniform_mass)
-DRENCH_SIMD_CLONES void pbf_moves(const FluidContext& ctx, const PackedPointArray& x_w, Scalar mass,
-                                  std::size_t begin, std::size_t end, Vec3* out) {
-  with_group_of_copy<HalvesGroup, WideGroup>([&](auto lanes) __attribute__((always_inline)) {
-    using Group = decltype(lanes);
-    for (std::size_t i = begin; i < end; ++i) {
-      const PackedPoint& pi = x_w[i];
-      Vec3 move = -gradient_sum<Group>(ctx.kernel, ctx.fluid_neighbors, i, pi, x_w.data(), pi.w, mass);
-      if (pi.w != 0.0)
-        move -=
-            gradient_sum<Group>(ctx.kernel, ctx.boundary_neighbors, i, pi, ctx.boundary.data(), 0.0, pi.w);
-      out[i - begin] = move;
-    }
-  });
+/// Calls body(js, n, active, count) for the neighbors of particle i in `list`, Group::kGroupLanes at a time,
+/// as for_each_group (sph/packed_lanes.hpp), with n the list entry of the group's first lane and count the
+/// group's lanes that are i's neighbors: the entry tells where the group's gradient factors are kept.
+template <class Group, class Body>
+[[gnu::always_inline]] inline void for_each_entry_group(const NeighborList& list, std::size_t i,
+                                                        Body&& body) {
+  constexpr std::uint32_t lanes = Group::kGroupLanes;
+  const Index* js = list.indices.data();
+  std::uint32_t n = list.offsets[i];
+  const std::uint32_t end = list.offsets[i + 1];
+  typename Group::Mask all, active;
+  Group::first(lanes, all);
+  for (; n + lanes <= end; n += lanes)
+    body(js + n, n, all, lanes);
+  if (n == end) return;
+  const std::uint32_t count = end - n;
+  Group::first(count, active);
+  if (n + lanes <= list.indices.size()) {
+    body(js + n, n, active, count);
+    return;
+  }
+  Index padded[lanes];
+  for (std::uint32_t l = 0; l < lanes; ++l)
+    padded[l] = js[n + (l < count ? l : count - 1)];
+  body(padded, n, active, count);
 }
 
-/// For the particles [begin, end) at the positions of `x_mass` (w = mass): sum_k |grad_k C_i|^2 of eq. 11
-/// (unit: 1/m^2) into `denominators`, and the artificial pressure's move sum_j (m_j / rho0) s_corr_ij grad
-/// W_ij (eq. 13-14, unit: m) into `scorr_moves`, with s_corr = -scorr_scale (W / W(dq))^n; with
-/// scorr_scale 0 and `scorr_moves` null, the denominators alone. As pbf_moves, compiled per CPU.
-DRENCH_SIMD_CLONES void pbf_gradients(const FluidContext& ctx, const PackedPointArray& x_mass,
-                                      Scalar inv_rho0, Scalar scorr_scale, Scalar inv_w_dq, int scorr_n,
-                                      std::size_t begin, std::size_t end, Scalar* denominators,
-                                      Vec3* scorr_moves) {
-  with_group_of_copy<HalvesGroup, WideGroup>([&](auto lanes) __attribute__((always_inline)) {
+/// The kernel's value and gradient factor of every lane (CubicSplineKernel::value_and_gradient_factor_lanes),
+/// for each eight-lane vector type: a HalvesGroup vector as its two halves.
+[[gnu::always_inline]] inline void kernel_lanes(const CubicSplineKernel& k, const Wide& r2, Wide& w,
+                                                Wide& f) {
+  k.value_and_gradient_factor_lanes(r2, w, f);
+}
+[[gnu::always_inline]] inline void kernel_lanes(const CubicSplineKernel& k, const Halves& r2, Halves& w,
+                                                Halves& f) {
+  k.value_and_gradient_factor_lanes(r2.lo, w.lo, f.lo);
+  k.value_and_gradient_factor_lanes(r2.hi, w.hi, f.hi);
+}
+
+/// Keeps the first `count` lanes of f at out[0 .. count): a group's last lanes past i's neighbors are the
+/// next particle's entries, which another chunk's thread may be writing. Per half for Halves, so that GCC
+/// keeps the halves in registers.
+[[gnu::always_inline]] inline void store_lanes(const Wide& f, std::uint32_t count, Scalar* out) {
+  if (count == kWide) {
+    std::memcpy(out, &f, sizeof(Wide));
+    return;
+  }
+  for (std::uint32_t l = 0; l < count; ++l)
+    out[l] = f[l];
+}
+[[gnu::always_inline]] inline void store_lanes(const Halves& f, std::uint32_t count, Scalar* out) {
+  if (count == kWide) {
+    std::memcpy(out, &f.lo, sizeof(Lanes));
+    std::memcpy(out + kLanes, &f.hi, sizeof(Lanes));
+    return;
+  }
+  for (std::uint32_t l = 0; l < count; ++l)
+    out[l] = l < kLanes ? f.lo[l] : f.hi[l - kLanes];
+}
+
+/// The eight factors at `factors`, as load_lanes' counterpart of store_lanes.
+[[gnu::always_inline]] inline void load_lanes(const Scalar* factors, Wide& f) {
+  std::memcpy(&f, factors, sizeof(Wide));
+}
+[[gnu::always_inline]] inline void load_lanes(const Scalar* factors, Halves& f) {
+  std::memcpy(&f.lo, factors, sizeof(Lanes));
+  std::memcpy(&f.hi, factors + kLanes, sizeof(Lanes));
+}
+
+/// Gradient factors of the padding past the last list entry: pbf_moves reads whole groups of them in place.
+constexpr std::size_t kFactorPadding = 16;
+
+/// For the particles [begin, end) at the positions of `x_mass` (w = mass), in one pass over their neighbors:
+/// the density rho_i into `densities` (unit: kg/m^3), the same bits as sph_densities; sum_k |grad_k C_i|^2
+/// of eq. 11 (unit: 1/m^2) into `denominators`; when `scorr_moves` is given, the artificial pressure's move
+/// sum_j (m_j / rho0) s_corr_ij grad W_ij (eq. 13-14, unit: m) into it, with s_corr = -scorr_scale (W /
+/// W(dq))^n; and each pair's kernel gradient factor (unit: 1/m^5) at its list entry in `fluid_factors` and
+/// `boundary_factors`, for pbf_moves at the same positions. One pass: the density, the gradients and the
+/// move of an iteration read the same neighbors at the same positions, and the three passes that each took
+/// their own square roots and gradients were a quarter of the game-like level's frame (issue 41). Compiled
+/// per CPU as the other pair loops (sph/packed_lanes.hpp), eight neighbors at a time in a fixed order.
+DRENCH_SIMD_CLONES void pbf_constraint(const FluidContext& ctx, const PackedPointArray& x_mass,
+                                       Scalar inv_rho0, Scalar scorr_scale, Scalar inv_w_dq, int scorr_n,
+                                       std::size_t begin, std::size_t end, Scalar* densities,
+                                       Scalar* denominators, Vec3* scorr_moves, Scalar* fluid_factors,
+                                       Scalar* boundary_factors) {
+  const CubicSplineKernel& kernel = ctx.kernel;
+  const Scalar self = kernel.value(0.0);
+  // The artificial pressure's sums exist only in the loop that takes them: eight more accumulators in every
+  // iteration's loop made GCC spill the others.
+  const auto rows = [&](auto lanes, auto with_scorr) __attribute__((always_inline)) {
     using Group = decltype(lanes);
     using V = typename Group::Vec;
+    constexpr bool kScorr = decltype(with_scorr)::value;
     for (std::size_t i = begin; i < end; ++i) {
       const PackedPoint& xi = x_mass[i];
-      V gx = {}, gy = {}, gz = {}, squares = {}, sx = {}, sy = {}, sz = {};
-      for_each_group<Group>(
-          ctx.fluid_neighbors, i, nullptr,
-          [&](const Index* group, const float*, const typename Group::Mask& active)
+      V rho = {}, gx = {}, gy = {}, gz = {}, squares = {}, sx = {}, sy = {}, sz = {};
+      for_each_entry_group<Group>(
+          ctx.fluid_neighbors, i,
+          [&](const Index* group, std::uint32_t n, const typename Group::Mask& active, std::uint32_t count)
               __attribute__((always_inline)) {
                 typename Group::Points p;
                 Group::load(x_mass.data(), group, p);
-                V f, c;
-                Group::gradient_factor(ctx.kernel, xi, p, f);
-                Group::select(active, inv_rho0 * (p.w * f), c);
                 const V dx = xi.x - p.x, dy = xi.y - p.y, dz = xi.z - p.z;
+                const V r2 = dx * dx + dy * dy + dz * dz;
+                V w, f;
+                kernel_lanes(kernel, r2, w, f);
+                store_lanes(f, count, fluid_factors + n);
+                V term, c;
+                Group::select(active, p.w * w, term);
+                rho += term;
+                Group::select(active, inv_rho0 * (p.w * f), c);
                 gx += c * dx;
                 gy += c * dy;
                 gz += c * dz;
-                squares += (c * c) * (dx * dx + dy * dy + dz * dz);
-                if (scorr_scale > 0.0) {
-                  V w;
-                  Group::kernel(ctx.kernel, xi, p, w);
+                squares += (c * c) * r2;
+                if constexpr (kScorr) {
                   const V ratio = inv_w_dq * w;
                   V power = ratio;
                   for (int k = 1; k < scorr_n; ++k)
@@ -70,12 +139,101 @@ DRENCH_SIMD_CLONES void pbf_gradients(const FluidContext& ctx, const PackedPoint
                   sz += t * dz;
                 }
               });
-      const Vec3 gradient =
-          Vec3(Group::sum(gx), Group::sum(gy), Group::sum(gz)) +
-          gradient_sum<Group>(ctx.kernel, ctx.boundary_neighbors, i, xi, ctx.boundary.data(), 0.0, inv_rho0);
+      V boundary_rho = {}, bx = {}, by = {}, bz = {};
+      for_each_entry_group<Group>(
+          ctx.boundary_neighbors, i,
+          [&](const Index* group, std::uint32_t n, const typename Group::Mask& active, std::uint32_t count)
+              __attribute__((always_inline)) {
+                typename Group::Points p;
+                Group::load(ctx.boundary.data(), group, p);
+                const V dx = xi.x - p.x, dy = xi.y - p.y, dz = xi.z - p.z;
+                const V r2 = dx * dx + dy * dy + dz * dz;
+                V w, f;
+                kernel_lanes(kernel, r2, w, f);
+                store_lanes(f, count, boundary_factors + n);
+                V term, c;
+                Group::select(active, p.w * w, term);
+                boundary_rho += term;
+                // gradient_sum's term with alpha 0 and scale 1 / rho0: the same bits as before the fusion.
+                Group::select(active, inv_rho0 * ((0.0 + p.w) * f), c);
+                bx += c * dx;
+                by += c * dy;
+                bz += c * dz;
+              });
+      densities[i - begin] = Group::sum(rho) + Group::sum(boundary_rho) + xi.w * self;
+      const Vec3 gradient = Vec3(Group::sum(gx), Group::sum(gy), Group::sum(gz)) +
+                            Vec3(Group::sum(bx), Group::sum(by), Group::sum(bz));
       denominators[i - begin] = Group::sum(squares) + gradient.squaredNorm();
       if (scorr_moves)
         scorr_moves[i - begin] = -scorr_scale * Vec3(Group::sum(sx), Group::sum(sy), Group::sum(sz));
+    }
+  };
+  with_group_of_copy<HalvesGroup, WideGroup>([&](auto lanes) __attribute__((always_inline)) {
+    if (scorr_moves != nullptr && scorr_scale > 0.0) {
+      rows(lanes, std::true_type{});
+    } else {
+      rows(lanes, std::false_type{});
+    }
+  });
+}
+
+/// sum over the neighbors j of i in `list` of scale (alpha + w_j) f_ij (x_i - x_j), as gradient_sum
+/// (sph/packed_lanes.hpp) with the gradient factors f kept by pbf_constraint at the same positions (one per
+/// list entry, kFactorPadding more readable past the last): the same bits, without a square root and a
+/// division per pair.
+template <class Group>
+[[gnu::always_inline]] inline Vec3 kept_gradient_sum(const NeighborList& list, std::size_t i,
+                                                     const PackedPoint& xi, const PackedPoint* sources,
+                                                     const Scalar* factors, Scalar alpha, Scalar scale) {
+  typename Group::Vec sx = {}, sy = {}, sz = {};
+  for_each_entry_group<Group>(
+      list, i,
+      [&](const Index* group, std::uint32_t n, const typename Group::Mask& active, std::uint32_t)
+          __attribute__((always_inline)) {
+            typename Group::Points p;
+            Group::load(sources, group, p);
+            typename Group::Vec f, s;
+            load_lanes(factors + n, f);
+            Group::select(active, scale * ((alpha + p.w) * f), s);
+            sx += s * (xi.x - p.x);
+            sy += s * (xi.y - p.y);
+            sz += s * (xi.z - p.z);
+          });
+  return Vec3(Group::sum(sx), Group::sum(sy), Group::sum(sz));
+}
+
+/// True when every neighbor j of i in `list` has w_j = 0 (lambda_j = 0: not compressed). With w_i = 0 too,
+/// every term of i's move is a zero, and their sum is +0 (the sums start at +0, and +0 + -0 = +0): the move
+/// is known without the sum. Spray and the free surface are not compressed, and their moves were most of the
+/// game-like level's move pass (issue 41).
+[[gnu::always_inline]] inline bool at_rest(const NeighborList& list, std::size_t i,
+                                           const PackedPointArray& x_w) {
+  for (const Index* j = list.begin(i); j != list.end(i); ++j)
+    if (x_w[*j].w != 0.0) return false;
+  return true;
+}
+
+/// dp_i of eq. 12 for the particles [begin, end): -sum_j m_j (w_i + w_j) grad W_ij - w_i sum_b Psi_b
+/// grad W_ib, with w = -lambda / rho0 in `x_w` and the gradient factors pbf_constraint kept at its positions.
+/// Compiled per CPU as pbf_constraint, eight neighbors at a time in a fixed order.
+/// @param mass  every particle's mass (unit: kg), > 0 (FluidContext::uniform_mass)
+DRENCH_SIMD_CLONES void pbf_moves(const FluidContext& ctx, const PackedPointArray& x_w, Scalar mass,
+                                  const Scalar* fluid_factors, const Scalar* boundary_factors,
+                                  std::size_t begin, std::size_t end, Vec3* out) {
+  with_group_of_copy<HalvesGroup, WideGroup>([&](auto lanes) __attribute__((always_inline)) {
+    using Group = decltype(lanes);
+    for (std::size_t i = begin; i < end; ++i) {
+      const PackedPoint& pi = x_w[i];
+      if (pi.w == 0.0 && at_rest(ctx.fluid_neighbors, i, x_w)) {
+        out[i - begin] = -Vec3::Zero();  // the sum's bits: +0 in every lane, negated
+        continue;
+      }
+      Vec3 move =
+          -kept_gradient_sum<Group>(ctx.fluid_neighbors, i, pi, x_w.data(), fluid_factors, pi.w, mass);
+      if (pi.w != 0.0)
+        move -= kept_gradient_sum<Group>(ctx.boundary_neighbors, i, pi, ctx.boundary.data(), boundary_factors,
+                                         0.0, pi.w);
+      out[i - begin] = move;
     }
   });
 }
@@ -111,7 +269,6 @@ PressureStats PressurePbf::project(const FluidContext& ctx, Scalar dt) {
   const std::size_t n = particles.size();
   const Scalar rho0 = ctx.rest_density;
   const Scalar inv_rho0 = 1.0 / rho0;
-  const CubicSplineKernel& kernel = ctx.kernel;
   const NeighborList& fn = ctx.fluid_neighbors;
   const NeighborList& bn = ctx.boundary_neighbors;
   m_last_dt = dt;
@@ -143,27 +300,21 @@ PressureStats PressurePbf::project(const FluidContext& ctx, Scalar dt) {
       m_lambda_points[i] = packed(particles.positions[i], 0.0);
     }
   });
-  for_each_chunk(n, [&](std::size_t begin, std::size_t end) {
-    pbf_gradients(ctx, m_points, inv_rho0, scorr_scale, m_inv_w_dq, m_settings.scorr_n, begin, end,
-                  &m_denominator[begin], &m_scorr_moves[begin]);
-    for (std::size_t i = begin; i < end; ++i)
-      m_denominator[i] = std::max(m_denominator[i] + m_epsilon, m_min_denominator);
-  });
+  m_fluid_factors.resize(fn.indices.size() + kFactorPadding);
+  m_boundary_factors.resize(bn.indices.size() + kFactorPadding);
   const Scalar max_correction = m_settings.max_compression_per_iteration
                                     ? *m_settings.max_compression_per_iteration
                                     : std::numeric_limits<Scalar>::infinity();
   for (int iteration = 0; iteration < m_settings.iterations; ++iteration) {
-    // lambda_i at the current prediction (eq. 11), only for compression.
+    // rho_i, the denominator and lambda_i at the current prediction (eq. 11), only for compression.
     for_each_chunk(n, [&](std::size_t begin, std::size_t end) {
-      if (iteration > 0) {
-        pbf_gradients(ctx, m_points, inv_rho0, 0.0, m_inv_w_dq, m_settings.scorr_n, begin, end,
-                      &m_denominator[begin], nullptr);
-        for (std::size_t i = begin; i < end; ++i)
-          m_denominator[i] = std::max(m_denominator[i] + m_epsilon, m_min_denominator);
-      }
-      sph_densities(ctx, m_points, begin, end, &particles.densities[begin]);
+      pbf_constraint(ctx, m_points, inv_rho0, scorr_scale, m_inv_w_dq, m_settings.scorr_n, begin, end,
+                     &particles.densities[begin], &m_denominator[begin],
+                     iteration == 0 ? &m_scorr_moves[begin] : nullptr, m_fluid_factors.data(),
+                     m_boundary_factors.data());
       ChunkErrors errors;
       for (std::size_t i = begin; i < end; ++i) {
+        m_denominator[i] = std::max(m_denominator[i] + m_epsilon, m_min_denominator);
         const Scalar violation = std::max(particles.densities[i] * inv_rho0 - 1.0, 0.0);
         const Scalar lambda = -std::min(violation, max_correction) / m_denominator[i];
         m_lambda_sum[i] += lambda;
@@ -179,24 +330,30 @@ PressureStats PressurePbf::project(const FluidContext& ctx, Scalar dt) {
     // count and relaxation tried, since PBF's iterations move particles by a large part of a spacing.
     for_each_chunk(n, [&](std::size_t begin, std::size_t end) {
       if (ctx.uniform_mass > 0.0) {
-        pbf_moves(ctx, m_lambda_points, ctx.uniform_mass, begin, end, &m_moves[begin]);
+        pbf_moves(ctx, m_lambda_points, ctx.uniform_mass, m_fluid_factors.data(), m_boundary_factors.data(),
+                  begin, end, &m_moves[begin]);
         return;
       }
       for (std::size_t i = begin; i < end; ++i) {
         const PackedPoint& pi = m_lambda_points[i];
+        if (pi.w == 0.0 && at_rest(fn, i, m_lambda_points)) {
+          m_moves[i] = Vec3::Zero();  // the loop's bits: +0 minus zeros stays +0
+          continue;
+        }
         const Vec3 xi(pi.x, pi.y, pi.z);
         Vec3 move = Vec3::Zero();
+        // The gradient factors pbf_constraint kept at these positions: the same bits as taking them here.
         for (std::uint32_t k = fn.offsets[i]; k < fn.offsets[i + 1]; ++k) {
           const Index j = fn.indices[k];
           const PackedPoint& pj = m_lambda_points[j];
           const Vec3 d = xi - Vec3(pj.x, pj.y, pj.z);
-          move -= (m_points[j].w * (pi.w + pj.w) * kernel.gradient_factor(d.squaredNorm())) * d;
+          move -= (m_points[j].w * (pi.w + pj.w) * m_fluid_factors[k]) * d;
         }
         if (pi.w != 0.0) {
           for (std::uint32_t k = bn.offsets[i]; k < bn.offsets[i + 1]; ++k) {
             const PackedPoint& pb = ctx.boundary[bn.indices[k]];
             const Vec3 d = xi - Vec3(pb.x, pb.y, pb.z);
-            move -= (pi.w * pb.w * kernel.gradient_factor(d.squaredNorm())) * d;
+            move -= (pi.w * pb.w * m_boundary_factors[k]) * d;
           }
         }
         m_moves[i] = move;

@@ -50,6 +50,8 @@ class PressurePbf final : public PressureSolver {
   Vec3Array m_scorr_moves;           // N: the artificial pressure's move per iteration (unit: m)
   ScalarArray m_lambda_sum;          // N: lambda_i summed over the projection's iterations (unit: m^2)
   Vec3Array m_moves;                 // N: this iteration's dp_i without s_corr (unit: m)
+  ScalarArray m_fluid_factors;       // per fluid list entry: grad W = f (x_i - x_j) this iteration (1/m^5)
+  ScalarArray m_boundary_factors;    // per boundary list entry: the same with the boundary point (1/m^5)
   struct ChunkErrors {
     Scalar sum = 0.0, max = 0.0;
   };
