@@ -118,6 +118,12 @@ class StepContext {
     m_stats.vertical_impulse_on_cloth -= impulse.y();
   }
 
+  /// Sets node i's end position (an impact zone's move), marked as a change like apply()'s.
+  void move_node(Index i, const Vec3& x_t1) {
+    m_cloth.positions_t1[i] = x_t1;
+    m_node_changed[i] = 1;
+  }
+
   ccd::VertexFaceQuery query(Index p, Index t) const {
     const Triangle& tri = triangle(t);
     const Vec3Array& c0 = m_cloth.positions_t0;
