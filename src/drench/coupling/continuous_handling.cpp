@@ -240,6 +240,12 @@ std::uint32_t move_impact_zones(StepContext& ctx, TriangleBroadPhase& broad_phas
 }  // namespace
 
 void StepContext::mark_changed_candidates(std::vector<std::uint8_t>& only) const {
+  // Most rounds change no node (the fail-safe moves particles only, an impulse on a static face moves
+  // nothing): then only the changed particles are marked, without a look at every triangle and particle.
+  if (std::find(m_node_changed.begin(), m_node_changed.end(), std::uint8_t{1}) == m_node_changed.end()) {
+    only = m_particle_changed;
+    return;
+  }
   Box3 changed_triangles;
   for (std::size_t t = 0; t < m_cloth.triangles.size(); ++t) {
     const Triangle& tri = m_cloth.triangles[t];
