@@ -252,16 +252,6 @@ bool TriangleBoxKey::same_as_last(const ClothMesh& cloth, std::vector<std::uint8
   return false;
 }
 
-Box3 triangle_box(const ClothMesh& cloth, const Triangle& t, double margin) {
-  Box3 box;
-  for (Index v : t) {
-    box.extend(cloth.positions_t0[v]);
-    box.extend(cloth.positions_t1[v]);
-  }
-  box.grow(margin);
-  return box;
-}
-
 Box3 mesh_box(const ClothMesh& cloth) {
   Box3 box;
   for (const Vec3& x : cloth.positions_t0)

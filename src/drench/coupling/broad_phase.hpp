@@ -49,8 +49,17 @@ inline Box3 particle_box(const Vec3& x_t0, const Vec3& x_t1, double margin) {
   return box;
 }
 
-/// A triangle's box over the step: its nodes at both ends grown by `margin` (unit: m).
-Box3 triangle_box(const ClothMesh& cloth, const Triangle& t, double margin);
+/// A triangle's box over the step: its nodes at both ends grown by `margin` (unit: m). Inline: the grid
+/// recomputes one per moved triangle at every change of the cloth.
+inline Box3 triangle_box(const ClothMesh& cloth, const Triangle& t, double margin) {
+  Box3 box;
+  for (Index v : t) {
+    box.extend(cloth.positions_t0[v]);
+    box.extend(cloth.positions_t1[v]);
+  }
+  box.grow(margin);
+  return box;
+}
 
 /// The whole mesh's box over the step: every node at both ends, not grown (unit: m). It holds every
 /// triangle_box(cloth, t, 0) exactly (min and max do not round).
