@@ -54,32 +54,6 @@ void find_impacts(const StepContext& ctx, const std::vector<std::pair<Index, Ind
   }
 }
 
-/// Brings `all`, every pair of the motion as it was at the last clear_changes(), to the current motion:
-/// the broad phase is asked only for the particles mark_changed_candidates marks, whose pairs (`fresh`)
-/// replace theirs; an unmarked particle keeps its pairs with unchanged triangles and has none with a
-/// changed one (its box misses all of theirs). So `all` is exactly what a query of every particle would
-/// give, in the same order, at the cost of a query of the few marked ones: the fail-safe's and the impact
-/// zones' rounds asked for every particle again, four queries of the whole fluid per step in issue 41's
-/// level.
-/// @param only, merged  scratch
-void update_pairs(StepContext& ctx, TriangleBroadPhase& broad_phase, std::vector<std::uint8_t>& only,
-                  std::vector<std::pair<Index, Index>>& fresh, std::vector<std::pair<Index, Index>>& all,
-                  std::vector<std::pair<Index, Index>>& merged) {
-  ctx.mark_changed_candidates(only);
-  broad_phase.find_pairs(ctx.x0(), ctx.x1(), ctx.cloth(), 0.0, &only, fresh);
-  merged.clear();
-  merged.reserve(all.size() + fresh.size());
-  auto next = fresh.begin();
-  for (const auto& pair : all) {
-    if (only[pair.first]) continue;
-    for (; next != fresh.end() && next->first < pair.first; ++next)
-      merged.push_back(*next);
-    if (!ctx.pair_changed(pair.first, pair.second)) merged.push_back(pair);
-  }
-  merged.insert(merged.end(), next, fresh.end());
-  all.swap(merged);
-}
-
 /// The inelastic impulse at an impact, Bridson, Fedkiw, Anderson 2002's response as sec. 3.3 uses it: the
 /// relative normal velocity at the contact point becomes a small separating speed, 1% of the cloth thickness
 /// per step, so the corrected motion stays on its side instead of ending exactly in the plane.
@@ -238,6 +212,24 @@ std::uint32_t move_impact_zones(StepContext& ctx, TriangleBroadPhase& broad_phas
 }
 
 }  // namespace
+
+void update_pairs(StepContext& ctx, TriangleBroadPhase& broad_phase, std::vector<std::uint8_t>& only,
+                  std::vector<std::pair<Index, Index>>& fresh, std::vector<std::pair<Index, Index>>& all,
+                  std::vector<std::pair<Index, Index>>& merged) {
+  ctx.mark_changed_candidates(only);
+  broad_phase.find_pairs(ctx.x0(), ctx.x1(), ctx.cloth(), 0.0, &only, fresh);
+  merged.clear();
+  merged.reserve(all.size() + fresh.size());
+  auto next = fresh.begin();
+  for (const auto& pair : all) {
+    if (only[pair.first]) continue;
+    for (; next != fresh.end() && next->first < pair.first; ++next)
+      merged.push_back(*next);
+    if (!ctx.pair_changed(pair.first, pair.second)) merged.push_back(pair);
+  }
+  merged.insert(merged.end(), next, fresh.end());
+  all.swap(merged);
+}
 
 void StepContext::mark_changed_candidates(std::vector<std::uint8_t>& only) const {
   // Most rounds change no node (the fail-safe moves particles only, an impulse on a static face moves

@@ -215,6 +215,21 @@ void apply_friction(StepContext& ctx, std::vector<Contact>& contacts, const Coup
 void adhere(StepContext& ctx, TriangleBroadPhase& broad_phase, const AdhesionSettings& settings,
             double thickness);
 
+/// Brings `all`, every pair of the motion as it was at the last clear_changes(), to the current motion:
+/// the broad phase is asked only for the particles mark_changed_candidates marks, whose pairs (`fresh`)
+/// replace theirs; an unmarked particle keeps its pairs with unchanged triangles and has none with a
+/// changed one (its box misses all of theirs). So `all` is exactly what a query of every particle would
+/// give, in the same order, at the cost of a query of the few marked ones: the fail-safe's and the impact
+/// zones' rounds asked for every particle again, four queries of the whole fluid per step in issue 41's
+/// level.
+/// @param all  every pair of the motion at the last clear_changes() (a query of every particle with margin 0,
+///        sorted by particle, then triangle), brought to the current motion
+/// @param fresh  output, replaced: the pairs of the marked particles (mark_changed_candidates)
+/// @param only, merged  scratch
+void update_pairs(StepContext& ctx, TriangleBroadPhase& broad_phase, std::vector<std::uint8_t>& only,
+                  std::vector<std::pair<Index, Index>>& fresh, std::vector<std::pair<Index, Index>>& all,
+                  std::vector<std::pair<Index, Index>>& merged);
+
 /// Continuous intersection handling (sec. 3.3, continuous_handling.cpp) on the motion the earlier stages
 /// corrected: rounds of point-triangle CCD (eq. 5-6) and an inelastic impulse at each particle's earliest
 /// impact, the first round over every pair, later ones over the pairs whose motion the previous round
