@@ -79,8 +79,9 @@ bool any_particle_box_overlaps(const Vec3Array& particles_t0, const Vec3Array& p
 /// cloth); its boxes are rebuilt (FCL's tree refitted) only when it changed, not for every query.
 class TriangleBoxKey {
  public:
-  /// True when `cloth` (both position sets, triangles) equals, bit for bit, that of the last call that
-  /// returned false; else remembers it and returns false.
+  /// True when `cloth` (both position sets, triangles) equals that of the last call that returned false
+  /// (coordinates compared with ==, so a NaN always differs; the same bytes always equal); else remembers
+  /// it and returns false.
   /// @param moved  when not null and the result is false: M flags, set for the nodes whose position at either
   ///        end differs from the remembered one (all of them when the node count or the triangles changed,
   ///        or on the first call)
