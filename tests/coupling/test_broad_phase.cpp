@@ -9,6 +9,7 @@
 
 #include <drench/common/parallel.hpp>
 #include <drench/coupling/broad_phase.hpp>
+#include <drench/coupling/coupler_stages.hpp>
 #include "coupling_fixtures.hpp"
 
 namespace drench {
@@ -163,6 +164,77 @@ TEST(BroadPhase, GridRebinningOnlyTrianglesThatChangeCellsMatchesBruteForce) {
       for (Vec3& x : mesh.positions_t1)
         x += 0.002 * Vec3(u(rng), u(rng), u(rng));
       check("every node moved by up to 2 mm");
+    }
+  }
+}
+
+// The CCD rounds keep every pair of the motion and bring it up to date from the particles that can be in a
+// changed pair (coupling_detail::update_pairs) instead of asking for every particle again: after impulses
+// (a particle and its triangle's nodes move), fail-safe placements (particles only), impact-zone node moves
+// (every end position of a second sheet lifted by 5 cm, then put back)
+// and a round without a change, the kept set must be exactly the brute-force set of the current motion.
+TEST(BroadPhase, UpdatedPairsEqualAFullQueryAfterEveryKindOfChange) {
+  std::mt19937_64 rng(23);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  const double dt = 0.003;
+  test::Particles particles;
+  for (int k = 0; k < 3000; ++k)
+    particles.add(Vec3(0.4 * u(rng) + 0.35, 0.005 * u(rng), 0.35 * u(rng) + 0.15),
+                  Vec3(u(rng), 3.0 * u(rng), u(rng)), dt, 1e-4);
+  // Two sheets side by side, x in [0, 0.3] and [0.4, 0.7].
+  ClothMesh mesh = test::grid_mesh(21, 0.3, 0.0, 1.0);
+  const ClothMesh second = test::grid_mesh(21, 0.3, 0.0, 1.0, 0.4);
+  const auto first_nodes = static_cast<Index>(mesh.node_count());
+  mesh.positions_t0.insert(mesh.positions_t0.end(), second.positions_t0.begin(), second.positions_t0.end());
+  mesh.positions_t1.insert(mesh.positions_t1.end(), second.positions_t1.begin(), second.positions_t1.end());
+  mesh.inverse_masses.insert(mesh.inverse_masses.end(), second.inverse_masses.begin(),
+                             second.inverse_masses.end());
+  for (Triangle t : second.triangles) {
+    for (Index& v : t)
+      v += first_nodes;
+    mesh.triangles.push_back(t);
+  }
+  for (std::size_t i = 0; i < mesh.node_count(); i += 7)
+    mesh.inverse_masses[i] = 0.0;  // some static nodes: an impulse leaves them where they are
+  const FluidView view = particles.view();
+  CouplingStepStats stats;
+  Vec3Array node_impulses(mesh.node_count(), Vec3::Zero());
+  coupling_detail::StepContext ctx(view, mesh, dt, stats, node_impulses, nullptr);
+  for (BroadPhaseKind kind : {BroadPhaseKind::GRID, BroadPhaseKind::FCL}) {
+    const std::unique_ptr<TriangleBroadPhase> broad_phase = make_broad_phase(kind);
+    std::vector<std::pair<Index, Index>> all, fresh, merged, expected, before;
+    std::vector<std::uint8_t> only;
+    ctx.clear_changes();
+    broad_phase->find_pairs(particles.x0, particles.x1, mesh, 0.0, nullptr, all);
+    const auto random_index = [&](std::size_t n) { return static_cast<Index>(rng() % n); };
+    for (int round = 0; round < 8; ++round) {
+      find_pairs_brute_force(particles.x0, particles.x1, mesh, 0.0, before);
+      const int kind_of_change = round % 4;
+      for (int k = 0; k < 30 && kind_of_change < 2; ++k) {
+        const Index p = random_index(particles.x0.size());
+        const Index t = random_index(mesh.triangles.size());
+        const Vec3 w(0.2, 0.3, 0.5);
+        if (kind_of_change == 0) {
+          ctx.apply(p, t, w, 1e-3 * Vec3(u(rng), u(rng), u(rng)));  // a particle moves by up to 3 cm
+        } else {
+          ctx.place(p, particles.x0[p] + 0.01 * Vec3(u(rng), u(rng), u(rng)), t, w);
+        }
+      }
+      if (kind_of_change == 2) {
+        const double lift = round < 4 ? 0.05 : -0.05;
+        for (Index i = first_nodes; i < mesh.node_count(); ++i)
+          ctx.move_node(i, mesh.positions_t1[i] + Vec3(0.0, lift, 0.0));
+      }
+      coupling_detail::update_pairs(ctx, *broad_phase, only, fresh, all, merged);
+      ctx.clear_changes();
+      find_pairs_brute_force(particles.x0, particles.x1, mesh, 0.0, expected);
+      ASSERT_GT(expected.size(), 100u);
+      if (kind_of_change != 3) {
+        EXPECT_NE(expected, before) << "round " << round << ": the change must matter";
+      }
+      EXPECT_EQ(all, expected) << "round " << round << ", broad phase " << static_cast<int>(kind);
+      for (const auto& pair : fresh)
+        EXPECT_TRUE(only[pair.first]) << "round " << round << ": a pair of an unmarked particle";
     }
   }
 }

@@ -60,11 +60,17 @@ class FclBroadPhase final : public TriangleBroadPhase {
     if (!m_built_for.same_as_last(cloth)) update_tree(cloth);
 
     collect_pairs(
-        particles_t0, particles_t1, margin, only, m_boxes,
-        [&](const Box3& box, std::vector<Index>& candidates) {
+        particles_t0, particles_t1, margin, only,
+        [&](const Box3& box, std::vector<Index>& hits) {
           thread_local BoxObject query;  // one FCL object per thread, reused
+          thread_local std::vector<Index> candidates;
           query.set(box);
+          candidates.clear();
           m_manager.collide(query.object(), &candidates, collect_triangle);
+          // FCL only proposes: the same exact test as the grid decides.
+          for (Index t : candidates) {
+            if (box.overlaps(m_boxes[t])) hits.push_back(t);
+          }
         },
         pairs);
   }

@@ -2,6 +2,7 @@
 // the corrected motion, an inelastic impulse at each particle's earliest impact, and the fail-safe.
 // resolve_ccd is declared and documented in coupler_stages.hpp.
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <utility>
@@ -107,10 +108,14 @@ void resolve_impact(StepContext& ctx, Index p, const Impact& impact, double thic
 /// particle's change of momentum goes to its triangle's nodes (StepContext::place); a kinematic node's is
 /// lost, which the counters report. A crossing stays only where a member cannot follow its zone (a pinned
 /// node moved by its engine).
-/// @param pairs, impacts  scratch; impacts holds the fail-safe's leftover impacts on entry
+/// @param all  every pair of the motion on entry (update_pairs), kept so
+/// @param only, fresh, merged  scratch
+/// @param impacts  the fail-safe's leftover impacts on entry; scratch
 /// @return COUPLING_ZONES_STOPPED, with COUPLING_UNRESOLVED when an impact remained (named in `unresolved`)
 std::uint32_t move_impact_zones(StepContext& ctx, TriangleBroadPhase& broad_phase,
-                                std::vector<std::pair<Index, Index>>& pairs,
+                                std::vector<std::uint8_t>& only, std::vector<std::pair<Index, Index>>& fresh,
+                                std::vector<std::pair<Index, Index>>& all,
+                                std::vector<std::pair<Index, Index>>& merged,
                                 std::vector<std::pair<Index, Impact>>& impacts,
                                 std::pair<std::int64_t, std::int64_t>* unresolved) {
   ClothMesh& cloth = ctx.cloth();
@@ -194,11 +199,12 @@ std::uint32_t move_impact_zones(StepContext& ctx, TriangleBroadPhase& broad_phas
       if (e < n) {
         ctx.place(static_cast<Index>(e), ctx.x0()[e] + displacement, link[k].first, link[k].second);
       } else {
-        cloth.positions_t1[e - n] = cloth.positions_t0[e - n] + displacement;
+        ctx.move_node(static_cast<Index>(e - n), cloth.positions_t0[e - n] + displacement);
       }
     }
-    broad_phase.find_pairs(ctx.x0(), ctx.x1(), cloth, 0.0, nullptr, pairs);
-    find_impacts(ctx, pairs, impacts);
+    update_pairs(ctx, broad_phase, only, fresh, all, merged);
+    ctx.clear_changes();
+    find_impacts(ctx, all, impacts);
   }
   if (impacts.empty()) return COUPLING_ZONES_STOPPED;
   if (unresolved) *unresolved = {impacts.front().first, impacts.front().second.triangle};
@@ -207,7 +213,31 @@ std::uint32_t move_impact_zones(StepContext& ctx, TriangleBroadPhase& broad_phas
 
 }  // namespace
 
+void update_pairs(StepContext& ctx, TriangleBroadPhase& broad_phase, std::vector<std::uint8_t>& only,
+                  std::vector<std::pair<Index, Index>>& fresh, std::vector<std::pair<Index, Index>>& all,
+                  std::vector<std::pair<Index, Index>>& merged) {
+  ctx.mark_changed_candidates(only);
+  broad_phase.find_pairs(ctx.x0(), ctx.x1(), ctx.cloth(), 0.0, &only, fresh);
+  merged.clear();
+  merged.reserve(all.size() + fresh.size());
+  auto next = fresh.begin();
+  for (const auto& pair : all) {
+    if (only[pair.first]) continue;
+    for (; next != fresh.end() && next->first < pair.first; ++next)
+      merged.push_back(*next);
+    if (!ctx.pair_changed(pair.first, pair.second)) merged.push_back(pair);
+  }
+  merged.insert(merged.end(), next, fresh.end());
+  all.swap(merged);
+}
+
 void StepContext::mark_changed_candidates(std::vector<std::uint8_t>& only) const {
+  // Most rounds change no node (the fail-safe moves particles only, an impulse on a static face moves
+  // nothing): then only the changed particles are marked, without a look at every triangle and particle.
+  if (std::find(m_node_changed.begin(), m_node_changed.end(), std::uint8_t{1}) == m_node_changed.end()) {
+    only = m_particle_changed;
+    return;
+  }
   Box3 changed_triangles;
   for (std::size_t t = 0; t < m_cloth.triangles.size(); ++t) {
     const Triangle& tri = m_cloth.triangles[t];
@@ -236,26 +266,27 @@ std::uint32_t resolve_ccd(StepContext& ctx, TriangleBroadPhase& broad_phase, con
   ClothMesh& cloth = ctx.cloth();
   CouplingStepStats& stats = ctx.stats();
   const double thickness = settings.cloth_thickness;
-  std::vector<std::pair<Index, Index>> pairs;
+  std::vector<std::pair<Index, Index>> all;    // every pair of the motion at the last query
+  std::vector<std::pair<Index, Index>> pairs;  // the pairs a round queries
+  std::vector<std::pair<Index, Index>> merged;
   std::vector<std::pair<Index, Impact>> impacts;
-  std::vector<std::pair<Index, Index>> changed;
   std::vector<std::uint8_t> only;
   for (int iteration = 0; iteration <= settings.max_ccd_iterations; ++iteration) {
     // Repulsion changed the motion, so the first round checks every pair; after it, only pairs whose motion
     // changed in the previous round can have a new impact, so the broad phase is asked only for the particles
     // that can be in one, and only the changed pairs are queried.
-    if (iteration > 0) ctx.mark_changed_candidates(only);
-    broad_phase.find_pairs(ctx.x0(), ctx.x1(), cloth, 0.0, iteration > 0 ? &only : nullptr, pairs);
-    if (iteration > 0) {
-      changed.clear();
-      for (const auto& pair : pairs) {
-        if (ctx.pair_changed(pair.first, pair.second)) changed.push_back(pair);
-      }
-      pairs.swap(changed);
+    if (iteration == 0) {
+      broad_phase.find_pairs(ctx.x0(), ctx.x1(), cloth, 0.0, nullptr, all);
+    } else {
+      update_pairs(ctx, broad_phase, only, pairs, all, merged);
+      pairs.erase(
+          std::remove_if(pairs.begin(), pairs.end(),
+                         [&](const auto& pair) { return !ctx.pair_changed(pair.first, pair.second); }),
+          pairs.end());
     }
     ctx.clear_changes();
     ++stats.ccd_iterations;
-    find_impacts(ctx, pairs, impacts);
+    find_impacts(ctx, iteration == 0 ? all : pairs, impacts);
     if (impacts.empty()) break;
     if (iteration == settings.max_ccd_iterations) {
       // Fail-safe: the particle follows its triangle's contact point over the step, so that triangle cannot
@@ -270,9 +301,11 @@ std::uint32_t resolve_ccd(StepContext& ctx, TriangleBroadPhase& broad_phase, con
         ctx.place(p, ctx.x0()[p] + shift, impact.triangle, w);
         ++stats.failsafe_activations;
       }
-      broad_phase.find_pairs(ctx.x0(), ctx.x1(), cloth, 0.0, nullptr, pairs);
-      find_impacts(ctx, pairs, impacts);
-      if (!impacts.empty()) status |= move_impact_zones(ctx, broad_phase, pairs, impacts, unresolved);
+      update_pairs(ctx, broad_phase, only, pairs, all, merged);
+      ctx.clear_changes();
+      find_impacts(ctx, all, impacts);
+      if (!impacts.empty())
+        status |= move_impact_zones(ctx, broad_phase, only, pairs, all, merged, impacts, unresolved);
       break;
     }
     stats.ccd_impacts += impacts.size();

@@ -118,6 +118,12 @@ class StepContext {
     m_stats.vertical_impulse_on_cloth -= impulse.y();
   }
 
+  /// Sets node i's end position (an impact zone's move), marked as a change like apply()'s.
+  void move_node(Index i, const Vec3& x_t1) {
+    m_cloth.positions_t1[i] = x_t1;
+    m_node_changed[i] = 1;
+  }
+
   ccd::VertexFaceQuery query(Index p, Index t) const {
     const Triangle& tri = triangle(t);
     const Vec3Array& c0 = m_cloth.positions_t0;
@@ -208,6 +214,21 @@ void apply_friction(StepContext& ctx, std::vector<Contact>& contacts, const Coup
 ///        stands for it
 void adhere(StepContext& ctx, TriangleBroadPhase& broad_phase, const AdhesionSettings& settings,
             double thickness);
+
+/// Brings `all`, every pair of the motion as it was at the last clear_changes(), to the current motion:
+/// the broad phase is asked only for the particles mark_changed_candidates marks, whose pairs (`fresh`)
+/// replace theirs; an unmarked particle keeps its pairs with unchanged triangles and has none with a
+/// changed one (its box misses all of theirs). So `all` is exactly what a query of every particle would
+/// give, in the same order, at the cost of a query of the few marked ones: the fail-safe's and the impact
+/// zones' rounds asked for every particle again, four queries of the whole fluid per step in issue 41's
+/// level.
+/// @param all  every pair of the motion at the last clear_changes() (a query of every particle with margin 0,
+///        sorted by particle, then triangle), brought to the current motion
+/// @param fresh  output, replaced: the pairs of the marked particles (mark_changed_candidates)
+/// @param only, merged  scratch
+void update_pairs(StepContext& ctx, TriangleBroadPhase& broad_phase, std::vector<std::uint8_t>& only,
+                  std::vector<std::pair<Index, Index>>& fresh, std::vector<std::pair<Index, Index>>& all,
+                  std::vector<std::pair<Index, Index>>& merged);
 
 /// Continuous intersection handling (sec. 3.3, continuous_handling.cpp) on the motion the earlier stages
 /// corrected: rounds of point-triangle CCD (eq. 5-6) and an inelastic impulse at each particle's earliest
