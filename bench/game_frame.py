@@ -3,9 +3,10 @@
 
     python3 bench/game_frame.py --bench build-bench/bench/bench_game_frame \
         --out bench/results/debian12-2core/game_frame.csv [--frames 600] [--warmup 60] [--solvers dfsph,pcisph,pbf]
-        [--busy N]
+        [--busy N] [--rounds N]
 
-Runs bench/bench_game_frame.cpp once (Google Benchmark, JSON output): demos/bullet_playground's level (a hammock,
+Runs bench/bench_game_frame.cpp once, or --rounds times one after another (a `round` column tells them apart)
+(Google Benchmark, JSON output): demos/bullet_playground's level (a hammock,
 a curtain, two balls, a crate, two jets of 1 cm particles, wetting), one coupled step of 1/60 s per frame, for
 each solver with drench on 1 thread and on its default (the CPUs), alone and beside one busy thread per CPU
 (--busy: that many instead).
@@ -30,7 +31,7 @@ sys.path.insert(0, str(ROOT / "bench"))
 from bench_surface import commit, cpu_model, write_csv  # noqa: E402  (the same provenance lines as the other CSVs)
 
 STAGES = ["emit", "fluid", "cloth", "rigid", "coupling", "other", "total"]
-DEFAULTS = {"frames": 600, "warmup": 60, "solvers": "dfsph,pcisph,pbf", "busy": 0}
+DEFAULTS = {"frames": 600, "warmup": 60, "solvers": "dfsph,pcisph,pbf", "busy": 0, "rounds": 1}
 
 
 def row_of(benchmark, blow_ups):
@@ -82,9 +83,26 @@ def main():
     parser.add_argument("--busy", type=int, default=DEFAULTS["busy"],
                         help="spinning threads beside drench in the busy condition (0: one per CPU)")
     parser.add_argument("--filter", help="--benchmark_filter for the binary (a regex over the names)")
+    parser.add_argument("--rounds", type=int, default=DEFAULTS["rounds"],
+                        help="runs of the whole set, one after another (a ratio near 1 needs its spread)")
     parser.add_argument("--out", required=True, help="CSV to write")
     args = parser.parse_args()
     load_before = " ".join(f"{x:.2f}" for x in os.getloadavg())
+    rows = []
+    for round_ in range(args.rounds):
+        rows += [dict(r, round=round_) for r in run_once(args)]
+    load_after = " ".join(f"{x:.2f}" for x in os.getloadavg())
+    keys = list(max(rows, key=len))  # a failed benchmark's row has fewer keys; its other cells stay empty
+    rows = [{key: r.get(key, "") for key in keys} for r in rows]
+    options = "".join(f" --{key} {getattr(args, key)}" for key in DEFAULTS if getattr(args, key) != DEFAULTS[key])
+    if args.filter:
+        options += f" --filter '{args.filter}'"
+    write_csv(args.out, rows, [f"command: python3 bench/game_frame.py{options}", f"commit: {commit()}",
+                               f"cpu: {cpu_model()}", f"load_before: {load_before}", f"load_after: {load_after}"])
+
+
+def run_once(args):
+    """One run of the binary over the benchmarks args selects: their rows."""
     with tempfile.TemporaryDirectory() as scratch:
         out = Path(scratch) / "game_frame.json"
         command = [args.bench, "--frames", str(args.frames), "--warmup", str(args.warmup), "--solvers",
@@ -105,17 +123,10 @@ def main():
         if process.returncode != 0:
             raise SystemExit(f"{' '.join(command)}: exit {process.returncode}")
         report = json.loads(out.read_text())
-    load_after = " ".join(f"{x:.2f}" for x in os.getloadavg())
     rows = [row_of(b, blow_ups) for b in report["benchmarks"]]
     if not rows:
         raise SystemExit(f"{' '.join(command)}: no benchmark ran (filter {args.filter!r}?)")
-    keys = list(max(rows, key=len))  # a failed benchmark's row has fewer keys; its other cells stay empty
-    rows = [{key: r.get(key, "") for key in keys} for r in rows]
-    options = "".join(f" --{key} {getattr(args, key)}" for key in DEFAULTS if getattr(args, key) != DEFAULTS[key])
-    if args.filter:
-        options += f" --filter '{args.filter}'"
-    write_csv(args.out, rows, [f"command: python3 bench/game_frame.py{options}", f"commit: {commit()}",
-                               f"cpu: {cpu_model()}", f"load_before: {load_before}", f"load_after: {load_after}"])
+    return rows
 
 
 if __name__ == "__main__":
