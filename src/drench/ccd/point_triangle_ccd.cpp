@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <optional>
 #include <string>
 
 #include <drench/ccd/ccd_exact_reference.hpp>
@@ -409,6 +410,36 @@ Verdict classify(const Span& s) {
   return Verdict::UNDECIDED;
 }
 
+/// Walks the spans of `root` depth-first, left half first, so in time order: skips the spans classify
+/// certifies free of contact, and returns on_contact(span) at the first it certifies a contact in, or
+/// on_undecided(span) at the first it cannot split further (over `budget` splits, kMaxDepth, or a midpoint
+/// that does not split exactly); nullopt when every span is free. The stack holds at most one pending right
+/// half per level, so its size bounds the depth.
+template <class OnContact, class OnUndecided>
+auto walk_spans(const Span& root, int budget, OnContact on_contact, OnUndecided on_undecided)
+    -> std::optional<decltype(on_contact(root))> {
+  std::array<Span, kMaxDepth + 1> stack;
+  std::array<int, kMaxDepth + 1> depth;
+  int top = 0;
+  stack[top] = root;
+  depth[top++] = 0;
+  for (int splits = 0; top > 0;) {
+    --top;
+    const Verdict verdict = classify(stack[top]);
+    if (verdict == Verdict::NO_CONTACT) continue;
+    if (verdict == Verdict::CONTACT) return on_contact(stack[top]);
+    const Span s = stack[top];
+    const int d = depth[top];
+    if (++splits > budget || d >= kMaxDepth || !exact_split(s.t_lo, 0.5 * (s.t_lo + s.t_hi), s.t_hi, 0.5)) {
+      return on_undecided(s);
+    }
+    s.split(stack[top + 1], stack[top]);  // right half below, left half on top
+    depth[top++] = d + 1;
+    depth[top++] = d + 1;
+  }
+  return std::nullopt;
+}
+
 Vec3 at(const Vec3& x_t0, const Vec3& x_t1, double t) {
   return (1.0 - t) * x_t0 + t * x_t1;
 }
@@ -595,29 +626,12 @@ CcdResult point_triangle_ccd(const VertexFaceQuery& query, const CcdSettings& se
     root.f = deflate(root.f, at_end);
   }
 
-  // Depth-first, left half first, so intervals are visited in time order. The stack holds at most one pending
-  // right half per level, so its size bounds the depth.
-  const int budget = std::max(settings.max_filter_intervals, 1);
-  std::array<Span, kMaxDepth + 1> stack;
-  std::array<int, kMaxDepth + 1> depth;
-  int top = 0;
-  stack[top] = root;
-  depth[top++] = 0;
-  for (int splits = 0; top > 0;) {
-    --top;
-    const Verdict verdict = classify(stack[top]);
-    if (verdict == Verdict::NO_CONTACT) continue;
-    if (verdict == Verdict::CONTACT) return earliest_root(query, stack[top], settings);
-    const Span s = stack[top];
-    const int d = depth[top];
-    const double mid = 0.5 * (s.t_lo + s.t_hi);
-    if (++splits > budget || d >= kMaxDepth || !exact_split(s.t_lo, mid, s.t_hi, 0.5)) {
-      return exact_from(query, s.t_lo, settings);
-    }
-    s.split(stack[top + 1], stack[top]);  // right half below, left half on top
-    depth[top++] = d + 1;
-    depth[top++] = d + 1;
-  }
+  // In time order, so the first contact certified is the earliest: everything to its left was skipped.
+  const std::optional<CcdResult> found = walk_spans(
+      root, std::max(settings.max_filter_intervals, 1),
+      [&](const Span& s) { return earliest_root(query, s, settings); },
+      [&](const Span& s) { return exact_from(query, s.t_lo, settings); });
+  if (found) return *found;
   if (contact_at_end) return contact_at(query, 1.0, CcdPath::FILTER);
   if (undecided_at_end) return exact_from(query, 1.0, settings);
   return CcdResult{};
@@ -736,27 +750,10 @@ bool transversal_crossing(const VertexFaceQuery& query, CcdPath* path) {
   // ends, so it has a root of odd multiplicity strictly inside (0, 1), and there the point is strictly inside
   // a face of nonzero area. Spans certified free of contact hold none. The order does not matter; the budget
   // is point_triangle_ccd's.
-  const int budget = CcdSettings{}.max_filter_intervals;
-  std::array<Span, kMaxDepth + 1> stack;
-  std::array<int, kMaxDepth + 1> depth;
-  int top = 0;
-  stack[top] = root;
-  depth[top++] = 0;
-  for (int splits = 0; top > 0;) {
-    --top;
-    const Verdict verdict = classify(stack[top]);
-    if (verdict == Verdict::NO_CONTACT) continue;
-    if (verdict == Verdict::CONTACT) return true;
-    const Span s = stack[top];
-    const int d = depth[top];
-    if (++splits > budget || d >= kMaxDepth || !exact_split(s.t_lo, 0.5 * (s.t_lo + s.t_hi), s.t_hi, 0.5)) {
-      return exact();
-    }
-    s.split(stack[top + 1], stack[top]);
-    depth[top++] = d + 1;
-    depth[top++] = d + 1;
-  }
-  return false;
+  return walk_spans(
+             root, CcdSettings{}.max_filter_intervals, [](const Span&) { return true; },
+             [&](const Span&) { return exact(); })
+      .value_or(false);
 }
 
 }  // namespace drench::ccd
