@@ -13,6 +13,16 @@ namespace {
 
 using test::grid_mesh;
 
+/// One still triangle with legs of 1 m along x and z, in the plane y = 0.
+ClothMesh still_right_triangle() {
+  ClothMesh mesh;
+  mesh.positions_t0 = {Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 0, 1)};
+  mesh.positions_t1 = mesh.positions_t0;
+  mesh.inverse_masses = {0, 0, 0};
+  mesh.triangles = {{0, 1, 2}};
+  return mesh;
+}
+
 std::uint64_t leaks_of(const Vec3& start, const Vec3& end, const ClothMesh& mesh) {
   LeakAuditStats stats;
   return audit_leaks(Vec3Array{start}, Vec3Array{end}, mesh, stats);
@@ -141,11 +151,7 @@ TEST(LeakAudit, CountsACrossingThroughAMovingTriangle) {
 // still and tilting: no leak, decided without the exact reference (the in-plane edge test); through the
 // triangle it is still one leak.
 TEST(LeakAudit, DecidesACrossingBesideTheTriangleWithoutTheExactReference) {
-  ClothMesh mesh;
-  mesh.positions_t0 = {Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 0, 1)};
-  mesh.positions_t1 = mesh.positions_t0;
-  mesh.inverse_masses = {0, 0, 0};
-  mesh.triangles = {{0, 1, 2}};
+  ClothMesh mesh = still_right_triangle();
   for (double tilt : {0.0, 0.02}) {
     mesh.positions_t1[2].y() = tilt;
     LeakAuditStats beside;
@@ -164,11 +170,7 @@ TEST(LeakAudit, DecidesACrossingBesideTheTriangleWithoutTheExactReference) {
 // beside it, and one crossing the triangle on a slant: the audit's own tests decide neither (no one edge has
 // the particle beyond it at both ends), the CCD filter decides both, without the exact reference.
 TEST(LeakAudit, DecidesSlantingPathsWithoutTheExactReference) {
-  ClothMesh mesh;
-  mesh.positions_t0 = {Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 0, 1)};
-  mesh.positions_t1 = mesh.positions_t0;
-  mesh.inverse_masses = {0, 0, 0};
-  mesh.triangles = {{0, 1, 2}};
+  ClothMesh mesh = still_right_triangle();
   for (double tilt : {0.0, 0.02}) {
     mesh.positions_t1[2].y() = tilt;
     // Past the corner at (1, 0, 0): in the plane near t = 5/12 at z < 0.
