@@ -156,9 +156,8 @@ void LeakAudit::update_grid(const ClothMesh& cloth) {
     // A box with a NaN has a NaN range, which never equals itself: always filed again (as oversized, where
     // no test passes).
     if ((range.lo == m_ranges[t].lo).all() && (range.hi == m_ranges[t].hi).all()) continue;
-    unfile(static_cast<Index>(t), m_ranges[t]);
+    refile(static_cast<Index>(t), m_ranges[t], range);
     m_ranges[t] = range;
-    file(static_cast<Index>(t), range);
   }
 }
 
@@ -166,11 +165,15 @@ LeakAudit::CellRange LeakAudit::cell_range(const Bounds& box) const {
   return {(box.lo / m_cell).array().floor(), (box.hi / m_cell).array().floor()};
 }
 
+bool LeakAudit::oversized(const CellRange& range) {
+  // `!(... <= ...)` also holds for a box with a NaN, where its bounds test never passes.
+  return !((range.hi - range.lo + 1.0).prod() <= 4096.0);
+}
+
 void LeakAudit::file(Index t, const CellRange& range) {
   const Eigen::Array3d& lo = range.lo;
   const Eigen::Array3d& hi = range.hi;
-  // `!(... <= ...)` also sends a box with a NaN here, where its bounds test never passes.
-  if (!((hi - lo + 1.0).prod() <= 4096.0)) {
+  if (oversized(range)) {
     m_oversized.insert(std::upper_bound(m_oversized.begin(), m_oversized.end(), t), t);
     return;
   }
@@ -183,7 +186,7 @@ void LeakAudit::file(Index t, const CellRange& range) {
 void LeakAudit::unfile(Index t, const CellRange& range) {
   const Eigen::Array3d& lo = range.lo;
   const Eigen::Array3d& hi = range.hi;
-  if (!((hi - lo + 1.0).prod() <= 4096.0)) {
+  if (oversized(range)) {
     m_oversized.erase(std::lower_bound(m_oversized.begin(), m_oversized.end(), t));
     return;
   }
@@ -191,6 +194,29 @@ void LeakAudit::unfile(Index t, const CellRange& range) {
     for (double y = lo[1]; y <= hi[1]; y += 1.0)
       for (double x = lo[0]; x <= hi[0]; x += 1.0)
         m_grid.remove(cell_key(Eigen::Array3d(x, y, z)), t);
+}
+
+void LeakAudit::refile(Index t, const CellRange& from, const CellRange& to) {
+  if (oversized(from) || oversized(to)) {
+    unfile(t, from);
+    file(t, to);
+    return;
+  }
+  // Visits the keys of the cells of `range` that `other` does not cover.
+  const auto for_cells_outside = [](const CellRange& range, const CellRange& other, const auto& visit) {
+    const auto inside = [&](double c, int axis) { return c >= other.lo[axis] && c <= other.hi[axis]; };
+    for (double z = range.lo[2]; z <= range.hi[2]; z += 1.0) {
+      const bool z_inside = inside(z, 2);
+      for (double y = range.lo[1]; y <= range.hi[1]; y += 1.0) {
+        const bool yz_inside = z_inside && inside(y, 1);
+        for (double x = range.lo[0]; x <= range.hi[0]; x += 1.0) {
+          if (!(yz_inside && inside(x, 0))) visit(cell_key(Eigen::Array3d(x, y, z)));
+        }
+      }
+    }
+  };
+  for_cells_outside(from, to, [&](std::uint64_t key) { m_grid.remove(key, t); });
+  for_cells_outside(to, from, [&](std::uint64_t key) { m_grid.add(key, t); });
 }
 
 std::uint64_t LeakAudit::audit(const Vec3Array& particles_t0, const Vec3Array& particles_t1,
