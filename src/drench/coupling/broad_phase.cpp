@@ -110,13 +110,30 @@ class GridBroadPhase final : public TriangleBroadPhase {
     m_boxes.resize(f);
     m_extents.resize(f);
     m_face_moved.assign(f, 0);
+    // Each moved node's box over the step once, and a face's box as the union of its nodes' boxes: a node
+    // is in about six faces, and the six-point box of every moved face was most of this update (issue 41).
+    // The same box as triangle_box(cloth, t, 0): min and max do not round, and both drop a NaN coordinate.
+    const std::size_t m = cloth.positions_t0.size();
+    m_node_boxes.resize(m);
+    for (std::size_t v = 0; v < m; ++v) {
+      if (!all_faces && !m_moved[v]) continue;
+      Box3 box;
+      box.extend(cloth.positions_t0[v]);
+      box.extend(cloth.positions_t1[v]);
+      m_node_boxes[v] = box;
+    }
     double extent_sum = 0.0;
     for (std::size_t t = 0; t < f; ++t) {
       const Triangle& tri = cloth.triangles[t];
       if (all_faces || m_moved[tri[0]] || m_moved[tri[1]] || m_moved[tri[2]]) {
         m_face_moved[t] = 1;
-        m_boxes[t] = triangle_box(cloth, tri, 0.0);
-        m_extents[t] = (m_boxes[t].hi - m_boxes[t].lo).maxCoeff();
+        const Box3& a = m_node_boxes[tri[0]];
+        const Box3& b = m_node_boxes[tri[1]];
+        const Box3& c = m_node_boxes[tri[2]];
+        Box3& box = m_boxes[t];
+        box.lo = a.lo.cwiseMin(b.lo).cwiseMin(c.lo);
+        box.hi = a.hi.cwiseMax(b.hi).cwiseMax(c.hi);
+        m_extents[t] = (box.hi - box.lo).maxCoeff();
       }
       extent_sum += m_extents[t];
     }
@@ -215,6 +232,7 @@ class GridBroadPhase final : public TriangleBroadPhase {
   double m_cell = 1.0;
   double m_inverse_cell = 1.0;             // 1 / m_cell (unit: 1/m)
   std::vector<Box3> m_boxes;               // F, each triangle's current box (the exact test's)
+  std::vector<Box3> m_node_boxes;          // M, each node's box over the step (moved nodes' updated)
   std::vector<CellRange> m_ranges;         // F, the cells each triangle is binned in
   std::vector<double> m_extents;           // F, each triangle's box's largest extent (unit: m)
   std::vector<std::uint8_t> m_moved;       // M, the nodes that moved since the last update (m_built_for)
