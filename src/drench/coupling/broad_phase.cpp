@@ -110,13 +110,30 @@ class GridBroadPhase final : public TriangleBroadPhase {
     m_boxes.resize(f);
     m_extents.resize(f);
     m_face_moved.assign(f, 0);
+    // Each moved node's box over the step once, and a face's box as the union of its nodes' boxes: a node
+    // is in about six faces, and the six-point box of every moved face was most of this update (issue 41).
+    // The same box as triangle_box(cloth, t, 0): min and max do not round, and both drop a NaN coordinate.
+    const std::size_t m = cloth.positions_t0.size();
+    m_node_boxes.resize(m);
+    for (std::size_t v = 0; v < m; ++v) {
+      if (!all_faces && !m_moved[v]) continue;
+      Box3 box;
+      box.extend(cloth.positions_t0[v]);
+      box.extend(cloth.positions_t1[v]);
+      m_node_boxes[v] = box;
+    }
     double extent_sum = 0.0;
     for (std::size_t t = 0; t < f; ++t) {
       const Triangle& tri = cloth.triangles[t];
       if (all_faces || m_moved[tri[0]] || m_moved[tri[1]] || m_moved[tri[2]]) {
         m_face_moved[t] = 1;
-        m_boxes[t] = triangle_box(cloth, tri, 0.0);
-        m_extents[t] = (m_boxes[t].hi - m_boxes[t].lo).maxCoeff();
+        const Box3& a = m_node_boxes[tri[0]];
+        const Box3& b = m_node_boxes[tri[1]];
+        const Box3& c = m_node_boxes[tri[2]];
+        Box3& box = m_boxes[t];
+        box.lo = a.lo.cwiseMin(b.lo).cwiseMin(c.lo);
+        box.hi = a.hi.cwiseMax(b.hi).cwiseMax(c.hi);
+        m_extents[t] = (box.hi - box.lo).maxCoeff();
       }
       extent_sum += m_extents[t];
     }
@@ -142,10 +159,22 @@ class GridBroadPhase final : public TriangleBroadPhase {
       if (!m_face_moved[t]) continue;
       const CellRange range = cell_range(m_boxes[t]);
       if (range == m_ranges[t]) continue;
-      unfile(static_cast<Index>(t), m_ranges[t]);
+      refile(static_cast<Index>(t), m_ranges[t], range);
       m_ranges[t] = range;
-      file(static_cast<Index>(t), range);
     }
+  }
+
+  /// Moves triangle t from the cells of `from` to those of `to`. Only the cells in one range and not the
+  /// other are touched: a box that slides into the next cells keeps most of its cells (half of them for a
+  /// box over 2 x 2 x 2 cells moving by one along an axis), and each cell touched costs a key lookup.
+  void refile(Index t, const CellRange& from, const CellRange& to) {
+    if (from.everywhere || to.everywhere) {
+      unfile(t, from);
+      file(t, to);
+      return;
+    }
+    for_cells_outside(from, to, [&](std::uint64_t key) { m_lists.remove(key, t); });
+    for_cells_outside(to, from, [&](std::uint64_t key) { m_lists.add(key, t); });
   }
 
   /// Adds triangle t to the lists of the cells of `range`, or to m_everywhere when they are too many.
@@ -173,6 +202,22 @@ class GridBroadPhase final : public TriangleBroadPhase {
     return true;
   }
 
+  /// Visits the keys of the cells of `range` that `other` does not cover. Precondition: neither is
+  /// `everywhere`.
+  template <class Visit>
+  static void for_cells_outside(const CellRange& range, const CellRange& other, Visit&& visit) {
+    const auto inside = [&](std::int64_t c, int axis) { return c >= other.lo[axis] && c <= other.hi[axis]; };
+    for (std::int64_t z = range.lo[2]; z <= range.hi[2]; ++z) {
+      const bool z_inside = inside(z, 2);
+      for (std::int64_t y = range.lo[1]; y <= range.hi[1]; ++y) {
+        const bool yz_inside = z_inside && inside(y, 1);
+        for (std::int64_t x = range.lo[0]; x <= range.hi[0]; ++x) {
+          if (!(yz_inside && inside(x, 0))) visit(key(x, y, z));
+        }
+      }
+    }
+  }
+
   static constexpr std::int64_t kMaxCellsPerBox = 4096;
   // Cell coordinates stay well inside std::int64_t and exact in a double.
   static constexpr double kMaxCellCoordinate = 1e12;
@@ -187,12 +232,14 @@ class GridBroadPhase final : public TriangleBroadPhase {
   double m_cell = 1.0;
   double m_inverse_cell = 1.0;             // 1 / m_cell (unit: 1/m)
   std::vector<Box3> m_boxes;               // F, each triangle's current box (the exact test's)
+  std::vector<Box3> m_node_boxes;          // M, each node's box over the step (moved nodes' updated)
   std::vector<CellRange> m_ranges;         // F, the cells each triangle is binned in
   std::vector<double> m_extents;           // F, each triangle's box's largest extent (unit: m)
   std::vector<std::uint8_t> m_moved;       // M, the nodes that moved since the last update (m_built_for)
   std::vector<std::uint8_t> m_face_moved;  // F, the triangles with such a node
-  CellLists<Index> m_lists;                // the triangles of each cell key, ascending
-  std::vector<Index> m_everywhere;         // the triangles over kMaxCellsPerBox cells, in no order
+  // The triangles of each cell key, in any order: collect_pairs sorts each particle's hits.
+  CellLists<Index, CellListOrder::ANY> m_lists;
+  std::vector<Index> m_everywhere;  // the triangles over kMaxCellsPerBox cells, in no order
   TriangleBoxKey m_built_for;
 };
 

@@ -64,6 +64,12 @@ class LeakAudit {
   void file(Index t, const CellRange& range);
   /// Takes triangle t out of where file(t, range) put it.
   void unfile(Index t, const CellRange& range);
+  /// Moves triangle t from where file(t, from) put it to where file(t, to) would, touching only the cells in
+  /// one range and not the other: a box sliding into the next cells keeps most of its cells, and the lists
+  /// (ascending) come out the same as unfile then file would leave them.
+  void refile(Index t, const CellRange& from, const CellRange& to);
+  /// True when `range` is over 4,096 cells or not finite: its triangle is tested by every particle.
+  static bool oversized(const CellRange& range);
 
   double m_cell = 0.0;                     // edge of the grid's cells (unit: m)
   TriangleBoxKey m_built_for;              // the mesh the grid was last brought to
