@@ -1,5 +1,6 @@
 // FluidSolver's fluid.max_speed: a particle over it stops the step before a sub-step, naming the particle,
-// where the CFL rule would otherwise cut the step into hundreds of sub-steps for that particle alone.
+// where the CFL rule would otherwise cut the step into hundreds of sub-steps for that particle alone. And a
+// moving boundary at rest kept (keep_moving_boundary) rather than set again.
 
 #include <gtest/gtest.h>
 
@@ -79,6 +80,56 @@ TEST(FluidSolver, AnInfiniteVelocityIsNonFiniteNotRunaway) {
   EXPECT_TRUE(status.flags & StepStatus::NON_FINITE_STATE);
   EXPECT_FALSE(status.flags & StepStatus::RUNAWAY_PARTICLE);
   EXPECT_EQ(status.non_finite_particle, static_cast<std::int64_t>(id));
+}
+
+TEST(FluidSolver, KeepingAMovingBoundaryAtRestGivesTheBitsOfSettingItAgain) {
+  // A block falling onto a body's floor of boundary points that does not move. Set again every step, its
+  // grid is rebuilt; kept, it is not, but the next search is fresh all the same: every solver (WCSPH keeps
+  // Verlet lists over sub-steps and steps) must reach the very same state, and the body the same impulses.
+  Vec3Array floor, normals;
+  ScalarArray volumes;
+  for (int i = -2; i < 8; ++i) {
+    for (int k = -2; k < 8; ++k) {
+      floor.push_back(Vec3((i + 0.5) * kSpacing, -0.6 * kSpacing, (k + 0.5) * kSpacing));
+      volumes.push_back(kSpacing * kSpacing * kSpacing);
+      normals.push_back(Vec3::UnitY());
+    }
+  }
+  for (const PressureSolverKind solver : {PressureSolverKind::WCSPH, PressureSolverKind::PCISPH,
+                                          PressureSolverKind::DFSPH, PressureSolverKind::PBF}) {
+    FluidSettings settings;
+    settings.particle_spacing = kSpacing;
+    settings.pressure_solver = solver;
+    const auto make = [&] {
+      FluidSolver fluid(settings, Vec3(0, -9.81, 0), BoundaryParticles{}, {}, false, 10.0);
+      BoxEmitterSettings box;
+      box.min = Vec3(0, 0.5 * kSpacing, 0);
+      box.max = Vec3(6 * kSpacing, 4.5 * kSpacing, 6 * kSpacing);
+      std::uint32_t next_id = 0;
+      emit_box(box, kSpacing, settings.rest_density * kSpacing * kSpacing * kSpacing, fluid.particles(),
+               next_id);
+      fluid.set_moving_boundary(floor, volumes, normals);
+      return fluid;
+    };
+    FluidSolver set_again = make(), kept = make();
+    Vec3 pushed = Vec3::Zero();
+    for (int step = 0; step < 20; ++step) {
+      set_again.set_moving_boundary(floor, volumes, normals);
+      kept.keep_moving_boundary();
+      ASSERT_TRUE(set_again.step(0.004).ok()) << pressure_solver_name(solver);
+      ASSERT_TRUE(kept.step(0.004).ok()) << pressure_solver_name(solver);
+      ASSERT_EQ(set_again.particles().positions, kept.particles().positions)
+          << pressure_solver_name(solver) << " step " << step;
+      ASSERT_EQ(set_again.particles().velocities, kept.particles().velocities)
+          << pressure_solver_name(solver);
+      ASSERT_EQ(set_again.moving_boundary_impulses(), kept.moving_boundary_impulses())
+          << pressure_solver_name(solver);
+      for (const Vec3& j : kept.moving_boundary_impulses())
+        pushed += j;
+    }
+    // The water lands on the floor and pushes it down: the comparison covered a boundary in use.
+    EXPECT_LT(pushed.y(), 0.0) << pressure_solver_name(solver);
+  }
 }
 
 }  // namespace

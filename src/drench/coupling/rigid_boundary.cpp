@@ -106,48 +106,64 @@ RigidBoundary::Body RigidBoundary::sample(const RigidSurface& surface) const {
   return body;
 }
 
-void RigidBoundary::place(const std::vector<RigidSurface>& surfaces, Vec3Array& positions,
-                          ScalarArray& volumes, Vec3Array& normals) {
-  positions.clear();
-  volumes.clear();
-  normals.clear();
+bool RigidBoundary::place(const std::vector<RigidSurface>& surfaces) {
   m_placed.assign(surfaces.size(), nullptr);
+  bool changed = false;
+  std::vector<std::uint64_t> keys;  // the dynamic bodies in order: their samples' layout
   std::unordered_set<std::uint64_t> seen;
   for (std::size_t s = 0; s < surfaces.size(); ++s) {
     const RigidSurface& surface = surfaces[s];
     if (surface.motion != RigidMotion::DYNAMIC) continue;
     seen.insert(surface.key);
+    keys.push_back(surface.key);
     auto it = m_bodies.find(surface.key);
     if (it == m_bodies.end() || it->second.nodes != surface.positions_t0.size() ||
         it->second.triangles != surface.triangles.size()) {
       it = m_bodies.insert_or_assign(surface.key, sample(surface)).first;
     }
-    const Body& body = it->second;
+    Body& body = it->second;
     m_placed[s] = &body;
     const Vec3Array& x = surface.positions_t0;
+    // Bit for bit where it was placed last (a body at rest, which its engine does not move): the same points.
+    // A NaN node compares unequal, so such a body is placed again and the fluid names it.
+    if (body.placed_at == x) continue;
+    changed = true;
+    body.placed_at = x;
     // One normal per face, not per sample: a face carries a dozen samples or more, and the cross product
     // and square root per sample were most of placing them (issue 41's profile). The same bits either way.
     m_face_normals.resize(surface.triangles.size());
     for (std::size_t f = 0; f < surface.triangles.size(); ++f)
       m_face_normals[f] = outward_normal(x, surface.triangles[f]);
-    const std::size_t first = positions.size();
-    positions.resize(first + body.samples.size());
-    volumes.resize(first + body.samples.size());
-    normals.resize(first + body.samples.size());
+    body.positions.resize(body.samples.size());
+    body.normals.resize(body.samples.size());
     for (std::size_t k = 0; k < body.samples.size(); ++k) {
       const Sample& sample = body.samples[k];
       const Triangle& t = surface.triangles[sample.triangle];
       const Vec3& n = m_face_normals[sample.triangle];
-      positions[first + k] = sample.weights[0] * x[t[0]] + sample.weights[1] * x[t[1]] +
-                             sample.weights[2] * x[t[2]] - m_inset * n;
-      volumes[first + k] = sample.volume;
-      normals[first + k] = n;
+      body.positions[k] = sample.weights[0] * x[t[0]] + sample.weights[1] * x[t[1]] +
+                          sample.weights[2] * x[t[2]] - m_inset * n;
+      body.normals[k] = n;
     }
   }
   // Bodies gone from the world: a new body at the same address is sampled afresh.
   for (auto it = m_bodies.begin(); it != m_bodies.end();) {
     it = seen.count(it->first) ? std::next(it) : m_bodies.erase(it);
   }
+  // A body that came, went or changed its place in the list changes the layout though none moved. (A body
+  // sampled afresh, if under a key seen before, has no placed_at yet: it counts as moved above.)
+  if (!changed && keys == m_placed_keys) return false;
+  m_placed_keys = std::move(keys);
+  m_positions.clear();
+  m_volumes.clear();
+  m_normals.clear();
+  for (const Body* body : m_placed) {
+    if (!body) continue;
+    m_positions.insert(m_positions.end(), body->positions.begin(), body->positions.end());
+    m_normals.insert(m_normals.end(), body->normals.begin(), body->normals.end());
+    for (const Sample& sample : body->samples)
+      m_volumes.push_back(sample.volume);
+  }
+  return true;
 }
 
 void RigidBoundary::spread(const std::vector<RigidSurface>& surfaces, const Vec3Array& sample_impulses,

@@ -27,18 +27,24 @@ class RigidBoundary {
   /// along its own face's normal), set inside the body by inset() so that the water's volume ends at the
   /// face, with Akinci et al. 2012 eq. 4's volume V_b = 1 / sum_k W_bk over the body's own samples. A body
   /// seen for the first time (or whose mesh changed) is sampled now; its samples are kept by key, in
-  /// barycentric weights, since the body is rigid.
-  /// @param positions, volumes, normals  out: B points (unit: m), volumes (unit: m^3) and the outward unit
-  ///        normals of their faces
-  void place(const std::vector<RigidSurface>& surfaces, Vec3Array& positions, ScalarArray& volumes,
-             Vec3Array& normals);
+  /// barycentric weights, since the body is rigid. Static and kinematic surfaces have none.
+  /// A body whose positions_t0 are those of its last placing keeps its placed samples: a body at rest (a
+  /// crate on a table, a sleeping ball) costs nothing, and the points are the same bits either way.
+  /// @return true when positions(), volumes() or normals() changed: a body moved, came or went
+  bool place(const std::vector<RigidSurface>& surfaces);
 
-  /// Adds the impulses on the samples of the last place() (B entries, unit: N s) to the nodes of their faces
-  /// by the samples' barycentric weights: node_impulses[first_node[s] + node] for surface s.
+  /// The samples of the last place(), body after body: B points (unit: m), their volumes (unit: m^3) and the
+  /// outward unit normals of their faces.
+  const Vec3Array& positions() const { return m_positions; }
+  const ScalarArray& volumes() const { return m_volumes; }
+  const Vec3Array& normals() const { return m_normals; }
+
   /// How far the samples sit inside the faces (unit: m): where a resting fluid's first layer, next to a plane
   /// of such samples, has the rest density, less half a spacing (0.60 spacings for the cubic spline).
   Scalar inset() const { return m_inset; }
 
+  /// Adds the impulses on the samples of the last place() (B entries, unit: N s) to the nodes of their faces
+  /// by the samples' barycentric weights: node_impulses[first_node[s] + node] for surface s.
   void spread(const std::vector<RigidSurface>& surfaces, const Vec3Array& sample_impulses,
               const std::vector<std::size_t>& first_node, Vec3Array& node_impulses) const;
 
@@ -51,14 +57,21 @@ class RigidBoundary {
   struct Body {
     std::size_t nodes = 0, triangles = 0;
     std::vector<Sample> samples;
+    Vec3Array placed_at;  // the positions_t0 of its last placing (unit: m); empty before the first
+    Vec3Array positions;  // its samples placed there (unit: m)
+    Vec3Array normals;    // their faces' outward unit normals
   };
   Body sample(const RigidSurface& surface) const;
 
   Scalar m_spacing;
   Scalar m_inset;
   std::unordered_map<std::uint64_t, Body> m_bodies;
-  std::vector<const Body*> m_placed;  // per surface of the last place(), null when not dynamic
-  Vec3Array m_face_normals;           // place(): scratch, the outward normals of one surface's faces
+  std::vector<const Body*> m_placed;         // per surface of the last place(), null when not dynamic
+  Vec3Array m_face_normals;                  // place(): scratch, the outward normals of one surface's faces
+  std::vector<std::uint64_t> m_placed_keys;  // the keys of the bodies of m_positions, in order
+  Vec3Array m_positions;                     // the last place()'s samples, body after body (unit: m)
+  ScalarArray m_volumes;                     // their volumes (unit: m^3)
+  Vec3Array m_normals;                       // their faces' outward unit normals
 };
 
 }  // namespace drench

@@ -356,10 +356,15 @@ double Simulation::rigid_seconds() const {
 
 void Simulation::place_rigid_boundary() {
   ScopedTimer timer(m_rigid_seconds);
-  Vec3Array positions, normals;
-  ScalarArray volumes;
-  m_rigid_boundary->place(m_with_obstacles->rigid_surfaces(), positions, volumes, normals);
-  m_fluid->set_moving_boundary(positions, volumes, normals);
+  // Only the dynamic bodies have boundary particles (static ones hold the water by the coupling alone). When
+  // none of them moved, came or went, the fluid keeps its points and their grid, which it would rebuild to
+  // the same bits: a level whose bodies rest pays for placing them only when they move.
+  RigidBoundary& boundary = *m_rigid_boundary;
+  if (boundary.place(m_with_obstacles->rigid_surfaces())) {
+    m_fluid->set_moving_boundary(boundary.positions(), boundary.volumes(), boundary.normals());
+  } else {
+    m_fluid->keep_moving_boundary();
+  }
 }
 
 void Simulation::push_rigid_bodies() {

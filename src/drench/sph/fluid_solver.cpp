@@ -146,6 +146,11 @@ void FluidSolver::set_moving_boundary(const Vec3Array& positions, const ScalarAr
   m_neighbors.set_boundary_points(std::move(points));
 }
 
+void FluidSolver::keep_moving_boundary() {
+  std::fill(m_moving_impulses.begin(), m_moving_impulses.end(), Vec3::Zero());
+  if (m_boundary_packed.size() > m_static_boundary) m_neighbors.search_afresh();
+}
+
 void FluidSolver::add_moving_boundary_reactions(Scalar dt, const Vec3Array& positions) {
   m_pressure->boundary_pressure_factors(m_particles, m_boundary_factors);
   const NeighborList& bn = m_neighbors.boundary();

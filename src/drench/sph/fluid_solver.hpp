@@ -161,6 +161,11 @@ class FluidSolver {
   /// @param normals  B unit normals of the faces the points stand for, outward from the body
   /// @throws std::invalid_argument when the sizes differ
   void set_moving_boundary(const Vec3Array& positions, const ScalarArray& volumes, const Vec3Array& normals);
+  /// set_moving_boundary with its last call's points, volumes and normals (bodies at rest), without
+  /// rebuilding their grid. The next step() still searches its neighbors afresh, as after
+  /// set_moving_boundary: the neighbor lists' order follows their rebuilds, so a run is the same bits whether
+  /// its bodies rest or not.
+  void keep_moving_boundary();
   /// B impulses the fluid's pressure gave the moving boundary particles in the last step() (unit: N s),
   /// sum over sub-steps and particles i of m_i dt w_i Psi_b grad W_ib (PressureSolver::
   /// boundary_pressure_factors): the opposite of what they gave the fluid.

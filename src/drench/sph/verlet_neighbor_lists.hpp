@@ -39,6 +39,9 @@ class VerletNeighborLists {
   /// Replaces the boundary points (unit: m, finite), e.g. with a moving body's at the start of a fluid step;
   /// the next update() searches afresh.
   void set_boundary_points(Vec3Array boundary);
+  /// Makes the next update() search afresh, keeping the boundary points and their grid: what
+  /// set_boundary_points does for points that did not change.
+  void search_afresh() { m_skin = 0.0; }
 
   /// Whether update() takes fluid_gradient_factors() (default true). Off, they stay empty: PBF takes the
   /// kernel's gradients at its iterations' positions, so without surface tension no one reads them, and they

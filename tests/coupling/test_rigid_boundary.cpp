@@ -1,0 +1,106 @@
+// Boundary particles of moving rigid bodies (coupling/rigid_boundary.hpp): which bodies have them, and that a
+// body at rest keeps the very samples a fresh placing would give.
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <vector>
+
+#include <drench/coupling/rigid_boundary.hpp>
+
+namespace drench {
+namespace {
+
+constexpr double kSpacing = 0.01;  // the fluid's particle spacing (unit: m)
+
+/// A cube of side `side` (unit: m) with its lowest corner at `corner`: 8 nodes, 12 faces turned outward.
+RigidSurface cube(std::uint64_t key, RigidMotion motion, const Vec3& corner, double side) {
+  RigidSurface s;
+  s.key = key;
+  s.motion = motion;
+  for (int i = 0; i < 8; ++i)
+    s.positions_t0.push_back(corner + side * Vec3(i & 1, (i >> 1) & 1, (i >> 2) & 1));
+  // Two triangles per face, each turned so that its normal points away from the centre.
+  const int faces[6][4] = {{0, 1, 3, 2}, {4, 5, 7, 6}, {0, 1, 5, 4},
+                           {2, 3, 7, 6}, {0, 2, 6, 4}, {1, 3, 7, 5}};
+  const Vec3 centre = corner + Vec3::Constant(0.5 * side);
+  const Vec3Array& x = s.positions_t0;
+  for (const auto& f : faces) {
+    for (const Triangle t : {Triangle{f[0], f[1], f[2]}, Triangle{f[0], f[2], f[3]}}) {
+      const Vec3 n = (x[t[1]] - x[t[0]]).cross(x[t[2]] - x[t[0]]);
+      s.triangles.push_back(n.dot(x[t[0]] - centre) > 0.0 ? t : Triangle{t[0], t[2], t[1]});
+    }
+  }
+  s.positions_t1 = s.positions_t0;
+  s.velocities_t0.assign(8, Vec3::Zero());
+  return s;
+}
+
+/// The surface moved by `offset` (unit: m).
+RigidSurface moved(RigidSurface s, const Vec3& offset) {
+  for (Vec3& x : s.positions_t0)
+    x += offset;
+  s.positions_t1 = s.positions_t0;
+  return s;
+}
+
+TEST(RigidBoundary, OnlyDynamicBodiesHaveSamplesAndEachLiesInsideItsBody) {
+  RigidBoundary boundary(kSpacing);
+  const std::vector<RigidSurface> surfaces = {
+      cube(1, RigidMotion::STATIC, Vec3(-1, -1, -1), 0.5),  // a table: held by the coupling alone
+      cube(2, RigidMotion::DYNAMIC, Vec3(0, 0, 0), 0.05),
+      cube(3, RigidMotion::KINEMATIC, Vec3(1, 1, 1), 0.05),
+  };
+  ASSERT_TRUE(boundary.place(surfaces));
+  // 12 faces whose longest edge, the diagonal, is 7.07 spacings: 8^2 sub-triangles each.
+  ASSERT_EQ(boundary.positions().size(), 12u * 64u);
+  ASSERT_EQ(boundary.volumes().size(), boundary.positions().size());
+  ASSERT_EQ(boundary.normals().size(), boundary.positions().size());
+  for (std::size_t b = 0; b < boundary.positions().size(); ++b) {
+    const Vec3& x = boundary.positions()[b];
+    const Vec3& n = boundary.normals()[b];
+    // Inside the dynamic cube, inset() behind the face its normal names, to rounding.
+    EXPECT_GT(x.minCoeff(), 0.0);
+    EXPECT_LT(x.maxCoeff(), 0.05);
+    int axis = 0;
+    n.cwiseAbs().maxCoeff(&axis);
+    ASSERT_NEAR(std::abs(n[axis]), 1.0, 1e-12);
+    const double behind = n[axis] > 0.0 ? 0.05 - x[axis] : x[axis];
+    EXPECT_NEAR(behind, boundary.inset(), 1e-12);
+    EXPECT_GT(boundary.volumes()[b], 0.0);
+  }
+}
+
+TEST(RigidBoundary, ABodyAtRestKeepsTheBitsAFreshPlacingGives) {
+  RigidBoundary boundary(kSpacing);
+  const RigidSurface ball = cube(7, RigidMotion::DYNAMIC, Vec3(0.2, 0.3, 0.1), 0.04);
+  const RigidSurface crate = cube(8, RigidMotion::DYNAMIC, Vec3(-0.2, 0.1, 0.0), 0.03);
+  const Vec3 nudge(1e-3, -2e-4, 3e-5);
+  ASSERT_TRUE(boundary.place({ball, crate}));
+  // Nothing moved: no change, and the same points.
+  const Vec3Array first = boundary.positions();
+  const ScalarArray volumes = boundary.volumes();
+  EXPECT_FALSE(boundary.place({ball, crate}));
+  EXPECT_EQ(boundary.positions(), first);
+  // The crate moves, the ball rests: a change, and bit for bit the points a new RigidBoundary places there
+  // (the volumes are the bodies' own, from their first sampling: the bodies are rigid).
+  const std::vector<RigidSurface> later = {ball, moved(crate, nudge)};
+  ASSERT_TRUE(boundary.place(later));
+  RigidBoundary fresh(kSpacing);
+  ASSERT_TRUE(fresh.place(later));
+  EXPECT_EQ(boundary.positions(), fresh.positions());
+  EXPECT_EQ(boundary.volumes(), volumes);
+  EXPECT_EQ(boundary.normals(), fresh.normals());
+  EXPECT_NE(boundary.positions(), first);
+  // A body that leaves, or the same bodies in another order, change the points though none moved.
+  EXPECT_TRUE(boundary.place({ball}));
+  EXPECT_TRUE(boundary.place({later[1], ball}));
+  RigidBoundary reordered(kSpacing);
+  ASSERT_TRUE(reordered.place({later[1], ball}));
+  EXPECT_EQ(boundary.positions(), reordered.positions());
+  // A static body coming or going changes nothing: it has no samples.
+  EXPECT_FALSE(boundary.place({later[1], cube(9, RigidMotion::STATIC, Vec3(0, 0, 0), 1.0), ball}));
+}
+
+}  // namespace
+}  // namespace drench
