@@ -21,8 +21,8 @@ RigidSurface cube(std::uint64_t key, RigidMotion motion, const Vec3& corner, dou
   for (int i = 0; i < 8; ++i)
     s.positions_t0.push_back(corner + side * Vec3(i & 1, (i >> 1) & 1, (i >> 2) & 1));
   // Two triangles per face, each turned so that its normal points away from the centre.
-  const int faces[6][4] = {{0, 1, 3, 2}, {4, 5, 7, 6}, {0, 1, 5, 4},
-                           {2, 3, 7, 6}, {0, 2, 6, 4}, {1, 3, 7, 5}};
+  const Index faces[6][4] = {{0, 1, 3, 2}, {4, 5, 7, 6}, {0, 1, 5, 4},
+                             {2, 3, 7, 6}, {0, 2, 6, 4}, {1, 3, 7, 5}};
   const Vec3 centre = corner + Vec3::Constant(0.5 * side);
   const Vec3Array& x = s.positions_t0;
   for (const auto& f : faces) {
