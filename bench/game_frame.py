@@ -87,6 +87,8 @@ def main():
                         help="runs of the whole set, one after another (a ratio near 1 needs its spread)")
     parser.add_argument("--out", required=True, help="CSV to write")
     args = parser.parse_args()
+    if args.rounds < 1:
+        parser.error(f"--rounds must be at least 1, got {args.rounds}")
     load_before = " ".join(f"{x:.2f}" for x in os.getloadavg())
     rows = []
     for round_ in range(args.rounds):
