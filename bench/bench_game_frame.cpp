@@ -4,8 +4,8 @@
 // drench on 1 thread and on its default (the CPUs), alone and beside one busy thread per CPU (std::threads
 // spinning from before the warm-up to the end of the run, as a game's or a renderer's threads would).
 //
-//   build-bench/bench/bench_game_frame [--frames 600] [--warmup 60] [--solvers dfsph,pcisph,pbf] [--busy N]
-//       [--broad-phase grid|fcl] [--benchmark_filter=...] --benchmark_out=game_frame.json
+//   build-bench/bench/bench_game_frame [--frames 600] [--warmup 60] [--solvers dfsph,pcisph,pbf,pbf:2x3]
+//       [--busy N] [--broad-phase grid|fcl] [--benchmark_filter=...] --benchmark_out=game_frame.json
 //       --benchmark_out_format=json
 // bench/game_frame.py runs it and writes bench/results/<machine>/game_frame.csv. Built in a build directory
 // configured with -DDRENCH_POOL_STATS=ON it also counts, per frame, the parallel and serial loops of drench's
@@ -47,14 +47,25 @@ constexpr drench::PressureSolverKind kKnownSolvers[] = {
     drench::PressureSolverKind::PBF,
 };
 
+/// One solver of the run: its kind and, for PBF, the sub-steps and iterations per frame when not the level's
+/// (the token `pbf:<substeps>x<iterations>`, e.g. `pbf:2x3`), so that the page can show what a cheaper
+/// setting saves and what it costs in density error.
+struct SolverRun {
+  drench::PressureSolverKind kind = drench::PressureSolverKind::PBF;
+  int pbf_substeps = 0;    // 0: the level's (PbfSettings::substeps)
+  int pbf_iterations = 0;  // 0: the level's (PbfSettings::iterations)
+  std::string label;       // the token: the benchmark's <solver> part
+};
+
 struct Options {
   long frames = 600;  // timed frames per benchmark
   long warmup = 60;   // frames stepped before them, untimed
   int busy = 0;       // spinning threads of the busy condition; 0: one per CPU
   // The coupling's broad phase; none: the level's own (coupling.broad_phase of playground::scene).
   std::optional<drench::BroadPhaseKind> broad_phase;
-  std::vector<drench::PressureSolverKind> solvers = {
-      drench::PressureSolverKind::DFSPH, drench::PressureSolverKind::PCISPH, drench::PressureSolverKind::PBF};
+  std::vector<SolverRun> solvers = {{drench::PressureSolverKind::DFSPH, 0, 0, "dfsph"},
+                                    {drench::PressureSolverKind::PCISPH, 0, 0, "pcisph"},
+                                    {drench::PressureSolverKind::PBF, 0, 0, "pbf"}};
 };
 
 /// Threads that spin until destroyed, one per CPU of the condition "beside busy threads": each keeps a core
@@ -100,13 +111,15 @@ double quantile(std::vector<double> values, double q) {
 /// over the timed frames; the continuous handling's CCD rounds, impacts, fail-safe particles and sub-step
 /// obstacle stops per frame, and the shares of frames that reached its fail-safe and its impact zones; the
 /// time of a blow-up (0: none), after which nothing more is stepped.
-void game_frame(benchmark::State& state, const std::string& name, drench::PressureSolverKind solver,
-                int threads, int busy, long warmup, std::optional<drench::BroadPhaseKind> broad_phase) {
+void game_frame(benchmark::State& state, const std::string& name, const SolverRun& solver, int threads,
+                int busy, long warmup, std::optional<drench::BroadPhaseKind> broad_phase) {
   drench::set_thread_count(threads);
   const auto frames = static_cast<long>(state.max_iterations);
   playground::World game;
   drench::SceneConfig scene =
-      playground::scene(static_cast<double>(warmup + frames) * playground::kDt, solver);
+      playground::scene(static_cast<double>(warmup + frames) * playground::kDt, solver.kind);
+  if (solver.pbf_substeps > 0) scene.fluid.pbf.substeps = solver.pbf_substeps;
+  if (solver.pbf_iterations > 0) scene.fluid.pbf.iterations = solver.pbf_iterations;
   if (broad_phase) scene.coupling.broad_phase = *broad_phase;
   drench::bullet::CoupledWorld coupled(game.world, game.cloths(), scene);
   const BusyThreads spinning(busy);
@@ -233,7 +246,8 @@ void game_frame(benchmark::State& state, const std::string& name, drench::Pressu
   std::fprintf(
       stderr,
       "%s: %s\nusage: %s [--frames N (600)] [--warmup N (60)] [--solvers NAME,... (dfsph,pcisph,pbf; "
-      "known: %s)] [--busy N (one per CPU)] [Google Benchmark flags]\n",
+      "known: %s; pbf:<substeps>x<iterations> for PBF at another setting)] [--busy N (one per CPU)] "
+      "[Google Benchmark flags]\n",
       program, problem.c_str(), program, known.c_str());
   std::exit(1);
 }
@@ -273,12 +287,26 @@ Options parse(int argc, char** argv) {
       std::string list = value;
       for (std::size_t from = 0; from <= list.size();) {
         const std::size_t to = std::min(list.find(',', from), list.size());
-        const std::string name = list.substr(from, to - from);
-        const auto* kind = std::find_if(std::begin(kKnownSolvers), std::end(kKnownSolvers),
-                                        [&](auto k) { return name == drench::pressure_solver_name(k); });
-        if (kind == std::end(kKnownSolvers)) usage(argv[0], "--solvers: unknown solver '" + name + "'");
-        options.solvers.push_back(*kind);
+        const std::string token = list.substr(from, to - from);
         from = to + 1;
+        // pbf:<substeps>x<iterations>: PBF at a setting other than the level's.
+        int substeps = 0, iterations = 0;
+        if (token.rfind("pbf:", 0) == 0) {
+          const std::string setting = token.substr(4);
+          const std::size_t x = setting.find('x');
+          if (x == std::string::npos)
+            usage(argv[0], "--solvers: '" + token + "' must read pbf:<substeps>x<iterations>, e.g. pbf:2x3");
+          substeps = static_cast<int>(
+              count_option(argv[0], "--solvers pbf:<substeps>", setting.substr(0, x).c_str(), 1));
+          iterations = static_cast<int>(
+              count_option(argv[0], "--solvers pbf:...x<iterations>", setting.substr(x + 1).c_str(), 1));
+          options.solvers.push_back({drench::PressureSolverKind::PBF, substeps, iterations, token});
+          continue;
+        }
+        const auto* kind = std::find_if(std::begin(kKnownSolvers), std::end(kKnownSolvers),
+                                        [&](auto k) { return token == drench::pressure_solver_name(k); });
+        if (kind == std::end(kKnownSolvers)) usage(argv[0], "--solvers: unknown solver '" + token + "'");
+        options.solvers.push_back({*kind, 0, 0, token});
       }
     } else {
       usage(argv[0], "unknown argument '" + flag + "'");
@@ -298,11 +326,10 @@ int main(int argc, char** argv) {
 
   std::vector<int> thread_counts = {1};
   if (default_threads != 1) thread_counts.push_back(default_threads);
-  for (drench::PressureSolverKind solver : options.solvers) {
+  for (const SolverRun& solver : options.solvers) {
     for (int threads : thread_counts) {
       for (int busy : {0, options.busy > 0 ? options.busy : cpus}) {
-        const std::string name = std::string("game_frame/") + drench::pressure_solver_name(solver) +
-                                 "/threads:" + std::to_string(threads) +
+        const std::string name = "game_frame/" + solver.label + "/threads:" + std::to_string(threads) +
                                  (busy == 0 ? "/alone" : "/busy:" + std::to_string(busy));
         benchmark::RegisterBenchmark(name.c_str(), game_frame, name, solver, threads, busy, options.warmup,
                                      options.broad_phase)

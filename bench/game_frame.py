@@ -79,7 +79,8 @@ def main():
     parser.add_argument("--bench", default=str(ROOT / "build-bench" / "bench" / "bench_game_frame"))
     parser.add_argument("--frames", type=int, default=DEFAULTS["frames"], help="timed frames per benchmark")
     parser.add_argument("--warmup", type=int, default=DEFAULTS["warmup"], help="untimed frames before them")
-    parser.add_argument("--solvers", default=DEFAULTS["solvers"], help="comma-separated scene names")
+    parser.add_argument("--solvers", default=DEFAULTS["solvers"],
+                        help="comma-separated scene names; pbf:<substeps>x<iterations> for PBF at another setting")
     parser.add_argument("--busy", type=int, default=DEFAULTS["busy"],
                         help="spinning threads beside drench in the busy condition (0: one per CPU)")
     parser.add_argument("--filter", help="--benchmark_filter for the binary (a regex over the names)")
