@@ -102,5 +102,45 @@ TEST(RigidBoundary, ABodyAtRestKeepsTheBitsAFreshPlacingGives) {
   EXPECT_FALSE(boundary.place({later[1], cube(9, RigidMotion::STATIC, Vec3(0, 0, 0), 1.0), ball}));
 }
 
+TEST(RigidBoundary, SpreadGivesTheNodesOfEachSampledFaceItsImpulseByWeight) {
+  // Most samples of a body get no impulse (no water near them). Those that do pass it to the three nodes of
+  // their face by their barycentric weights: the nodes' sum is the samples' (momentum passes whole), and a
+  // lone sample's impulse lands on its own face's nodes only.
+  RigidBoundary boundary(kSpacing);
+  const std::vector<RigidSurface> surfaces = {cube(1, RigidMotion::STATIC, Vec3(-1, -1, -1), 0.5),
+                                              cube(2, RigidMotion::DYNAMIC, Vec3(0, 0, 0), 0.03)};
+  ASSERT_TRUE(boundary.place(surfaces));
+  const std::size_t count = boundary.positions().size();
+  const std::vector<std::size_t> first_node = {0, 8};  // the static cube's 8 nodes come first
+  Vec3Array impulses(count, Vec3::Zero());
+  const std::size_t lone = count / 3;
+  impulses[lone] = Vec3(0.25, -1.0, 0.5);  // (unit: N s)
+  Vec3Array nodes(16, Vec3::Zero());
+  boundary.spread(surfaces, impulses, first_node, nodes);
+  Vec3 sum = Vec3::Zero();
+  int touched = 0;
+  for (std::size_t n = 0; n < nodes.size(); ++n) {
+    sum += nodes[n];
+    if (nodes[n] != Vec3::Zero()) {
+      ++touched;
+      EXPECT_GE(n, 8u) << "a static body's node took an impulse";
+    }
+  }
+  EXPECT_NEAR((sum - impulses[lone]).norm(), 0.0, 1e-15);
+  EXPECT_EQ(touched, 3);  // a sample inside its face: all three weights > 0
+  // Every sample pushed: the sum is still theirs, to rounding.
+  Vec3 total = Vec3::Zero();
+  for (std::size_t k = 0; k < count; ++k) {
+    impulses[k] = Vec3(1e-3 * static_cast<double>(k % 7), -2e-3, 1e-3 * static_cast<double>(k % 5));
+    total += impulses[k];
+  }
+  nodes.assign(16, Vec3::Zero());
+  boundary.spread(surfaces, impulses, first_node, nodes);
+  sum = Vec3::Zero();
+  for (const Vec3& j : nodes)
+    sum += j;
+  EXPECT_NEAR((sum - total).norm(), 0.0, 1e-12 * total.norm());
+}
+
 }  // namespace
 }  // namespace drench

@@ -109,6 +109,7 @@ RigidBoundary::Body RigidBoundary::sample(const RigidSurface& surface) const {
 bool RigidBoundary::place(const std::vector<RigidSurface>& surfaces) {
   m_placed.assign(surfaces.size(), nullptr);
   bool changed = false;
+  bool resampled = false;  // a body sampled afresh: its volumes are new, though its key was there before
   std::vector<std::uint64_t> keys;  // the dynamic bodies in order: their samples' layout
   std::unordered_set<std::uint64_t> seen;
   for (std::size_t s = 0; s < surfaces.size(); ++s) {
@@ -120,6 +121,7 @@ bool RigidBoundary::place(const std::vector<RigidSurface>& surfaces) {
     if (it == m_bodies.end() || it->second.nodes != surface.positions_t0.size() ||
         it->second.triangles != surface.triangles.size()) {
       it = m_bodies.insert_or_assign(surface.key, sample(surface)).first;
+      resampled = true;
     }
     Body& body = it->second;
     m_placed[s] = &body;
@@ -136,12 +138,22 @@ bool RigidBoundary::place(const std::vector<RigidSurface>& surfaces) {
       m_face_normals[f] = outward_normal(x, surface.triangles[f]);
     body.positions.resize(body.samples.size());
     body.normals.resize(body.samples.size());
+    // A face's samples come one after another (sample()): its nodes and its inset normal are fetched once
+    // per face, not per sample. m_inset * n is the product the expression took per sample: the same bits.
+    Index face = static_cast<Index>(-1);
+    Vec3 x0 = Vec3::Zero(), x1 = x0, x2 = x0, n = x0, inset_n = x0;
     for (std::size_t k = 0; k < body.samples.size(); ++k) {
       const Sample& sample = body.samples[k];
-      const Triangle& t = surface.triangles[sample.triangle];
-      const Vec3& n = m_face_normals[sample.triangle];
-      body.positions[k] = sample.weights[0] * x[t[0]] + sample.weights[1] * x[t[1]] +
-                          sample.weights[2] * x[t[2]] - m_inset * n;
+      if (sample.triangle != face) {
+        face = sample.triangle;
+        const Triangle& t = surface.triangles[face];
+        x0 = x[t[0]];
+        x1 = x[t[1]];
+        x2 = x[t[2]];
+        n = m_face_normals[face];
+        inset_n = m_inset * n;
+      }
+      body.positions[k] = sample.weights[0] * x0 + sample.weights[1] * x1 + sample.weights[2] * x2 - inset_n;
       body.normals[k] = n;
     }
   }
@@ -151,17 +163,26 @@ bool RigidBoundary::place(const std::vector<RigidSurface>& surfaces) {
   }
   // A body that came, went or changed its place in the list changes the layout though none moved. (A body
   // sampled afresh, if under a key seen before, has no placed_at yet: it counts as moved above.)
-  if (!changed && keys == m_placed_keys) return false;
+  const bool same_layout = keys == m_placed_keys && !resampled;
+  if (!changed && same_layout) return false;
   m_placed_keys = std::move(keys);
-  m_positions.clear();
-  m_volumes.clear();
-  m_normals.clear();
+  std::size_t count = 0;
+  for (const Body* body : m_placed)
+    count += body ? body->samples.size() : 0;
+  m_positions.resize(count);
+  m_normals.resize(count);
+  // The volumes are the bodies' own, from their sampling: written again only when the layout changed.
+  if (!same_layout) m_volumes.resize(count);
+  std::size_t first = 0;
   for (const Body* body : m_placed) {
     if (!body) continue;
-    m_positions.insert(m_positions.end(), body->positions.begin(), body->positions.end());
-    m_normals.insert(m_normals.end(), body->normals.begin(), body->normals.end());
-    for (const Sample& sample : body->samples)
-      m_volumes.push_back(sample.volume);
+    std::copy(body->positions.begin(), body->positions.end(), m_positions.begin() + static_cast<long>(first));
+    std::copy(body->normals.begin(), body->normals.end(), m_normals.begin() + static_cast<long>(first));
+    if (!same_layout) {
+      for (std::size_t k = 0; k < body->samples.size(); ++k)
+        m_volumes[first + k] = body->samples[k].volume;
+    }
+    first += body->samples.size();
   }
   return true;
 }
@@ -173,10 +194,14 @@ void RigidBoundary::spread(const std::vector<RigidSurface>& surfaces, const Vec3
     if (!m_placed[s]) continue;
     for (const Sample& sample : m_placed[s]->samples) {
       if (k >= sample_impulses.size()) return;
+      const Vec3& impulse = sample_impulses[k++];
+      // Most samples lie where no water reached them (FluidSolver::set_moving_boundary leaves them out of its
+      // search): their impulse is zero, and adding w times zero changes no node but one at -0 (to +0);
+      // Simulation's start at +0, which sums never turn into -0.
+      if (impulse.x() == 0.0 && impulse.y() == 0.0 && impulse.z() == 0.0) continue;
       const Triangle& t = surfaces[s].triangles[sample.triangle];
       for (int i = 0; i < 3; ++i)
-        node_impulses[first_node[s] + t[i]] += sample.weights[i] * sample_impulses[k];
-      ++k;
+        node_impulses[first_node[s] + t[i]] += sample.weights[i] * impulse;
     }
   }
 }

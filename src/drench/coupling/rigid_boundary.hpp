@@ -44,7 +44,8 @@ class RigidBoundary {
   Scalar inset() const { return m_inset; }
 
   /// Adds the impulses on the samples of the last place() (B entries, unit: N s) to the nodes of their faces
-  /// by the samples' barycentric weights: node_impulses[first_node[s] + node] for surface s.
+  /// by the samples' barycentric weights: node_impulses[first_node[s] + node] for surface s. Samples with a
+  /// zero impulse (those no water reached) are skipped: the same bits but for a node holding -0.
   void spread(const std::vector<RigidSurface>& surfaces, const Vec3Array& sample_impulses,
               const std::vector<std::size_t>& first_node, Vec3Array& node_impulses) const;
 
