@@ -195,9 +195,8 @@ void RigidBoundary::spread(const std::vector<RigidSurface>& surfaces, const Vec3
     for (const Sample& sample : m_placed[s]->samples) {
       if (k >= sample_impulses.size()) return;
       const Vec3& impulse = sample_impulses[k++];
-      // Most samples lie where no water reached them (FluidSolver::set_moving_boundary leaves them out of its
-      // search): their impulse is zero, and adding w times zero changes no node but one at -0 (to +0);
-      // Simulation's start at +0, which sums never turn into -0.
+      // Most samples lie where no water reached them: their impulse is zero, and adding w times zero changes
+      // no node but one at -0 (to +0); Simulation's start at +0, which sums never turn into -0.
       if (impulse.x() == 0.0 && impulse.y() == 0.0 && impulse.z() == 0.0) continue;
       const Triangle& t = surfaces[s].triangles[sample.triangle];
       for (int i = 0; i < 3; ++i)
