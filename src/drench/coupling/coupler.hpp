@@ -49,7 +49,7 @@ struct CouplingStepStats {
   double zone_node_shift = 0.0;
   /// The momentum those shifts give a carried-water cloth's own nodes when its engine takes them at
   /// end_step, sum of |shift / (im dt)| (unit: N s), im the node's own inverse mass
-  /// (CouplingScheme::CARRIED_WATER; Simulation counts it).
+  /// (CouplingScheme::CARRIED_WATER; owe_zone_shifts counts it and books it back).
   double zone_cloth_momentum = 0.0;
   /// Sum of |shift| over nodes whose own inverse mass is 0 (a body's, a pin's, an obstacle's), whose
   /// engine ignores it (unit: m): the water there was moved against a face that stays where it was.
@@ -71,8 +71,10 @@ enum CouplingStatus : std::uint32_t {
   COUPLING_UNRESOLVED = 1u << 1,
   /// The fail-safe left collisions (a particle caught in a fold), so the particles and nodes involved were
   /// joined into impact zones, each moving by one displacement for the step (the mean of its members'; at
-  /// rest when it holds an unmoved node); no crossing, but their momentum was not conserved
-  /// (CouplingStepStats::stopped_particles, stopped_nodes). Rare; lower dt if frequent.
+  /// rest when it holds an unmoved node); no crossing. The particles' momentum is booked on their triangles'
+  /// nodes; the moves of nodes of inverse mass 0 are not paid for (Coupler::node_shifts: a carried-water
+  /// cloth owes them back, owe_zone_shifts). (CouplingStepStats::stopped_particles, stopped_nodes.) Rare;
+  /// lower dt if frequent.
   COUPLING_ZONES_STOPPED = 1u << 2,
 };
 

@@ -471,18 +471,10 @@ void Simulation::step_cloth_and_couple(Scalar dt, StepStatus& status) {
       for (std::size_t i = 0; i < given.size(); ++i) {
         if (kinematic.own_inverse_masses()[i] > 0.0) m_pending_cloth_impulses[i] += given[i];
       }
-      // The impact zones moved nodes the coupler saw as kinematic: end_step gives a cloth node that move
-      // as a velocity no impulse paid for; a body's, a pin's or an obstacle's node does not move.
-      const Vec3Array& shifts = m_effects.coupler->node_shifts();
-      for (std::size_t i = 0; i < shifts.size(); ++i) {
-        if (shifts[i] == Vec3::Zero()) continue;
-        const double im = kinematic.own_inverse_masses()[i];
-        if (im > 0.0) {
-          m_coupling_stats.zone_cloth_momentum += shifts[i].norm() / (im * dt);
-        } else {
-          m_coupling_stats.zone_ignored_shift += shifts[i].norm();
-        }
-      }
+      // What the impact zones' moves of its nodes give the cloth at end_step is owed back at its next step
+      // (carried_water.hpp), as the water's impulses are.
+      owe_zone_shifts(m_effects.coupler->node_shifts(), kinematic.own_inverse_masses(), dt,
+                      m_pending_cloth_impulses, m_coupling_stats);
       m_pending_links = m_effects.coupler->impulse_links();
     } else {
       m_last_coupling_status = m_effects.coupler->step(view, mesh, dt, m_coupling_stats);
