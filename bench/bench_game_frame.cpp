@@ -109,7 +109,9 @@ double quantile(std::vector<double> values, double q) {
 /// (warm-up included; the target is 0); the fastest particle and node at the end of any step of the run
 /// (unit: m/s); particles at the end and at most; the fluid's CFL sub-steps per frame and mean density error
 /// over the timed frames; the continuous handling's CCD rounds, impacts, fail-safe particles and sub-step
-/// obstacle stops per frame, and the shares of frames that reached its fail-safe and its impact zones; the
+/// obstacle stops per frame, and the shares of frames that reached its fail-safe and its impact zones; per
+/// frame, what the last resorts gave particles (N s), the momentum impact zones' node moves gave the cloth
+/// (N s) and how far they moved nodes whose engine ignores it (m) (CouplingStepStats); the
 /// time of a blow-up (0: none), after which nothing more is stepped.
 void game_frame(benchmark::State& state, const std::string& name, const SolverRun& solver, int threads,
                 int busy, long warmup, std::optional<drench::BroadPhaseKind> broad_phase) {
@@ -130,6 +132,7 @@ void game_frame(benchmark::State& state, const std::string& name, const SolverRu
   struct {
     std::uint64_t rounds = 0, impacts = 0, failsafe_particles = 0, failsafe_frames = 0, zone_frames = 0,
                   obstacle_stops = 0;
+    double last_resort_impulse = 0.0, zone_cloth_momentum = 0.0, zone_ignored_shift = 0.0;
   } ccd;
   bool timing = false;
   const auto checked_step = [&]() {
@@ -142,6 +145,9 @@ void game_frame(benchmark::State& state, const std::string& name, const SolverRu
       ccd.impacts += c.ccd_impacts;
       ccd.failsafe_particles += c.failsafe_activations;
       ccd.obstacle_stops += c.obstacle_stops;
+      ccd.last_resort_impulse += c.last_resort_impulse;
+      ccd.zone_cloth_momentum += c.zone_cloth_momentum;
+      ccd.zone_ignored_shift += c.zone_ignored_shift;
       if (report.coupling & drench::COUPLING_FAILSAFE_USED) ++ccd.failsafe_frames;
       if (report.coupling & drench::COUPLING_ZONES_STOPPED) ++ccd.zone_frames;
     }
@@ -235,6 +241,9 @@ void game_frame(benchmark::State& state, const std::string& name, const SolverRu
   state.counters["failsafe_frame_share"] = static_cast<double>(ccd.failsafe_frames) / frames_done;
   state.counters["zone_frame_share"] = static_cast<double>(ccd.zone_frames) / frames_done;
   state.counters["obstacle_stops_per_frame"] = static_cast<double>(ccd.obstacle_stops) / frames_done;
+  state.counters["last_resort_impulse_per_frame"] = ccd.last_resort_impulse / frames_done;
+  state.counters["zone_cloth_momentum_per_frame"] = ccd.zone_cloth_momentum / frames_done;
+  state.counters["zone_ignored_shift_per_frame"] = ccd.zone_ignored_shift / frames_done;
   state.counters["density_error_mean"] =
       substeps > 0 ? (fluid.density_error_sum - fluid_before.density_error_sum) / substeps : 0.0;
 }

@@ -61,4 +61,18 @@ Vec3 CarriedWater::hand_back(const Vec3Array& velocities_before, const Vec3Array
   return given;
 }
 
+void owe_zone_shifts(const Vec3Array& shifts, const ScalarArray& inverse_masses, double dt, Vec3Array& owed,
+                     CouplingStepStats& stats) {
+  for (std::size_t i = 0; i < shifts.size(); ++i) {
+    if (shifts[i] == Vec3::Zero()) continue;
+    if (inverse_masses[i] > 0.0) {
+      const Vec3 momentum = shifts[i] / (inverse_masses[i] * dt);
+      owed[i] -= momentum;
+      stats.zone_cloth_momentum += momentum.norm();
+    } else {
+      stats.zone_ignored_shift += shifts[i].norm();
+    }
+  }
+}
+
 }  // namespace drench

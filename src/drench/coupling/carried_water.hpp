@@ -24,6 +24,7 @@
 
 #include <drench/common/types.hpp>
 #include <drench/coupling/cloth_mesh.hpp>
+#include <drench/coupling/coupler.hpp>
 #include <drench/coupling/impulse_link.hpp>
 
 namespace drench {
@@ -74,5 +75,22 @@ class CarriedWater {
   std::vector<Link> m_links;
   ScalarArray m_carried;
 };
+
+/// Settles what the coupler's impact zones did to a carried-water cloth (the last resort of sec. 3.3's
+/// continuous handling, continuous_handling.cpp). The coupler sees the cloth's nodes as kinematic, so a zone
+/// that holds water caught between the cloth and another face moves those nodes off their end positions
+/// (Coupler::node_shifts) without an impulse; the engine's end_step then gives node i the velocity shift_i /
+/// dt, momentum that neither the water nor a body gave. Owing node i -shift_i / (im_i dt) at its next step,
+/// as every other impulse of the scheme is owed, cancels it: the node keeps the corrected position, and
+/// water, cloth and bodies keep their momentum. A node of own inverse mass 0 (a pin, a body's, an
+/// obstacle's) is not moved by its engine, so nothing is owed for it.
+/// @param shifts  M node shifts (unit: m), Coupler::node_shifts
+/// @param inverse_masses  M own inverse masses as the engine holds them (unit: 1/kg), >= 0
+/// @param dt  the step (unit: s), > 0
+/// @param owed  M impulses owed to the nodes at their next step (unit: N s), added to
+/// @param stats  adds sum |shift_i / (im_i dt)| to zone_cloth_momentum, and sum |shift_i| over the nodes of
+///        inverse mass 0 to zone_ignored_shift
+void owe_zone_shifts(const Vec3Array& shifts, const ScalarArray& inverse_masses, double dt, Vec3Array& owed,
+                     CouplingStepStats& stats);
 
 }  // namespace drench

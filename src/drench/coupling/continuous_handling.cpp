@@ -105,9 +105,10 @@ void resolve_impact(StepContext& ctx, Index p, const Impact& impact, double thic
 /// particles and nodes; a zone holding a node that did not move (a pin) stays at rest. Zones at rest stopped
 /// a fast cloth's nodes behind their neighbours and overstretched it (the crumpled cloth at dt 4 ms,
 /// HostilePhysics.ACrumpledClothAtDt4msDoesNotLeak); moving zones keep the nodes with the cloth. A
-/// particle's change of momentum goes to its triangle's nodes (StepContext::place); a kinematic node's is
-/// lost, which the counters report. A crossing stays only where a member cannot follow its zone (a pinned
-/// node moved by its engine).
+/// particle's change of momentum goes to its triangle's nodes (StepContext::place); a kinematic node's move
+/// goes to Coupler::node_shifts, for its caller to settle (a carried-water cloth owes it back,
+/// owe_zone_shifts; a body's engine ignores it, CouplingStepStats::zone_ignored_shift). A crossing stays only
+/// where a member cannot follow its zone (a pinned node moved by its engine).
 /// @param all  every pair of the motion on entry (update_pairs), kept so
 /// @param only, fresh, merged  scratch
 /// @param impacts  the fail-safe's leftover impacts on entry; scratch

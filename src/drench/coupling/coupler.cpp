@@ -77,6 +77,7 @@ void Coupler::set_adhesion(AdhesionSettings settings) {
 
 std::uint32_t Coupler::step(const FluidView& fluid, ClothMesh& cloth, double dt, CouplingStepStats& stats) {
   m_node_impulses.assign(cloth.node_count(), Vec3::Zero());
+  m_node_shifts.assign(cloth.node_count(), Vec3::Zero());
   m_impulse_links.clear();
   m_unresolved = {-1, -1};
   // Exact, not a heuristic: every pair a stage acts on comes from the broad phase, asked at x_t0 with margin
@@ -107,7 +108,8 @@ std::uint32_t Coupler::step(const FluidView& fluid, ClothMesh& cloth, double dt,
 std::uint32_t Coupler::correct(const FluidView& fluid, ClothMesh& cloth, double dt,
                                CouplingStepStats& stats) {
   std::uint32_t status = COUPLING_OK;
-  StepContext ctx(fluid, cloth, dt, stats, m_node_impulses, fluid.ids != nullptr ? &m_largest : nullptr);
+  StepContext ctx(fluid, cloth, dt, stats, m_node_impulses, fluid.ids != nullptr ? &m_largest : nullptr,
+                  &m_node_shifts);
   ctx.clear_changes();
   const double thickness = m_settings.cloth_thickness;
   std::vector<std::pair<Index, Index>> pairs;
@@ -141,6 +143,10 @@ std::uint32_t Coupler::correct(const FluidView& fluid, ClothMesh& cloth, double 
 
   const auto ccd_start = Clock::now();
   status |= resolve_ccd(ctx, *m_broad_phase, m_settings, &m_unresolved);  // sec. 3.3, eq. 5-6
+  if (status & COUPLING_ZONES_STOPPED) {
+    for (const Vec3& shift : m_node_shifts)
+      stats.zone_node_shift += shift.norm();
+  }
   stats.seconds_ccd += seconds_since(ccd_start);
   return status;
 }

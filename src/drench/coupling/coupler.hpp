@@ -40,6 +40,20 @@ struct CouplingStepStats {
   /// left a collision (COUPLING_ZONES_STOPPED)
   std::uint64_t stopped_particles = 0;
   std::uint64_t stopped_nodes = 0;
+  /// What the last resorts (the fail-safe's and the impact zones' moves, StepContext::place) gave particles:
+  /// the sum of |m dv| (unit: N s). Each is booked against its triangle's nodes as an impulse is.
+  double last_resort_impulse = 0.0;
+  /// How far impact zones moved the nodes the coupler sees with inverse mass 0 off their end positions,
+  /// summed over those nodes (|shift|, unit: m): motion no impulse of the coupler pays for
+  /// (Coupler::node_shifts).
+  double zone_node_shift = 0.0;
+  /// The momentum those shifts give a carried-water cloth's own nodes when its engine takes them at
+  /// end_step, sum of |shift / (im dt)| (unit: N s), im the node's own inverse mass
+  /// (CouplingScheme::CARRIED_WATER; owe_zone_shifts counts it and books it back).
+  double zone_cloth_momentum = 0.0;
+  /// Sum of |shift| over nodes whose own inverse mass is 0 (a body's, a pin's, an obstacle's), whose
+  /// engine ignores it (unit: m): the water there was moved against a face that stays where it was.
+  double zone_ignored_shift = 0.0;
   double slip_sum_mps = 0.0;  ///< sum over contacts of the relative tangential speed after coupling
   double vertical_impulse_on_cloth = 0.0;  ///< sum of the y components of the impulses on cloth nodes (N s)
   double seconds_repulsion = 0.0;          ///< wall time of proximity + repulsion + friction (unit: s)
@@ -57,8 +71,10 @@ enum CouplingStatus : std::uint32_t {
   COUPLING_UNRESOLVED = 1u << 1,
   /// The fail-safe left collisions (a particle caught in a fold), so the particles and nodes involved were
   /// joined into impact zones, each moving by one displacement for the step (the mean of its members'; at
-  /// rest when it holds an unmoved node); no crossing, but their momentum was not conserved
-  /// (CouplingStepStats::stopped_particles, stopped_nodes). Rare; lower dt if frequent.
+  /// rest when it holds an unmoved node); no crossing. The particles' momentum is booked on their triangles'
+  /// nodes; the moves of nodes of inverse mass 0 are not paid for (Coupler::node_shifts: a carried-water
+  /// cloth owes them back, owe_zone_shifts). (CouplingStepStats::stopped_particles, stopped_nodes.) Rare;
+  /// lower dt if frequent.
   COUPLING_ZONES_STOPPED = 1u << 2,
 };
 
@@ -122,6 +138,11 @@ class Coupler {
   /// the cloth itself (CouplingScheme::CARRIED_WATER), so momentum is still exchanged.
   const Vec3Array& node_impulses() const { return m_node_impulses; }
 
+  /// How far the last step()'s impact zones moved each node with inverse mass 0 off the end position it was
+  /// given (unit: m), M entries, 0 elsewhere. No impulse of the coupler pays for it: an engine that takes
+  /// it as a velocity (a carried-water cloth's end_step) must have its momentum booked by the caller.
+  const Vec3Array& node_shifts() const { return m_node_shifts; }
+
   /// For every particle that received an impulse in the last step() (in particle order), the triangle, the
   /// weights and the size of its largest one; empty unless FluidView::ids was given. With node_impulses(),
   /// what CarriedWater::attach needs to carry each particle with the nodes its impulse goes to.
@@ -142,6 +163,7 @@ class Coupler {
   std::optional<AdhesionSettings> m_adhesion;
   EffectCounter m_adhesion_counter;
   Vec3Array m_node_impulses;
+  Vec3Array m_node_shifts;
   ImpulseLinks m_largest;  // N, scratch of step()
   ImpulseLinks m_impulse_links;
   std::pair<std::int64_t, std::int64_t> m_unresolved{-1, -1};

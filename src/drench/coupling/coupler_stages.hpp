@@ -47,8 +47,10 @@ struct Contact {
 /// inline here: the stages call them per contact and per impact.
 class StepContext {
  public:
+  /// @param node_shifts  M entries, or null: where move_node() adds how far it moved each node of inverse
+  ///        mass 0 (unit: m)
   StepContext(const FluidView& fluid, ClothMesh& cloth, double dt, CouplingStepStats& stats,
-              Vec3Array& node_impulses, ImpulseLinks* largest)
+              Vec3Array& node_impulses, ImpulseLinks* largest, Vec3Array* node_shifts = nullptr)
       : m_x0(*fluid.positions_t0),
         m_x1(*fluid.positions_t1),
         m_v(*fluid.velocities),
@@ -57,7 +59,8 @@ class StepContext {
         m_dt(dt),
         m_stats(stats),
         m_node_impulses(node_impulses),
-        m_largest(largest) {}
+        m_largest(largest),
+        m_node_shifts(node_shifts) {}
 
   const Triangle& triangle(Index t) const { return m_cloth.triangles[t]; }
   Vec3 particle_velocity(Index p) const { return (m_x1[p] - m_x0[p]) / m_dt; }
@@ -116,10 +119,14 @@ class StepContext {
     for (int i = 0; i < 3; ++i)
       m_node_impulses[tri[i]] -= w[i] * impulse;
     m_stats.vertical_impulse_on_cloth -= impulse.y();
+    m_stats.last_resort_impulse += impulse.norm();
   }
 
-  /// Sets node i's end position (an impact zone's move), marked as a change like apply()'s.
+  /// Sets node i's end position (an impact zone's move), marked as a change like apply()'s. A node of
+  /// inverse mass 0 takes no impulse for it: the move is added to node_shifts for the caller to settle.
   void move_node(Index i, const Vec3& x_t1) {
+    if (m_node_shifts != nullptr && !(m_cloth.inverse_masses[i] > 0.0))
+      (*m_node_shifts)[i] += x_t1 - m_cloth.positions_t1[i];
     m_cloth.positions_t1[i] = x_t1;
     m_node_changed[i] = 1;
   }
@@ -168,6 +175,7 @@ class StepContext {
   std::vector<std::uint8_t> m_node_changed;
   Vec3Array& m_node_impulses;  // what every node received, inverse mass 0 or not (unit: N s)
   ImpulseLinks* m_largest;     // N, each particle's largest impulse so far (impulse 0: none), or null
+  Vec3Array* m_node_shifts;    // M, what move_node moved each node of inverse mass 0 by (m), or null
 };
 
 /// Proximity (sec. 3.1, proximity.cpp): eq. 1's plane distance and barycentric inside test, extended to edges

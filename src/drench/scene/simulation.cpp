@@ -471,6 +471,10 @@ void Simulation::step_cloth_and_couple(Scalar dt, StepStatus& status) {
       for (std::size_t i = 0; i < given.size(); ++i) {
         if (kinematic.own_inverse_masses()[i] > 0.0) m_pending_cloth_impulses[i] += given[i];
       }
+      // What the impact zones' moves of its nodes give the cloth at end_step is owed back at its next step
+      // (carried_water.hpp), as the water's impulses are.
+      owe_zone_shifts(m_effects.coupler->node_shifts(), kinematic.own_inverse_masses(), dt,
+                      m_pending_cloth_impulses, m_coupling_stats);
       m_pending_links = m_effects.coupler->impulse_links();
     } else {
       m_last_coupling_status = m_effects.coupler->step(view, mesh, dt, m_coupling_stats);
