@@ -110,18 +110,16 @@ Vec3i NeighborSearch::cell_of(const Vec3& x) const {
   // out-of-range double to int is undefined behaviour), and before flooring, which keeps the integer bounds,
   // so the cells are the same; then floored by truncation and a correction for negative values: std::floor
   // was a libm call per axis in the baseline build, and made this 100 instructions per point, 2% of issue
-  // 41's level (callgrind), most of it the grid's build every sub-step. NaN goes to the lowest cell; the
-  // solver reports non-finite particles itself.
+  // 41's level (callgrind), most of it the grid's build every sub-step. The clamp is written as the CPU's
+  // max and min (maxsd, minsd: the second operand when unordered), so NaN takes the lowest bound and the
+  // lowest cell with no branch of its own; the solver reports non-finite particles itself.
   constexpr Scalar kLowest = static_cast<Scalar>(1 - kCellOffset);
   constexpr Scalar kHighest = static_cast<Scalar>(kCellMax - 1 - kCellOffset);
   Vec3i cell;
   for (int a = 0; a < 3; ++a) {
     const Scalar v = x[a] * m_inv_cell;
-    if (std::isnan(v)) {
-      cell[a] = 1;
-      continue;
-    }
-    const Scalar c = std::clamp(v, kLowest, kHighest);
+    const Scalar above_lowest = v > kLowest ? v : kLowest;  // NaN: kLowest
+    const Scalar c = above_lowest < kHighest ? above_lowest : kHighest;
     const int truncated = static_cast<int>(c);
     cell[a] = truncated - (c < static_cast<Scalar>(truncated) ? 1 : 0) + static_cast<int>(kCellOffset);
   }
