@@ -8,6 +8,10 @@
 #include <string>
 #include <utility>
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 #include <drench/common/parallel.hpp>
 #include <drench/sph/candidate_scan.hpp>
 
@@ -91,6 +95,27 @@ DRENCH_SIMD_CLONES std::size_t scan_runs_lanes(const Scalar* xs, const Scalar* y
   return scan_runs<scan_candidates_lanes>(xs, ys, zs, indices, begins, ends, runs, x, r2, self, dst);
 }
 
+/// The scan over runs of `scan` (NeighborSearch::set_candidate_scan), all of one signature: find_sorted picks
+/// it once per search rather than through scan()'s switch per query, a call of 30 instructions a query in
+/// issue 41's level (callgrind).
+using ScanRunsFunction = std::size_t (*)(const Scalar*, const Scalar*, const Scalar*, const Index*,
+                                         const std::uint32_t*, const std::uint32_t*, int, const Vec3&, Scalar,
+                                         Index, Index*);
+ScanRunsFunction scan_runs_for(CandidateScan scan) {
+  switch (scan) {
+#if DRENCH_HAS_AVX512_SCAN
+    case CandidateScan::kAvx512Compress:
+      return scan_runs_compress;
+#endif
+#if DRENCH_HAS_AVX2_SCAN
+    case CandidateScan::kAvx2Permute:
+      return scan_runs_permute;
+#endif
+    default:
+      return scan_runs_lanes;
+  }
+}
+
 }  // namespace
 
 NeighborSearch::NeighborSearch(Scalar support_radius)
@@ -126,11 +151,30 @@ Vec3i NeighborSearch::cell_of(const Vec3& x) const {
   // out-of-range double to int is undefined behaviour), and before flooring, which keeps the integer bounds,
   // so the cells are the same; then floored by truncation and a correction for negative values: std::floor
   // was a libm call per axis in the baseline build, and made this 100 instructions per point, 2% of issue
-  // 41's level (callgrind), most of it the grid's build every sub-step. The clamp is written as the CPU's
-  // max and min (maxsd, minsd: the second operand when unordered), so NaN takes the lowest bound and the
-  // lowest cell with no branch of its own; the solver reports non-finite particles itself.
+  // 41's level (callgrind), most of it the grid's build every sub-step. The clamp is the CPU's max and min
+  // (maxpd and maxsd give the second operand when unordered), so NaN takes the lowest bound and the lowest
+  // cell with no branch of its own; the solver reports non-finite particles itself.
   constexpr Scalar kLowest = static_cast<Scalar>(1 - kCellOffset);
   constexpr Scalar kHighest = static_cast<Scalar>(kCellMax - 1 - kCellOffset);
+#if defined(__SSE2__)
+  // x and y in one SSE2 vector, z in another: the same products, clamps, truncations and corrections as the
+  // scalar code below, lane by lane, without its branches (60 instructions per point in the scalar code, a
+  // third of the neighbour search's build in issue 41's level; callgrind).
+  const __m128d inv = _mm_set1_pd(m_inv_cell);
+  const __m128d lowest = _mm_set1_pd(kLowest), highest = _mm_set1_pd(kHighest);
+  const __m128i offset = _mm_set1_epi32(static_cast<int>(kCellOffset));
+  const auto cells = [&](__m128d v) {
+    const __m128d c = _mm_min_pd(_mm_max_pd(_mm_mul_pd(v, inv), lowest), highest);
+    const __m128i truncated = _mm_cvttpd_epi32(c);  // two int32 lanes, then zeros
+    // All ones (-1) in a lane whose truncation rounded up (c negative and not whole): the floor is one less.
+    const __m128i below = _mm_shuffle_epi32(_mm_castpd_si128(_mm_cmplt_pd(c, _mm_cvtepi32_pd(truncated))),
+                                            _MM_SHUFFLE(2, 0, 2, 0));
+    return _mm_add_epi32(_mm_add_epi32(truncated, below), offset);
+  };
+  const __m128i xy = cells(_mm_loadu_pd(x.data()));
+  const __m128i z = cells(_mm_load_sd(x.data() + 2));
+  return Vec3i(_mm_cvtsi128_si32(xy), _mm_cvtsi128_si32(_mm_srli_si128(xy, 4)), _mm_cvtsi128_si32(z));
+#else
   Vec3i cell;
   for (int a = 0; a < 3; ++a) {
     const Scalar v = x[a] * m_inv_cell;
@@ -140,6 +184,7 @@ Vec3i NeighborSearch::cell_of(const Vec3& x) const {
     cell[a] = truncated - (c < static_cast<Scalar>(truncated) ? 1 : 0) + static_cast<int>(kCellOffset);
   }
   return cell;
+#endif
 }
 
 std::uint64_t NeighborSearch::key_of_cell(const Vec3i& cell) const {
@@ -459,6 +504,8 @@ void NeighborSearch::find_sorted(const NeighborSearch& queries, bool exclude_sel
   m_query_owner.resize(m);
   m_query_start.resize(m);
   std::vector<std::size_t> used_by(static_cast<std::size_t>(threads), 0);
+  const ScanRunsFunction scan_runs_function = scan_runs_for(m_scan);
+  const Scalar r2 = m_radius * m_radius;
   const auto gather = [&](std::size_t chunk_begin, std::size_t chunk_end, int thread) {
     IndexArray& local = buffers[static_cast<std::size_t>(thread)];
     std::size_t used = used_by[static_cast<std::size_t>(thread)];
@@ -481,8 +528,9 @@ void NeighborSearch::find_sorted(const NeighborSearch& queries, bool exclude_sel
       const std::size_t room = used + runs.total + kScanPadding;
       if (local.size() < room) local.resize(std::max(2 * local.size(), room));
       const std::size_t first = used;
-      used += scan(runs, Vec3(queries.m_xs[k], queries.m_ys[k], queries.m_zs[k]), exclude_self ? i : kNoIndex,
-                   local.data() + used);
+      used += scan_runs_function(m_xs.data(), m_ys.data(), m_zs.data(), m_sorted_index.data(), runs.begin,
+                                 runs.end, runs.runs, Vec3(queries.m_xs[k], queries.m_ys[k], queries.m_zs[k]),
+                                 r2, exclude_self ? i : kNoIndex, local.data() + used);
       out.offsets[i + 1] = static_cast<std::uint32_t>(used - first);
       m_query_owner[i] = thread;
       m_query_start[i] = first;
