@@ -525,12 +525,17 @@ void NeighborSearch::find_sorted(const NeighborSearch& queries, bool exclude_sel
         buffered_cell = c;
       }
       const Index i = queries.m_sorted_index[k];
-      const std::size_t room = used + runs.total + kScanPadding;
-      if (local.size() < room) local.resize(std::max(2 * local.size(), room));
       const std::size_t first = used;
-      used += scan_runs_function(m_xs.data(), m_ys.data(), m_zs.data(), m_sorted_index.data(), runs.begin,
-                                 runs.end, runs.runs, Vec3(queries.m_xs[k], queries.m_ys[k], queries.m_zs[k]),
-                                 r2, exclude_self ? i : kNoIndex, local.data() + used);
+      // No candidates, no scan: most of the fluid's particles are far from every body's boundary points, and
+      // the scan's call was most of their search.
+      if (runs.runs > 0) {
+        const std::size_t room = used + runs.total + kScanPadding;
+        if (local.size() < room) local.resize(std::max(2 * local.size(), room));
+        used +=
+            scan_runs_function(m_xs.data(), m_ys.data(), m_zs.data(), m_sorted_index.data(), runs.begin,
+                               runs.end, runs.runs, Vec3(queries.m_xs[k], queries.m_ys[k], queries.m_zs[k]),
+                               r2, exclude_self ? i : kNoIndex, local.data() + used);
+      }
       out.offsets[i + 1] = static_cast<std::uint32_t>(used - first);
       m_query_owner[i] = thread;
       m_query_start[i] = first;
