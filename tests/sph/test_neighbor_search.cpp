@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 #include <random>
+#include <stdexcept>
 
 #include <drench/sph/candidate_scan.hpp>
 #include <drench/sph/neighbor_search.hpp>
@@ -294,6 +295,105 @@ TEST(NeighborSearch, ZOrderIsAPermutationGroupingEachCell) {
   for (std::size_t k = 1; k < order.size(); ++k) {
     ASSERT_LE(search.cell_key(points[order[k - 1]]), search.cell_key(points[order[k]]));
   }
+}
+
+/// The lists' order by its definition, as slowly as can be: the sources sorted by cell (z, then y, then x of
+/// floor(x / radius)), then by index; each query takes the nine rows (z, y) about its cell, z then y, each
+/// row the sources of its cells x - 1 .. x + 1 in that order, and keeps those within the radius (source minus
+/// query, summed x, y, z, as the scans). Every pair sum downstream follows this order, so the search must
+/// give it exactly, whatever its layout or its tricks.
+NeighborList lists_in_grid_order(const Vec3Array& queries, const Vec3Array& sources, Scalar radius,
+                                 bool exclude_self) {
+  const auto cell = [&](const Vec3& x) {
+    return Vec3i(static_cast<int>(std::floor(x.x() * (1.0 / radius))),
+                 static_cast<int>(std::floor(x.y() * (1.0 / radius))),
+                 static_cast<int>(std::floor(x.z() * (1.0 / radius))));
+  };
+  const auto before = [](const Vec3i& a, const Vec3i& b) {
+    if (a.z() != b.z()) return a.z() < b.z();
+    if (a.y() != b.y()) return a.y() < b.y();
+    return a.x() < b.x();
+  };
+  std::vector<Vec3i> cells(sources.size());
+  IndexArray sorted(sources.size());
+  for (std::size_t j = 0; j < sources.size(); ++j) {
+    cells[j] = cell(sources[j]);
+    sorted[j] = static_cast<Index>(j);
+  }
+  std::stable_sort(sorted.begin(), sorted.end(),
+                   [&](Index a, Index b) { return before(cells[a], cells[b]); });
+  NeighborList list;
+  list.offsets.push_back(0);
+  for (std::size_t i = 0; i < queries.size(); ++i) {
+    const Vec3& x = queries[i];
+    const Vec3i c = cell(x);
+    for (int dz = -1; dz <= 1; ++dz) {
+      for (int dy = -1; dy <= 1; ++dy) {
+        for (const Index j : sorted) {
+          const Vec3i& cj = cells[j];
+          if (cj.z() != c.z() + dz || cj.y() != c.y() + dy || cj.x() < c.x() - 1 || cj.x() > c.x() + 1)
+            continue;
+          if (exclude_self && j == i) continue;
+          const Scalar d0 = sources[j].x() - x.x(), d1 = sources[j].y() - x.y(), d2 = sources[j].z() - x.z();
+          if (d0 * d0 + d1 * d1 + d2 * d2 < radius * radius) list.indices.push_back(j);
+        }
+      }
+    }
+    list.offsets.push_back(static_cast<std::uint32_t>(list.indices.size()));
+  }
+  return list;
+}
+
+// find() and find_self() give every list in exactly the order of its definition (lists_in_grid_order), not
+// only the same sets: in the dense layout and the hashed one, for points in their given order and z-ordered,
+// querying themselves and other points. A change that kept the sets but moved one entry would change the
+// bits of the sums that follow.
+TEST(NeighborSearch, ListsFollowTheGridOrderOfTheirDefinition) {
+  const Scalar radius = 0.04;
+  Vec3Array sparse = random_points(700, Vec3(-0.05, 0, -0.1), Vec3(0.15, 0.2, 0.1), 61);
+  const Vec3Array far = random_points(300, Vec3(-40, -5, 0), Vec3(60, 5, 0.1), 62);
+  sparse.insert(sparse.end(), far.begin(), far.end());
+  const Vec3Array block = random_points(1000, Vec3(-0.1, -0.05, 0), Vec3(0.1, 0.1, 0.15), 63);
+  const Vec3Array queries = random_points(400, Vec3(-0.15, -0.1, -0.15), Vec3(0.2, 0.25, 0.2), 64);
+  for (const bool dense : {false, true}) {
+    NeighborSearch search(radius);
+    const Vec3Array& points = dense ? block : sparse;
+    for (const Vec3Array& order : {points, z_ordered(search, points)}) {
+      search.build(order);
+      ASSERT_EQ(search.dense(), dense);
+      const NeighborList expected = lists_in_grid_order(order, order, radius, true);
+      NeighborList got;
+      find_with_every_scan(search, order, got, /*exclude_self=*/true);
+      EXPECT_EQ(got.offsets, expected.offsets) << (dense ? "dense" : "hashed") << ", find";
+      EXPECT_EQ(got.indices, expected.indices) << (dense ? "dense" : "hashed") << ", find";
+      search.find_self(got);
+      EXPECT_EQ(got.offsets, expected.offsets) << (dense ? "dense" : "hashed") << ", find_self";
+      EXPECT_EQ(got.indices, expected.indices) << (dense ? "dense" : "hashed") << ", find_self";
+      const NeighborList cross = lists_in_grid_order(queries, order, radius, false);
+      find_with_every_scan(search, queries, got, /*exclude_self=*/false);
+      EXPECT_EQ(got.offsets, cross.offsets) << (dense ? "dense" : "hashed") << ", other queries";
+      EXPECT_EQ(got.indices, cross.indices) << (dense ? "dense" : "hashed") << ", other queries";
+      for (const Vec3Array& query_order : {queries, z_ordered(search, queries), points}) {
+        NeighborSearch query_grid(radius);
+        query_grid.build(query_order);
+        search.find_for_points_of(query_grid, got);
+        const NeighborList expected_cross = lists_in_grid_order(query_order, order, radius, false);
+        EXPECT_EQ(got.offsets, expected_cross.offsets) << (dense ? "dense" : "hashed") << ", another grid's";
+        EXPECT_EQ(got.indices, expected_cross.indices) << (dense ? "dense" : "hashed") << ", another grid's";
+      }
+    }
+  }
+}
+
+// Another grid's points are its cells' points only if its cells are this grid's: a grid of other cells is
+// refused by name.
+TEST(NeighborSearch, FindForPointsOfAGridOfOtherCellsThrows) {
+  const Vec3Array points = random_points(50, Vec3(0, 0, 0), Vec3(0.1, 0.1, 0.1), 71);
+  NeighborSearch search(0.04), other(0.05);
+  search.build(points);
+  other.build(points);
+  NeighborList list;
+  EXPECT_THROW(search.find_for_points_of(other, list), std::invalid_argument);
 }
 
 TEST(NeighborSearch, EmptySourceSetGivesNoNeighbors) {

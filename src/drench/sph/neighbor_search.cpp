@@ -4,7 +4,13 @@
 #include <cassert>
 #include <cmath>
 #include <limits>
+#include <stdexcept>
+#include <string>
 #include <utility>
+
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 
 #include <drench/common/parallel.hpp>
 #include <drench/sph/candidate_scan.hpp>
@@ -34,12 +40,80 @@ std::uint64_t row_key(int y, int z) {
   return (static_cast<std::uint64_t>(z) << kCellBits) | static_cast<std::uint64_t>(y);
 }
 
+/// Sorts `values` by `keys` (both n long, moved together), stably: a least-significant-digit radix sort of
+/// the keys' low bits up to max_key's highest, in passes of at most 11 bits. The grid's cells are sorted so
+/// every PBF sub-step; std::sort of (key, index) pairs was a quarter of the build there (callgrind, issue
+/// 41's level), for keys of about 20 bits that two or three counting passes sort.
+void radix_sort_by_key(std::vector<std::uint64_t>& keys, IndexArray& values, std::uint64_t max_key) {
+  const int bits = max_key == 0 ? 0 : 64 - __builtin_clzll(max_key);
+  if (bits == 0) return;
+  const int passes = (bits + 10) / 11;
+  const int digit_bits = (bits + passes - 1) / passes;
+  const std::uint64_t mask = (std::uint64_t{1} << digit_bits) - 1;
+  const std::size_t n = keys.size();
+  std::vector<std::uint64_t> keys_to(n);
+  IndexArray values_to(n);
+  std::vector<std::uint32_t> start(static_cast<std::size_t>(mask) + 2);
+  for (int pass = 0; pass < passes; ++pass) {
+    const int shift = pass * digit_bits;
+    std::fill(start.begin(), start.end(), 0u);
+    for (std::size_t k = 0; k < n; ++k)
+      ++start[static_cast<std::size_t>((keys[k] >> shift) & mask) + 1];
+    for (std::size_t d = 0; d <= mask; ++d)
+      start[d + 1] += start[d];
+    for (std::size_t k = 0; k < n; ++k) {
+      const std::uint32_t slot = start[static_cast<std::size_t>((keys[k] >> shift) & mask)]++;
+      keys_to[slot] = keys[k];
+      values_to[slot] = values[k];
+    }
+    keys.swap(keys_to);
+    values.swap(values_to);
+  }
+}
+
+/// Appends the non-empty run [b, e) of sorted points to `runs` (a NeighborSearch::CandidateRuns), joined to
+/// the last run when it starts where that one ends: the scan then reads the same points in the same order in
+/// one run. Sparse water's rows hold a cell or two, so the runs of neighbouring rows often touch, and the
+/// scans take at least a group of eight per run: joined, the PBF level's searches scan fewer, fuller groups.
+template <class Runs>
+inline void append_run(Runs& runs, std::uint32_t b, std::uint32_t e) {
+  if (runs.runs > 0 && runs.end[runs.runs - 1] == b) {
+    runs.end[runs.runs - 1] = e;
+  } else {
+    runs.begin[runs.runs] = b;
+    runs.end[runs.runs] = e;
+    ++runs.runs;
+  }
+  runs.total += e - b;
+}
+
 /// scan_runs with scan_candidates_lanes, compiled for each copy of DRENCH_SIMD_CLONES: the CPUs without AVX2.
 DRENCH_SIMD_CLONES std::size_t scan_runs_lanes(const Scalar* xs, const Scalar* ys, const Scalar* zs,
                                                const Index* indices, const std::uint32_t* begins,
                                                const std::uint32_t* ends, int runs, const Vec3& x, Scalar r2,
                                                Index self, Index* dst) {
   return scan_runs<scan_candidates_lanes>(xs, ys, zs, indices, begins, ends, runs, x, r2, self, dst);
+}
+
+/// The scan over runs of `scan` (NeighborSearch::set_candidate_scan), all of one signature: find_sorted picks
+/// it once per search rather than through scan()'s switch per query, a call of 30 instructions a query in
+/// issue 41's level (callgrind).
+using ScanRunsFunction = std::size_t (*)(const Scalar*, const Scalar*, const Scalar*, const Index*,
+                                         const std::uint32_t*, const std::uint32_t*, int, const Vec3&, Scalar,
+                                         Index, Index*);
+ScanRunsFunction scan_runs_for(CandidateScan scan) {
+  switch (scan) {
+#if DRENCH_HAS_AVX512_SCAN
+    case CandidateScan::kAvx512Compress:
+      return scan_runs_compress;
+#endif
+#if DRENCH_HAS_AVX2_SCAN
+    case CandidateScan::kAvx2Permute:
+      return scan_runs_permute;
+#endif
+    default:
+      return scan_runs_lanes;
+  }
 }
 
 }  // namespace
@@ -77,22 +151,40 @@ Vec3i NeighborSearch::cell_of(const Vec3& x) const {
   // out-of-range double to int is undefined behaviour), and before flooring, which keeps the integer bounds,
   // so the cells are the same; then floored by truncation and a correction for negative values: std::floor
   // was a libm call per axis in the baseline build, and made this 100 instructions per point, 2% of issue
-  // 41's level (callgrind), most of it the grid's build every sub-step. NaN goes to the lowest cell; the
-  // solver reports non-finite particles itself.
+  // 41's level (callgrind), most of it the grid's build every sub-step. The clamp is the CPU's max and min
+  // (maxpd and maxsd give the second operand when unordered), so NaN takes the lowest bound and the lowest
+  // cell with no branch of its own; the solver reports non-finite particles itself.
   constexpr Scalar kLowest = static_cast<Scalar>(1 - kCellOffset);
   constexpr Scalar kHighest = static_cast<Scalar>(kCellMax - 1 - kCellOffset);
+#if defined(__SSE2__)
+  // x and y in one SSE2 vector, z in another: the same products, clamps, truncations and corrections as the
+  // scalar code below, lane by lane, without its branches (60 instructions per point in the scalar code, a
+  // third of the neighbour search's build in issue 41's level; callgrind).
+  const __m128d inv = _mm_set1_pd(m_inv_cell);
+  const __m128d lowest = _mm_set1_pd(kLowest), highest = _mm_set1_pd(kHighest);
+  const __m128i offset = _mm_set1_epi32(static_cast<int>(kCellOffset));
+  const auto cells = [&](__m128d v) {
+    const __m128d c = _mm_min_pd(_mm_max_pd(_mm_mul_pd(v, inv), lowest), highest);
+    const __m128i truncated = _mm_cvttpd_epi32(c);  // two int32 lanes, then zeros
+    // All ones (-1) in a lane whose truncation rounded up (c negative and not whole): the floor is one less.
+    const __m128i below = _mm_shuffle_epi32(_mm_castpd_si128(_mm_cmplt_pd(c, _mm_cvtepi32_pd(truncated))),
+                                            _MM_SHUFFLE(2, 0, 2, 0));
+    return _mm_add_epi32(_mm_add_epi32(truncated, below), offset);
+  };
+  const __m128i xy = cells(_mm_loadu_pd(x.data()));
+  const __m128i z = cells(_mm_load_sd(x.data() + 2));
+  return Vec3i(_mm_cvtsi128_si32(xy), _mm_cvtsi128_si32(_mm_srli_si128(xy, 4)), _mm_cvtsi128_si32(z));
+#else
   Vec3i cell;
   for (int a = 0; a < 3; ++a) {
     const Scalar v = x[a] * m_inv_cell;
-    if (std::isnan(v)) {
-      cell[a] = 1;
-      continue;
-    }
-    const Scalar c = std::clamp(v, kLowest, kHighest);
+    const Scalar above_lowest = v > kLowest ? v : kLowest;  // NaN: kLowest
+    const Scalar c = above_lowest < kHighest ? above_lowest : kHighest;
     const int truncated = static_cast<int>(c);
     cell[a] = truncated - (c < static_cast<Scalar>(truncated) ? 1 : 0) + static_cast<int>(kCellOffset);
   }
   return cell;
+#endif
 }
 
 std::uint64_t NeighborSearch::key_of_cell(const Vec3i& cell) const {
@@ -145,7 +237,7 @@ void NeighborSearch::build(const Vec3Array& points) {
   if (m_dense) {
     build_dense(cells, lo, dims);
   } else {
-    build_hashed(cells);
+    build_hashed(cells, lo, dims);
   }
   m_count = n;
   // Where a query can have neighbors: within the radius of the finite points' box (a NaN point is nobody's
@@ -183,58 +275,72 @@ void NeighborSearch::build(const Vec3Array& points) {
 void NeighborSearch::build_dense(const std::vector<Vec3i>& cells, const Vec3i& lo, const Vec3i& dims) {
   m_lo = lo;
   m_dims = dims;
+  const std::size_t n = cells.size();
   const std::size_t cell_count = static_cast<std::size_t>(dims.x()) * dims.y() * dims.z();
-  auto linear = [&](const Vec3i& c) {
-    return (static_cast<std::size_t>(c.z() - lo.z()) * dims.y() + (c.y() - lo.y())) * dims.x() +
-           (c.x() - lo.x());
-  };
-  // Counting sort by cell: stable in the point index, so the order is deterministic.
+  // Counting sort by cell, stable in the point index, so the order is deterministic. Each point's cell is
+  // linearised once, and the points are placed from the last one at the end of its cell, each cell's entry
+  // counting down to its first point: no second array of cursors over every cell (the grid can hold 128
+  // cells per point).
+  std::vector<std::uint32_t>& linear = m_linear_scratch;
+  linear.resize(n);
   m_cell_begin.assign(cell_count + 1, 0);
-  for (const Vec3i& c : cells)
-    ++m_cell_begin[linear(c) + 1];
-  for (std::size_t c = 0; c < cell_count; ++c)
-    m_cell_begin[c + 1] += m_cell_begin[c];
-  std::vector<std::uint32_t> next(m_cell_begin.begin(), m_cell_begin.end() - 1);
-  m_sorted_index.resize(cells.size());
-  for (std::size_t i = 0; i < cells.size(); ++i)
-    m_sorted_index[next[linear(cells[i])]++] = static_cast<Index>(i);
+  for (std::size_t i = 0; i < n; ++i) {
+    const Vec3i& c = cells[i];
+    const std::size_t l =
+        (static_cast<std::size_t>(c.z() - lo.z()) * dims.y() + (c.y() - lo.y())) * dims.x() +
+        (c.x() - lo.x());
+    linear[i] = static_cast<std::uint32_t>(l);
+    ++m_cell_begin[l];
+  }
+  std::uint32_t sum = 0;
+  for (std::size_t c = 0; c < cell_count; ++c) {
+    sum += m_cell_begin[c];
+    m_cell_begin[c] = sum;
+  }
+  m_cell_begin[cell_count] = static_cast<std::uint32_t>(n);
+  m_sorted_index.resize(n);
+  for (std::size_t i = n; i-- > 0;)
+    m_sorted_index[--m_cell_begin[linear[i]]] = static_cast<Index>(i);
   m_cells.clear();
 }
 
-void NeighborSearch::build_hashed(const std::vector<Vec3i>& cells) {
+void NeighborSearch::build_hashed(const std::vector<Vec3i>& cells, const Vec3i& lo, const Vec3i& dims) {
   // Sorted by row (z, then y), then x, then index, as the dense grid's linear index sorts them: the three
   // cells x - 1 .. x + 1 of a row are then one run of sorted points, and a query looks up the nine rows about
   // its cell, not 27 cells. The hashed grid held sparse water (a jet, spray, a film on the ground) at 1.5
-  // points per cell in issue 41's level, where the 27 lookups per cell were most of the search.
+  // points per cell in issue 41's level, where the 27 lookups per cell were most of the search. The key is
+  // the cell's linear index in the points' box of cells (below 2^63: 2^21 cells per axis), which orders the
+  // cells so.
   const std::size_t n = cells.size();
-  std::vector<std::pair<std::uint64_t, Index>> keyed(n);
-  parallel_for(n, kLightChunk, [&](std::size_t begin, std::size_t end) {
-    for (std::size_t i = begin; i < end; ++i) {
-      const Vec3i& c = cells[i];
-      keyed[i] = {(row_key(c.y(), c.z()) << kCellBits) | static_cast<std::uint64_t>(c.x()),
-                  static_cast<Index>(i)};
-    }
-  });
-  std::sort(keyed.begin(), keyed.end());
+  std::vector<std::uint64_t> keys(n);
   m_sorted_index.resize(n);
+  const auto dx = static_cast<std::uint64_t>(dims.x()), dy = static_cast<std::uint64_t>(dims.y());
+  for (std::size_t i = 0; i < n; ++i) {
+    const Vec3i& c = cells[i];
+    keys[i] =
+        (static_cast<std::uint64_t>(c.z() - lo.z()) * dy + static_cast<std::uint64_t>(c.y() - lo.y())) * dx +
+        static_cast<std::uint64_t>(c.x() - lo.x());
+    m_sorted_index[i] = static_cast<Index>(i);
+  }
+  radix_sort_by_key(keys, m_sorted_index, dx * dy * static_cast<std::uint64_t>(dims.z()) - 1);
   std::vector<std::uint64_t> rows;
   m_cell_begin.clear();
   m_cell_x.clear();
   m_row_first.clear();
   for (std::size_t k = 0; k < n; ++k) {
-    m_sorted_index[k] = keyed[k].second;
-    const std::uint64_t key = keyed[k].first;
-    if (k > 0 && keyed[k - 1].first == key) continue;
-    const std::uint64_t row = key >> kCellBits;
+    if (k > 0 && keys[k - 1] == keys[k]) continue;
+    const Vec3i& c = cells[m_sorted_index[k]];
+    const std::uint64_t row = row_key(c.y(), c.z());
     if (rows.empty() || rows.back() != row) {
       rows.push_back(row);
       m_row_first.push_back(static_cast<std::uint32_t>(m_cell_x.size()));
     }
-    m_cell_x.push_back(static_cast<int>(key & static_cast<std::uint64_t>(kCellMax)));
+    m_cell_x.push_back(c.x());
     m_cell_begin.push_back(static_cast<std::uint32_t>(k));
   }
   m_cell_begin.push_back(static_cast<std::uint32_t>(n));
   m_row_first.push_back(static_cast<std::uint32_t>(m_cell_x.size()));
+  m_row_keys = rows;
   m_cells.build(std::move(rows));
 }
 
@@ -274,10 +380,7 @@ void NeighborSearch::candidate_runs(const Vec3i& cell, CandidateRuns& out) const
         const std::uint32_t b = m_cell_begin[row + x_first];
         const std::uint32_t e = m_cell_begin[row + x_last + 1];
         if (b >= e) continue;
-        out.begin[out.runs] = b;
-        out.end[out.runs] = e;
-        ++out.runs;
-        out.total += e - b;
+        append_run(out, b, e);
       }
     }
     return;
@@ -289,29 +392,42 @@ void NeighborSearch::candidate_runs(const Vec3i& cell, CandidateRuns& out) const
       std::uint32_t b, e;
       const bool found = hashed_row_range(cell + Vec3i(0, dy, dz), b, e);
       if (!found) continue;
-      out.begin[out.runs] = b;
-      out.end[out.runs] = e;
-      ++out.runs;
-      out.total += e - b;
+      append_run(out, b, e);
     }
   }
 }
 
 void NeighborSearch::rows_along(const Vec3i& cell, RowCursor& rows, CandidateRuns& out) const {
   // The cells come in the sorted order: along a row, x only grows, and the nine rows about it stay the same.
-  // They are looked up once per row of cells, and each row's cursor moves on from where the last cell left
-  // it, rather than nine lookups and searches per cell (candidate_runs, which gives the same runs).
-  if (!rows.valid || cell.y() != rows.y || cell.z() != rows.z || cell.x() < rows.x) {
+  // They are found once per row of cells, and each row's cursor moves on from where the last cell left it,
+  // rather than nine lookups and searches per cell (candidate_runs, which gives the same runs). The rows
+  // come in order too, so the three runs of rows (z + dz, y - 1 .. y + 1) are found by walking three cursors
+  // forward over the sorted row keys: nine hash lookups per row of cells were a third of find_self in issue
+  // 41's level (callgrind), where sparse water has rows of one or two cells.
+  const bool same_row = rows.valid && cell.y() == rows.y && cell.z() == rows.z;
+  if (!same_row || cell.x() < rows.x) {
+    const std::uint64_t* keys = m_row_keys.data();
+    const auto row_count = static_cast<std::uint32_t>(m_row_keys.size());
+    const bool forward = rows.valid && row_key(cell.y(), cell.z()) > row_key(rows.y, rows.z);
     int r = 0;
     for (int dz = -1; dz <= 1; ++dz) {
+      const std::uint64_t first_key = row_key(cell.y() - 1, cell.z() + dz);
+      std::uint32_t& first = rows.first_row[dz + 1];
+      if (forward) {
+        while (first < row_count && keys[first] < first_key)
+          ++first;
+      } else {
+        first = static_cast<std::uint32_t>(std::lower_bound(keys, keys + row_count, first_key) - keys);
+      }
+      std::uint32_t k = first;
       for (int dy = -1; dy <= 1; ++dy, ++r) {
-        const std::int64_t row = m_cells.find(row_key(cell.y() + dy, cell.z() + dz));
-        if (row < 0) {
+        if (k < row_count && keys[k] == first_key + static_cast<std::uint64_t>(dy + 1)) {
+          rows.from[r] = m_cell_x.data() + m_row_first[k];
+          rows.last[r] = m_cell_x.data() + m_row_first[k + 1];
+          ++k;
+        } else {
           rows.from[r] = rows.last[r] = nullptr;
-          continue;
         }
-        rows.from[r] = m_cell_x.data() + m_row_first[static_cast<std::size_t>(row)];
-        rows.last[r] = m_cell_x.data() + m_row_first[static_cast<std::size_t>(row) + 1];
       }
     }
     rows.valid = true;
@@ -332,10 +448,7 @@ void NeighborSearch::rows_along(const Vec3i& cell, RowCursor& rows, CandidateRun
     if (from == to) continue;
     const std::uint32_t b = m_cell_begin[static_cast<std::size_t>(from - m_cell_x.data())];
     const std::uint32_t e = m_cell_begin[static_cast<std::size_t>(to - m_cell_x.data())];
-    out.begin[out.runs] = b;
-    out.end[out.runs] = e;
-    ++out.runs;
-    out.total += e - b;
+    append_run(out, b, e);
   }
 }
 
@@ -359,17 +472,31 @@ std::size_t NeighborSearch::scan(const CandidateRuns& runs, const Vec3& x, Index
 }
 
 void NeighborSearch::find_self(NeighborList& out) const {
-  const std::size_t m = m_count;
+  find_sorted(*this, /*exclude_self=*/true, out);
+}
+
+void NeighborSearch::find_for_points_of(const NeighborSearch& queries, NeighborList& out) const {
+  if (queries.m_radius != m_radius) {
+    throw std::invalid_argument("NeighborSearch::find_for_points_of: the queries' grid has cells of " +
+                                std::to_string(queries.m_radius) + " m, this one of " +
+                                std::to_string(m_radius) + " m");
+  }
+  find_sorted(queries, /*exclude_self=*/false, out);
+}
+
+void NeighborSearch::find_sorted(const NeighborSearch& queries, bool exclude_self, NeighborList& out) const {
+  const std::size_t m = queries.m_count;
   out.offsets.assign(m + 1, 0);
-  if (m == 0) {
+  if (m == 0 || m_count == 0) {
     out.indices.clear();
     return;
   }
-  // The queries in the sorted order, where the points of a cell are contiguous: the runs of a cell's 27
-  // neighbours are looked up once per cell, and no query's cell is computed again. In the caller's order
-  // a z-order sorted some sub-steps ago kept runs of only 1.2 queries per cell in issue 41's level, and
-  // looking the runs up again for nearly every query was half the search. Each thread gathers the lists of
-  // the chunks it takes into its own buffer and remembers where each query's list starts; the lists are then
+  // The queries in their grid's sorted order, where the points of a cell are contiguous: the runs of a
+  // cell's 27 neighbours are looked up once per cell, and no query's cell is computed again. In the caller's
+  // order a z-order sorted some sub-steps ago kept runs of only 1.2 queries per cell in issue 41's level, and
+  // looking the runs up again for nearly every query was half the search. Both grids sort their cells by row
+  // (z, y), then x, so the queries' cells come in this grid's order too. Each thread gathers the lists of the
+  // chunks it takes into its own buffer and remembers where each query's list starts; the lists are then
   // copied to their place in query order, the same for any thread count and any deal.
   const int threads = thread_count();
   std::vector<IndexArray>& buffers = m_thread_buffers;
@@ -377,6 +504,8 @@ void NeighborSearch::find_self(NeighborList& out) const {
   m_query_owner.resize(m);
   m_query_start.resize(m);
   std::vector<std::size_t> used_by(static_cast<std::size_t>(threads), 0);
+  const ScanRunsFunction scan_runs_function = scan_runs_for(m_scan);
+  const Scalar r2 = m_radius * m_radius;
   const auto gather = [&](std::size_t chunk_begin, std::size_t chunk_end, int thread) {
     IndexArray& local = buffers[static_cast<std::size_t>(thread)];
     std::size_t used = used_by[static_cast<std::size_t>(thread)];
@@ -385,7 +514,7 @@ void NeighborSearch::find_self(NeighborList& out) const {
     bool buffered = false;
     Vec3i buffered_cell = Vec3i::Zero();
     for (std::size_t k = chunk_begin; k < chunk_end; ++k) {
-      const Vec3i& c = m_sorted_cells[k];
+      const Vec3i& c = queries.m_sorted_cells[k];
       if (!buffered || c != buffered_cell) {
         if (m_dense) {
           candidate_runs(c, runs);
@@ -395,11 +524,18 @@ void NeighborSearch::find_self(NeighborList& out) const {
         buffered = true;
         buffered_cell = c;
       }
-      const Index i = m_sorted_index[k];
-      const std::size_t room = used + runs.total + kScanPadding;
-      if (local.size() < room) local.resize(std::max(2 * local.size(), room));
+      const Index i = queries.m_sorted_index[k];
       const std::size_t first = used;
-      used += scan(runs, Vec3(m_xs[k], m_ys[k], m_zs[k]), i, local.data() + used);
+      // No candidates, no scan: most of the fluid's particles are far from every body's boundary points, and
+      // the scan's call was most of their search.
+      if (runs.runs > 0) {
+        const std::size_t room = used + runs.total + kScanPadding;
+        if (local.size() < room) local.resize(std::max(2 * local.size(), room));
+        used +=
+            scan_runs_function(m_xs.data(), m_ys.data(), m_zs.data(), m_sorted_index.data(), runs.begin,
+                               runs.end, runs.runs, Vec3(queries.m_xs[k], queries.m_ys[k], queries.m_zs[k]),
+                               r2, exclude_self ? i : kNoIndex, local.data() + used);
+      }
       out.offsets[i + 1] = static_cast<std::uint32_t>(used - first);
       m_query_owner[i] = thread;
       m_query_start[i] = first;

@@ -65,6 +65,12 @@ class NeighborSearch {
   /// object.
   void find_self(NeighborList& out) const;
 
+  /// find(points, out, false) for the points of `queries`' last build (its query i is its build's point i):
+  /// the same lists, found faster, as find_self finds them (the queries' cells are known and sorted). The
+  /// fluid's search of its boundary points each sub-step takes the fluid's grid so.
+  /// @throws std::invalid_argument when `queries` has another support radius (its cells would differ)
+  void find_for_points_of(const NeighborSearch& queries, NeighborList& out) const;
+
   /// Permutation that orders `points` along the z-order curve of their cells (ties by index): new position k
   /// holds old index order[k].
   IndexArray z_order(const Vec3Array& points) const;
@@ -102,20 +108,25 @@ class NeighborSearch {
   struct RowCursor {
     bool valid = false;
     int x = 0, y = 0, z = 0;  // the cell of the last query
-    const int* from[9];       // into m_cell_x; null, with last, for an empty row
+    std::uint32_t
+        first_row[3];    // per dz = -1, 0, 1: the first row (of m_row_keys) not before (z + dz, y - 1)
+    const int* from[9];  // into m_cell_x; null, with last, for an empty row
     const int* last[9];
   };
   /// Hashed mode: candidate_runs(cell, out) for cells taken in the sorted order, as find_self takes them,
   /// with `rows` kept from the previous cell.
   void rows_along(const Vec3i& cell, RowCursor& rows, CandidateRuns& out) const;
+  /// find_self and find_for_points_of: the lists of the points of `queries`' last build (which may be this),
+  /// taken in its sorted order; with exclude_self, query i skips source i.
+  void find_sorted(const NeighborSearch& queries, bool exclude_self, NeighborList& out) const;
   std::uint64_t key_of_cell(const Vec3i& cell) const;
   Vec3i cell_of(const Vec3& x) const;
   /// Hashed mode only: the sorted-point range of the cells x - 1 .. x + 1 of the row of `cell`; false when
   /// empty.
   bool hashed_row_range(const Vec3i& cell, std::uint32_t& begin, std::uint32_t& end) const;
   void build_dense(const std::vector<Vec3i>& cells, const Vec3i& lo, const Vec3i& dims);
-  /// @param cells  the cell of every point (cell_of)
-  void build_hashed(const std::vector<Vec3i>& cells);
+  /// @param cells  the cell of every point (cell_of); lo, dims: their box of cells, as for build_dense
+  void build_hashed(const std::vector<Vec3i>& cells, const Vec3i& lo, const Vec3i& dims);
   /// Appends to dst the original indices of the candidates of `runs` within the radius of x, but `self`, with
   /// the CPU's scan (m_scan); returns how many. dst has room for runs.total + kScanPadding.
   std::size_t scan(const CandidateRuns& runs, const Vec3& x, Index self, Index* dst) const;
@@ -129,11 +140,13 @@ class NeighborSearch {
   std::vector<Vec3i> m_sorted_cells;  // n: the cell of each sorted point
   Vec3 m_reach_lo = Vec3::Zero();     // the finite points' box grown by two radii (unit: m)
   Vec3 m_reach_hi = Vec3::Zero();
-  std::size_t m_count = 0;  // source points of the last build
-  KeyIndexTable m_cells;    // hashed mode: the distinct rows (z, y), ascending, and their table
-  std::vector<std::uint32_t> m_cell_begin;  // first sorted point of each cell; one extra end entry
-  std::vector<int> m_cell_x;                // hashed mode: the x of each distinct cell, ascending in its row
-  std::vector<std::uint32_t> m_row_first;   // hashed mode: the first cell of each row; one extra end entry
+  std::size_t m_count = 0;                // source points of the last build
+  KeyIndexTable m_cells;                  // hashed mode: the distinct rows (z, y), ascending, and their table
+  std::vector<std::uint64_t> m_row_keys;  // hashed mode: the same rows' keys, ascending (rows_along)
+  std::vector<std::uint32_t> m_cell_begin;      // first sorted point of each cell; one extra end entry
+  std::vector<std::uint32_t> m_linear_scratch;  // build_dense: each point's cell, linearised
+  std::vector<int> m_cell_x;               // hashed mode: the x of each distinct cell, ascending in its row
+  std::vector<std::uint32_t> m_row_first;  // hashed mode: the first cell of each row; one extra end entry
   bool m_dense = false;
   CandidateScan m_scan = CandidateScan::kFourLanes;
   Vec3i m_lo = Vec3i::Zero();                        // dense mode: first cell of the grid

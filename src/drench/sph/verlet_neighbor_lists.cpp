@@ -118,7 +118,7 @@ bool VerletNeighborLists::update(const Vec3Array& positions, const std::vector<s
     // Exactly the neighbors: nothing to filter, and no candidates are kept.
     m_exact_fluid.build(positions);
     m_exact_fluid.find_self(m_fluid);
-    m_exact_boundary.find(positions, m_boundary, /*exclude_self=*/false);
+    m_exact_boundary.find_for_points_of(m_exact_fluid, m_boundary);
     if (m_want_fluid_factors) {
       gradient_factors(m_fluid, positions, positions, m_fluid_factors);
     } else {
