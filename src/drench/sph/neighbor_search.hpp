@@ -92,7 +92,8 @@ class NeighborSearch {
 
  private:
   /// Where the candidates of a query lie in the sorted arrays (m_xs, ...): the runs [begin[r], end[r]),
-  /// r < runs, in find()'s order (nine rows of three cells, in either layout), `total` points in all.
+  /// r < runs, in find()'s order (nine rows of three cells, in either layout; rows whose runs touch in the
+  /// sorted arrays are joined into one run, so at most nine), `total` points in all.
   struct CandidateRuns {
     std::uint32_t begin[9];
     std::uint32_t end[9];
