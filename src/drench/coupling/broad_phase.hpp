@@ -84,7 +84,8 @@ class TriangleBoxKey {
   /// it and returns false.
   /// @param moved  when not null and the result is false: M flags, set for the nodes whose position at either
   ///        end differs from the remembered one (all of them when the node count or the triangles changed,
-  ///        or on the first call)
+  ///        or on the first call); a node whose bytes did not change may be left unset even with a NaN, as
+  ///        its boxes are the same bits
   bool same_as_last(const ClothMesh& cloth, std::vector<std::uint8_t>* moved = nullptr);
 
  private:
