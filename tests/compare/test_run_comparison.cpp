@@ -396,6 +396,7 @@ TEST(ReferenceOverrides, RefineTheSceneEffectiveValuesAndKeepTheRest) {
   EXPECT_DOUBLE_EQ(document["time"]["dt"].get<double>(), 0.0005);
   EXPECT_DOUBLE_EQ(document["fluid"]["pcisph"]["eta"].get<double>(), 0.0001) << "the default 0.001 / 10";
   EXPECT_EQ(document["fluid"]["pcisph"]["precision"], "double");
+  EXPECT_EQ(document["fluid"]["pbf"]["precision"], "double");
   EXPECT_DOUBLE_EQ(document["fluid"]["dfsph"]["eta"].get<double>(), 0.00005);
   EXPECT_EQ(document["cloth"]["substeps"], 12);
   EXPECT_DOUBLE_EQ(document["fluid"]["particle_spacing"].get<double>(), 0.005);

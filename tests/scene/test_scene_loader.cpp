@@ -369,6 +369,11 @@ TEST(SceneLoader, ReadsPbfWithItsSettingsAndDefaults) {
                    .fluid.pbf.max_compression_per_iteration);
   EXPECT_FALSE(parse(R"({"fluid": {"pbf": {"scorr_substep": null}}})").fluid.pbf.scorr_substep);
   EXPECT_EQ(parse(R"({"fluid": {"pbf": {"scorr_substep": 0.001}}})").fluid.pbf.scorr_substep, 0.001);
+  EXPECT_EQ(d.precision, IterationPrecision::SINGLE);
+  EXPECT_EQ(parse(R"({"fluid": {"pbf": {"precision": "double"}}})").fluid.pbf.precision,
+            IterationPrecision::DOUBLE);
+  EXPECT_EQ(parse(R"({"fluid": {"pbf": {"precision": "single"}}})").fluid.pbf.precision,
+            IterationPrecision::SINGLE);
   const SceneConfig c = parse(R"({"fluid": {"pressure_solver": "pbf", "pbf": {"substeps": 2, "iterations": 6,
       "relaxation": 0.5, "scorr_k": 0, "scorr_n": 2, "scorr_dq": 0.3}}})");
   EXPECT_EQ(c.fluid.pressure_solver, PressureSolverKind::PBF);
@@ -391,7 +396,8 @@ TEST(SceneLoader, RejectsBadPbfSettingsNamingTheKey) {
   EXPECT_TRUE(scene_error(R"({"fluid": {"pbf": {"sub_steps": 2}}})",
                           "fluid.pbf.sub_steps is not a known key (x.json); known: substeps, iterations, "
                           "relaxation, scorr_k, scorr_n, scorr_dq, max_compression_per_iteration, "
-                          "scorr_substep"));
+                          "scorr_substep, precision"));
+  EXPECT_TRUE(scene_error(R"({"fluid": {"pbf": {"precision": "half"}}})", "fluid.pbf.precision"));
   EXPECT_TRUE(scene_error(R"({"fluid": {"pbf": {"max_compression_per_iteration": 0}}})",
                           "fluid.pbf.max_compression_per_iteration must be > 0, got 0 (x.json)"));
   EXPECT_TRUE(scene_error(R"({"fluid": {"pbf": {"scorr_substep": -0.004}}})",

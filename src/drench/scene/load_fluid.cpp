@@ -60,13 +60,16 @@ FluidSettings read_fluid(const Node& node) {
                       fluid.dfsph.max_iterations);
 
   const ObjectReader pbf(r["pbf"], {"substeps", "iterations", "relaxation", "scorr_k", "scorr_n", "scorr_dq",
-                                    "max_compression_per_iteration", "scorr_substep"});
+                                    "max_compression_per_iteration", "scorr_substep", "precision"});
   pbf.read("substeps", fluid.pbf.substeps, kAtLeastOne);
   pbf.read("iterations", fluid.pbf.iterations, kAtLeastOne);
   pbf.read("relaxation", fluid.pbf.relaxation, kNonNegative);
   pbf.read("scorr_k", fluid.pbf.scorr_k, kNonNegative);
   pbf.read("scorr_n", fluid.pbf.scorr_n, kAtLeastOne);
   pbf.read("scorr_dq", fluid.pbf.scorr_dq, Range{0.0, true, 1.0, true});
+  pbf.read_choice("precision", fluid.pbf.precision,
+                  Choices<IterationPrecision>{{"single", IterationPrecision::SINGLE},
+                                              {"double", IterationPrecision::DOUBLE}});
 
   // null is "no limit" (the published WCSPH, PCISPH and DFSPH), so that --set can undo the default.
   for (auto [reader, key, limit] :

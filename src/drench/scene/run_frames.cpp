@@ -141,6 +141,7 @@ std::vector<std::string> reference_overrides(const nlohmann::json& scene,
   if (refinement.double_precision) {
     add({"fluid", "pcisph", "precision"}, "double");
     add({"fluid", "dfsph", "precision"}, "double");
+    add({"fluid", "pbf", "precision"}, "double");
   }
   if (config.cloth)
     add({"cloth", "substeps"}, static_cast<int>(config.cloth->substeps * refinement.cloth_substeps_factor));

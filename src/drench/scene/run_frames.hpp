@@ -33,7 +33,7 @@ struct ReferenceRefinement {
   double dt_divisor = 8;             ///< time.dt (and with time.adaptive time.dt_min) divided by this, >= 1
   double eta_divisor = 10;           ///< fluid.pcisph.eta and fluid.dfsph.eta divided by this, >= 1
   double cloth_substeps_factor = 4;  ///< cloth.substeps multiplied by this, >= 1 (a whole number)
-  bool double_precision = true;      ///< fluid.pcisph.precision and fluid.dfsph.precision "double"
+  bool double_precision = true;      ///< fluid.{pcisph,dfsph,pbf}.precision "double"
 };
 
 /// The `--set` assignments that make `scene` (a scene document with the user's overrides applied, valid)

@@ -7,6 +7,7 @@
 #include <type_traits>
 
 #include <drench/common/parallel.hpp>
+#include <drench/sph/float_lanes.hpp>
 #include <drench/sph/packed_lanes.hpp>
 
 namespace drench {
@@ -206,8 +207,8 @@ template <class Group>
 /// every term of i's move is a zero, and their sum is +0 (the sums start at +0, and +0 + -0 = +0): the move
 /// is known without the sum. Spray and the free surface are not compressed, and their moves were most of the
 /// game-like level's move pass (issue 41).
-[[gnu::always_inline]] inline bool at_rest(const NeighborList& list, std::size_t i,
-                                           const PackedPointArray& x_w) {
+template <class Points>
+[[gnu::always_inline]] inline bool at_rest(const NeighborList& list, std::size_t i, const Points& x_w) {
   for (const Index* j = list.begin(i); j != list.end(i); ++j)
     if (x_w[*j].w != 0.0) return false;
   return true;
@@ -233,6 +234,200 @@ DRENCH_SIMD_CLONES void pbf_moves(const FluidContext& ctx, const PackedPointArra
       if (pi.w != 0.0)
         move -= kept_gradient_sum<Group>(ctx.boundary_neighbors, i, pi, ctx.boundary.data(), boundary_factors,
                                          0.0, pi.w);
+      out[i - begin] = move;
+    }
+  });
+}
+
+/// The cubic spline kernel's value w (unit: 1/m^3) and gradient factor f (unit: 1/m^5) of every lane of r2
+/// in single precision: CubicSplineKernel::value_and_gradient_factor_lanes' polynomial on FloatKernel's
+/// constants, `gradient_scale` = 3 sigma / (4 h) (unit: 1/m^4). V is Floats8 or Floats16.
+template <class V>
+[[gnu::always_inline]] inline void float_kernel_lanes(const FloatKernel& k, float gradient_scale, const V& r2,
+                                                      V& w, V& f) {
+  V r;
+  for (std::uint32_t l = 0; l < sizeof(V) / sizeof(float); ++l)
+    r[l] = std::sqrt(r2[l]);
+  const V q = r * k.inv_h;
+  V a = 2.0f - q, b = 1.0f - q;
+  a = a < 0.0f ? V{} : a;
+  b = b < 0.0f ? V{} : b;
+  w = k.quarter_sigma * (a * a * a - 4.0f * b * b * b);
+  const auto apart = r2 > 0.0f;
+  const V g = gradient_scale * (4.0f * b * b - a * a) / (apart ? r : V{} + 1.0f);
+  f = apart ? g : V{};
+}
+[[gnu::always_inline]] inline void float_kernel_lanes(const FloatKernel& k, float gradient_scale,
+                                                      const FloatHalves& r2, FloatHalves& w, FloatHalves& f) {
+  float_kernel_lanes(k, gradient_scale, r2.lo, w.lo, f.lo);
+  float_kernel_lanes(k, gradient_scale, r2.hi, w.hi, f.hi);
+}
+
+/// store_lanes for the sixteen float lanes.
+[[gnu::always_inline]] inline void store_lanes(const Floats16& f, std::uint32_t count, float* out) {
+  if (count == kFloatLanes) {
+    std::memcpy(out, &f, sizeof(Floats16));
+    return;
+  }
+  for (std::uint32_t l = 0; l < count; ++l)
+    out[l] = f[l];
+}
+[[gnu::always_inline]] inline void store_lanes(const FloatHalves& f, std::uint32_t count, float* out) {
+  if (count == kFloatLanes) {
+    std::memcpy(out, &f.lo, sizeof(Floats8));
+    std::memcpy(out + 8, &f.hi, sizeof(Floats8));
+    return;
+  }
+  for (std::uint32_t l = 0; l < count; ++l)
+    out[l] = l < 8 ? f.lo[l] : f.hi[l - 8];
+}
+
+/// pbf_constraint in single precision (PbfSettings::precision): the same outputs, with the sums over
+/// neighbors taken in float, sixteen neighbors at a time (sph/float_lanes.hpp), over `x_mass` and `boundary`
+/// relative to an origin near the fluid, and converted to double. Kept per list entry, in float, is the
+/// gradient factor times the neighbor's mass m_j f_ij (Psi_b f_ib for a boundary point; unit: kg/m^5), so
+/// that the move pass needs no mass and serves particles of differing masses: wetting leaves a partly
+/// absorbed particle lighter, and the game-like level's masses differ in most frames (issue 41). The self
+/// term of the density is added in double, as sph_densities_float's. Every copy and thread count gives the
+/// same bits.
+DRENCH_SIMD_CLONES void pbf_constraint_float(const FluidContext& ctx, const PackedPointFArray& x_mass,
+                                             const PackedPointFArray& boundary, Scalar inv_rho0,
+                                             Scalar scorr_scale, Scalar inv_w_dq, int scorr_n,
+                                             std::size_t begin, std::size_t end, Scalar* densities,
+                                             Scalar* denominators, Vec3* scorr_moves, float* fluid_factors,
+                                             float* boundary_factors) {
+  const FloatKernel kernel(ctx.kernel);
+  const float gradient_scale =
+      static_cast<float>(3.0 * (ctx.kernel.value(0.0) / 4.0) / ctx.kernel.smoothing_length());
+  const Scalar self = ctx.kernel.value(0.0);
+  const float inv_rho0_f = static_cast<float>(inv_rho0);
+  const float inv_w_dq_f = static_cast<float>(inv_w_dq);
+  const PackedPointF* xs = x_mass.data();
+  const PackedPointF* bs = boundary.data();
+  const auto rows = [&](auto lanes, auto with_scorr) __attribute__((always_inline)) {
+    using Group = decltype(lanes);
+    using V = typename Group::Vec;
+    constexpr bool kScorr = decltype(with_scorr)::value;
+    for (std::size_t i = begin; i < end; ++i) {
+      const PackedPointF& xi = xs[i];
+      V rho = {}, gx = {}, gy = {}, gz = {}, squares = {}, sx = {}, sy = {}, sz = {};
+      for_each_entry_group<Group>(
+          ctx.fluid_neighbors, i,
+          [&](const Index* group, std::uint32_t n, const typename Group::Mask& active, std::uint32_t count)
+              __attribute__((always_inline)) {
+                typename Group::Points p;
+                Group::load(xs, group, p);
+                const V dx = xi.x - p.x, dy = xi.y - p.y, dz = xi.z - p.z;
+                const V r2 = dx * dx + dy * dy + dz * dz;
+                V w, f;
+                float_kernel_lanes(kernel, gradient_scale, r2, w, f);
+                const V mass_f = p.w * f;
+                store_lanes(mass_f, count, fluid_factors + n);
+                V term, c;
+                Group::select(active, p.w * w, term);
+                rho += term;
+                Group::select(active, inv_rho0_f * mass_f, c);
+                gx += c * dx;
+                gy += c * dy;
+                gz += c * dz;
+                squares += (c * c) * r2;
+                if constexpr (kScorr) {
+                  const V ratio = inv_w_dq_f * w;
+                  V power = ratio;
+                  for (int k = 1; k < scorr_n; ++k)
+                    power = power * ratio;
+                  const V t = c * power;
+                  sx += t * dx;
+                  sy += t * dy;
+                  sz += t * dz;
+                }
+              });
+      V boundary_rho = {}, bx = {}, by = {}, bz = {};
+      for_each_entry_group<Group>(
+          ctx.boundary_neighbors, i,
+          [&](const Index* group, std::uint32_t n, const typename Group::Mask& active, std::uint32_t count)
+              __attribute__((always_inline)) {
+                typename Group::Points p;
+                Group::load(bs, group, p);
+                const V dx = xi.x - p.x, dy = xi.y - p.y, dz = xi.z - p.z;
+                const V r2 = dx * dx + dy * dy + dz * dz;
+                V w, f;
+                float_kernel_lanes(kernel, gradient_scale, r2, w, f);
+                const V mass_f = p.w * f;
+                store_lanes(mass_f, count, boundary_factors + n);
+                V term, c;
+                Group::select(active, p.w * w, term);
+                boundary_rho += term;
+                Group::select(active, inv_rho0_f * mass_f, c);
+                bx += c * dx;
+                by += c * dy;
+                bz += c * dz;
+              });
+      densities[i - begin] = Scalar{Group::sum(rho)} + Scalar{Group::sum(boundary_rho)} + Scalar{xi.w} * self;
+      const Vec3 gradient = Vec3(Group::sum(gx), Group::sum(gy), Group::sum(gz)) +
+                            Vec3(Group::sum(bx), Group::sum(by), Group::sum(bz));
+      denominators[i - begin] = Scalar{Group::sum(squares)} + gradient.squaredNorm();
+      if (scorr_moves)
+        scorr_moves[i - begin] = -scorr_scale * Vec3(Group::sum(sx), Group::sum(sy), Group::sum(sz));
+    }
+  };
+  with_group_of_copy<FloatHalvesGroup, FloatWideGroup>([&](auto lanes) __attribute__((always_inline)) {
+    if (scorr_moves != nullptr && scorr_scale > 0.0) {
+      rows(lanes, std::true_type{});
+    } else {
+      rows(lanes, std::false_type{});
+    }
+  });
+}
+
+/// In single precision, over float records and the products g = m_j f_ij pbf_constraint_float kept: sum
+/// over the neighbors j of i in `list` of (alpha + w_j) g_ij (x_i - x_j) (kWeighted), or of g_ij (x_i - x_j)
+/// (not kWeighted: the boundary's, whose w_i is a factor of the whole sum); converted to double.
+template <class Group, bool kWeighted>
+[[gnu::always_inline]] inline Vec3 float_kept_gradient_sum(const NeighborList& list, std::size_t i,
+                                                           const PackedPointF& xi,
+                                                           const PackedPointF* sources, const float* factors,
+                                                           float alpha) {
+  typename Group::Vec sx = {}, sy = {}, sz = {};
+  for_each_entry_group<Group>(
+      list, i,
+      [&](const Index* group, std::uint32_t n, const typename Group::Mask& active, std::uint32_t)
+          __attribute__((always_inline)) {
+            typename Group::Points p;
+            Group::load(sources, group, p);
+            typename Group::Vec g, s;
+            Group::load_factors(factors + n, g);
+            if constexpr (kWeighted) {
+              Group::select(active, (alpha + p.w) * g, s);
+            } else {
+              Group::select(active, g, s);
+            }
+            sx += s * (xi.x - p.x);
+            sy += s * (xi.y - p.y);
+            sz += s * (xi.z - p.z);
+          });
+  return Vec3(Group::sum(sx), Group::sum(sy), Group::sum(sz));
+}
+
+/// pbf_moves in single precision, over `x_w` and `boundary` relative to the origin of pbf_constraint_float,
+/// with the products m_j f_ij it kept: any particle masses. Every copy and thread count gives the same bits.
+DRENCH_SIMD_CLONES void pbf_moves_float(const FluidContext& ctx, const PackedPointFArray& x_w,
+                                        const PackedPointFArray& boundary, const float* fluid_factors,
+                                        const float* boundary_factors, std::size_t begin, std::size_t end,
+                                        Vec3* out) {
+  with_group_of_copy<FloatHalvesGroup, FloatWideGroup>([&](auto lanes) __attribute__((always_inline)) {
+    using Group = decltype(lanes);
+    for (std::size_t i = begin; i < end; ++i) {
+      const PackedPointF& pi = x_w[i];
+      if (pi.w == 0.0f && at_rest(ctx.fluid_neighbors, i, x_w)) {
+        out[i - begin] = -Vec3::Zero();
+        continue;
+      }
+      Vec3 move =
+          -float_kept_gradient_sum<Group, true>(ctx.fluid_neighbors, i, pi, x_w.data(), fluid_factors, pi.w);
+      if (pi.w != 0.0f)
+        move -= Scalar{pi.w} * float_kept_gradient_sum<Group, false>(ctx.boundary_neighbors, i, pi,
+                                                                     boundary.data(), boundary_factors, 0.0f);
       out[i - begin] = move;
     }
   });
@@ -272,8 +467,14 @@ PressureStats PressurePbf::project(const FluidContext& ctx, Scalar dt) {
   const NeighborList& fn = ctx.fluid_neighbors;
   const NeighborList& bn = ctx.boundary_neighbors;
   m_last_dt = dt;
+  Vec3 origin;
+  // Any masses: the float passes carry each particle's (pbf_constraint_float).
+  const bool single = single_precision_origin(ctx, m_settings.precision, origin, false);
   m_points.resize(n);
-  m_lambda_points.resize(n);
+  m_lambda_points.resize(single ? 0 : n);
+  m_points_float.resize(single ? n : 0);
+  m_lambda_points_float.resize(single ? n : 0);
+  m_boundary_float.resize(single ? ctx.boundary.size() : 0);
   m_denominator.resize(n);
   m_scorr_moves.resize(n);
   m_lambda_sum.assign(n, 0.0);
@@ -297,21 +498,43 @@ PressureStats PressurePbf::project(const FluidContext& ctx, Scalar dt) {
   parallel_for(n, kLightChunk, [&](std::size_t begin, std::size_t end) {
     for (std::size_t i = begin; i < end; ++i) {
       m_points[i] = packed(particles.positions[i], particles.masses[i]);
-      m_lambda_points[i] = packed(particles.positions[i], 0.0);
+      if (single) {
+        m_points_float[i] = packed_float(particles.positions[i] - origin, particles.masses[i]);
+        m_lambda_points_float[i] = packed_float(particles.positions[i] - origin, 0.0);
+      } else {
+        m_lambda_points[i] = packed(particles.positions[i], 0.0);
+      }
     }
   });
-  m_fluid_factors.resize(fn.indices.size() + kFactorPadding);
-  m_boundary_factors.resize(bn.indices.size() + kFactorPadding);
+  if (single) {
+    parallel_for(ctx.boundary.size(), kLightChunk, [&](std::size_t begin, std::size_t end) {
+      for (std::size_t b = begin; b < end; ++b) {
+        const PackedPoint& p = ctx.boundary[b];
+        m_boundary_float[b] = packed_float(Vec3(p.x, p.y, p.z) - origin, p.w);
+      }
+    });
+  }
+  m_fluid_factors.resize(single ? 0 : fn.indices.size() + kFactorPadding);
+  m_boundary_factors.resize(single ? 0 : bn.indices.size() + kFactorPadding);
+  m_fluid_factors_float.resize(single ? fn.indices.size() + kFactorPadding : 0);
+  m_boundary_factors_float.resize(single ? bn.indices.size() + kFactorPadding : 0);
   const Scalar max_correction = m_settings.max_compression_per_iteration
                                     ? *m_settings.max_compression_per_iteration
                                     : std::numeric_limits<Scalar>::infinity();
   for (int iteration = 0; iteration < m_settings.iterations; ++iteration) {
     // rho_i, the denominator and lambda_i at the current prediction (eq. 11), only for compression.
     for_each_chunk(n, [&](std::size_t begin, std::size_t end) {
-      pbf_constraint(ctx, m_points, inv_rho0, scorr_scale, m_inv_w_dq, m_settings.scorr_n, begin, end,
-                     &particles.densities[begin], &m_denominator[begin],
-                     iteration == 0 ? &m_scorr_moves[begin] : nullptr, m_fluid_factors.data(),
-                     m_boundary_factors.data());
+      Vec3* scorr_moves = iteration == 0 ? &m_scorr_moves[begin] : nullptr;
+      if (single) {
+        pbf_constraint_float(ctx, m_points_float, m_boundary_float, inv_rho0, scorr_scale, m_inv_w_dq,
+                             m_settings.scorr_n, begin, end, &particles.densities[begin],
+                             &m_denominator[begin], scorr_moves, m_fluid_factors_float.data(),
+                             m_boundary_factors_float.data());
+      } else {
+        pbf_constraint(ctx, m_points, inv_rho0, scorr_scale, m_inv_w_dq, m_settings.scorr_n, begin, end,
+                       &particles.densities[begin], &m_denominator[begin], scorr_moves,
+                       m_fluid_factors.data(), m_boundary_factors.data());
+      }
       ChunkErrors errors;
       for (std::size_t i = begin; i < end; ++i) {
         m_denominator[i] = std::max(m_denominator[i] + m_epsilon, m_min_denominator);
@@ -319,7 +542,11 @@ PressureStats PressurePbf::project(const FluidContext& ctx, Scalar dt) {
         const Scalar lambda = -std::min(violation, max_correction) / m_denominator[i];
         m_lambda_sum[i] += lambda;
         // dp_i = -sum_j m_j (w_i + w_j) grad W_ij - w_i sum_b Psi_b grad W_ib with w = -lambda / rho0.
-        m_lambda_points[i].w = -lambda * inv_rho0;
+        if (single) {
+          m_lambda_points_float[i].w = static_cast<float>(-lambda * inv_rho0);
+        } else {
+          m_lambda_points[i].w = -lambda * inv_rho0;
+        }
         errors.sum += violation;
         errors.max = std::max(errors.max, violation);
       }
@@ -329,6 +556,11 @@ PressureStats PressurePbf::project(const FluidContext& ctx, Scalar dt) {
     // as PCISPH's pressure loop uses them, made the hydrostatic tank blow up within 0.1 s at every sub-step
     // count and relaxation tried, since PBF's iterations move particles by a large part of a spacing.
     for_each_chunk(n, [&](std::size_t begin, std::size_t end) {
+      if (single) {
+        pbf_moves_float(ctx, m_lambda_points_float, m_boundary_float, m_fluid_factors_float.data(),
+                        m_boundary_factors_float.data(), begin, end, &m_moves[begin]);
+        return;
+      }
       if (ctx.uniform_mass > 0.0) {
         pbf_moves(ctx, m_lambda_points, ctx.uniform_mass, m_fluid_factors.data(), m_boundary_factors.data(),
                   begin, end, &m_moves[begin]);
@@ -363,10 +595,20 @@ PressureStats PressurePbf::project(const FluidContext& ctx, Scalar dt) {
     parallel_for(n, kLightChunk, [&](std::size_t begin, std::size_t end) {
       for (std::size_t i = begin; i < end; ++i) {
         const Vec3 move = m_moves[i] + m_scorr_moves[i];
-        for (PackedPoint* p : {&m_points[i], &m_lambda_points[i]}) {
-          p->x += move.x();
-          p->y += move.y();
-          p->z += move.z();
+        PackedPoint& p = m_points[i];
+        p.x += move.x();
+        p.y += move.y();
+        p.z += move.z();
+        if (single) {
+          // Rounded from the double prediction, so that the float records do not gather roundings.
+          const PackedPointF x = packed_float(Vec3(p.x, p.y, p.z) - origin, p.w);
+          m_points_float[i] = x;
+          m_lambda_points_float[i] = {x.x, x.y, x.z, m_lambda_points_float[i].w};
+        } else {
+          PackedPoint& q = m_lambda_points[i];
+          q.x += move.x();
+          q.y += move.y();
+          q.z += move.z();
         }
       }
     });

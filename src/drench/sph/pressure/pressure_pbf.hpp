@@ -12,7 +12,7 @@ namespace drench {
 /// mass, as SPlisHSPlasH's PBF). Only compression is a violation, as SPlisHSPlasH's: a free-surface particle
 /// lacks neighbours, and pulling it in clusters the surface. FluidSolver drives it with project() from
 /// positions already predicted and neighbor lists searched there (their Algorithm 1); PbfSettings has the
-/// sources of the defaults.
+/// sources of the defaults. PbfSettings::precision chooses the precision of the iterations' pair sums.
 class PressurePbf final : public PressureSolver {
  public:
   explicit PressurePbf(const FluidSettings& settings);
@@ -52,6 +52,14 @@ class PressurePbf final : public PressureSolver {
   Vec3Array m_moves;                 // N: this iteration's dp_i without s_corr (unit: m)
   ScalarArray m_fluid_factors;       // per fluid list entry: grad W = f (x_i - x_j) this iteration (1/m^5)
   ScalarArray m_boundary_factors;    // per boundary list entry: the same with the boundary point (1/m^5)
+  // For IterationPrecision::SINGLE, in float, every point relative to the centre of the fluid's bounding box
+  // at the projection's start (single_precision_origin, unit: m); m_points stays the double prediction the
+  // moves are added to, and these are rounded from it after every move. Empty in double precision.
+  PackedPointFArray m_points_float;             // N: w = mass (unit: kg)
+  PackedPointFArray m_lambda_points_float;      // N: w = -lambda_i / rho0 (unit: m^5/kg)
+  PackedPointFArray m_boundary_float;           // ctx.boundary, w = Psi_b (unit: kg); made at each projection
+  std::vector<float> m_fluid_factors_float;     // as m_fluid_factors, in float (unit: 1/m^5)
+  std::vector<float> m_boundary_factors_float;  // as m_boundary_factors, in float (unit: 1/m^5)
   struct ChunkErrors {
     Scalar sum = 0.0, max = 0.0;
   };

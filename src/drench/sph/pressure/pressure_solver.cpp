@@ -70,9 +70,11 @@ void density_error_stats(const ScalarArray& densities, Scalar rest_density, Pres
   stats.max_density_error = max / rest_density;
 }
 
-bool single_precision_origin(const FluidContext& ctx, IterationPrecision precision, Vec3& origin) {
+bool single_precision_origin(const FluidContext& ctx, IterationPrecision precision, Vec3& origin,
+                             bool needs_uniform_mass) {
   origin = Vec3::Zero();
-  const bool wanted = precision == IterationPrecision::SINGLE && ctx.uniform_mass > 0.0;
+  const bool wanted =
+      precision == IterationPrecision::SINGLE && (ctx.uniform_mass > 0.0 || !needs_uniform_mass);
   if (!wanted || ctx.particles.empty()) return false;
   Vec3 lo, hi;
   finite_bounding_box(ctx.particles.positions, lo, hi);

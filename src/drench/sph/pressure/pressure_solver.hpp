@@ -75,9 +75,12 @@ void density_error_stats(const ScalarArray& densities, Scalar rest_density, Pres
 /// the world (at x = 100 m a float is 7.6 um coarse, 3e-4 of a 25 mm spacing). True when `precision` asks
 /// for it, every particle has one mass (ctx.uniform_mass > 0: the float pressure loop takes it as a
 /// constant) and the fluid reaches at most about 1,680 spacings from that centre (beyond it a rounding would
-/// exceed 1e-4 of a spacing: a particle flung far without a kill region). Shared by PCISPH and DFSPH;
+/// exceed 1e-4 of a spacing: a particle flung far without a kill region). Shared by PCISPH, DFSPH and PBF;
 /// the result is the same for any thread count.
 /// @param origin  out: the origin, the zero vector when the result is false or no particle is finite
-bool single_precision_origin(const FluidContext& ctx, IterationPrecision precision, Vec3& origin);
+/// @param needs_uniform_mass  false for loops that carry each particle's mass in its record (PBF's): then
+///        differing masses do not take the double loops
+bool single_precision_origin(const FluidContext& ctx, IterationPrecision precision, Vec3& origin,
+                             bool needs_uniform_mass = true);
 
 }  // namespace drench
