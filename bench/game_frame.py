@@ -61,6 +61,9 @@ def row_of(benchmark, blow_ups):
            "failsafe_frame_share": round(benchmark.get("failsafe_frame_share", float("nan")), 3),
            "zone_frame_share": round(benchmark.get("zone_frame_share", float("nan")), 3),
            "failsafe_particles_per_frame": round(benchmark.get("failsafe_particles_per_frame", float("nan")), 2),
+           # What the impact zones moved the bodies' nodes by (sum of |shift|, m per frame): their engine keeps
+           # the bodies where it put them, so water placed against a moved face may end inside its body.
+           "zone_ignored_shift_m_per_frame": float(f"{benchmark.get('zone_ignored_shift_per_frame', float('nan')):.3g}"),
            "mean_ms": round(benchmark["real_time"], 3),
            # The calling thread's CPU time per frame: beside other load, a frame's wall time over it tells how
            # much of a core drench's first thread got (about 1 for one thread on a quiet machine).
