@@ -43,17 +43,25 @@ struct FloatKernel {
         quarter_sigma(static_cast<float>(k.value(0.0) / 4.0)) {}
 };
 
-/// w = W(sqrt(r2)) lane by lane (unit: 1/m^3); V is Floats8 or Floats16. NaN stays NaN, as in double.
+/// r = sqrt(r2) (unit: m) and the cubic spline's terms a = max(2 - q, 0), b = max(1 - q, 0) at q = r / h,
+/// lane by lane: its value and its gradient are polynomials in them. V is Floats8 or Floats16.
 template <class V>
-[[gnu::always_inline]] inline void float_kernel_values(const FloatKernel& k, const V& r2, V& w) {
-  V r;
+[[gnu::always_inline]] inline void float_kernel_terms(const FloatKernel& k, const V& r2, V& r, V& a, V& b) {
   for (std::uint32_t l = 0; l < sizeof(V) / sizeof(float); ++l)
     r[l] = std::sqrt(r2[l]);
   const V q = r * k.inv_h;
-  V a = 2.0f - q, b = 1.0f - q;
+  a = 2.0f - q;
+  b = 1.0f - q;
   // std::max(a, 0) as written for double: NaN lanes keep a (the comparison is false).
   a = a < 0.0f ? V{} : a;
   b = b < 0.0f ? V{} : b;
+}
+
+/// w = W(sqrt(r2)) lane by lane (unit: 1/m^3); V is Floats8 or Floats16. NaN stays NaN, as in double.
+template <class V>
+[[gnu::always_inline]] inline void float_kernel_values(const FloatKernel& k, const V& r2, V& w) {
+  V r, a, b;
+  float_kernel_terms(k, r2, r, a, b);
   w = k.quarter_sigma * (a * a * a - 4.0f * b * b * b);
 }
 

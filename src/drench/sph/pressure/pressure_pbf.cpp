@@ -245,13 +245,8 @@ DRENCH_SIMD_CLONES void pbf_moves(const FluidContext& ctx, const PackedPointArra
 template <class V>
 [[gnu::always_inline]] inline void float_kernel_lanes(const FloatKernel& k, float gradient_scale, const V& r2,
                                                       V& w, V& f) {
-  V r;
-  for (std::uint32_t l = 0; l < sizeof(V) / sizeof(float); ++l)
-    r[l] = std::sqrt(r2[l]);
-  const V q = r * k.inv_h;
-  V a = 2.0f - q, b = 1.0f - q;
-  a = a < 0.0f ? V{} : a;
-  b = b < 0.0f ? V{} : b;
+  V r, a, b;
+  float_kernel_terms(k, r2, r, a, b);
   w = k.quarter_sigma * (a * a * a - 4.0f * b * b * b);
   const auto apart = r2 > 0.0f;
   const V g = gradient_scale * (4.0f * b * b - a * a) / (apart ? r : V{} + 1.0f);
