@@ -106,7 +106,6 @@ CouplingStepStats difference(const CouplingStepStats& a, const CouplingStepStats
   d.stopped_particles = a.stopped_particles - b.stopped_particles;
   d.stopped_nodes = a.stopped_nodes - b.stopped_nodes;
   d.last_resort_impulse = a.last_resort_impulse - b.last_resort_impulse;
-  d.zone_node_shift = a.zone_node_shift - b.zone_node_shift;
   d.zone_cloth_momentum = a.zone_cloth_momentum - b.zone_cloth_momentum;
   d.zone_ignored_shift = a.zone_ignored_shift - b.zone_ignored_shift;
   d.slip_sum_mps = a.slip_sum_mps - b.slip_sum_mps;

@@ -143,10 +143,6 @@ std::uint32_t Coupler::correct(const FluidView& fluid, ClothMesh& cloth, double 
 
   const auto ccd_start = Clock::now();
   status |= resolve_ccd(ctx, *m_broad_phase, m_settings, &m_unresolved);  // sec. 3.3, eq. 5-6
-  if (status & COUPLING_ZONES_STOPPED) {
-    for (const Vec3& shift : m_node_shifts)
-      stats.zone_node_shift += shift.norm();
-  }
   stats.seconds_ccd += seconds_since(ccd_start);
   return status;
 }

@@ -43,10 +43,6 @@ struct CouplingStepStats {
   /// What the last resorts (the fail-safe's and the impact zones' moves, StepContext::place) gave particles:
   /// the sum of |m dv| (unit: N s). Each is booked against its triangle's nodes as an impulse is.
   double last_resort_impulse = 0.0;
-  /// How far impact zones moved the nodes the coupler sees with inverse mass 0 off their end positions,
-  /// summed over those nodes (|shift|, unit: m): motion no impulse of the coupler pays for
-  /// (Coupler::node_shifts).
-  double zone_node_shift = 0.0;
   /// The momentum those shifts give a carried-water cloth's own nodes when its engine takes them at
   /// end_step, sum of |shift / (im dt)| (unit: N s), im the node's own inverse mass
   /// (CouplingScheme::CARRIED_WATER; owe_zone_shifts counts it and books it back).
@@ -73,8 +69,8 @@ enum CouplingStatus : std::uint32_t {
   /// joined into impact zones, each moving by one displacement for the step (the mean of its members'; at
   /// rest when it holds an unmoved node); no crossing. The particles' momentum is booked on their triangles'
   /// nodes; the moves of nodes of inverse mass 0 are not paid for (Coupler::node_shifts: a carried-water
-  /// cloth owes them back, owe_zone_shifts). (CouplingStepStats::stopped_particles, stopped_nodes.) Rare;
-  /// lower dt if frequent.
+  /// cloth owes them back, owe_zone_shifts). (CouplingStepStats::stopped_particles, stopped_nodes.) Lower
+  /// dt if frequent.
   COUPLING_ZONES_STOPPED = 1u << 2,
 };
 
