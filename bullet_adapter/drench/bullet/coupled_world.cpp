@@ -118,6 +118,7 @@ CouplingStepStats difference(const CouplingStepStats& a, const CouplingStepStats
 LeakAuditStats difference(const LeakAuditStats& a, const LeakAuditStats& b) {
   LeakAuditStats d;
   d.leaks = a.leaks - b.leaks;
+  d.jump_leaks = a.jump_leaks - b.jump_leaks;
   d.pairs = a.pairs - b.pairs;
   d.exact_checks = a.exact_checks - b.exact_checks;
   d.seconds = a.seconds - b.seconds;

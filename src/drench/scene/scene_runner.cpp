@@ -168,6 +168,7 @@ nlohmann::json make_summary(const Simulation& sim, double wall_seconds, const st
     s["timings_s"]["ccd"] = c.seconds_ccd;
     if (sim.config().has_effect("leak_audit")) {
       s["leaks"] = sim.leak_stats().leaks;
+      s["jump_leaks"] = sim.leak_stats().jump_leaks;
       s["timings_s"]["leak_audit"] = sim.leak_stats().seconds;
     }
     if (const ClothWetting* wetting = sim.wetting()) {

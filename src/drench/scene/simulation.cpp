@@ -323,11 +323,18 @@ StepStatus Simulation::step(Scalar dt) {
     m_emitted_mass += static_cast<double>(m_fluid->particles().size() - before) * m_fluid->particle_mass();
   }
   if (m_engine) m_engine->begin_step();
+  StepStatus jump_status;
+  if (m_engine) audit_face_jumps_since_last_step(jump_status);
   // The cloth at its start positions is an obstacle inside the fluid's sub-steps
   // (coupling/cloth_obstacle.hpp).
   if (m_effects.obstacle) m_effects.obstacle->begin_step(m_engine->mesh(), m_engine->velocities());
   if (m_rigid_boundary) place_rigid_boundary();
   StepStatus status = m_fluid->step(dt, m_effects.obstacle.get());
+  if ((jump_status.flags & StepStatus::LEAKED) && !(status.flags & StepStatus::LEAKED)) {
+    status.flags |= StepStatus::LEAKED;
+    status.leaked_particle = jump_status.leaked_particle;
+    status.leaked_triangle = jump_status.leaked_triangle;
+  }
   if (m_rigid_boundary) push_rigid_bodies();
   if (m_engine) step_cloth_and_couple(dt, status);
   // `!(a <= b)` rather than std::max, so that a NaN speed stays NaN in the summary.
@@ -382,6 +389,21 @@ void Simulation::push_rigid_bodies() {
   }
   // Before the bodies' step: the water's pressure moves them in it.
   m_with_obstacles->apply_body_impulses(nodes);
+}
+
+void Simulation::audit_face_jumps_since_last_step(StepStatus& status) {
+  const ClothMesh& mesh = m_engine->mesh();
+  // The first step, or a mesh whose layout changed (a body came or went), has no end to compare with.
+  if (!m_effects.leak_audit || m_audited_end.size() != mesh.node_count() ||
+      m_audited_triangles != mesh.triangles) {
+    return;
+  }
+  ParticleSet& p = m_fluid->particles();
+  if (audit_face_jumps(p.positions, mesh.triangles, m_audited_end, mesh.positions_t0, m_leak_stats) > 0) {
+    status.flags |= StepStatus::LEAKED;
+    status.leaked_particle = p.ids[static_cast<std::size_t>(m_leak_stats.leak_particle)];
+    status.leaked_triangle = m_leak_stats.leak_triangle;
+  }
 }
 
 void Simulation::step_cloth_and_couple(Scalar dt, StepStatus& status) {
@@ -515,6 +537,16 @@ void Simulation::step_cloth_and_couple(Scalar dt, StepStatus& status) {
       ++m_effects.leak_counter.passes;
     } else {
       ++m_effects.leak_counter.skipped;
+    }
+  }
+  // Where the next step's audit_face_jumps_since_last_step compares the faces' start with: the faces as
+  // the coupler left them, which the water was held against.
+  if (m_effects.leak_audit) {
+    if (m_non_finite_node < 0) {
+      m_audited_end = mesh.positions_t1;
+      if (m_audited_triangles != mesh.triangles) m_audited_triangles = mesh.triangles;
+    } else {
+      m_audited_end.clear();
     }
   }
   if (m_effects.wetting && coupled) wet_cloth(dt);
