@@ -488,7 +488,8 @@ void Simulation::step_cloth_and_couple(Scalar dt, StepStatus& status) {
       // impulse reaches it at its next step (moving a light node with heavy water here is what the links
       // would snap back).
       const KinematicCloth kinematic(mesh);
-      m_last_coupling_status = m_effects.coupler->step(view, mesh, dt, m_coupling_stats);
+      m_last_coupling_status =
+          m_effects.coupler->step(view, mesh, dt, m_coupling_stats, &kinematic.own_inverse_masses());
       const Vec3Array& given = m_effects.coupler->node_impulses();
       for (std::size_t i = 0; i < given.size(); ++i) {
         if (kinematic.own_inverse_masses()[i] > 0.0) m_pending_cloth_impulses[i] += given[i];
@@ -509,6 +510,10 @@ void Simulation::step_cloth_and_couple(Scalar dt, StepStatus& status) {
       status.leaked_particle = p.ids[static_cast<std::size_t>(particle)];
       status.leaked_triangle = triangle;
     }
+    // The water the impact zones squeezed out between faces that move differently: its mass and momentum
+    // are booked in the coupling's stats.
+    const std::vector<std::uint8_t>& squeezed = m_effects.coupler->squeezed_out();
+    if (!squeezed.empty()) m_removed += static_cast<std::int64_t>(p.remove_flagged(squeezed));
   }
   // A dynamic body takes what the water gave its nodes now: its engine has already stepped it. Outside the
   // coupling's timer: handing the bodies their impulses is the rigid stage's (body_seconds).
