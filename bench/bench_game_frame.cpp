@@ -106,13 +106,14 @@ double quantile(std::vector<double> values, double q) {
 /// `threads` threads and `busy` spinning threads beside it. Counters (ms per frame, median and p99 over the
 /// timed frames): <stage>_ms_median, <stage>_ms_p99 for the stages of CoupledStepReport::seconds (emit,
 /// fluid, cloth, rigid, coupling, other = total less the named ones, total); leaks over the whole run
-/// (warm-up included; the target is 0); the fastest particle and node at the end of any step of the run
-/// (unit: m/s); particles at the end and at most; the fluid's CFL sub-steps per frame and mean density error
-/// over the timed frames; the continuous handling's CCD rounds, impacts, fail-safe particles and sub-step
-/// obstacle stops per frame, and the shares of frames that reached its fail-safe and its impact zones; per
-/// frame, what the last resorts gave particles (N s), the momentum impact zones' node moves gave the cloth
-/// (N s) and how far they moved nodes whose engine ignores it (m) (CouplingStepStats); the
-/// time of a blow-up (0: none), after which nothing more is stepped.
+/// (warm-up included; the target is 0), of which jump_leaks between steps (audit_face_jumps), and the
+/// particles the impact zones squeezed out over the whole run (squeezed_out); the fastest particle and node
+/// at the end of any step of the run (unit: m/s); particles at the end and at most; the fluid's CFL sub-steps
+/// per frame and mean density error over the timed frames; the continuous handling's CCD rounds, impacts,
+/// fail-safe particles and sub-step obstacle stops per frame, and the shares of frames that reached its
+/// fail-safe and its impact zones; per frame, what the last resorts gave particles (N s), the momentum impact
+/// zones' node moves gave the cloth (N s) and how far they moved nodes whose engine ignores it (m)
+/// (CouplingStepStats); the time of a blow-up (0: none), after which nothing more is stepped.
 void game_frame(benchmark::State& state, const std::string& name, const SolverRun& solver, int threads,
                 int busy, long warmup, std::optional<drench::BroadPhaseKind> broad_phase) {
   drench::set_thread_count(threads);
@@ -126,7 +127,7 @@ void game_frame(benchmark::State& state, const std::string& name, const SolverRu
   drench::bullet::CoupledWorld coupled(game.world, game.cloths(), scene);
   const BusyThreads spinning(busy);
 
-  std::uint64_t leaks = 0, failed_frames = 0;
+  std::uint64_t leaks = 0, jump_leaks = 0, squeezed_out = 0, failed_frames = 0;
   // The continuous handling's work over the timed frames: how often a frame needs its last resorts tells
   // whether its rounds (coupling.max_ccd_iterations) suffice for the level.
   struct {
@@ -138,6 +139,8 @@ void game_frame(benchmark::State& state, const std::string& name, const SolverRu
   const auto checked_step = [&]() {
     drench::bullet::CoupledStepReport report = coupled.step();
     leaks += report.leak_stats.leaks;
+    jump_leaks += report.leak_stats.jump_leaks;
+    squeezed_out += report.coupling_stats.squeezed_out;
     if (report.failed()) ++failed_frames;
     if (timing) {
       const drench::CouplingStepStats& c = report.coupling_stats;
@@ -226,6 +229,8 @@ void game_frame(benchmark::State& state, const std::string& name, const SolverRu
   state.counters["drench_threads"] = drench::thread_count();
   state.counters["busy_threads"] = busy;
   state.counters["leaks"] = static_cast<double>(leaks);
+  state.counters["jump_leaks"] = static_cast<double>(jump_leaks);
+  state.counters["squeezed_out"] = static_cast<double>(squeezed_out);
   state.counters["failed_frames"] = static_cast<double>(failed_frames);
   state.counters["blew_up_at_s"] = blew_up_at;
   state.counters["fastest_particle_mps"] = sim.max_particle_speed();

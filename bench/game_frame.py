@@ -50,7 +50,12 @@ def row_of(benchmark, blow_ups):
            "blew_up_at_s": round(benchmark["blew_up_at_s"], 4),
            "frames": int(benchmark["frames"]), "warmup_frames": int(benchmark["warmup_frames"]),
            "particles_max": int(benchmark["particles_max"]), "particles_end": int(benchmark["particles"]),
-           "leaks": int(benchmark["leaks"]), "failed_frames": int(benchmark["failed_frames"]),
+           "leaks": int(benchmark["leaks"]),
+           # Of the leaks: water a face passed between two steps (a body's face an impact zone had moved).
+           "jump_leaks": int(benchmark.get("jump_leaks", 0)),
+           # Water the impact zones removed, caught between faces that move differently.
+           "squeezed_out": int(benchmark.get("squeezed_out", 0)),
+           "failed_frames": int(benchmark["failed_frames"]),
            "fastest_particle_mps": round(benchmark["fastest_particle_mps"], 3),
            "fastest_node_mps": round(benchmark["fastest_node_mps"], 3),
            "fluid_substeps_per_frame": round(benchmark["fluid_substeps_per_frame"], 2),
@@ -61,8 +66,9 @@ def row_of(benchmark, blow_ups):
            "failsafe_frame_share": round(benchmark.get("failsafe_frame_share", float("nan")), 3),
            "zone_frame_share": round(benchmark.get("zone_frame_share", float("nan")), 3),
            "failsafe_particles_per_frame": round(benchmark.get("failsafe_particles_per_frame", float("nan")), 2),
-           # What the impact zones moved the bodies' nodes by (sum of |shift|, m per frame): their engine keeps
-           # the bodies where it put them, so water placed against a moved face may end inside its body.
+           # What the impact zones moved the bodies' nodes by (sum of |shift|, m per frame), which their engine
+           # ignores: 0 since the zones take a body's motion as given (water placed against a moved face ended
+           # inside its body).
            "zone_ignored_shift_m_per_frame": float(f"{benchmark.get('zone_ignored_shift_per_frame', float('nan')):.3g}"),
            "mean_ms": round(benchmark["real_time"], 3),
            # The calling thread's CPU time per frame: beside other load, a frame's wall time over it tells how

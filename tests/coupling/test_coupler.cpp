@@ -372,23 +372,28 @@ std::size_t nodes_moved_by(const ClothMesh& mesh, const Vec3& displacement, doub
 }
 
 /// One coupling step of 4 ms, with 4 CCD rounds before the fail-safe, of a particle at rest at y = 0 between
-/// two sheets (two_sheets' arguments, unit: m): the fold of the crumpled cloth (issue 39) in small.
+/// two sheets (two_sheets' arguments, unit: m): the fold of the crumpled cloth (issue 39) in small. The
+/// sheets' own nodes weigh 10 g, as the carried-water scheme tells the coupler (Coupler::step's
+/// engine_inverse_masses), so the impact zones may move them; `pinned` makes their engine hold them instead.
 struct FoldStep {
   ClothMesh mesh;
   Particles particles;
   CouplingStepStats stats;
   std::uint32_t status = COUPLING_OK;
   std::pair<std::int64_t, std::int64_t> unresolved;
+  std::vector<std::uint8_t> squeezed;
 
-  FoldStep(double y_top, double dy_top, double y_bottom, double dy_bottom)
+  FoldStep(double y_top, double dy_top, double y_bottom, double dy_bottom, bool pinned = false)
       : mesh(two_sheets(y_top, dy_top, y_bottom, dy_bottom)) {
     const double dt = 0.004;
     particles.add(Vec3(0.3, 0.0, 0.2), Vec3::Zero(), dt, kMass);
     CouplingSettings settings;
     settings.max_ccd_iterations = 4;
     Coupler coupler(settings);
-    status = coupler.step(particles.view(), mesh, dt, stats);
+    const ScalarArray own(mesh.node_count(), pinned ? 0.0 : 1.0 / 0.01);
+    status = coupler.step(particles.view(), mesh, dt, stats, &own);
     unresolved = coupler.unresolved();
+    squeezed = coupler.squeezed_out();
   }
   std::size_t leaks() {
     LeakAuditStats audit;
@@ -430,6 +435,24 @@ TEST(Coupler, AnImpactZoneInAFallingFoldMovesWithItsNodes) {
   EXPECT_LT((fold.particles.x1[0] - fold.particles.x0[0] - zone).norm(), 1e-15);
   EXPECT_EQ(fold.stats.stopped_nodes, 6u);
   EXPECT_EQ(nodes_moved_by(fold.mesh, zone, 1e-15), 6u);
+}
+
+// The same fold with both layers held by their engine (pins, or two bodies): no motion of the particle keeps
+// it between layers that each end where they were given, so the zone squeezes it out, its mass and momentum
+// booked, and moves no node.
+TEST(Coupler, AParticleCaughtBetweenTwoPinnedLayersIsSqueezedOut) {
+  FoldStep fold(0.002, -0.012, -0.003, 0.012, true);
+  ASSERT_NE(fold.status & COUPLING_ZONES_STOPPED, 0u)
+      << "the fold must need the last resort, else it tests nothing";
+  EXPECT_EQ(fold.status & COUPLING_UNRESOLVED, 0u);
+  EXPECT_EQ(fold.squeezed, std::vector<std::uint8_t>{1});
+  EXPECT_EQ(fold.stats.squeezed_out, 1u);
+  EXPECT_EQ(fold.stats.squeezed_out_mass, kMass);
+  EXPECT_EQ(fold.stats.squeezed_out_momentum, kMass * fold.particles.v[0]);
+  EXPECT_EQ(fold.stats.zone_ignored_shift, 0.0);
+  // Every node ends where it was given (rounding: none, they are never written).
+  const ClothMesh given = two_sheets(0.002, -0.012, -0.003, 0.012);
+  EXPECT_EQ(fold.mesh.positions_t1, given.positions_t1);
 }
 
 TEST(Coupler, RejectsBadSettingsNamingThem) {

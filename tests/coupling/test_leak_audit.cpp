@@ -4,6 +4,8 @@
 
 #include <cmath>
 #include <limits>
+#include <stdexcept>
+#include <vector>
 
 #include <drench/coupling/leak_audit.hpp>
 #include "coupling_fixtures.hpp"
@@ -229,6 +231,35 @@ TEST(LeakAudit, KeptOverStepsFlagsWhatAFreshAuditFlags) {
     // The same triangle named: the kept grid lists each cell's triangles in a fresh grid's order.
     EXPECT_EQ(kept_stats.leak_triangle, fresh_stats.leak_triangle) << "step " << step;
   }
+}
+
+// Between two steps the particles stay still and a face moves from where the last step left it to where the
+// next starts it: a face that moves over a particle counts it once, named with the face's index in the
+// whole mesh; a face that stays, or moves without passing a particle, counts nothing.
+TEST(LeakAudit, AFaceThatJumpsOverAStillParticleBetweenStepsIsALeak) {
+  const ClothMesh mesh = grid_mesh(3, 1.0, 0.0, 0.0);  // 8 triangles in y = 0
+  const Vec3Array particles = {Vec3(0.8, 0.001, 0.8), Vec3(0.2, 0.001, 0.2), Vec3(0.3, 0.5, 0.3)};
+  Vec3Array start = mesh.positions_t0;
+  LeakAuditStats still;
+  EXPECT_EQ(audit_face_jumps(particles, mesh.triangles, mesh.positions_t0, start, still), 0u);
+  EXPECT_EQ(still.pairs, 0u);  // no face moved: none examined
+  // The far corner node (1, 0, 1) rises 1 cm: under the first particle, where its weight is 0.2, its face
+  // rises 2 mm, past the particle 1 mm above it.
+  const std::size_t corner = 8;
+  ASSERT_EQ(mesh.positions_t0[corner], Vec3(1, 0, 1));
+  start[corner].y() += 0.01;
+  LeakAuditStats jumped;
+  std::vector<std::uint8_t> leaked;
+  EXPECT_EQ(audit_face_jumps(particles, mesh.triangles, mesh.positions_t0, start, jumped, &leaked), 1u);
+  EXPECT_EQ(jumped.leaks, 1u);
+  EXPECT_EQ(jumped.jump_leaks, 1u);
+  EXPECT_EQ(leaked, (std::vector<std::uint8_t>{1, 0, 0}));
+  EXPECT_EQ(jumped.leak_particle, 0);
+  ASSERT_GE(jumped.leak_triangle, 0);
+  const Triangle& face = mesh.triangles[static_cast<std::size_t>(jumped.leak_triangle)];
+  EXPECT_TRUE(face[0] == corner || face[1] == corner || face[2] == corner);
+  EXPECT_THROW(audit_face_jumps(particles, mesh.triangles, mesh.positions_t0, Vec3Array(3), jumped),
+               std::invalid_argument);
 }
 
 }  // namespace

@@ -108,6 +108,9 @@ CouplingStepStats difference(const CouplingStepStats& a, const CouplingStepStats
   d.last_resort_impulse = a.last_resort_impulse - b.last_resort_impulse;
   d.zone_cloth_momentum = a.zone_cloth_momentum - b.zone_cloth_momentum;
   d.zone_ignored_shift = a.zone_ignored_shift - b.zone_ignored_shift;
+  d.squeezed_out = a.squeezed_out - b.squeezed_out;
+  d.squeezed_out_mass = a.squeezed_out_mass - b.squeezed_out_mass;
+  d.squeezed_out_momentum = a.squeezed_out_momentum - b.squeezed_out_momentum;
   d.slip_sum_mps = a.slip_sum_mps - b.slip_sum_mps;
   d.vertical_impulse_on_cloth = a.vertical_impulse_on_cloth - b.vertical_impulse_on_cloth;
   d.seconds_repulsion = a.seconds_repulsion - b.seconds_repulsion;
@@ -118,6 +121,7 @@ CouplingStepStats difference(const CouplingStepStats& a, const CouplingStepStats
 LeakAuditStats difference(const LeakAuditStats& a, const LeakAuditStats& b) {
   LeakAuditStats d;
   d.leaks = a.leaks - b.leaks;
+  d.jump_leaks = a.jump_leaks - b.jump_leaks;
   d.pairs = a.pairs - b.pairs;
   d.exact_checks = a.exact_checks - b.exact_checks;
   d.seconds = a.seconds - b.seconds;

@@ -5,8 +5,11 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <optional>
 #include <utility>
 #include <vector>
+
+#include <Eigen/SVD>
 
 #include <drench/ccd/ccd_exact_reference.hpp>
 #include <drench/ccd/point_triangle_ccd.hpp>
@@ -35,7 +38,7 @@ void find_impacts(const StepContext& ctx, const std::vector<std::pair<Index, Ind
   });
   impacts.clear();
   for (std::size_t k = 0; k < pairs.size(); ++k) {
-    if (!results[k].hit) continue;
+    if (!results[k].hit || ctx.squeezed_out(pairs[k].first)) continue;
     // A particle that starts exactly in the triangle (distance 0: it has no side yet) touches at t = 0
     // whatever it does next; pushing it would flip it back and forth. Repulsion handles it. Anything else at
     // toi = 0 may be a contact just after the start (toi is a lower bound) and is resolved.
@@ -95,51 +98,114 @@ void resolve_impact(StepContext& ctx, Index p, const Impact& impact, double thic
   ctx.apply(p, impact.triangle, w, (target - vn) / ctx.inverse_mass(p, impact.triangle, w) * normal);
 }
 
+using Mat3 = Eigen::Matrix3d;
+
+/// One motion of a zone's members over the step: x_t1 = rotation (x_t0 - from) + to. A translation has the
+/// identity rotation.
+struct ZoneMotion {
+  Mat3 rotation = Mat3::Identity();
+  Vec3 from = Vec3::Zero(), to = Vec3::Zero();
+  Vec3 operator()(const Vec3& x_t0) const { return rotation * (x_t0 - from) + to; }
+};
+
+/// The one rigid motion that takes the start positions `x0` to the end positions `x1` (Kabsch's fit: the
+/// rotation about the centroids that best maps one onto the other, without a reflection), or nullopt when
+/// no rigid motion brings every point within `tolerance` (unit: m) of its end: nodes of two bodies, or of a
+/// body and the ground, that move differently. Points that all move by one displacement are a translation,
+/// exactly.
+std::optional<ZoneMotion> rigid_motion(const Vec3Array& x0, const Vec3Array& x1, double tolerance) {
+  ZoneMotion motion;
+  const Vec3 shift = x1.front() - x0.front();
+  bool translation = true;
+  for (std::size_t i = 1; i < x0.size() && translation; ++i)
+    translation = x1[i] - x0[i] == shift;
+  if (translation) {
+    motion.to = shift;  // x_t0 + shift: a zone at rest ends exactly where it started
+    return motion;
+  }
+  for (std::size_t i = 0; i < x0.size(); ++i) {
+    motion.from += x0[i];
+    motion.to += x1[i];
+  }
+  motion.from /= static_cast<double>(x0.size());
+  motion.to /= static_cast<double>(x0.size());
+  Mat3 covariance = Mat3::Zero();
+  for (std::size_t i = 0; i < x0.size(); ++i)
+    covariance += (x1[i] - motion.to) * (x0[i] - motion.from).transpose();
+  const Eigen::JacobiSVD<Mat3> svd(covariance, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  Mat3 sign = Mat3::Identity();
+  sign(2, 2) = (svd.matrixU() * svd.matrixV().transpose()).determinant() < 0.0 ? -1.0 : 1.0;
+  motion.rotation = svd.matrixU() * sign * svd.matrixV().transpose();
+  for (std::size_t i = 0; i < x0.size(); ++i) {
+    if (!((motion(x0[i]) - x1[i]).norm() <= tolerance)) return std::nullopt;
+  }
+  return motion;
+}
+
 /// The last resort, when even the fail-safe leaves impacts (a particle between two faces of a fold that move
-/// apart cannot follow both): rigid impact zones (Bridson et al. 2002) that translate. Each colliding
-/// particle is joined with its triangle's nodes into a zone, zones that collide merge, and every member of a
-/// zone moves over the step by the zone's one displacement, so members do not move relative to each other and
-/// cannot cross (the start of the step was free of crossings). What then collides with a zone joins it,
-/// round after round, until no pair collides. The displacement is the mean of the members' own: of the
-/// nodes the coupler sees as kinematic (inverse mass 0) when the zone has any, else mass-weighted over
-/// particles and nodes; a zone holding a node that did not move (a pin) stays at rest. Zones at rest stopped
-/// a fast cloth's nodes behind their neighbours and overstretched it (the crumpled cloth at dt 4 ms,
-/// HostilePhysics.ACrumpledClothAtDt4msDoesNotLeak); moving zones keep the nodes with the cloth. A
-/// particle's change of momentum goes to its triangle's nodes (StepContext::place); a kinematic node's move
-/// goes to Coupler::node_shifts, for its caller to settle (a carried-water cloth owes it back,
-/// owe_zone_shifts; a body's engine ignores it, CouplingStepStats::zone_ignored_shift). A crossing stays only
-/// where a member cannot follow its zone (a pinned node moved by its engine).
+/// apart cannot follow both): rigid impact zones (Bridson et al. 2002). Each colliding particle is joined
+/// with its triangle's nodes into a zone, zones that collide merge, and every member of a zone moves over
+/// the step by the zone's one motion, so members do not move relative to each other and cannot cross (the
+/// start of the step was free of crossings; a motion that is the same affine map for every member keeps
+/// each point on its side of each face). What then collides with a zone joins it, round after round, until
+/// no pair collides.
+/// The motion takes the fixed nodes' as given: a node whose engine ignores a move (inverse mass 0 as its
+/// engine holds it: a rigid body's, an obstacle's, a pin's) ends exactly where it was given, since water
+/// placed against a face its engine puts elsewhere is inside the body at the next step (the leak audit's
+/// audit_face_jumps). A zone whose fixed nodes share one rigid motion (one body, turning or not; bodies at
+/// rest together) gives that motion to its other members, as if they were stuck to the body. A zone without
+/// fixed nodes moves by one displacement: the mean of the displacements of the nodes the coupler sees as
+/// kinematic (a carried-water cloth's) when it has any, else mass-weighted over particles and nodes. Zones
+/// at rest stopped a fast cloth's nodes behind their neighbours and overstretched it (the crumpled cloth at
+/// dt 4 ms, HostilePhysics.ACrumpledClothAtDt4msDoesNotLeak); moving with the cloth keeps the nodes with it.
+/// Where the fixed nodes of a zone move differently (water squeezed between a falling box and the ground),
+/// no motion serves both: the zone's particles that hit a face with a fixed node are squeezed out, removed
+/// with their mass and momentum booked (StepContext::squeeze_out), and the zones are formed again without
+/// them, so the water that only touched the cloth keeps a motion (squeezing out every particle of such a
+/// zone removed 752 particles in 300 frames of bench_game_frame's pbf level, this 21). A node left alone
+/// goes back where it was given. A particle's change of momentum goes to its triangle's nodes
+/// (StepContext::place); a carried-water cloth's node moved by its zone goes to Coupler::node_shifts, for
+/// its caller to settle (owe_zone_shifts). A crossing stays only where no round makes progress
+/// (COUPLING_UNRESOLVED).
 /// @param all  every pair of the motion on entry (update_pairs), kept so
 /// @param only, fresh, merged  scratch
 /// @param impacts  the fail-safe's leftover impacts on entry; scratch
+/// @param tolerance  how far a fixed node may be from a rigid motion that takes it as given (unit: m), > 0
 /// @return COUPLING_ZONES_STOPPED, with COUPLING_UNRESOLVED when an impact remained (named in `unresolved`)
 std::uint32_t move_impact_zones(StepContext& ctx, TriangleBroadPhase& broad_phase,
                                 std::vector<std::uint8_t>& only, std::vector<std::pair<Index, Index>>& fresh,
                                 std::vector<std::pair<Index, Index>>& all,
                                 std::vector<std::pair<Index, Index>>& merged,
-                                std::vector<std::pair<Index, Impact>>& impacts,
+                                std::vector<std::pair<Index, Impact>>& impacts, double tolerance,
                                 std::pair<std::int64_t, std::int64_t>* unresolved) {
   ClothMesh& cloth = ctx.cloth();
   CouplingStepStats& stats = ctx.stats();
   const std::size_t n = ctx.x0().size();
-  // Elements: particle p is p, node i is n + i. parent[e] == e for a root; kNone: not in a zone.
+  // Elements: particle p is p, node i is n + i. index[e]: e's place in `members`, or kNone.
   constexpr std::size_t kNone = static_cast<std::size_t>(-1);
-  std::vector<std::size_t> parent(n + cloth.node_count(), kNone);
+  std::vector<std::size_t> index(n + cloth.node_count(), kNone);
   std::vector<std::size_t> members;
-  Vec3Array own;                             // per member: its displacement over the step when it joined (m)
-  std::vector<std::pair<Index, Vec3>> link;  // per member particle: the triangle and weights it hit
-  const auto root = [&parent](std::size_t e) {
-    while (parent[e] != e) {
-      parent[e] = parent[parent[e]];
-      e = parent[e];
+  Vec3Array given;                             // per member: its end position when it joined (m)
+  std::vector<std::pair<Index, Vec3>> link;    // per member particle: the triangle and weights it hit first
+  std::vector<std::pair<Index, Index>> edges;  // (particle, triangle) of every impact that joined zones
+  std::vector<std::size_t> parent;             // per member: union-find over members, rebuilt each round
+  const auto root = [&parent](std::size_t k) {
+    while (parent[k] != k) {
+      parent[k] = parent[parent[k]];
+      k = parent[k];
     }
-    return e;
+    return k;
   };
-  const auto join = [&](std::size_t e, const Vec3& displacement, Index t, const Vec3& w) {
-    if (parent[e] != kNone) return false;
-    parent[e] = e;
+  const auto unite = [&](std::size_t a, std::size_t b) {
+    a = root(a);
+    b = root(b);
+    if (a != b) parent[std::max(a, b)] = std::min(a, b);  // the zones' order does not depend on rounds
+  };
+  const auto join = [&](std::size_t e, const Vec3& end, Index t, const Vec3& w) {
+    if (index[e] != kNone) return false;
+    index[e] = members.size();
     members.push_back(e);
-    own.push_back(displacement);
+    given.push_back(end);
     link.emplace_back(t, w);
     if (e < n) {
       ++stats.stopped_particles;
@@ -148,59 +214,100 @@ std::uint32_t move_impact_zones(StepContext& ctx, TriangleBroadPhase& broad_phas
     }
     return true;
   };
-  const auto unite = [&](std::size_t a, std::size_t b) {
-    a = root(a);
-    b = root(b);
-    if (a == b) return false;
-    parent[std::max(a, b)] = std::min(a, b);  // the smaller root: the zones' order does not depend on rounds
-    return true;
-  };
+  const auto start_of = [&](std::size_t e) { return e < n ? ctx.x0()[e] : cloth.positions_t0[e - n]; };
   struct Zone {
     Vec3 kinematic = Vec3::Zero(), weighted = Vec3::Zero();
     double kinematic_count = 0.0, mass = 0.0;
-    bool pinned = false;
+    std::size_t size = 0;
+    Vec3Array fixed_t0, fixed_t1;
+    std::optional<ZoneMotion> motion;
   };
-  std::vector<Zone> zones(parent.size());
-  // Every round joins or merges at least one zone (else it ends), so the rounds are bounded by the elements.
+  std::vector<Zone> zones;
+  // Every round adds a member or an edge (else it ends), so the rounds are bounded by the pairs.
   while (!impacts.empty()) {
     bool progress = false;
     for (const auto& [p, impact] : impacts) {
       const Triangle& tri = cloth.triangles[impact.triangle];
-      progress |= join(p, ctx.x1()[p] - ctx.x0()[p], impact.triangle, impact.ccd.barycentric);
-      for (const Index node : tri) {
-        progress |= join(n + node, cloth.positions_t1[node] - cloth.positions_t0[node], 0, Vec3::Zero());
-        progress |= unite(p, n + node);
+      progress |= join(p, ctx.x1()[p], impact.triangle, impact.ccd.barycentric);
+      for (const Index node : tri)
+        progress |= join(n + node, cloth.positions_t1[node], 0, Vec3::Zero());
+      const std::pair<Index, Index> edge(p, impact.triangle);
+      const auto at = std::lower_bound(edges.begin(), edges.end(), edge);
+      if (at == edges.end() || *at != edge) {
+        edges.insert(at, edge);
+        progress = true;
       }
     }
     if (!progress) break;
-    for (const std::size_t e : members)
-      zones[root(e)] = Zone{};
-    for (std::size_t k = 0; k < members.size(); ++k) {
-      const std::size_t e = members[k];
-      Zone& zone = zones[root(e)];
-      if (e < n) {
-        zone.weighted += ctx.mass(e) * own[k];
-        zone.mass += ctx.mass(e);
-      } else if (own[k] == Vec3::Zero()) {
-        zone.pinned = true;
-      } else if (const double im = cloth.inverse_masses[e - n]; im > 0.0) {
-        zone.weighted += own[k] / im;
-        zone.mass += 1.0 / im;
-      } else {
-        zone.kinematic += own[k];
-        zone.kinematic_count += 1.0;
+    // The zones, and their motions; a zone whose fixed nodes move differently loses its particles against
+    // a fixed face, which may split it, so the zones are formed again until every one has a motion.
+    for (bool squeezed = true; squeezed;) {
+      squeezed = false;
+      parent.resize(members.size());
+      for (std::size_t k = 0; k < members.size(); ++k)
+        parent[k] = k;
+      for (const auto& [p, t] : edges) {
+        if (ctx.squeezed_out(p)) continue;
+        for (const Index node : cloth.triangles[t])
+          unite(index[p], index[n + node]);
+      }
+      zones.assign(members.size(), Zone{});
+      for (std::size_t k = 0; k < members.size(); ++k) {
+        const std::size_t e = members[k];
+        if (e < n && ctx.squeezed_out(static_cast<Index>(e))) continue;
+        Zone& zone = zones[root(k)];
+        ++zone.size;
+        const Vec3 own = given[k] - start_of(e);
+        if (e < n) {
+          zone.weighted += ctx.mass(e) * own;
+          zone.mass += ctx.mass(e);
+        } else if (ctx.fixed(static_cast<Index>(e - n))) {
+          zone.fixed_t0.push_back(start_of(e));
+          zone.fixed_t1.push_back(given[k]);
+        } else if (const double im = cloth.inverse_masses[e - n]; im > 0.0) {
+          zone.weighted += own / im;
+          zone.mass += 1.0 / im;
+        } else {
+          zone.kinematic += own;
+          zone.kinematic_count += 1.0;
+        }
+      }
+      for (std::size_t k = 0; k < members.size(); ++k) {
+        if (root(k) != k) continue;
+        Zone& zone = zones[k];
+        if (zone.fixed_t0.empty()) {
+          const Vec3 shift = zone.kinematic_count > 0.0 ? Vec3(zone.kinematic / zone.kinematic_count)
+                             : zone.mass > 0.0          ? Vec3(zone.weighted / zone.mass)
+                                                        : Vec3::Zero();
+          zone.motion = ZoneMotion{Mat3::Identity(), Vec3::Zero(), shift};
+          continue;
+        }
+        zone.motion = rigid_motion(zone.fixed_t0, zone.fixed_t1, tolerance);
+        if (zone.motion) continue;
+        // Only the particles against a fixed face: the rest of the zone (water on the cloth) may then split
+        // off with one fixed motion, or none.
+        for (const auto& [p, t] : edges) {
+          const Triangle& tri = cloth.triangles[t];
+          if (ctx.squeezed_out(p) || root(index[p]) != k ||
+              !(ctx.fixed(tri[0]) || ctx.fixed(tri[1]) || ctx.fixed(tri[2]))) {
+            continue;
+          }
+          ctx.squeeze_out(p);
+          squeezed = true;
+        }
       }
     }
     for (std::size_t k = 0; k < members.size(); ++k) {
       const std::size_t e = members[k];
-      const Zone& zone = zones[root(e)];
-      const Vec3 displacement = zone.pinned                  ? Vec3::Zero()
-                                : zone.kinematic_count > 0.0 ? Vec3(zone.kinematic / zone.kinematic_count)
-                                                             : Vec3(zone.weighted / zone.mass);
+      if (e < n && ctx.squeezed_out(static_cast<Index>(e))) continue;
+      if (e >= n && ctx.fixed(static_cast<Index>(e - n))) continue;  // never moved: where it was given
+      const Zone& zone = zones[root(k)];
+      // A node left alone when its zone lost its particles goes back where it was given.
+      const Vec3 end = zone.size == 1 || !zone.motion ? given[k] : (*zone.motion)(start_of(e));
       if (e < n) {
-        ctx.place(static_cast<Index>(e), ctx.x0()[e] + displacement, link[k].first, link[k].second);
+        ctx.place(static_cast<Index>(e), end, link[k].first, link[k].second);
       } else {
-        ctx.move_node(static_cast<Index>(e - n), cloth.positions_t0[e - n] + displacement);
+        ctx.move_node(static_cast<Index>(e - n), end);
       }
     }
     update_pairs(ctx, broad_phase, only, fresh, all, merged);
@@ -306,7 +413,8 @@ std::uint32_t resolve_ccd(StepContext& ctx, TriangleBroadPhase& broad_phase, con
       ctx.clear_changes();
       find_impacts(ctx, all, impacts);
       if (!impacts.empty())
-        status |= move_impact_zones(ctx, broad_phase, only, pairs, all, merged, impacts, unresolved);
+        status |= move_impact_zones(ctx, broad_phase, only, pairs, all, merged, impacts, 1e-3 * thickness,
+                                    unresolved);
       break;
     }
     stats.ccd_impacts += impacts.size();

@@ -75,8 +75,10 @@ void Coupler::set_adhesion(AdhesionSettings settings) {
   m_adhesion_counter.constructed = 1;
 }
 
-std::uint32_t Coupler::step(const FluidView& fluid, ClothMesh& cloth, double dt, CouplingStepStats& stats) {
+std::uint32_t Coupler::step(const FluidView& fluid, ClothMesh& cloth, double dt, CouplingStepStats& stats,
+                            const ScalarArray* engine_inverse_masses) {
   m_node_impulses.assign(cloth.node_count(), Vec3::Zero());
+  m_squeezed.clear();
   m_node_shifts.assign(cloth.node_count(), Vec3::Zero());
   m_impulse_links.clear();
   m_unresolved = {-1, -1};
@@ -94,7 +96,7 @@ std::uint32_t Coupler::step(const FluidView& fluid, ClothMesh& cloth, double dt,
   ++m_counter.passes;
   const bool record = fluid.ids != nullptr;
   if (record) m_largest.assign(fluid.positions_t0->size(), ImpulseLink{});
-  const std::uint32_t status = correct(fluid, cloth, dt, stats);
+  const std::uint32_t status = correct(fluid, cloth, dt, stats, engine_inverse_masses);
   if (record) {
     for (std::size_t p = 0; p < m_largest.size(); ++p) {
       if (m_largest[p].impulse == 0.0) continue;
@@ -105,11 +107,11 @@ std::uint32_t Coupler::step(const FluidView& fluid, ClothMesh& cloth, double dt,
   return status;
 }
 
-std::uint32_t Coupler::correct(const FluidView& fluid, ClothMesh& cloth, double dt,
-                               CouplingStepStats& stats) {
+std::uint32_t Coupler::correct(const FluidView& fluid, ClothMesh& cloth, double dt, CouplingStepStats& stats,
+                               const ScalarArray* engine_inverse_masses) {
   std::uint32_t status = COUPLING_OK;
   StepContext ctx(fluid, cloth, dt, stats, m_node_impulses, fluid.ids != nullptr ? &m_largest : nullptr,
-                  &m_node_shifts);
+                  &m_node_shifts, engine_inverse_masses, &m_squeezed);
   ctx.clear_changes();
   const double thickness = m_settings.cloth_thickness;
   std::vector<std::pair<Index, Index>> pairs;

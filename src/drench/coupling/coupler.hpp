@@ -9,6 +9,7 @@
 #include <memory>
 #include <optional>
 #include <utility>
+#include <vector>
 
 #include <drench/common/effect_counter.hpp>
 #include <drench/common/types.hpp>
@@ -50,6 +51,13 @@ struct CouplingStepStats {
   /// Sum of |shift| over nodes whose own inverse mass is 0 (a body's, a pin's, an obstacle's), whose
   /// engine ignores it (unit: m): the water there was moved against a face that stays where it was.
   double zone_ignored_shift = 0.0;
+  /// Particles the impact zones removed, caught between fixed faces that move differently (a falling box
+  /// and the ground), where no motion keeps them out of both: Coupler::squeezed_out names them for the
+  /// caller to remove. Their mass (unit: kg) and momentum m v at removal (unit: N s) are booked here, so the
+  /// water, cloth and bodies with these keep their momentum.
+  std::uint64_t squeezed_out = 0;
+  double squeezed_out_mass = 0.0;
+  Vec3 squeezed_out_momentum = Vec3::Zero();
   double slip_sum_mps = 0.0;  ///< sum over contacts of the relative tangential speed after coupling
   double vertical_impulse_on_cloth = 0.0;  ///< sum of the y components of the impulses on cloth nodes (N s)
   double seconds_repulsion = 0.0;          ///< wall time of proximity + repulsion + friction (unit: s)
@@ -66,11 +74,13 @@ enum CouplingStatus : std::uint32_t {
   /// audit counts the crossing. Smaller dt helps.
   COUPLING_UNRESOLVED = 1u << 1,
   /// The fail-safe left collisions (a particle caught in a fold), so the particles and nodes involved were
-  /// joined into impact zones, each moving by one displacement for the step (the mean of its members'; at
-  /// rest when it holds an unmoved node); no crossing. The particles' momentum is booked on their triangles'
-  /// nodes; the moves of nodes of inverse mass 0 are not paid for (Coupler::node_shifts: a carried-water
-  /// cloth owes them back, owe_zone_shifts). (CouplingStepStats::stopped_particles, stopped_nodes.) Lower
-  /// dt if frequent.
+  /// joined into impact zones, each moving by one motion for the step: that of its fixed nodes (a body's,
+  /// a pin's: they end where their engine put them) when they share one, else one displacement (the mean of
+  /// its members'); where its fixed nodes move differently its particles against their faces are squeezed
+  /// out (CouplingStepStats::squeezed_out); no crossing. The particles' momentum is booked on their
+  /// triangles' nodes; the moves of a carried-water cloth's nodes are not paid for (Coupler::node_shifts: the
+  /// cloth owes them back, owe_zone_shifts). (CouplingStepStats::stopped_particles, stopped_nodes.) Lower dt
+  /// if frequent.
   COUPLING_ZONES_STOPPED = 1u << 2,
 };
 
@@ -109,8 +119,12 @@ class Coupler {
   /// nothing, and its outputs are those of a step without contacts (counter().skipped).
   /// @param fluid  N particles; positions_t1 and velocities are changed
   /// @param cloth  validated mesh; positions_t1 are changed (the engine adds (change / dt) to its velocities)
+  /// @param engine_inverse_masses  M inverse masses as the nodes' engines hold them (unit: 1/kg), or null for
+  ///        cloth.inverse_masses: a caller that shows the coupler a cloth as kinematic (carried water) gives
+  ///        the cloth's own, so the impact zones may move its nodes; a node of 0 is never moved
   /// @return COUPLING_* flags
-  std::uint32_t step(const FluidView& fluid, ClothMesh& cloth, double dt, CouplingStepStats& stats);
+  std::uint32_t step(const FluidView& fluid, ClothMesh& cloth, double dt, CouplingStepStats& stats,
+                     const ScalarArray* engine_inverse_masses = nullptr);
 
   const CouplingSettings& settings() const { return m_settings; }
 
@@ -144,13 +158,18 @@ class Coupler {
   /// what CarriedWater::attach needs to carry each particle with the nodes its impulse goes to.
   const ImpulseLinks& impulse_links() const { return m_impulse_links; }
 
+  /// N flags of the particles the last step() squeezed out (CouplingStepStats::squeezed_out), which the
+  /// caller removes, their positions and velocities meaning nothing; empty when none was.
+  const std::vector<std::uint8_t>& squeezed_out() const { return m_squeezed; }
+
   /// After a step() that returned COUPLING_UNRESOLVED, the particle (index in that step's arrays) and the
   /// triangle of a collision left; (-1, -1) otherwise.
   std::pair<std::int64_t, std::int64_t> unresolved() const { return m_unresolved; }
 
  private:
   /// step() after its set-up: the stages of sec. 3 in the paper's order (coupler_stages.hpp).
-  std::uint32_t correct(const FluidView& fluid, ClothMesh& cloth, double dt, CouplingStepStats& stats);
+  std::uint32_t correct(const FluidView& fluid, ClothMesh& cloth, double dt, CouplingStepStats& stats,
+                        const ScalarArray* engine_inverse_masses);
 
   CouplingSettings m_settings;
   bool m_with_friction;
@@ -160,6 +179,7 @@ class Coupler {
   EffectCounter m_adhesion_counter;
   Vec3Array m_node_impulses;
   Vec3Array m_node_shifts;
+  std::vector<std::uint8_t> m_squeezed;
   ImpulseLinks m_largest;  // N, scratch of step()
   ImpulseLinks m_impulse_links;
   std::pair<std::int64_t, std::int64_t> m_unresolved{-1, -1};

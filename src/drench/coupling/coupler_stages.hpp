@@ -49,8 +49,13 @@ class StepContext {
  public:
   /// @param node_shifts  M entries, or null: where move_node() adds how far it moved each node of inverse
   ///        mass 0 (unit: m)
+  /// @param engine_inverse_masses  M inverse masses as the nodes' engines hold them (unit: 1/kg), or null
+  ///        for cloth.inverse_masses: a node of 0 is fixed (see fixed())
+  /// @param squeezed  where squeeze_out() flags the particles it removes, or null (nothing can be removed)
   StepContext(const FluidView& fluid, ClothMesh& cloth, double dt, CouplingStepStats& stats,
-              Vec3Array& node_impulses, ImpulseLinks* largest, Vec3Array* node_shifts = nullptr)
+              Vec3Array& node_impulses, ImpulseLinks* largest, Vec3Array* node_shifts = nullptr,
+              const ScalarArray* engine_inverse_masses = nullptr,
+              std::vector<std::uint8_t>* squeezed = nullptr)
       : m_x0(*fluid.positions_t0),
         m_x1(*fluid.positions_t1),
         m_v(*fluid.velocities),
@@ -60,7 +65,9 @@ class StepContext {
         m_stats(stats),
         m_node_impulses(node_impulses),
         m_largest(largest),
-        m_node_shifts(node_shifts) {}
+        m_node_shifts(node_shifts),
+        m_engine_inverse_masses(engine_inverse_masses ? *engine_inverse_masses : cloth.inverse_masses),
+        m_squeezed(squeezed) {}
 
   const Triangle& triangle(Index t) const { return m_cloth.triangles[t]; }
   Vec3 particle_velocity(Index p) const { return (m_x1[p] - m_x0[p]) / m_dt; }
@@ -131,6 +138,25 @@ class StepContext {
     m_node_changed[i] = 1;
   }
 
+  /// True when node i's engine ignores a move (a rigid body's, an obstacle's, a pinned cloth node): the
+  /// impact zones leave it where it was given.
+  bool fixed(Index i) const { return !(m_engine_inverse_masses[i] > 0.0); }
+
+  /// Removes particle p from the rest of the step (the impact zones' last resort, where no motion keeps it
+  /// out of every face): flagged in `squeezed` for the caller to remove, its mass and momentum m v booked
+  /// in the stats (squeezed_out, squeezed_out_mass, squeezed_out_momentum); later CCD rounds skip it.
+  /// Precondition: constructed with `squeezed`.
+  void squeeze_out(Index p) {
+    if (m_squeezed->empty()) m_squeezed->assign(m_x0.size(), 0);
+    (*m_squeezed)[p] = 1;
+    ++m_stats.squeezed_out;
+    m_stats.squeezed_out_mass += m_mass[p];
+    m_stats.squeezed_out_momentum += m_mass[p] * m_v[p];
+  }
+  bool squeezed_out(Index p) const {
+    return m_squeezed != nullptr && !m_squeezed->empty() && (*m_squeezed)[p];
+  }
+
   ccd::VertexFaceQuery query(Index p, Index t) const {
     const Triangle& tri = triangle(t);
     const Vec3Array& c0 = m_cloth.positions_t0;
@@ -176,6 +202,8 @@ class StepContext {
   Vec3Array& m_node_impulses;  // what every node received, inverse mass 0 or not (unit: N s)
   ImpulseLinks* m_largest;     // N, each particle's largest impulse so far (impulse 0: none), or null
   Vec3Array* m_node_shifts;    // M, what move_node moved each node of inverse mass 0 by (m), or null
+  const ScalarArray& m_engine_inverse_masses;  // M, as the engines hold them (unit: 1/kg)
+  std::vector<std::uint8_t>* m_squeezed;       // N flags of the particles squeezed out (empty: none), or null
 };
 
 /// Proximity (sec. 3.1, proximity.cpp): eq. 1's plane distance and barycentric inside test, extended to edges
@@ -244,8 +272,11 @@ void update_pairs(StepContext& ctx, TriangleBroadPhase& broad_phase, std::vector
 /// changed, until no pair collides. After settings.max_ccd_iterations rounds the fail-safe moves each
 /// particle still colliding with its triangle's contact point, which that triangle cannot cross; and where
 /// that is not enough (folds), the colliding particles and nodes join impact zones that each move by one
-/// displacement for the step (rigid impact zones that only translate), until no pair collides.
-/// Adds to the stats' ccd_iterations, ccd_impacts, failsafe_activations, stopped_particles, stopped_nodes.
+/// motion for the step (rigid impact zones), taking the fixed nodes' (StepContext::fixed) as given, until no
+/// pair collides; a zone between fixed nodes that move differently has its particles squeezed out
+/// (StepContext::squeeze_out).
+/// Adds to the stats' ccd_iterations, ccd_impacts, failsafe_activations, stopped_particles, stopped_nodes,
+/// squeezed_out.
 /// @param broad_phase  the coupler's, queried with margin 0 for swept boxes
 /// @param settings  cloth_thickness (unit: m) > 0, max_ccd_iterations >= 1
 /// @param unresolved  optional output: (particle index, triangle) of a collision left, else (-1, -1)

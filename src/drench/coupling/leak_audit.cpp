@@ -4,6 +4,8 @@
 #include <array>
 #include <chrono>
 #include <cmath>
+#include <stdexcept>
+#include <string>
 
 #include <drench/ccd/point_triangle_ccd.hpp>
 #include <drench/common/parallel.hpp>
@@ -122,6 +124,46 @@ std::uint64_t audit_leaks(const Vec3Array& particles_t0, const Vec3Array& partic
                           const ClothMesh& cloth, LeakAuditStats& stats, std::vector<std::uint8_t>* leaked) {
   LeakAudit audit;
   return audit.audit(particles_t0, particles_t1, cloth, stats, leaked);
+}
+
+std::uint64_t audit_face_jumps(const Vec3Array& particles, const std::vector<Triangle>& triangles,
+                               const Vec3Array& end, const Vec3Array& start, LeakAuditStats& stats,
+                               std::vector<std::uint8_t>* leaked) {
+  if (end.size() != start.size()) {
+    throw std::invalid_argument("audit_face_jumps: " + std::to_string(end.size()) + " end and " +
+                                std::to_string(start.size()) + " start positions");
+  }
+  const auto begin = std::chrono::steady_clock::now();
+  if (leaked) leaked->assign(particles.size(), 0);
+  // A face whose nodes all start where they ended sweeps nothing: only the others are audited.
+  std::vector<Index> jumped;
+  for (std::size_t t = 0; t < triangles.size(); ++t) {
+    const Triangle& tri = triangles[t];
+    if (end[tri[0]] != start[tri[0]] || end[tri[1]] != start[tri[1]] || end[tri[2]] != start[tri[2]])
+      jumped.push_back(static_cast<Index>(t));
+  }
+  std::uint64_t count = 0;
+  if (!jumped.empty() && !particles.empty()) {
+    ClothMesh faces;
+    faces.positions_t0 = end;
+    faces.positions_t1 = start;
+    faces.inverse_masses.assign(end.size(), 0.0);
+    faces.triangles.reserve(jumped.size());
+    for (const Index t : jumped)
+      faces.triangles.push_back(triangles[t]);
+    LeakAuditStats jump;
+    count = audit_leaks(particles, particles, faces, jump, leaked);
+    stats.leaks += count;
+    stats.jump_leaks += count;
+    stats.pairs += jump.pairs;
+    stats.exact_checks += jump.exact_checks;
+    if (count > 0) {
+      stats.leak_particle = jump.leak_particle;
+      stats.leak_triangle = jumped[static_cast<std::size_t>(jump.leak_triangle)];
+    }
+  }
+  stats.seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - begin).count();
+  return count;
 }
 
 void LeakAudit::update_grid(const ClothMesh& cloth) {

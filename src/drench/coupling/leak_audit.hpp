@@ -18,7 +18,10 @@
 namespace drench {
 
 struct LeakAuditStats {
-  std::uint64_t leaks = 0;         ///< particles that crossed a triangle (each at most once per step)
+  std::uint64_t leaks = 0;  ///< particles that crossed a triangle (each at most once per step)
+  /// Of `leaks`: particles a face crossed between two steps (audit_face_jumps), as where a rigid impact zone
+  /// had moved a body's face and the next step started from where its engine holds it.
+  std::uint64_t jump_leaks = 0;
   std::uint64_t pairs = 0;         ///< particle-triangle pairs whose swept boxes overlap
   std::uint64_t exact_checks = 0;  ///< pairs the filters left to the exact reference
   double seconds = 0.0;            ///< wall time (unit: s)
@@ -96,5 +99,26 @@ class LeakAudit {
 std::uint64_t audit_leaks(const Vec3Array& particles_t0, const Vec3Array& particles_t1,
                           const ClothMesh& cloth, LeakAuditStats& stats,
                           std::vector<std::uint8_t>* leaked = nullptr);
+
+/// The audit of what happens to the faces between two steps: each face moves from where the last audited
+/// step left it to where the next step starts it, the particles stay still, and a particle a face crosses
+/// (audit_leaks' transversal crossing, exactly as within a step) has leaked. A face's engine may start it
+/// elsewhere than the coupler left it: a rigid body's engine ignores what an impact zone did to its nodes
+/// (CouplingStepStats::zone_ignored_shift), and so does a cloth's for its pinned nodes; the water placed
+/// against the moved face would then be inside the body, crossing nothing within either step. Only the
+/// faces with a node that moved are examined, so a run whose faces start where they ended pays one pass
+/// over the nodes.
+/// @param particles  N particle positions between the steps (unit: m)
+/// @param triangles  F triangles, node indices < M
+/// @param end  M node positions where the last audited step ended (unit: m)
+/// @param start  M node positions where the next step starts (unit: m)
+/// @param stats  adds leaks (and jump_leaks), pairs, exact checks and time; names this call's first leak,
+///        if any, in leak_particle and leak_triangle (an index into `triangles`)
+/// @param leaked  optional output, N flags set for the particles that leaked
+/// @return the number of particles a face crossed
+/// @throws std::invalid_argument when `end` and `start` differ in size
+std::uint64_t audit_face_jumps(const Vec3Array& particles, const std::vector<Triangle>& triangles,
+                               const Vec3Array& end, const Vec3Array& start, LeakAuditStats& stats,
+                               std::vector<std::uint8_t>* leaked = nullptr);
 
 }  // namespace drench

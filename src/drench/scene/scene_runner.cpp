@@ -159,6 +159,8 @@ nlohmann::json make_summary(const Simulation& sim, double wall_seconds, const st
     s["failsafe_activations"] = c.failsafe_activations;
     s["stopped_particles"] = c.stopped_particles;
     s["stopped_nodes"] = c.stopped_nodes;
+    s["squeezed_out"] = c.squeezed_out;
+    s["squeezed_out_kg"] = c.squeezed_out_mass;
     s["obstacle_stops"] = c.obstacle_stops;
     s["mean_contact_slip_mps"] = c.contacts > 0 ? c.slip_sum_mps / static_cast<double>(c.contacts) : 0.0;
     s["coupling_status"] = sim.coupling_status();
@@ -168,6 +170,7 @@ nlohmann::json make_summary(const Simulation& sim, double wall_seconds, const st
     s["timings_s"]["ccd"] = c.seconds_ccd;
     if (sim.config().has_effect("leak_audit")) {
       s["leaks"] = sim.leak_stats().leaks;
+      s["jump_leaks"] = sim.leak_stats().jump_leaks;
       s["timings_s"]["leak_audit"] = sim.leak_stats().seconds;
     }
     if (const ClothWetting* wetting = sim.wetting()) {
@@ -182,8 +185,10 @@ nlohmann::json make_summary(const Simulation& sim, double wall_seconds, const st
                       {"absorbed", w.absorbed_kg},
                       {"dripped", w.dripped_kg},
                       {"killed", sim.killed_mass()},
+                      {"squeezed_out", sim.coupling_stats().squeezed_out_mass},
                       {"initial_total", sim.emitted_mass()},
-                      {"final_total", fluid + wetting->held() + sim.killed_mass()}};
+                      {"final_total",
+                       fluid + wetting->held() + sim.killed_mass() + sim.coupling_stats().squeezed_out_mass}};
       s["particles_absorbed"] = w.particles_absorbed;
       s["particles_dripped"] = w.particles_dripped;
       s["wet_area_fraction"] = wetting->wet_area_fraction();

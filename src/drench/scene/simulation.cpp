@@ -323,11 +323,18 @@ StepStatus Simulation::step(Scalar dt) {
     m_emitted_mass += static_cast<double>(m_fluid->particles().size() - before) * m_fluid->particle_mass();
   }
   if (m_engine) m_engine->begin_step();
+  StepStatus jump_status;
+  if (m_engine) audit_face_jumps_since_last_step(jump_status);
   // The cloth at its start positions is an obstacle inside the fluid's sub-steps
   // (coupling/cloth_obstacle.hpp).
   if (m_effects.obstacle) m_effects.obstacle->begin_step(m_engine->mesh(), m_engine->velocities());
   if (m_rigid_boundary) place_rigid_boundary();
   StepStatus status = m_fluid->step(dt, m_effects.obstacle.get());
+  if ((jump_status.flags & StepStatus::LEAKED) && !(status.flags & StepStatus::LEAKED)) {
+    status.flags |= StepStatus::LEAKED;
+    status.leaked_particle = jump_status.leaked_particle;
+    status.leaked_triangle = jump_status.leaked_triangle;
+  }
   if (m_rigid_boundary) push_rigid_bodies();
   if (m_engine) step_cloth_and_couple(dt, status);
   // `!(a <= b)` rather than std::max, so that a NaN speed stays NaN in the summary.
@@ -382,6 +389,21 @@ void Simulation::push_rigid_bodies() {
   }
   // Before the bodies' step: the water's pressure moves them in it.
   m_with_obstacles->apply_body_impulses(nodes);
+}
+
+void Simulation::audit_face_jumps_since_last_step(StepStatus& status) {
+  const ClothMesh& mesh = m_engine->mesh();
+  // The first step, or a mesh whose layout changed (a body came or went), has no end to compare with.
+  if (!m_effects.leak_audit || m_audited_end.size() != mesh.node_count() ||
+      m_audited_triangles != mesh.triangles) {
+    return;
+  }
+  ParticleSet& p = m_fluid->particles();
+  if (audit_face_jumps(p.positions, mesh.triangles, m_audited_end, mesh.positions_t0, m_leak_stats) > 0) {
+    status.flags |= StepStatus::LEAKED;
+    status.leaked_particle = p.ids[static_cast<std::size_t>(m_leak_stats.leak_particle)];
+    status.leaked_triangle = m_leak_stats.leak_triangle;
+  }
 }
 
 void Simulation::step_cloth_and_couple(Scalar dt, StepStatus& status) {
@@ -466,7 +488,8 @@ void Simulation::step_cloth_and_couple(Scalar dt, StepStatus& status) {
       // impulse reaches it at its next step (moving a light node with heavy water here is what the links
       // would snap back).
       const KinematicCloth kinematic(mesh);
-      m_last_coupling_status = m_effects.coupler->step(view, mesh, dt, m_coupling_stats);
+      m_last_coupling_status =
+          m_effects.coupler->step(view, mesh, dt, m_coupling_stats, &kinematic.own_inverse_masses());
       const Vec3Array& given = m_effects.coupler->node_impulses();
       for (std::size_t i = 0; i < given.size(); ++i) {
         if (kinematic.own_inverse_masses()[i] > 0.0) m_pending_cloth_impulses[i] += given[i];
@@ -487,6 +510,10 @@ void Simulation::step_cloth_and_couple(Scalar dt, StepStatus& status) {
       status.leaked_particle = p.ids[static_cast<std::size_t>(particle)];
       status.leaked_triangle = triangle;
     }
+    // The water the impact zones squeezed out between faces that move differently: its mass and momentum
+    // are booked in the coupling's stats.
+    const std::vector<std::uint8_t>& squeezed = m_effects.coupler->squeezed_out();
+    if (!squeezed.empty()) m_removed += static_cast<std::int64_t>(p.remove_flagged(squeezed));
   }
   // A dynamic body takes what the water gave its nodes now: its engine has already stepped it. Outside the
   // coupling's timer: handing the bodies their impulses is the rigid stage's (body_seconds).
@@ -515,6 +542,16 @@ void Simulation::step_cloth_and_couple(Scalar dt, StepStatus& status) {
       ++m_effects.leak_counter.passes;
     } else {
       ++m_effects.leak_counter.skipped;
+    }
+  }
+  // Where the next step's audit_face_jumps_since_last_step compares the faces' start with: the faces as
+  // the coupler left them, which the water was held against.
+  if (m_effects.leak_audit) {
+    if (m_non_finite_node < 0) {
+      m_audited_end = mesh.positions_t1;
+      if (m_audited_triangles != mesh.triangles) m_audited_triangles = mesh.triangles;
+    } else {
+      m_audited_end.clear();
     }
   }
   if (m_effects.wetting && coupled) wet_cloth(dt);

@@ -169,6 +169,10 @@ class Simulation {
   /// Gives the dynamic bodies what the fluid's pressure gave their boundary particles in its step.
   void push_rigid_bodies();
   void step_cloth_and_couple(Scalar dt, StepStatus& status);
+  /// The leak audit of the faces' move from where the last audited step ended them to where the engine
+  /// starts them now (audit_face_jumps), after the engine's begin_step; sets LEAKED in `status` naming the
+  /// particle and face when a face crossed one.
+  void audit_face_jumps_since_last_step(StepStatus& status);
   void remove_killed();
   /// The cloth's blow-up checks after a step: the fastest node against cloth.max_speed (RUNAWAY_NODE), the
   /// most stretched edge against cloth.max_strain (CLOTH_OVERSTRETCHED); also keeps the run's largest.
@@ -197,7 +201,9 @@ class Simulation {
   ImpulseLinks m_pending_links;           // the particles that gave them, carried in that step
   CouplingStepStats m_coupling_stats;
   LeakAuditStats m_leak_stats;
-  LeakAudit m_leak_audit;  // its grid of the mesh's faces kept from step to step
+  LeakAudit m_leak_audit;                     // its grid of the mesh's faces kept from step to step
+  Vec3Array m_audited_end;                    // the mesh's nodes where the last audited step ended them (m)
+  std::vector<Triangle> m_audited_triangles;  // the mesh's triangles then
   std::uint32_t m_coupling_status = 0;
   std::uint32_t m_last_coupling_status = 0;
   std::int64_t m_non_finite_node = -1;
