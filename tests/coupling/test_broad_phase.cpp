@@ -168,6 +168,94 @@ TEST(BroadPhase, GridRebinningOnlyTrianglesThatChangeCellsMatchesBruteForce) {
   }
 }
 
+/// Appends `part`'s nodes and triangles to `mesh`, as a world joins its cloths and bodies into one mesh.
+void append_mesh(ClothMesh& mesh, const ClothMesh& part) {
+  const auto offset = static_cast<Index>(mesh.node_count());
+  mesh.positions_t0.insert(mesh.positions_t0.end(), part.positions_t0.begin(), part.positions_t0.end());
+  mesh.positions_t1.insert(mesh.positions_t1.end(), part.positions_t1.begin(), part.positions_t1.end());
+  mesh.inverse_masses.insert(mesh.inverse_masses.end(), part.inverse_masses.begin(),
+                             part.inverse_masses.end());
+  for (Triangle t : part.triangles) {
+    for (Index& v : t)
+      v += offset;
+    mesh.triangles.push_back(t);
+  }
+}
+
+// A game's level joins faces of many sizes in one mesh (a ground of big faces, cloths of small ones), and
+// a grid's cells suit some sizes better than others (a grid that files faces by size moves them between its
+// levels as they grow and shrink). With a ground of 20 cm faces, a cloth of 1 cm faces just above it and a
+// 4 m quad below, while a corner of the cloth is stretched 8-fold and back (its faces grow by a factor 8
+// and shrink again), the cloth slides by 25 cm in one step, some faces collapse to a point (zero extent)
+// and one node flies 1 km, then 1e30 m away and back, it must stay exactly the brute-force set, at 1 and 2
+// threads.
+TEST(BroadPhase, GridWithFacesOfManySizesMatchesBruteForceAsTheyGrowAndMove) {
+  std::mt19937_64 rng(29);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  test::Particles particles;
+  for (int k = 0; k < 3000; ++k)
+    particles.add(Vec3(0.35 * u(rng) + 0.15, 0.02 * u(rng) + 0.01, 0.35 * u(rng) + 0.15),
+                  Vec3(u(rng), u(rng), u(rng)), 0.01, 1e-4);
+  ClothMesh mesh = test::grid_mesh(11, 2.0, 0.0, 0.0, -1.0, -1.0);  // the ground, x and z in [-1, 1]
+  const auto first_cloth_node = static_cast<Index>(mesh.node_count());
+  append_mesh(mesh, test::grid_mesh(31, 0.3, 0.01, 1.0));  // the cloth, x and z in [0, 0.3]
+  const auto cloth_end = static_cast<Index>(mesh.node_count());
+  append_mesh(mesh, test::grid_mesh(2, 4.0, -0.005, 0.0, -2.0, -2.0));
+  const Vec3Array rest = mesh.positions_t1;
+  const std::unique_ptr<TriangleBroadPhase> broad_phase = make_broad_phase(BroadPhaseKind::GRID);
+  const int threads = thread_count();
+  int calls = 0;
+  std::vector<std::pair<Index, Index>> expected, got;
+  const auto check = [&](const char* what) {
+    find_pairs_brute_force(particles.x0, particles.x1, mesh, 0.002, expected);
+    set_thread_count(1 + calls++ % 2);
+    broad_phase->find_pairs(particles.x0, particles.x1, mesh, 0.002, nullptr, got);
+    set_thread_count(threads);
+    ASSERT_GT(expected.size(), 100u) << what;
+    EXPECT_EQ(got, expected) << what;
+  };
+  // The next step: every node starts where it ended, and `move` sets where the cloth's nodes end.
+  const auto step = [&](const auto& move) {
+    mesh.positions_t0 = mesh.positions_t1;
+    for (Index i = first_cloth_node; i < cloth_end; ++i)
+      move(i, mesh.positions_t1[i]);
+  };
+  check("first call");
+  const auto stretch = [&](Index i, Vec3& x) {
+    if (rest[i].x() < 0.05 && rest[i].z() < 0.05) x = Vec3(8.0 * rest[i].x(), rest[i].y(), 8.0 * rest[i].z());
+  };
+  step(stretch);
+  check("a corner stretched 8-fold in the step");
+  step(stretch);
+  check("the corner stretched, at rest");
+  step([&](Index i, Vec3& x) { x = rest[i]; });
+  check("the corner back in the step");
+  step([&](Index i, Vec3& x) { x = rest[i]; });
+  check("the corner back, at rest");
+  step([&](Index, Vec3& x) { x += Vec3(0.25, 0.0, 0.0); });
+  check("the cloth slid by 25 cm in the step");
+  step([&](Index, Vec3& x) { x += 0.002 * Vec3(u(rng), u(rng), u(rng)); });
+  check("the cloth slid, moving by up to 2 mm");
+  step([&](Index i, Vec3& x) {
+    if (i % 31 < 3) x = rest[first_cloth_node];  // the faces between the first three columns: one point
+  });
+  step([](Index, Vec3&) {});
+  check("some faces collapsed to a point");
+  for (const double far : {1e3, 1e30}) {
+    step([&](Index i, Vec3& x) {
+      if (i == first_cloth_node + 400) x = Vec3(far, 0.0, 0.0);
+    });
+    check("one node flying far away");
+    step([&](Index i, Vec3& x) {
+      if (i == first_cloth_node + 400) x = rest[i];
+    });
+    check("the node back in the step");
+  }
+  step([&](Index i, Vec3& x) { x = rest[i]; });
+  step([&](Index i, Vec3& x) { x = rest[i]; });
+  check("the cloth back at rest");
+}
+
 // The CCD rounds keep every pair of the motion and bring it up to date from the particles that can be in a
 // changed pair (coupling_detail::update_pairs) instead of asking for every particle again: after impulses
 // (a particle and its triangle's nodes move), fail-safe placements (particles only), impact-zone node moves
