@@ -53,24 +53,28 @@ template <class Group, class Body>
 }
 
 /// Keeps the first `count` lanes of f at out[0 .. count): a group's last lanes past i's neighbors are the
-/// next particle's entries, which another chunk's thread may be writing. Per half for Halves, so that GCC
-/// keeps the halves in registers.
-[[gnu::always_inline]] inline void store_lanes(const Wide& f, std::uint32_t count, Scalar* out) {
-  if (count == kWide) {
-    std::memcpy(out, &f, sizeof(Wide));
+/// next particle's entries, which another chunk's thread may be writing. V is a whole vector of T (Wide,
+/// Floats16); the LanePair overload stores per half, so that GCC keeps the halves in registers.
+template <class V, class T>
+[[gnu::always_inline]] inline void store_lanes(const V& f, std::uint32_t count, T* out) {
+  constexpr std::uint32_t kAll = sizeof(V) / sizeof(T);
+  if (count == kAll) {
+    std::memcpy(out, &f, sizeof(V));
     return;
   }
   for (std::uint32_t l = 0; l < count; ++l)
     out[l] = f[l];
 }
-[[gnu::always_inline]] inline void store_lanes(const Halves& f, std::uint32_t count, Scalar* out) {
-  if (count == kWide) {
-    std::memcpy(out, &f.lo, sizeof(Lanes));
-    std::memcpy(out + kLanes, &f.hi, sizeof(Lanes));
+template <class V, class T>
+[[gnu::always_inline]] inline void store_lanes(const LanePair<V>& f, std::uint32_t count, T* out) {
+  constexpr std::uint32_t kHalf = sizeof(V) / sizeof(T);
+  if (count == 2 * kHalf) {
+    std::memcpy(out, &f.lo, sizeof(V));
+    std::memcpy(out + kHalf, &f.hi, sizeof(V));
     return;
   }
   for (std::uint32_t l = 0; l < count; ++l)
-    out[l] = l < kLanes ? f.lo[l] : f.hi[l - kLanes];
+    out[l] = l < kHalf ? f.lo[l] : f.hi[l - kHalf];
 }
 
 /// The eight factors at `factors`, as load_lanes' counterpart of store_lanes.
@@ -256,25 +260,6 @@ template <class V>
                                                       const FloatHalves& r2, FloatHalves& w, FloatHalves& f) {
   float_kernel_lanes(k, gradient_scale, r2.lo, w.lo, f.lo);
   float_kernel_lanes(k, gradient_scale, r2.hi, w.hi, f.hi);
-}
-
-/// store_lanes for the sixteen float lanes.
-[[gnu::always_inline]] inline void store_lanes(const Floats16& f, std::uint32_t count, float* out) {
-  if (count == kFloatLanes) {
-    std::memcpy(out, &f, sizeof(Floats16));
-    return;
-  }
-  for (std::uint32_t l = 0; l < count; ++l)
-    out[l] = f[l];
-}
-[[gnu::always_inline]] inline void store_lanes(const FloatHalves& f, std::uint32_t count, float* out) {
-  if (count == kFloatLanes) {
-    std::memcpy(out, &f.lo, sizeof(Floats8));
-    std::memcpy(out + 8, &f.hi, sizeof(Floats8));
-    return;
-  }
-  for (std::uint32_t l = 0; l < count; ++l)
-    out[l] = l < 8 ? f.lo[l] : f.hi[l - 8];
 }
 
 /// pbf_constraint in single precision (PbfSettings::precision): the same outputs, with the sums over
