@@ -268,23 +268,29 @@ class SheetEngine final : public ClothEngine {
   SheetOverBox& m_world;
 };
 
+/// A box body's surface at the start of a step (key 1): 12 triangles counter-clockwise seen from outside
+/// over its 8 corners (corner c at centre + half * (+-1, +-1, +-1) by its bits x, y, z), every corner moving
+/// at `velocity` (unit: m/s); positions_t1 = positions_t0.
+RigidSurface box_surface(RigidMotion motion, const Vec3Array& corners, const Vec3& velocity) {
+  RigidSurface s;
+  s.key = 1;
+  s.motion = motion;
+  const Index quads[6][4] = {{0, 4, 6, 2}, {1, 3, 7, 5}, {0, 1, 5, 4},
+                             {2, 6, 7, 3}, {0, 2, 3, 1}, {4, 5, 7, 6}};
+  for (const auto& q : quads) {
+    s.triangles.push_back({q[0], q[1], q[2]});
+    s.triangles.push_back({q[0], q[2], q[3]});
+  }
+  s.positions_t0 = s.positions_t1 = corners;
+  s.velocities_t0.assign(corners.size(), velocity);
+  return s;
+}
+
 class BoxBody final : public RigidBodySource {
  public:
   explicit BoxBody(SheetOverBox& world) : m_world(world) {}
   void begin_step(std::vector<RigidSurface>& surfaces) override {
-    surfaces.assign(1, RigidSurface{});
-    RigidSurface& s = surfaces[0];
-    s.key = 1;
-    s.motion = RigidMotion::DYNAMIC;
-    // Counter-clockwise seen from outside; corner c at centre + half * (+-1, +-1, +-1) by its bits x, y, z.
-    const Index quads[6][4] = {{0, 4, 6, 2}, {1, 3, 7, 5}, {0, 1, 5, 4},
-                               {2, 6, 7, 3}, {0, 2, 3, 1}, {4, 5, 7, 6}};
-    for (const auto& q : quads) {
-      s.triangles.push_back({q[0], q[1], q[2]});
-      s.triangles.push_back({q[0], q[2], q[3]});
-    }
-    s.positions_t0 = s.positions_t1 = m_world.box_nodes();
-    s.velocities_t0.assign(8, m_world.velocity);
+    surfaces.assign(1, box_surface(RigidMotion::DYNAMIC, m_world.box_nodes(), m_world.velocity));
   }
   void step(double) override {}  // the sheet's engine steps the box
   void end_positions(std::vector<RigidSurface>& surfaces) override {
@@ -419,18 +425,7 @@ class LoweredBox final : public RigidBodySource {
     return x;
   }
   void begin_step(std::vector<RigidSurface>& surfaces) override {
-    surfaces.assign(1, RigidSurface{});
-    RigidSurface& s = surfaces[0];
-    s.key = 1;
-    s.motion = RigidMotion::KINEMATIC;
-    const Index quads[6][4] = {{0, 4, 6, 2}, {1, 3, 7, 5}, {0, 1, 5, 4},
-                               {2, 6, 7, 3}, {0, 2, 3, 1}, {4, 5, 7, 6}};
-    for (const auto& q : quads) {
-      s.triangles.push_back({q[0], q[1], q[2]});
-      s.triangles.push_back({q[0], q[2], q[3]});
-    }
-    s.positions_t0 = s.positions_t1 = nodes();
-    s.velocities_t0.assign(8, Vec3::Zero());
+    surfaces.assign(1, box_surface(RigidMotion::KINEMATIC, nodes(), Vec3::Zero()));
   }
   void step(double dt) override { centre.y() = std::max(centre.y() - speed * dt, floor + half.y()); }
   void end_positions(std::vector<RigidSurface>& surfaces) override { surfaces[0].positions_t1 = nodes(); }
