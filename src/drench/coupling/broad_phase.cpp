@@ -20,12 +20,10 @@ namespace {
 /// every triangle whose box changed made the grid 1.75x FCL's time on bench_coupling's coupler_step, where
 /// the whole cloth moves (issue 41). The cell size only decides speed, never the pairs, so it is kept while
 /// the mean box stays within a factor 2 of it. One cell serves every size: a hierarchical grid (a level per
-/// size class of the boxes, each with a cell of its own) cut issue 41's candidates per query from 9-15 to
-/// 4-6, but each query's test of every level's bounds and the more frequent refiling of the small faces in
-/// their finer cells cost more than that saved (bench_game_frame under callgrind: 1.6G instructions in the
-/// broad phase against 1.24G). There the mean box, 5.6 cm, is not the ground's (3,200 faces of 10 cm): the
-/// balls' 2,700 faces of 1-2 cm and the cloths' 1,100 of 2.5-3.5 cm pull it down, and a candidate costs
-/// about 13 of a query's 565 instructions.
+/// size class, each with a cell of its own) found fewer candidates, but its per-level tests and the small
+/// faces' more frequent refiling cost more than that saved (bench_game_frame under callgrind), since a
+/// candidate is a small part of a query's cost and the balls' and cloths' small faces already keep the mean
+/// box near their size.
 class GridBroadPhase final : public TriangleBroadPhase {
  public:
   void find_pairs(const Vec3Array& particles_t0, const Vec3Array& particles_t1, const ClothMesh& cloth,

@@ -161,8 +161,8 @@ std::optional<ZoneMotion> rigid_motion(const Vec3Array& x0, const Vec3Array& x1,
 /// Where the fixed nodes of a zone move differently (water squeezed between a falling box and the ground),
 /// no motion serves both: the zone's particles that hit a face with a fixed node are squeezed out, removed
 /// with their mass and momentum booked (StepContext::squeeze_out), and the zones are formed again without
-/// them, so the water that only touched the cloth keeps a motion (squeezing out every particle of such a
-/// zone removed 752 particles in 300 frames of bench_game_frame's pbf level, this 21). A node left alone
+/// them, so the water that only touched the cloth keeps a motion (squeezing out the whole zone removed far
+/// more water in bench_game_frame's level). A node left alone
 /// goes back where it was given. A particle's change of momentum goes to its triangle's nodes
 /// (StepContext::place); a carried-water cloth's node moved by its zone goes to Coupler::node_shifts, for
 /// its caller to settle (owe_zone_shifts). A crossing stays only where no round makes progress
