@@ -406,7 +406,7 @@ std::uint32_t resolve_ccd(StepContext& ctx, TriangleBroadPhase& broad_phase, con
         Vec3 shift = Vec3::Zero();
         for (int i = 0; i < 3; ++i)
           shift += w[i] * (cloth.positions_t1[tri[i]] - cloth.positions_t0[tri[i]]);
-        ctx.place(p, ctx.x0()[p] + shift, impact.triangle, w);
+        ctx.place(p, ctx.x0()[p] + shift, impact.triangle, w, /*owe=*/true);
         ++stats.failsafe_activations;
       }
       update_pairs(ctx, broad_phase, only, pairs, all, merged);

@@ -80,6 +80,7 @@ std::uint32_t Coupler::step(const FluidView& fluid, ClothMesh& cloth, double dt,
   m_node_impulses.assign(cloth.node_count(), Vec3::Zero());
   m_squeezed.clear();
   m_node_shifts.assign(cloth.node_count(), Vec3::Zero());
+  m_owed_impulses.assign(cloth.node_count(), Vec3::Zero());
   m_impulse_links.clear();
   m_unresolved = {-1, -1};
   // Exact, not a heuristic: every pair a stage acts on comes from the broad phase, asked at x_t0 with margin
@@ -111,7 +112,7 @@ std::uint32_t Coupler::correct(const FluidView& fluid, ClothMesh& cloth, double 
                                const ScalarArray* engine_inverse_masses) {
   std::uint32_t status = COUPLING_OK;
   StepContext ctx(fluid, cloth, dt, stats, m_node_impulses, fluid.ids != nullptr ? &m_largest : nullptr,
-                  &m_node_shifts, engine_inverse_masses, &m_squeezed);
+                  &m_node_shifts, engine_inverse_masses, &m_squeezed, &m_owed_impulses);
   ctx.clear_changes();
   const double thickness = m_settings.cloth_thickness;
   std::vector<std::pair<Index, Index>> pairs;

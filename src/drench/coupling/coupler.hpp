@@ -153,6 +153,13 @@ class Coupler {
   /// it as a velocity (a carried-water cloth's end_step) must have its momentum booked by the caller.
   const Vec3Array& node_shifts() const { return m_node_shifts; }
 
+  /// What the last step()'s fail-safe gave the nodes of inverse mass > 0 without moving them (unit: N s), M
+  /// entries, 0 elsewhere: it moves a particle with its triangle's contact point and leaves the triangle
+  /// where it is, since moving it too could let it cross the particle. A caller whose nodes took the other
+  /// impulses as moves (CouplingScheme::IMPULSES) hands these to the cloth at its next step, so momentum is
+  /// exchanged here too (JetOnCloth.ImpulsesConserveLinearMomentumThroughTheFailSafe).
+  const Vec3Array& owed_impulses() const { return m_owed_impulses; }
+
   /// For every particle that received an impulse in the last step() (in particle order), the triangle, the
   /// weights and the size of its largest one; empty unless FluidView::ids was given. With node_impulses(),
   /// what CarriedWater::attach needs to carry each particle with the nodes its impulse goes to.
@@ -179,6 +186,7 @@ class Coupler {
   EffectCounter m_adhesion_counter;
   Vec3Array m_node_impulses;
   Vec3Array m_node_shifts;
+  Vec3Array m_owed_impulses;
   std::vector<std::uint8_t> m_squeezed;
   ImpulseLinks m_largest;  // N, scratch of step()
   ImpulseLinks m_impulse_links;

@@ -52,10 +52,12 @@ class StepContext {
   /// @param engine_inverse_masses  M inverse masses as the nodes' engines hold them (unit: 1/kg), or null
   ///        for cloth.inverse_masses: a node of 0 is fixed (see fixed())
   /// @param squeezed  where squeeze_out() flags the particles it removes, or null (nothing can be removed)
+  /// @param owed  M entries, or null: where place(..., owe = true) adds the impulses it books on nodes of
+  ///        inverse mass > 0 without moving them (unit: N s)
   StepContext(const FluidView& fluid, ClothMesh& cloth, double dt, CouplingStepStats& stats,
               Vec3Array& node_impulses, ImpulseLinks* largest, Vec3Array* node_shifts = nullptr,
               const ScalarArray* engine_inverse_masses = nullptr,
-              std::vector<std::uint8_t>* squeezed = nullptr)
+              std::vector<std::uint8_t>* squeezed = nullptr, Vec3Array* owed = nullptr)
       : m_x0(*fluid.positions_t0),
         m_x1(*fluid.positions_t1),
         m_v(*fluid.velocities),
@@ -67,7 +69,8 @@ class StepContext {
         m_largest(largest),
         m_node_shifts(node_shifts),
         m_engine_inverse_masses(engine_inverse_masses ? *engine_inverse_masses : cloth.inverse_masses),
-        m_squeezed(squeezed) {}
+        m_squeezed(squeezed),
+        m_owed(owed) {}
 
   const Triangle& triangle(Index t) const { return m_cloth.triangles[t]; }
   Vec3 particle_velocity(Index p) const { return (m_x1[p] - m_x0[p]) / m_dt; }
@@ -115,16 +118,21 @@ class StepContext {
   /// Moves particle p's end position (fail-safe), keeping velocity = displacement / dt. The momentum this
   /// gives the particle is booked against the nodes of triangle t by the weights w, as apply() books an
   /// impulse, without moving them: a rigid body or a carried-water cloth takes it from node_impulses, so the
-  /// exchange stays conservative even here.
-  void place(Index p, const Vec3& x_t1, Index t, const Vec3& w) {
+  /// exchange stays conservative even here. With `owe`, a node of inverse mass > 0, which no one else pays,
+  /// also has it added to `owed` (the fail-safe: moving the triangle would let it cross the particle it was
+  /// to carry; an impact zone's move of its nodes pays for its own particles).
+  void place(Index p, const Vec3& x_t1, Index t, const Vec3& w, bool owe = false) {
     const Vec3 dv = (x_t1 - m_x1[p]) / m_dt;
     m_v[p] += dv;
     m_x1[p] = x_t1;
     m_particle_changed[p] = 1;
     const Vec3 impulse = m_mass[p] * dv;
     const Triangle& tri = triangle(t);
-    for (int i = 0; i < 3; ++i)
+    for (int i = 0; i < 3; ++i) {
       m_node_impulses[tri[i]] -= w[i] * impulse;
+      if (owe && m_owed != nullptr && m_cloth.inverse_masses[tri[i]] > 0.0)
+        (*m_owed)[tri[i]] -= w[i] * impulse;
+    }
     m_stats.vertical_impulse_on_cloth -= impulse.y();
     m_stats.last_resort_impulse += impulse.norm();
   }
@@ -203,7 +211,8 @@ class StepContext {
   ImpulseLinks* m_largest;     // N, each particle's largest impulse so far (impulse 0: none), or null
   Vec3Array* m_node_shifts;    // M, what move_node moved each node of inverse mass 0 by (m), or null
   const ScalarArray& m_engine_inverse_masses;  // M, as the engines hold them (unit: 1/kg)
-  std::vector<std::uint8_t>* m_squeezed;       // N flags of the particles squeezed out (empty: none), or null
+  std::vector<std::uint8_t>* m_squeezed;
+  Vec3Array* m_owed;  // N flags of the particles squeezed out (empty: none), or null
 };
 
 /// Proximity (sec. 3.1, proximity.cpp): eq. 1's plane distance and barycentric inside test, extended to edges

@@ -501,6 +501,10 @@ void Simulation::step_cloth_and_couple(Scalar dt, StepStatus& status) {
       m_pending_links = m_effects.coupler->impulse_links();
     } else {
       m_last_coupling_status = m_effects.coupler->step(view, mesh, dt, m_coupling_stats);
+      // The fail-safe's share of the nodes it did not move reaches the cloth at its next step.
+      const Vec3Array& owed = m_effects.coupler->owed_impulses();
+      for (std::size_t i = 0; i < owed.size(); ++i)
+        m_pending_cloth_impulses[i] += owed[i];
     }
     m_coupling_status |= m_last_coupling_status;
     if (m_last_coupling_status & COUPLING_UNRESOLVED) {
