@@ -3,6 +3,8 @@
 
 #include <gtest/gtest.h>
 
+#include <Eigen/Geometry>
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -454,6 +456,53 @@ TEST(Coupler, AParticleCaughtBetweenTwoPinnedLayersIsSqueezedOut) {
   // Every node ends where it was given (rounding: none, they are never written).
   const ClothMesh given = two_sheets(0.002, -0.012, -0.003, 0.012);
   EXPECT_EQ(fold.mesh.positions_t1, given.positions_t1);
+}
+
+// A body turning as it falls through a particle onto a sheet rising under it: the zone takes the body's
+// one rigid motion (Kabsch's fit of its held nodes), so the particle and the sheet's caught nodes turn and
+// fall with the body's face, as if stuck to it, and stay on their sides. The body's nodes end exactly where
+// they were given: a move would leave the particle inside the body at the next step (jump_leaks).
+TEST(Coupler, AZoneWithATurningBodyTakesTheBodysRigidMotion) {
+  ClothMesh mesh = two_sheets(0.002, 0.0, -0.003, 0.012);
+  // The upper sheet is the body: turned by 0.01 rad about the z axis through the particle's start, and
+  // lowered by 12 mm.
+  const double angle = 0.01;
+  const Eigen::Matrix3d turn = Eigen::AngleAxisd(angle, Vec3::UnitZ()).toRotationMatrix();
+  const Vec3 pivot(0.3, 0.0, 0.2), drop(0.0, -0.012, 0.0);
+  const auto body_motion = [&](const Vec3& x) -> Vec3 { return turn * (x - pivot) + pivot + drop; };
+  for (std::size_t i = 0; i < 4; ++i)
+    mesh.positions_t1[i] = body_motion(mesh.positions_t0[i]);
+  const ClothMesh given = mesh;
+  const double dt = 0.004;
+  Particles particles;
+  particles.add(Vec3(0.3, 0.0, 0.2), Vec3::Zero(), dt, kMass);
+  CouplingSettings settings;
+  settings.max_ccd_iterations = 4;
+  Coupler coupler(settings);
+  ScalarArray own(mesh.node_count(), 1.0 / 0.01);  // the lower sheet: 10 g nodes
+  for (std::size_t i = 0; i < 4; ++i)
+    own[i] = 0.0;  // the body's, held by its engine
+  CouplingStepStats stats;
+  const std::uint32_t status = coupler.step(particles.view(), mesh, dt, stats, &own);
+  ASSERT_NE(status & COUPLING_ZONES_STOPPED, 0u)
+      << "the step must need the last resort, else it tests nothing";
+  EXPECT_EQ(status & COUPLING_UNRESOLVED, 0u);
+  EXPECT_EQ(stats.squeezed_out, 0u) << "one rigid motion serves the zone";
+  EXPECT_EQ(stats.zone_ignored_shift, 0.0);
+  LeakAuditStats audit;
+  EXPECT_EQ(audit_leaks(particles.x0, particles.x1, mesh, audit), 0u);
+  // The body's nodes are never written; the particle and every node that moved off its given end moved
+  // with the body's motion (rounding of the fit: 1e-12 m).
+  for (std::size_t i = 0; i < 4; ++i)
+    EXPECT_EQ(mesh.positions_t1[i], given.positions_t1[i]) << "body node " << i;
+  EXPECT_LT((particles.x1[0] - body_motion(particles.x0[0])).norm(), 1e-12);
+  std::size_t turned = 0;
+  for (std::size_t i = 4; i < mesh.node_count(); ++i) {
+    if (mesh.positions_t1[i] == given.positions_t1[i]) continue;
+    EXPECT_LT((mesh.positions_t1[i] - body_motion(mesh.positions_t0[i])).norm(), 1e-12) << "node " << i;
+    ++turned;
+  }
+  EXPECT_EQ(turned, 3u) << "the lower sheet's triangle under the particle";
 }
 
 TEST(Coupler, RejectsBadSettingsNamingThem) {
