@@ -420,7 +420,7 @@ void Simulation::step_cloth_and_couple(Scalar dt, StepStatus& status) {
       const ImpulseLinks& stops = m_effects.obstacle->impulse_links();
       links.insert(links.end(), stops.begin(), stops.end());
     }
-    m_effects.carried->attach(mesh, p.masses, p.ids, std::move(links));
+    m_effects.carried->attach(mesh, p.masses, p.ids, links);
     m_engine->set_carried_masses(m_effects.carried->carried_masses());
     before_impulses = m_engine->velocities();
   }
