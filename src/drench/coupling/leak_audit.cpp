@@ -4,6 +4,7 @@
 #include <array>
 #include <chrono>
 #include <cmath>
+#include <cstring>
 #include <stdexcept>
 #include <string>
 
@@ -135,12 +136,20 @@ std::uint64_t audit_face_jumps(const Vec3Array& particles, const std::vector<Tri
   }
   const auto begin = std::chrono::steady_clock::now();
   if (leaked) leaked->assign(particles.size(), 0);
-  // A face whose nodes all start where they ended sweeps nothing: only the others are audited.
+  // A face whose nodes all start where they ended sweeps nothing: only the others are audited. Most steps
+  // start every node where it ended, which one comparison of the bytes shows; a node whose bytes are the
+  // same but hold a NaN is passed over with them, as its faces' boxes meet no particle's in any case.
   std::vector<Index> jumped;
-  for (std::size_t t = 0; t < triangles.size(); ++t) {
-    const Triangle& tri = triangles[t];
-    if (end[tri[0]] != start[tri[0]] || end[tri[1]] != start[tri[1]] || end[tri[2]] != start[tri[2]])
-      jumped.push_back(static_cast<Index>(t));
+  static_assert(sizeof(Vec3) == 3 * sizeof(double), "a position is three doubles");
+  if (!end.empty() && std::memcmp(end.data(), start.data(), end.size() * sizeof(Vec3)) != 0) {
+    // Per node first: a node is in about six faces, and comparing its positions in each costs more.
+    std::vector<std::uint8_t> moved(end.size());
+    for (std::size_t i = 0; i < end.size(); ++i)
+      moved[i] = static_cast<std::uint8_t>(end[i] != start[i]);
+    for (std::size_t t = 0; t < triangles.size(); ++t) {
+      const Triangle& tri = triangles[t];
+      if (moved[tri[0]] || moved[tri[1]] || moved[tri[2]]) jumped.push_back(static_cast<Index>(t));
+    }
   }
   std::uint64_t count = 0;
   if (!jumped.empty() && !particles.empty()) {

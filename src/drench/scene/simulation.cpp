@@ -395,7 +395,7 @@ void Simulation::audit_face_jumps_since_last_step(StepStatus& status) {
   const ClothMesh& mesh = m_engine->mesh();
   // The first step, or a mesh whose layout changed (a body came or went), has no end to compare with.
   if (!m_effects.leak_audit || m_audited_end.size() != mesh.node_count() ||
-      m_audited_triangles != mesh.triangles) {
+      !same_triangles(m_audited_triangles, mesh.triangles)) {
     return;
   }
   ParticleSet& p = m_fluid->particles();
@@ -549,7 +549,7 @@ void Simulation::step_cloth_and_couple(Scalar dt, StepStatus& status) {
   if (m_effects.leak_audit) {
     if (m_non_finite_node < 0) {
       m_audited_end = mesh.positions_t1;
-      if (m_audited_triangles != mesh.triangles) m_audited_triangles = mesh.triangles;
+      if (!same_triangles(m_audited_triangles, mesh.triangles)) m_audited_triangles = mesh.triangles;
     } else {
       m_audited_end.clear();
     }
