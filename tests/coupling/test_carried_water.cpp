@@ -55,6 +55,29 @@ TEST(CarriedWater, CarriesTheParticlesWhoseImpulseTheClothTakes) {
   EXPECT_EQ(other.carried_masses(), carried);
 }
 
+TEST(CarriedWater, OfEqualImpulsesCarriesByTheLowerTriangleInEitherOrder) {
+  Scene s;
+  // Particle 13 (index 3) gives triangles 6 and 4 the same largest impulse; its ids need not be in index
+  // order.
+  s.ids = {12, 10, 11, 13};
+  const ImpulseLinks tied{{13, 6, Vec3(0.1, 0.1, 0.8), 5e-4},
+                          {13, 4, Vec3(0.3, 0.3, 0.4), 5e-4},
+                          {13, 2, Vec3(0.6, 0.1, 0.3), 2e-4}};
+  ScalarArray expected(s.cloth.node_count(), 0.0);
+  for (int i = 0; i < 3; ++i) {
+    const Index node = s.cloth.triangles[4][i];
+    if (s.cloth.inverse_masses[node] > 0.0) expected[node] += Vec3(0.3, 0.3, 0.4)[i] * s.m[3];
+  }
+  for (const bool reverse : {false, true}) {
+    const ImpulseLinks links = reverse ? ImpulseLinks(tied.rbegin(), tied.rend()) : tied;
+    CarriedWater water;
+    water.attach(s.cloth, s.m, s.ids, links);
+    EXPECT_EQ(water.carried_count(), 1u) << "reversed: " << reverse;
+    for (std::size_t i = 0; i < expected.size(); ++i)
+      EXPECT_NEAR(water.carried_masses()[i], expected[i], 1e-20) << "node " << i << ", reversed: " << reverse;
+  }
+}
+
 TEST(CarriedWater, HandsBackExactlyTheWatersShareOfTheClothsMomentumChange) {
   Scene s;
   CarriedWater water;

@@ -272,15 +272,6 @@ bool same_positions(const Vec3Array& a, const Vec3Array& b) {
   return same;
 }
 
-/// a == b, as std::vector's ==, in one comparison of the bytes (indices have no padding and compare as
-/// bytes): std::vector's compared the 3 indices of every triangle in a call of its own, which was most of a
-/// query that found the cloth unchanged (issue 41's profile).
-bool same_triangles(const std::vector<Triangle>& a, const std::vector<Triangle>& b) {
-  static_assert(sizeof(Triangle) == 3 * sizeof(Index), "a triangle is three indices");
-  return a.size() == b.size() &&
-         (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(Triangle)) == 0);
-}
-
 }  // namespace
 
 bool TriangleBoxKey::same_as_last(const ClothMesh& cloth, std::vector<std::uint8_t>* moved) {

@@ -1,44 +1,47 @@
 #include <drench/coupling/carried_water.hpp>
 
-#include <algorithm>
-
 namespace drench {
 
 void CarriedWater::attach(const ClothMesh& cloth, const ScalarArray& masses,
-                          const std::vector<std::uint32_t>& ids, ImpulseLinks links) {
+                          const std::vector<std::uint32_t>& ids, const ImpulseLinks& links) {
   m_carried.assign(cloth.node_count(), 0.0);
   m_links.clear();
-  links.erase(std::remove_if(links.begin(), links.end(),
-                             [&](const ImpulseLink& l) { return l.triangle >= cloth.triangle_count(); }),
-              links.end());
   if (links.empty() || ids.empty()) return;
-  // One link per particle id: its largest impulse (ties: the lower triangle index), so the order of the
-  // links given does not matter.
-  std::sort(links.begin(), links.end(), [](const ImpulseLink& a, const ImpulseLink& b) {
-    if (a.particle_id != b.particle_id) return a.particle_id < b.particle_id;
-    if (a.impulse != b.impulse) return a.impulse > b.impulse;
-    return a.triangle < b.triangle;
-  });
-  links.erase(
-      std::unique(links.begin(), links.end(),
-                  [](const ImpulseLink& a, const ImpulseLink& b) { return a.particle_id == b.particle_id; }),
-      links.end());
+  const std::size_t n = ids.size();
+  // Each link's particle is found by its id in a hashed table, not by sorting the links by id: a particle's
+  // links are scattered over the step's sub-steps and its ids come in z-order, and std::sort of the
+  // step's links was most of the carried water's cost (callgrind of bench_game_frame, issue 41).
+  m_ids.build(std::vector<std::uint64_t>(ids.begin(), ids.end()));
+  // Per particle, its largest impulse's link (ties: the lower triangle index; the same impulse to the same
+  // triangle twice: the first), so the order of the links given does not matter.
+  m_best.assign(n, -1);
+  for (std::size_t k = 0; k < links.size(); ++k) {
+    const ImpulseLink& link = links[k];
+    if (link.triangle >= cloth.triangle_count()) continue;
+    const std::int64_t p = m_ids.find(link.particle_id);
+    if (p < 0) continue;  // a particle no longer present
+    std::int32_t& best = m_best[static_cast<std::size_t>(p)];
+    if (best >= 0) {
+      const ImpulseLink& held = links[static_cast<std::size_t>(best)];
+      const bool larger = link.impulse > held.impulse;
+      const bool tie = link.impulse == held.impulse && link.triangle < held.triangle;
+      if (!larger && !tie) continue;
+    }
+    best = static_cast<std::int32_t>(k);
+  }
   // In particle order, so that the sums per node do not depend on the links' order.
-  for (std::size_t p = 0; p < ids.size(); ++p) {
-    const auto link =
-        std::lower_bound(links.begin(), links.end(), ids[p],
-                         [](const ImpulseLink& l, std::uint32_t id) { return l.particle_id < id; });
-    if (link == links.end() || link->particle_id != ids[p] || link->triangle >= cloth.triangle_count())
-      continue;
-    const Triangle& tri = cloth.triangles[link->triangle];
+  for (std::size_t p = 0; p < n; ++p) {
+    if (m_best[p] < 0) continue;
+    const ImpulseLink& link = links[static_cast<std::size_t>(m_best[p])];
+    const Triangle& tri = cloth.triangles[link.triangle];
     bool carried = false;
     for (int i = 0; i < 3; ++i) {
-      if (cloth.inverse_masses[tri[i]] > 0.0 && link->weights[i] > 0.0) {
-        m_carried[tri[i]] += link->weights[i] * masses[p];
+      if (cloth.inverse_masses[tri[i]] > 0.0 && link.weights[i] > 0.0) {
+        m_carried[tri[i]] += link.weights[i] * masses[p];
         carried = true;
       }
     }
-    if (carried) m_links.push_back({static_cast<Index>(p), link->triangle, link->weights});
+    if (carried) m_links.push_back({static_cast<Index>(p), link.triangle, link.weights});
   }
 }
 

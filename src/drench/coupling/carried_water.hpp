@@ -22,6 +22,7 @@
 #include <cstdint>
 #include <vector>
 
+#include <drench/common/key_index_table.hpp>
 #include <drench/common/types.hpp>
 #include <drench/coupling/cloth_mesh.hpp>
 #include <drench/coupling/coupler.hpp>
@@ -40,7 +41,7 @@ class CarriedWater {
   /// @param ids  N particle ids (ParticleSet::ids), unique
   /// @param links  in any order, repeats allowed
   void attach(const ClothMesh& cloth, const ScalarArray& masses, const std::vector<std::uint32_t>& ids,
-              ImpulseLinks links);
+              const ImpulseLinks& links);
 
   /// Carried mass per node after attach() (unit: kg), M entries: the sum over carried particles of weight
   /// times mass.
@@ -74,6 +75,8 @@ class CarriedWater {
   };
   std::vector<Link> m_links;
   ScalarArray m_carried;
+  KeyIndexTable m_ids;               // scratch of attach: each particle id's index
+  std::vector<std::int32_t> m_best;  // scratch of attach: N, each particle's link, -1 none
 };
 
 /// Settles what the coupler's impact zones did to a carried-water cloth (the last resort of sec. 3.3's

@@ -1,6 +1,7 @@
 #include <drench/coupling/cloth_mesh.hpp>
 
 #include <cmath>
+#include <cstring>
 #include <string>
 
 #include <drench/common/error.hpp>
@@ -67,6 +68,12 @@ void ClothMesh::validate() const {
                   ", " + std::to_string(t[1]) + ", " + std::to_string(t[2]) + ")");
     }
   }
+}
+
+bool same_triangles(const std::vector<Triangle>& a, const std::vector<Triangle>& b) {
+  static_assert(sizeof(Triangle) == 3 * sizeof(Index), "a triangle is three indices");
+  return a.size() == b.size() &&
+         (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(Triangle)) == 0);
 }
 
 }  // namespace drench

@@ -34,4 +34,10 @@ struct ClothMesh {
   void validate() const;
 };
 
+/// a == b, as std::vector's ==, in one comparison of the bytes (indices have no padding and compare as
+/// bytes): std::vector's compares each triangle in a call of its own, which was most of a check that found
+/// a mesh's triangles unchanged (the grid broad phase's, the leak audit's between steps; issue 41's profile).
+/// @param a, b  triangle lists of any lengths
+bool same_triangles(const std::vector<Triangle>& a, const std::vector<Triangle>& b);
+
 }  // namespace drench

@@ -6,6 +6,7 @@
 /// CCD's certified Bernstein filter (ccd::transversal_crossing, checked against the exact reference by its
 /// own tests): a pair it decides costs about 1/40 of the exact reference's instructions (issue 41).
 
+#include <array>
 #include <cstdint>
 #include <utility>
 #include <vector>
@@ -73,6 +74,11 @@ class LeakAudit {
   void refile(Index t, const CellRange& from, const CellRange& to);
   /// True when `range` is over 4,096 cells or not finite: its triangle is tested by every particle.
   static bool oversized(const CellRange& range);
+  /// The median of m_sizes (non-empty), raised to 1e-9 m (also a NaN median): the grid's cell (unit: m).
+  double median_size();
+  /// Where a box size lies against the cell: below half of it, within [half, twice], above, or a NaN.
+  int size_class(double size) const;
+  enum : int { kSmaller = 0, kWithin = 1, kLarger = 2, kUnordered = 3 };
 
   double m_cell = 0.0;                     // edge of the grid's cells (unit: m)
   TriangleBoxKey m_built_for;              // the mesh the grid was last brought to
@@ -84,6 +90,8 @@ class LeakAudit {
   std::vector<CellRange> m_ranges;         // per triangle, the cells it is filed in
   CellLists<Index> m_grid;                 // each cell key's triangles, ascending
   std::vector<Index> m_oversized;          // triangles over 4,096 cells, ascending: every particle's
+  // How many of m_sizes have each size_class at m_cell.
+  std::array<std::size_t, 4> m_size_classes{};
 };
 
 /// A leak is a transversal crossing: at some time of the step the particle lies in a closed triangle and its

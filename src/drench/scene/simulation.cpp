@@ -8,9 +8,9 @@
 #include <limits>
 #include <stdexcept>
 #include <string>
-#include <unordered_map>
 
 #include <drench/common/error.hpp>
+#include <drench/common/key_index_table.hpp>
 #include <drench/common/parallel.hpp>
 #include <drench/common/stopwatch.hpp>
 #include <drench/coupling/broad_phase.hpp>
@@ -395,7 +395,7 @@ void Simulation::audit_face_jumps_since_last_step(StepStatus& status) {
   const ClothMesh& mesh = m_engine->mesh();
   // The first step, or a mesh whose layout changed (a body came or went), has no end to compare with.
   if (!m_effects.leak_audit || m_audited_end.size() != mesh.node_count() ||
-      m_audited_triangles != mesh.triangles) {
+      !same_triangles(m_audited_triangles, mesh.triangles)) {
     return;
   }
   ParticleSet& p = m_fluid->particles();
@@ -420,7 +420,7 @@ void Simulation::step_cloth_and_couple(Scalar dt, StepStatus& status) {
       const ImpulseLinks& stops = m_effects.obstacle->impulse_links();
       links.insert(links.end(), stops.begin(), stops.end());
     }
-    m_effects.carried->attach(mesh, p.masses, p.ids, std::move(links));
+    m_effects.carried->attach(mesh, p.masses, p.ids, links);
     m_engine->set_carried_masses(m_effects.carried->carried_masses());
     before_impulses = m_engine->velocities();
   }
@@ -553,7 +553,7 @@ void Simulation::step_cloth_and_couple(Scalar dt, StepStatus& status) {
   if (m_effects.leak_audit) {
     if (m_non_finite_node < 0) {
       m_audited_end = mesh.positions_t1;
-      if (m_audited_triangles != mesh.triangles) m_audited_triangles = mesh.triangles;
+      if (!same_triangles(m_audited_triangles, mesh.triangles)) m_audited_triangles = mesh.triangles;
     } else {
       m_audited_end.clear();
     }
@@ -569,21 +569,26 @@ void Simulation::wet_cloth(Scalar dt) {
   // The particles the coupling touched in this step: the coupler's and, inside the fluid's sub-steps, the
   // obstacle's; a particle's largest impulse names its triangle. Obstacle triangles (after the cloth's)
   // absorb nothing.
-  std::unordered_map<std::uint32_t, const ImpulseLink*> touched;
+  // Each link's particle is found by its id in a hashed table of the particles' ids: a node-based map of
+  // the touched ids, filled and searched per particle, cost more than all of the wetting's own work
+  // (callgrind of bench_game_frame). A link to a particle no longer present is passed over.
+  KeyIndexTable index_of;
+  index_of.build(std::vector<std::uint64_t>(p.ids.begin(), p.ids.end()));
+  std::vector<const ImpulseLink*> touched(p.size(), nullptr);
   auto collect = [&](const ImpulseLinks& links) {
     for (const ImpulseLink& link : links) {
       if (link.triangle >= cloth.triangle_count()) continue;
-      auto [it, fresh] = touched.try_emplace(link.particle_id, &link);
-      if (!fresh && link.impulse > it->second->impulse) it->second = &link;
+      const std::int64_t i = index_of.find(link.particle_id);
+      if (i < 0) continue;
+      const ImpulseLink*& held = touched[static_cast<std::size_t>(i)];
+      if (!held || link.impulse > held->impulse) held = &link;
     }
   };
   collect(m_effects.coupler->impulse_links());
   if (m_effects.obstacle) collect(m_effects.obstacle->impulse_links());
   std::vector<WettingContact> contacts;
-  contacts.reserve(touched.size());
-  for (std::size_t i = 0; i < p.size() && !touched.empty(); ++i) {
-    const auto it = touched.find(p.ids[i]);
-    if (it != touched.end()) contacts.push_back({i, it->second->triangle, it->second->weights});
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    if (touched[i]) contacts.push_back({i, touched[i]->triangle, touched[i]->weights});
   }
   std::vector<std::uint8_t> remove(p.size(), 0);
   const Scalar particle_mass = m_fluid->particle_mass();
