@@ -102,6 +102,50 @@ TEST(RigidBoundary, ABodyAtRestKeepsTheBitsAFreshPlacingGives) {
   EXPECT_FALSE(boundary.place({later[1], cube(9, RigidMotion::STATIC, Vec3(0, 0, 0), 1.0), ball}));
 }
 
+/// The surface turned by `angle` (unit: rad) about the z axis through `pivot` (unit: m).
+RigidSurface turned(RigidSurface s, double angle, const Vec3& pivot) {
+  const double c = std::cos(angle), sn = std::sin(angle);
+  for (Vec3& x : s.positions_t0) {
+    const Vec3 d = x - pivot;
+    x = pivot + Vec3(c * d.x() - sn * d.y(), sn * d.x() + c * d.y(), d.z());
+  }
+  s.positions_t1 = s.positions_t0;
+  return s;
+}
+
+TEST(RigidBoundary, EveryPlacingGivesTheBitsOfAFreshOne) {
+  // place() writes each moved body's samples where they were and leaves a resting body's alone; after any
+  // sequence of motions, arrivals and departures its points and normals are bit for bit those a new
+  // RigidBoundary places for the same bodies (the volumes are the bodies' own from their first sampling).
+  RigidBoundary boundary(kSpacing);
+  const RigidSurface ball = cube(7, RigidMotion::DYNAMIC, Vec3(0.2, 0.3, 0.1), 0.04);
+  const RigidSurface crate = cube(8, RigidMotion::DYNAMIC, Vec3(-0.2, 0.1, 0.0), 0.03);
+  const RigidSurface table = cube(9, RigidMotion::STATIC, Vec3(-1, -1, -1), 0.5);
+  const Vec3 pivot(0.1, 0.2, 0.0);
+  const std::vector<std::vector<RigidSurface>> steps = {
+      {ball, table, crate},
+      {turned(ball, 0.3, pivot), table, crate},                           // the ball turns, the crate rests
+      {turned(ball, 0.3, pivot), table, moved(crate, Vec3(1e-3, 0, 0))},  // the ball rests, the crate slides
+      {turned(ball, 0.7, pivot), table, moved(crate, Vec3(2e-3, 0, 0))},  // both move
+      {table, moved(crate, Vec3(2e-3, 0, 0))},                            // the ball leaves, the crate rests
+      {moved(crate, Vec3(2e-3, 0, 0)), turned(ball, -0.2, pivot)},        // it comes back, after the crate
+      {moved(crate, Vec3(3e-3, 1e-4, 0)), turned(ball, -0.2, pivot)},     // the crate alone moves
+  };
+  for (std::size_t k = 0; k < steps.size(); ++k) {
+    EXPECT_TRUE(boundary.place(steps[k])) << "step " << k;  // each step moves a body or changes the list
+    RigidBoundary fresh(kSpacing);
+    ASSERT_TRUE(fresh.place(steps[k]));
+    ASSERT_EQ(boundary.positions().size(), fresh.positions().size()) << "step " << k;
+    EXPECT_EQ(boundary.positions(), fresh.positions()) << "step " << k;
+    EXPECT_EQ(boundary.normals(), fresh.normals()) << "step " << k;
+    EXPECT_EQ(boundary.volumes().size(), fresh.positions().size()) << "step " << k;
+    // Nothing moved since: no change, and the same bits.
+    const Vec3Array placed = boundary.positions();
+    EXPECT_FALSE(boundary.place(steps[k])) << "step " << k;
+    EXPECT_EQ(boundary.positions(), placed) << "step " << k;
+  }
+}
+
 TEST(RigidBoundary, SpreadGivesTheNodesOfEachSampledFaceItsImpulseByWeight) {
   // Most samples of a body get no impulse (no water near them). Those that do pass it to the three nodes of
   // their face by their barycentric weights: the nodes' sum is the samples' (momentum passes whole), and a

@@ -108,7 +108,6 @@ RigidBoundary::Body RigidBoundary::sample(const RigidSurface& surface) const {
 
 bool RigidBoundary::place(const std::vector<RigidSurface>& surfaces) {
   m_placed.assign(surfaces.size(), nullptr);
-  bool changed = false;
   bool resampled = false;  // a body sampled afresh: its volumes are new, though its key was there before
   std::vector<std::uint64_t> keys;  // the dynamic bodies in order: their samples' layout
   std::unordered_set<std::uint64_t> seen;
@@ -123,68 +122,82 @@ bool RigidBoundary::place(const std::vector<RigidSurface>& surfaces) {
       it = m_bodies.insert_or_assign(surface.key, sample(surface)).first;
       resampled = true;
     }
-    Body& body = it->second;
-    m_placed[s] = &body;
-    const Vec3Array& x = surface.positions_t0;
-    // Bit for bit where it was placed last (a body at rest, which its engine does not move): the same points.
-    // A NaN node compares unequal, so such a body is placed again and the fluid names it.
-    if (body.placed_at == x) continue;
-    changed = true;
-    body.placed_at = x;
-    // One normal per face, not per sample: a face carries a dozen samples or more, and the cross product
-    // and square root per sample were most of placing them (issue 41's profile). The same bits either way.
-    m_face_normals.resize(surface.triangles.size());
-    for (std::size_t f = 0; f < surface.triangles.size(); ++f)
-      m_face_normals[f] = outward_normal(x, surface.triangles[f]);
-    body.positions.resize(body.samples.size());
-    body.normals.resize(body.samples.size());
-    // A face's samples come one after another (sample()): its nodes and its inset normal are fetched once
-    // per face, not per sample. m_inset * n is the product the expression took per sample: the same bits.
-    Index face = static_cast<Index>(-1);
-    Vec3 x0 = Vec3::Zero(), x1 = x0, x2 = x0, n = x0, inset_n = x0;
-    for (std::size_t k = 0; k < body.samples.size(); ++k) {
-      const Sample& sample = body.samples[k];
-      if (sample.triangle != face) {
-        face = sample.triangle;
-        const Triangle& t = surface.triangles[face];
-        x0 = x[t[0]];
-        x1 = x[t[1]];
-        x2 = x[t[2]];
-        n = m_face_normals[face];
-        inset_n = m_inset * n;
-      }
-      body.positions[k] = sample.weights[0] * x0 + sample.weights[1] * x1 + sample.weights[2] * x2 - inset_n;
-      body.normals[k] = n;
-    }
+    m_placed[s] = &it->second;
   }
   // Bodies gone from the world: a new body at the same address is sampled afresh.
   for (auto it = m_bodies.begin(); it != m_bodies.end();) {
     it = seen.count(it->first) ? std::next(it) : m_bodies.erase(it);
   }
-  // A body that came, went or changed its place in the list changes the layout though none moved. (A body
-  // sampled afresh, if under a key seen before, has no placed_at yet: it counts as moved above.)
+  // A body that came, went or changed its place in the list changes the layout though none moved: then every
+  // body is placed again (the same bits for those at rest) and the volumes, the bodies' own from their
+  // sampling, are written again.
   const bool same_layout = keys == m_placed_keys && !resampled;
-  if (!changed && same_layout) return false;
-  m_placed_keys = std::move(keys);
-  std::size_t count = 0;
-  for (const Body* body : m_placed)
-    count += body ? body->samples.size() : 0;
-  m_positions.resize(count);
-  m_normals.resize(count);
-  // The volumes are the bodies' own, from their sampling: written again only when the layout changed.
-  if (!same_layout) m_volumes.resize(count);
-  std::size_t first = 0;
-  for (const Body* body : m_placed) {
-    if (!body) continue;
-    std::copy(body->positions.begin(), body->positions.end(), m_positions.begin() + static_cast<long>(first));
-    std::copy(body->normals.begin(), body->normals.end(), m_normals.begin() + static_cast<long>(first));
-    if (!same_layout) {
+  if (!same_layout) {
+    m_placed_keys = std::move(keys);
+    std::size_t count = 0;
+    for (const Body* body : m_placed)
+      count += body ? body->samples.size() : 0;
+    m_positions.resize(count);
+    m_normals.resize(count);
+    m_volumes.resize(count);
+    std::size_t first = 0;
+    for (const Body* body : m_placed) {
+      if (!body) continue;
       for (std::size_t k = 0; k < body->samples.size(); ++k)
         m_volumes[first + k] = body->samples[k].volume;
+      first += body->samples.size();
     }
-    first += body->samples.size();
   }
-  return true;
+  bool changed = !same_layout;
+  std::size_t first = 0;
+  for (std::size_t s = 0; s < surfaces.size(); ++s) {
+    if (!m_placed[s]) continue;
+    Body& body = *m_placed[s];
+    const std::size_t at = first;
+    first += body.samples.size();
+    const Vec3Array& x = surfaces[s].positions_t0;
+    // Bit for bit where it was placed last (a body at rest, which its engine does not move): its samples in
+    // positions() are those a placing would give. A NaN node compares unequal, so such a body is placed
+    // again and the fluid names it.
+    if (same_layout && body.placed_at == x) continue;
+    changed = true;
+    body.placed_at = x;
+    place_samples(surfaces[s], body, at);
+  }
+  return changed;
+}
+
+void RigidBoundary::place_samples(const RigidSurface& surface, const Body& body, std::size_t first) {
+  const Vec3Array& x = surface.positions_t0;
+  // One normal per face, not per sample: a face carries a dozen samples or more, and the cross product
+  // and square root per sample were most of placing them (issue 41's profile). The same bits either way.
+  m_face_normals.resize(surface.triangles.size());
+  for (std::size_t f = 0; f < surface.triangles.size(); ++f)
+    m_face_normals[f] = outward_normal(x, surface.triangles[f]);
+  // Written where the fluid reads them, body after body: placing them in arrays of their body's and copying
+  // those over was a third more work in issue 41's level, whose three bodies move every frame (callgrind).
+  Vec3* positions = m_positions.data() + first;
+  Vec3* normals = m_normals.data() + first;
+  // A face's samples come one after another (sample()): its nodes and its inset normal are fetched once
+  // per face, not per sample. m_inset * n is the product the expression took per sample: the same bits.
+  const Sample* samples = body.samples.data();  // read once: the stores below could alias the vector
+  const std::size_t count = body.samples.size();
+  Index face = static_cast<Index>(-1);
+  Vec3 x0 = Vec3::Zero(), x1 = x0, x2 = x0, n = x0, inset_n = x0;
+  for (std::size_t k = 0; k < count; ++k) {
+    const Sample& sample = samples[k];
+    if (sample.triangle != face) {
+      face = sample.triangle;
+      const Triangle& t = surface.triangles[face];
+      x0 = x[t[0]];
+      x1 = x[t[1]];
+      x2 = x[t[2]];
+      n = m_face_normals[face];
+      inset_n = m_inset * n;
+    }
+    positions[k] = sample.weights[0] * x0 + sample.weights[1] * x1 + sample.weights[2] * x2 - inset_n;
+    normals[k] = n;
+  }
 }
 
 void RigidBoundary::spread(const std::vector<RigidSurface>& surfaces, const Vec3Array& sample_impulses,

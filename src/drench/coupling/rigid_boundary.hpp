@@ -59,15 +59,15 @@ class RigidBoundary {
     std::size_t nodes = 0, triangles = 0;
     std::vector<Sample> samples;
     Vec3Array placed_at;  // the positions_t0 of its last placing (unit: m); empty before the first
-    Vec3Array positions;  // its samples placed there (unit: m)
-    Vec3Array normals;    // their faces' outward unit normals
   };
   Body sample(const RigidSurface& surface) const;
+  /// Places body's samples at surface.positions_t0 into m_positions and m_normals from index `first`.
+  void place_samples(const RigidSurface& surface, const Body& body, std::size_t first);
 
   Scalar m_spacing;
   Scalar m_inset;
   std::unordered_map<std::uint64_t, Body> m_bodies;
-  std::vector<const Body*> m_placed;         // per surface of the last place(), null when not dynamic
+  std::vector<Body*> m_placed;               // per surface of the last place(), null when not dynamic
   Vec3Array m_face_normals;                  // place(): scratch, the outward normals of one surface's faces
   std::vector<std::uint64_t> m_placed_keys;  // the keys of the bodies of m_positions, in order
   Vec3Array m_positions;                     // the last place()'s samples, body after body (unit: m)

@@ -138,15 +138,11 @@ void FluidSolver::set_moving_boundary(const Vec3Array& positions, const ScalarAr
   if (positions.empty() && m_boundary_packed.size() == m_static_boundary) return;
   // Sized once and written in place: a game's bodies move every step, and growing both arrays a point at a
   // time was most of this function's own cost in issue 41's level (callgrind).
-  const std::size_t count = m_static_boundary + positions.size();
-  m_boundary_packed.resize(count);
-  Vec3Array points(count);
-  std::copy_n(m_neighbors.boundary_points().begin(), m_static_boundary, points.begin());
-  std::copy(positions.begin(), positions.end(), points.begin() + static_cast<long>(m_static_boundary));
+  m_boundary_packed.resize(m_static_boundary + positions.size());
   PackedPoint* moving = m_boundary_packed.data() + m_static_boundary;
   for (std::size_t b = 0; b < positions.size(); ++b)
     moving[b] = packed(positions[b], m_settings.rest_density * volumes[b]);
-  m_neighbors.set_boundary_points(std::move(points));
+  m_neighbors.set_boundary_points(m_static_boundary, positions);
 }
 
 void FluidSolver::keep_moving_boundary() {

@@ -70,8 +70,10 @@ VerletNeighborLists::VerletNeighborLists(const CubicSplineKernel& kernel, Scalar
   m_exact_boundary.build(m_boundary_points);
 }
 
-void VerletNeighborLists::set_boundary_points(Vec3Array boundary) {
-  m_boundary_points = std::move(boundary);
+void VerletNeighborLists::set_boundary_points(std::size_t first, const Vec3Array& points) {
+  assert(first <= m_boundary_points.size());
+  m_boundary_points.resize(first + points.size());
+  std::copy(points.begin(), points.end(), m_boundary_points.begin() + static_cast<long>(first));
   m_exact_boundary.build(m_boundary_points);
   m_wide_boundary_built = false;
   m_skin = 0.0;  // the kept candidates name the old points

@@ -36,9 +36,13 @@ class VerletNeighborLists {
   /// @return true when the grid search ran
   bool update(const Vec3Array& positions, const std::vector<std::uint32_t>& ids, Scalar skin);
 
-  /// Replaces the boundary points (unit: m, finite), e.g. with a moving body's at the start of a fluid step;
-  /// the next update() searches afresh.
-  void set_boundary_points(Vec3Array boundary);
+  /// Replaces the boundary points from index `first` on with `points` (unit: m, finite), e.g. with the moving
+  /// bodies' at the start of a fluid step, keeping the first `first`; the next update() searches afresh.
+  /// Written in place, as a game's bodies move every frame: no new array per call, and the kept points (a
+  /// scene's walls, thousands) are not copied again.
+  /// @param first  <= boundary_points().size()
+  /// @param points  not boundary_points() itself
+  void set_boundary_points(std::size_t first, const Vec3Array& points);
   /// Makes the next update() search afresh, keeping the boundary points and their grid: what
   /// set_boundary_points does for points that did not change.
   void search_afresh() { m_skin = 0.0; }
