@@ -44,6 +44,23 @@ TEST(BroadPhase, FclFindsExactlyTheBruteForcePairs) {
   expect_same_pairs_as_brute_force(BroadPhaseKind::FCL);
 }
 
+// A query's few triangles, sorted in place with repeats dropped: the same list as std::sort and std::unique
+// for every length the insertion sort takes (a particle's box in several cells sees a face several times).
+TEST(BroadPhase, SortsAFewTrianglesAsStdSortAndUnique) {
+  std::mt19937_64 rng(17);
+  for (int round = 0; round < 2000; ++round) {
+    std::vector<Index> hits(1 + round % 16);
+    std::uniform_int_distribution<Index> pick(0, round % 3 == 0 ? 3 : 40);
+    for (Index& t : hits)
+      t = pick(rng);
+    std::vector<Index> expected = hits;
+    std::sort(expected.begin(), expected.end());
+    expected.erase(std::unique(expected.begin(), expected.end()), expected.end());
+    sort_unique_few(hits);
+    ASSERT_EQ(hits, expected) << "round " << round;
+  }
+}
+
 // One object kept over steps, as the coupler keeps it (the FCL tree is refitted, not rebuilt), with the
 // `only` flags, at 1 and 2 threads: still exactly the brute-force pairs of the flagged particles.
 TEST(BroadPhase, ReusedOverMovingStepsMatchesBruteForceAtAnyThreadCount) {
