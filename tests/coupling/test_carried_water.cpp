@@ -78,6 +78,28 @@ TEST(CarriedWater, OfEqualImpulsesCarriesByTheLowerTriangleInEitherOrder) {
   }
 }
 
+// Wetting takes the coupler's links and the obstacle's in two lists: the chosen link must not depend on which
+// list a tie came in, nor on the order within one.
+TEST(ImpulseLinks, TheLargestImpulseWinsAndATieGoesToTheLowerTriangleInAnyList) {
+  KeyIndexTable index_of;
+  index_of.build({40, 41, 42});
+  const ImpulseLinks coupler{{41, 6, Vec3(0.2, 0.3, 0.5), 3e-4},   // tied with the obstacle's triangle 2
+                             {42, 1, Vec3(0.5, 0.5, 0.0), 1e-4},   // beaten by the obstacle's larger one
+                             {99, 0, Vec3(1.0, 0.0, 0.0), 9e-4},   // a particle no longer present
+                             {40, 8, Vec3(1.0, 0.0, 0.0), 9e-4}};  // an obstacle face, not the cloth's
+  const ImpulseLinks obstacle{{41, 2, Vec3(0.1, 0.1, 0.8), 3e-4}, {42, 5, Vec3(0.3, 0.3, 0.4), 2e-4}};
+  for (const bool coupler_first : {true, false}) {
+    std::vector<const ImpulseLink*> best(3, nullptr);
+    keep_largest_links(coupler_first ? coupler : obstacle, 8, index_of, best);
+    keep_largest_links(coupler_first ? obstacle : coupler, 8, index_of, best);
+    EXPECT_EQ(best[0], nullptr) << "coupler first: " << coupler_first;
+    ASSERT_NE(best[1], nullptr);
+    EXPECT_EQ(best[1]->triangle, 2u) << "coupler first: " << coupler_first;
+    ASSERT_NE(best[2], nullptr);
+    EXPECT_EQ(best[2]->triangle, 5u) << "coupler first: " << coupler_first;
+  }
+}
+
 TEST(CarriedWater, HandsBackExactlyTheWatersShareOfTheClothsMomentumChange) {
   Scene s;
   CarriedWater water;

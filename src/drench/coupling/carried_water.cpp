@@ -12,27 +12,12 @@ void CarriedWater::attach(const ClothMesh& cloth, const ScalarArray& masses,
   // links are scattered over the step's sub-steps and its ids come in z-order, and std::sort of the
   // step's links was most of the carried water's cost (callgrind of bench_game_frame, issue 41).
   m_ids.build(std::vector<std::uint64_t>(ids.begin(), ids.end()));
-  // Per particle, its largest impulse's link (ties: the lower triangle index; the same impulse to the same
-  // triangle twice: the first), so the order of the links given does not matter.
-  m_best.assign(n, -1);
-  for (std::size_t k = 0; k < links.size(); ++k) {
-    const ImpulseLink& link = links[k];
-    if (link.triangle >= cloth.triangle_count()) continue;
-    const std::int64_t p = m_ids.find(link.particle_id);
-    if (p < 0) continue;  // a particle no longer present
-    std::int32_t& best = m_best[static_cast<std::size_t>(p)];
-    if (best >= 0) {
-      const ImpulseLink& held = links[static_cast<std::size_t>(best)];
-      const bool larger = link.impulse > held.impulse;
-      const bool tie = link.impulse == held.impulse && link.triangle < held.triangle;
-      if (!larger && !tie) continue;
-    }
-    best = static_cast<std::int32_t>(k);
-  }
+  m_best.assign(n, nullptr);
+  keep_largest_links(links, cloth.triangle_count(), m_ids, m_best);
   // In particle order, so that the sums per node do not depend on the links' order.
   for (std::size_t p = 0; p < n; ++p) {
-    if (m_best[p] < 0) continue;
-    const ImpulseLink& link = links[static_cast<std::size_t>(m_best[p])];
+    if (!m_best[p]) continue;
+    const ImpulseLink& link = *m_best[p];
     const Triangle& tri = cloth.triangles[link.triangle];
     bool carried = false;
     for (int i = 0; i < 3; ++i) {

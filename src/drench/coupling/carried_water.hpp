@@ -75,8 +75,8 @@ class CarriedWater {
   };
   std::vector<Link> m_links;
   ScalarArray m_carried;
-  KeyIndexTable m_ids;               // scratch of attach: each particle id's index
-  std::vector<std::int32_t> m_best;  // scratch of attach: N, each particle's link, -1 none
+  KeyIndexTable m_ids;                     // scratch of attach: each particle id's index
+  std::vector<const ImpulseLink*> m_best;  // scratch of attach: N, each particle's link, null none
 };
 
 /// Settles what the coupler's impact zones did to a carried-water cloth (the last resort of sec. 3.3's

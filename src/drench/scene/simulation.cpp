@@ -575,17 +575,9 @@ void Simulation::wet_cloth(Scalar dt) {
   KeyIndexTable index_of;
   index_of.build(std::vector<std::uint64_t>(p.ids.begin(), p.ids.end()));
   std::vector<const ImpulseLink*> touched(p.size(), nullptr);
-  auto collect = [&](const ImpulseLinks& links) {
-    for (const ImpulseLink& link : links) {
-      if (link.triangle >= cloth.triangle_count()) continue;
-      const std::int64_t i = index_of.find(link.particle_id);
-      if (i < 0) continue;
-      const ImpulseLink*& held = touched[static_cast<std::size_t>(i)];
-      if (!held || link.impulse > held->impulse) held = &link;
-    }
-  };
-  collect(m_effects.coupler->impulse_links());
-  if (m_effects.obstacle) collect(m_effects.obstacle->impulse_links());
+  keep_largest_links(m_effects.coupler->impulse_links(), cloth.triangle_count(), index_of, touched);
+  if (m_effects.obstacle)
+    keep_largest_links(m_effects.obstacle->impulse_links(), cloth.triangle_count(), index_of, touched);
   std::vector<WettingContact> contacts;
   for (std::size_t i = 0; i < p.size(); ++i) {
     if (touched[i]) contacts.push_back({i, touched[i]->triangle, touched[i]->weights});
