@@ -278,12 +278,13 @@ void update_pairs(StepContext& ctx, TriangleBroadPhase& broad_phase, std::vector
 /// Continuous intersection handling (sec. 3.3, continuous_handling.cpp) on the motion the earlier stages
 /// corrected: rounds of point-triangle CCD (eq. 5-6) and an inelastic impulse at each particle's earliest
 /// impact, the first round over every pair, later ones over the pairs whose motion the previous round
-/// changed, until no pair collides. After settings.max_ccd_iterations rounds the fail-safe moves each
-/// particle still colliding with its triangle's contact point, which that triangle cannot cross; and where
-/// that is not enough (folds), the colliding particles and nodes join impact zones that each move by one
-/// motion for the step (rigid impact zones), taking the fixed nodes' (StepContext::fixed) as given, until no
-/// pair collides; a zone between fixed nodes that move differently has its particles squeezed out
-/// (StepContext::squeeze_out).
+/// changed, until no pair collides (the fail-safe's check and the impact zones' rounds below need every
+/// pair's answer: an unchanged pair keeps the one it had). After settings.max_ccd_iterations rounds the
+/// fail-safe moves each particle still colliding with its triangle's contact point, which that triangle
+/// cannot cross; and where that is not enough (folds), the colliding particles and nodes join impact zones
+/// that each move by one motion for the step (rigid impact zones), taking the fixed nodes'
+/// (StepContext::fixed) as given, until no pair collides; a zone between fixed nodes that move differently
+/// has its particles squeezed out (StepContext::squeeze_out).
 /// Adds to the stats' ccd_iterations, ccd_impacts, failsafe_activations, stopped_particles, stopped_nodes,
 /// squeezed_out.
 /// @param broad_phase  the coupler's, queried with margin 0 for swept boxes
