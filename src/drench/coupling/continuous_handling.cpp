@@ -381,12 +381,35 @@ void update_pairs(StepContext& ctx, TriangleBroadPhase& broad_phase, std::vector
   broad_phase.find_pairs(ctx.x0(), ctx.x1(), ctx.cloth(), 0.0, &only, fresh);
   merged.clear();
   merged.reserve(all.size() + fresh.size());
+  // The pairs of unmarked particles are copied in stretches up to the next marked particle's, all of them
+  // when no node changed: a test per pair was twice the merge's instructions in bench_game_frame's level,
+  // where a round marks about 36 of 3,000 particles and `all` holds about 1,700 pairs (callgrind).
+  const bool nodes_changed = ctx.nodes_changed();
   auto next = fresh.begin();
-  for (const auto& pair : all) {
-    if (only[pair.first]) continue;
-    for (; next != fresh.end() && next->first < pair.first; ++next)
-      merged.push_back(*next);
-    if (!ctx.pair_changed(pair.first, pair.second)) merged.push_back(pair);
+  std::size_t k = 0;
+  while (k < all.size()) {
+    const Index p = all[k].first;
+    if (next != fresh.end() && next->first < p) {
+      merged.push_back(*next++);
+      continue;
+    }
+    if (only[p]) {
+      ++k;
+      continue;
+    }
+    // Up to the next pair of a marked particle or of one after the next fresh pair's (all marked).
+    std::size_t end = k + 1;
+    while (end < all.size() && (next == fresh.end() || all[end].first < next->first) && !only[all[end].first])
+      ++end;
+    if (nodes_changed) {
+      for (std::size_t j = k; j < end; ++j) {
+        if (!ctx.pair_changed(all[j].first, all[j].second)) merged.push_back(all[j]);
+      }
+    } else {
+      merged.insert(merged.end(), all.begin() + static_cast<std::ptrdiff_t>(k),
+                    all.begin() + static_cast<std::ptrdiff_t>(end));
+    }
+    k = end;
   }
   merged.insert(merged.end(), next, fresh.end());
   all.swap(merged);
@@ -395,7 +418,7 @@ void update_pairs(StepContext& ctx, TriangleBroadPhase& broad_phase, std::vector
 void StepContext::mark_changed_candidates(std::vector<std::uint8_t>& only) const {
   // Most rounds change no node (the fail-safe moves particles only, an impulse on a static face moves
   // nothing): then only the changed particles are marked, without a look at every triangle and particle.
-  if (std::find(m_node_changed.begin(), m_node_changed.end(), std::uint8_t{1}) == m_node_changed.end()) {
+  if (!nodes_changed()) {
     only = m_particle_changed;
     return;
   }
