@@ -104,6 +104,7 @@ class StepContext {
       if (im > 0.0) {
         m_cloth.positions_t1[tri[i]] -= (w[i] * im * m_dt) * impulse;
         m_node_changed[tri[i]] = 1;
+        m_nodes_changed = true;
       }
     }
     m_particle_changed[p] = 1;
@@ -144,6 +145,7 @@ class StepContext {
       (*m_node_shifts)[i] += x_t1 - m_cloth.positions_t1[i];
     m_cloth.positions_t1[i] = x_t1;
     m_node_changed[i] = 1;
+    m_nodes_changed = true;
   }
 
   /// True when node i's engine ignores a move (a rigid body's, an obstacle's, a pinned cloth node): the
@@ -175,6 +177,7 @@ class StepContext {
   void clear_changes() {
     m_particle_changed.assign(m_x0.size(), 0);
     m_node_changed.assign(m_cloth.node_count(), 0);
+    m_nodes_changed = false;
   }
   /// Marks in `only` (N entries) every particle that can be in a changed pair (pair_changed) whose boxes
   /// overlap: the changed particles, and those whose box over the step (margin 0, as the CCD rounds' query)
@@ -182,6 +185,9 @@ class StepContext {
   /// the broad phase would not report, so a query restricted to the marked ones finds every changed pair.
   /// Defined in continuous_handling.cpp, its only user.
   void mark_changed_candidates(std::vector<std::uint8_t>& only) const;
+
+  /// True when a node was marked as changed since the last clear_changes().
+  bool nodes_changed() const { return m_nodes_changed; }
 
   bool pair_changed(Index p, Index t) const {
     const Triangle& tri = triangle(t);
@@ -207,6 +213,8 @@ class StepContext {
   CouplingStepStats& m_stats;
   std::vector<std::uint8_t> m_particle_changed;
   std::vector<std::uint8_t> m_node_changed;
+  // Some m_node_changed is set: a flag, where a search of the M flags was asked for twice a round.
+  bool m_nodes_changed = false;
   Vec3Array& m_node_impulses;  // what every node received, inverse mass 0 or not (unit: N s)
   ImpulseLinks* m_largest;     // N, each particle's largest impulse so far (impulse 0: none), or null
   Vec3Array* m_node_shifts;    // M, what move_node moved each node of inverse mass 0 by (m), or null
@@ -278,12 +286,13 @@ void update_pairs(StepContext& ctx, TriangleBroadPhase& broad_phase, std::vector
 /// Continuous intersection handling (sec. 3.3, continuous_handling.cpp) on the motion the earlier stages
 /// corrected: rounds of point-triangle CCD (eq. 5-6) and an inelastic impulse at each particle's earliest
 /// impact, the first round over every pair, later ones over the pairs whose motion the previous round
-/// changed, until no pair collides. After settings.max_ccd_iterations rounds the fail-safe moves each
-/// particle still colliding with its triangle's contact point, which that triangle cannot cross; and where
-/// that is not enough (folds), the colliding particles and nodes join impact zones that each move by one
-/// motion for the step (rigid impact zones), taking the fixed nodes' (StepContext::fixed) as given, until no
-/// pair collides; a zone between fixed nodes that move differently has its particles squeezed out
-/// (StepContext::squeeze_out).
+/// changed, until no pair collides (the fail-safe's check and the impact zones' rounds below need every
+/// pair's answer: an unchanged pair keeps the one it had). After settings.max_ccd_iterations rounds the
+/// fail-safe moves each particle still colliding with its triangle's contact point, which that triangle
+/// cannot cross; and where that is not enough (folds), the colliding particles and nodes join impact zones
+/// that each move by one motion for the step (rigid impact zones), taking the fixed nodes'
+/// (StepContext::fixed) as given, until no pair collides; a zone between fixed nodes that move differently
+/// has its particles squeezed out (StepContext::squeeze_out).
 /// Adds to the stats' ccd_iterations, ccd_impacts, failsafe_activations, stopped_particles, stopped_nodes,
 /// squeezed_out.
 /// @param broad_phase  the coupler's, queried with margin 0 for swept boxes

@@ -1,6 +1,7 @@
 // Proximity (Huber et al. 2013 sec. 3.1, eq. 1): which particles start the step within the cloth thickness of
 // a triangle. Declared and documented in coupler_stages.hpp.
 
+#include <algorithm>
 #include <cstdint>
 #include <utility>
 #include <vector>
@@ -16,6 +17,7 @@ std::vector<Contact> find_contacts(const StepContext& ctx, const std::vector<std
                                    double thickness) {
   std::vector<Contact> candidates(pairs.size());
   std::vector<std::uint8_t> keep(pairs.size(), 0);
+  Vec3Array points(pairs.size());  // each kept candidate's closest point at t0, for the duplicate test
   const ClothMesh& cloth = ctx.cloth();
   parallel_for(pairs.size(), 256, [&](std::size_t begin, std::size_t end) {
     for (std::size_t k = begin; k < end; ++k) {
@@ -50,6 +52,7 @@ std::vector<Contact> find_contacts(const StepContext& ctx, const std::vector<std
       contact.inverse_mass = ctx.inverse_mass(p, t, w);
       const Vec3 v = ctx.relative_velocity(p, t, w);
       contact.tangential_pre = v - v.dot(normal) * normal;
+      points[k] = closest;
       keep[k] = 1;
     }
   });
@@ -67,6 +70,9 @@ std::vector<Contact> find_contacts(const StepContext& ctx, const std::vector<std
     return true;
   };
   std::vector<Contact> contacts;
+  contacts.reserve(static_cast<std::size_t>(std::count(keep.begin(), keep.end(), std::uint8_t{1})));
+  std::vector<std::size_t> kept;  // per contact, its candidate's index
+  kept.reserve(contacts.capacity());
   for (std::size_t first = 0; first < pairs.size();) {
     std::size_t last = first;
     while (last < pairs.size() && pairs[last].first == pairs[first].first)
@@ -84,19 +90,17 @@ std::vector<Contact> find_contacts(const StepContext& ctx, const std::vector<std
       }
       if (shadowed) continue;
       // Pairs come sorted by particle: earlier contacts of the same particle are at the back of `contacts`.
-      const Triangle& tri = cloth.triangles[c.triangle];
-      const Vec3 point = c.weights[0] * cloth.positions_t0[tri[0]] +
-                         c.weights[1] * cloth.positions_t0[tri[1]] +
-                         c.weights[2] * cloth.positions_t0[tri[2]];
+      // Their closest points come from the parallel pass (the same sum of the weighted nodes), not
+      // recomputed for every two contacts of a particle.
+      const Vec3& point = points[k];
       bool duplicate = false;
-      for (auto it = contacts.rbegin(); it != contacts.rend() && it->particle == c.particle; ++it) {
-        const Triangle& other = cloth.triangles[it->triangle];
-        const Vec3 other_point = it->weights[0] * cloth.positions_t0[other[0]] +
-                                 it->weights[1] * cloth.positions_t0[other[1]] +
-                                 it->weights[2] * cloth.positions_t0[other[2]];
-        if ((point - other_point).norm() <= 1e-12 * (1.0 + point.norm())) duplicate = true;
+      for (std::size_t j = contacts.size(); j > 0 && contacts[j - 1].particle == c.particle; --j) {
+        if ((point - points[kept[j - 1]]).norm() <= 1e-12 * (1.0 + point.norm())) duplicate = true;
       }
-      if (!duplicate) contacts.push_back(c);
+      if (!duplicate) {
+        contacts.push_back(c);
+        kept.push_back(k);
+      }
     }
     first = last;
   }
