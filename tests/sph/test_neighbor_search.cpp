@@ -160,6 +160,32 @@ TEST(NeighborSearch, FindSelfGivesFindsListsInTheSameOrderInEitherLayout) {
   }
 }
 
+// One grid rebuilt in turn hashed, dense and hashed again over other points, as the fluid's grid is every
+// sub-step: the hashed layout's table of rows is built by the first find() after a build, so each find()
+// must see the rows of the last build, never a former one's.
+TEST(NeighborSearch, RebuildsAlternatingLayoutsFindTheLastBuildsPoints) {
+  Vec3Array sparse_a = random_points(1200, Vec3(0, 0, 0), Vec3(0.2, 0.2, 0.2), 61);
+  const Vec3Array far_a = random_points(400, Vec3(-40, -5, 0), Vec3(60, 5, 0.1), 62);
+  sparse_a.insert(sparse_a.end(), far_a.begin(), far_a.end());
+  Vec3Array sparse_b = random_points(1000, Vec3(0.1, -0.1, 0), Vec3(0.3, 0.1, 0.2), 63);
+  const Vec3Array far_b = random_points(300, Vec3(-5, -40, 0), Vec3(5, 60, 0.1), 64);
+  sparse_b.insert(sparse_b.end(), far_b.begin(), far_b.end());
+  const Vec3Array block = random_points(1500, Vec3(-0.1, 0, 0), Vec3(0.2, 0.1, 0.3), 65);
+  const Vec3Array queries = random_points(800, Vec3(-0.1, -0.1, -0.1), Vec3(0.3, 0.2, 0.3), 66);
+  NeighborSearch search(0.04);
+  const std::pair<const Vec3Array*, bool> builds[] = {
+      {&sparse_a, false}, {&block, true}, {&sparse_b, false}, {&sparse_a, false}};
+  for (const auto& [points, dense] : builds) {
+    search.build(*points);
+    ASSERT_EQ(search.dense(), dense);
+    NeighborList self, cross;
+    search.find_self(self);
+    expect_same_sets(self, brute_force(*points, *points, 0.04, true));
+    search.find(queries, cross, /*exclude_self=*/false);
+    expect_same_sets(cross, brute_force(queries, *points, 0.04, false));
+  }
+}
+
 // A NaN point (a particle the solver will name after the sub-step) sits in the grid's lowest cell: it is
 // nobody's neighbor and has none, with every scan, and the other points keep exactly their neighbors.
 TEST(NeighborSearch, ANaNPointIsNoNeighborAndHasNone) {

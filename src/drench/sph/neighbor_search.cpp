@@ -41,22 +41,26 @@ std::uint64_t row_key(int y, int z) {
 }
 
 /// Sorts `values` by `keys` (both n long, moved together), stably: a least-significant-digit radix sort of
-/// the keys' low bits up to max_key's highest, in passes of at most 11 bits. The grid's cells are sorted so
-/// every PBF sub-step; std::sort of (key, index) pairs was a quarter of the build there (callgrind, issue
-/// 41's level), for keys of about 20 bits that two or three counting passes sort.
-void radix_sort_by_key(std::vector<std::uint64_t>& keys, IndexArray& values, std::uint64_t max_key) {
+/// the keys' low bits up to max_key's highest, in passes of at most 11 bits, through keys_to and values_to
+/// (scratch kept by the caller: allocated and zero-filled per call, they were a tenth of the hashed build).
+/// The grid's cells are sorted so every PBF sub-step; std::sort of (key, index) pairs was a quarter of the
+/// build there (callgrind, issue 41's level), for keys of about 20 bits that two or three counting passes
+/// sort.
+void radix_sort_by_key(std::vector<std::uint64_t>& keys, IndexArray& values, std::uint64_t max_key,
+                       std::vector<std::uint64_t>& keys_to, IndexArray& values_to) {
   const int bits = max_key == 0 ? 0 : 64 - __builtin_clzll(max_key);
   if (bits == 0) return;
   const int passes = (bits + 10) / 11;
   const int digit_bits = (bits + passes - 1) / passes;
   const std::uint64_t mask = (std::uint64_t{1} << digit_bits) - 1;
   const std::size_t n = keys.size();
-  std::vector<std::uint64_t> keys_to(n);
-  IndexArray values_to(n);
-  std::vector<std::uint32_t> start(static_cast<std::size_t>(mask) + 2);
+  // Every entry is written by each pass before it is read: no need to clear what the last call left.
+  keys_to.resize(n);
+  values_to.resize(n);
+  std::uint32_t start[(std::size_t{1} << 11) + 1];
   for (int pass = 0; pass < passes; ++pass) {
     const int shift = pass * digit_bits;
-    std::fill(start.begin(), start.end(), 0u);
+    std::fill(start, start + mask + 2, 0u);
     for (std::size_t k = 0; k < n; ++k)
       ++start[static_cast<std::size_t>((keys[k] >> shift) & mask) + 1];
     for (std::size_t d = 0; d <= mask; ++d)
@@ -216,7 +220,9 @@ IndexArray NeighborSearch::z_order(const Vec3Array& points) const {
 
 void NeighborSearch::build(const Vec3Array& points) {
   const std::size_t n = points.size();
-  std::vector<Vec3i> cells(n);
+  // Kept from build to build: a new array was zero-filled first.
+  std::vector<Vec3i>& cells = m_cells_scratch;
+  cells.resize(n);
   parallel_for(n, kLightChunk, [&](std::size_t begin, std::size_t end) {
     for (std::size_t i = begin; i < end; ++i)
       cells[i] = cell_of(points[i]);
@@ -239,6 +245,7 @@ void NeighborSearch::build(const Vec3Array& points) {
             (cell_count <= 4.0 * point_count + 4096.0 || cell_count <= std::min(128.0 * point_count, 0x1p24));
   if (m_dense) {
     build_dense(cells, lo, dims);
+    m_cells_indexed = true;  // build_dense empties the table, as the dense layout wants
   } else {
     build_hashed(cells, lo, dims);
   }
@@ -304,6 +311,7 @@ void NeighborSearch::build_dense(const std::vector<Vec3i>& cells, const Vec3i& l
   for (std::size_t i = n; i-- > 0;)
     m_sorted_index[--m_cell_begin[linear[i]]] = static_cast<Index>(i);
   m_cells.clear();
+  m_row_keys.clear();
 }
 
 void NeighborSearch::build_hashed(const std::vector<Vec3i>& cells, const Vec3i& lo, const Vec3i& dims) {
@@ -314,7 +322,8 @@ void NeighborSearch::build_hashed(const std::vector<Vec3i>& cells, const Vec3i& 
   // the cell's linear index in the points' box of cells (below 2^63: 2^21 cells per axis), which orders the
   // cells so.
   const std::size_t n = cells.size();
-  std::vector<std::uint64_t> keys(n);
+  std::vector<std::uint64_t>& keys = m_keys_scratch;
+  keys.resize(n);
   m_sorted_index.resize(n);
   const auto dx = static_cast<std::uint64_t>(dims.x()), dy = static_cast<std::uint64_t>(dims.y());
   for (std::size_t i = 0; i < n; ++i) {
@@ -324,26 +333,44 @@ void NeighborSearch::build_hashed(const std::vector<Vec3i>& cells, const Vec3i& 
         static_cast<std::uint64_t>(c.x() - lo.x());
     m_sorted_index[i] = static_cast<Index>(i);
   }
-  radix_sort_by_key(keys, m_sorted_index, dx * dy * static_cast<std::uint64_t>(dims.z()) - 1);
-  std::vector<std::uint64_t> rows;
-  m_cell_begin.clear();
-  m_cell_x.clear();
-  m_row_first.clear();
+  radix_sort_by_key(keys, m_sorted_index, dx * dy * static_cast<std::uint64_t>(dims.z()) - 1, m_keys_to,
+                    m_values_to);
+  // At most n cells and rows: written by index into arrays of that size, then cut to their counts (a call of
+  // push_back per cell, not inlined, was an eighth of this function; callgrind, issue 41's level).
+  m_cell_begin.resize(n + 1);
+  m_cell_x.resize(n);
+  m_row_first.resize(n + 1);
+  m_row_keys.resize(n);
+  std::size_t cell_count = 0, row_count = 0;
   for (std::size_t k = 0; k < n; ++k) {
     if (k > 0 && keys[k - 1] == keys[k]) continue;
     const Vec3i& c = cells[m_sorted_index[k]];
     const std::uint64_t row = row_key(c.y(), c.z());
-    if (rows.empty() || rows.back() != row) {
-      rows.push_back(row);
-      m_row_first.push_back(static_cast<std::uint32_t>(m_cell_x.size()));
+    if (row_count == 0 || m_row_keys[row_count - 1] != row) {
+      m_row_keys[row_count] = row;
+      m_row_first[row_count] = static_cast<std::uint32_t>(cell_count);
+      ++row_count;
     }
-    m_cell_x.push_back(c.x());
-    m_cell_begin.push_back(static_cast<std::uint32_t>(k));
+    m_cell_x[cell_count] = c.x();
+    m_cell_begin[cell_count] = static_cast<std::uint32_t>(k);
+    ++cell_count;
   }
-  m_cell_begin.push_back(static_cast<std::uint32_t>(n));
-  m_row_first.push_back(static_cast<std::uint32_t>(m_cell_x.size()));
-  m_row_keys = rows;
-  m_cells.build(std::move(rows));
+  m_cell_begin[cell_count] = static_cast<std::uint32_t>(n);
+  m_row_first[row_count] = static_cast<std::uint32_t>(cell_count);
+  m_cell_begin.resize(cell_count + 1);
+  m_cell_x.resize(cell_count);
+  m_row_first.resize(row_count + 1);
+  m_row_keys.resize(row_count);
+  // The table of rows is built when find() first needs it (hashed_row_range): find_self and
+  // find_for_points_of walk m_row_keys in order instead, and the fluid's grid, hashed and rebuilt every PBF
+  // sub-step, is searched only so.
+  m_cells_indexed = false;
+}
+
+void NeighborSearch::index_rows() const {
+  if (m_cells_indexed) return;
+  m_cells.build(m_dense ? std::vector<std::uint64_t>{} : m_row_keys);
+  m_cells_indexed = true;
 }
 
 bool NeighborSearch::hashed_row_range(const Vec3i& cell, std::uint32_t& begin, std::uint32_t& end) const {
@@ -565,6 +592,7 @@ void NeighborSearch::find(const Vec3Array& queries, NeighborList& out, bool excl
     out.indices.clear();
     return;
   }
+  index_rows();  // before the threads read the table
 
   // One pass: the queries are cut into chunks of kParticleChunk, each taken by the next free thread (as
   // for_each_chunk), so that each thread gets some of every region of the z-ordered fluid: contiguous halves

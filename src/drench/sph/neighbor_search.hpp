@@ -122,8 +122,10 @@ class NeighborSearch {
   void find_sorted(const NeighborSearch& queries, bool exclude_self, NeighborList& out) const;
   std::uint64_t key_of_cell(const Vec3i& cell) const;
   Vec3i cell_of(const Vec3& x) const;
-  /// Hashed mode only: the sorted-point range of the cells x - 1 .. x + 1 of the row of `cell`; false when
-  /// empty.
+  /// Hashed mode: builds m_cells from m_row_keys unless it holds them (m_cells_indexed); not concurrently.
+  void index_rows() const;
+  /// Hashed mode only, after index_rows(): the sorted-point range of the cells x - 1 .. x + 1 of the row of
+  /// `cell`; false when empty.
   bool hashed_row_range(const Vec3i& cell, std::uint32_t& begin, std::uint32_t& end) const;
   void build_dense(const std::vector<Vec3i>& cells, const Vec3i& lo, const Vec3i& dims);
   /// @param cells  the cell of every point (cell_of); lo, dims: their box of cells, as for build_dense
@@ -142,10 +144,15 @@ class NeighborSearch {
   Vec3 m_reach_lo = Vec3::Zero();     // the finite points' box grown by two radii (unit: m)
   Vec3 m_reach_hi = Vec3::Zero();
   std::size_t m_count = 0;                // source points of the last build
-  KeyIndexTable m_cells;                  // hashed mode: the distinct rows (z, y), ascending, and their table
+  mutable KeyIndexTable m_cells;          // hashed mode: the distinct rows (z, y), ascending, and their table
+  mutable bool m_cells_indexed = true;    // m_cells holds m_row_keys (index_rows)
   std::vector<std::uint64_t> m_row_keys;  // hashed mode: the same rows' keys, ascending (rows_along)
   std::vector<std::uint32_t> m_cell_begin;      // first sorted point of each cell; one extra end entry
   std::vector<std::uint32_t> m_linear_scratch;  // build_dense: each point's cell, linearised
+  std::vector<Vec3i> m_cells_scratch;           // build: each point's cell
+  std::vector<std::uint64_t> m_keys_scratch;    // build_hashed: each point's key, then sorted
+  std::vector<std::uint64_t> m_keys_to;         // build_hashed: the radix sort's scratch
+  IndexArray m_values_to;
   std::vector<int> m_cell_x;               // hashed mode: the x of each distinct cell, ascending in its row
   std::vector<std::uint32_t> m_row_first;  // hashed mode: the first cell of each row; one extra end entry
   bool m_dense = false;
