@@ -34,8 +34,12 @@ struct Box3 {
     lo.array() -= margin;
     hi.array() += margin;
   }
+  /// All six comparisons, combined without a branch: the broad phase's candidates pass about one in ten,
+  /// and an early exit at whichever comparison failed was most of its queries' branch mispredictions
+  /// (bench_game_frame under callgrind --branch-sim=yes). False when a coordinate is NaN.
   bool overlaps(const Box3& o) const {
-    return (lo.array() <= o.hi.array()).all() && (o.lo.array() <= hi.array()).all();
+    return (lo.x() <= o.hi.x()) & (lo.y() <= o.hi.y()) & (lo.z() <= o.hi.z()) & (o.lo.x() <= hi.x()) &
+           (o.lo.y() <= hi.y()) & (o.lo.z() <= hi.z());
   }
 };
 
