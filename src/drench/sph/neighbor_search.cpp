@@ -369,7 +369,7 @@ void NeighborSearch::build_hashed(const std::vector<Vec3i>& cells, const Vec3i& 
 
 void NeighborSearch::index_rows() const {
   if (m_cells_indexed) return;
-  m_cells.build(m_dense ? std::vector<std::uint64_t>{} : m_row_keys);
+  m_cells.build(m_row_keys);  // empty in the dense layout, which build() leaves indexed
   m_cells_indexed = true;
 }
 
