@@ -92,6 +92,14 @@ class BusyThreads {
   std::vector<std::thread> m_threads;
 };
 
+/// Bins of the frames by the particles at their end: bin k holds counts in (k, k + 1] x kBinParticles (an
+/// empty level in bin 0), up to kParticleBins x kBinParticles, the 5,000; more are not binned.
+constexpr std::size_t kBinParticles = 500;
+constexpr std::size_t kParticleBins = 10;
+std::size_t particle_bin(std::size_t particles) {
+  return particles == 0 ? 0 : (particles - 1) / kBinParticles;
+}
+
 /// The q-quantile of `values` by the nearest rank (q = 0.5: the median), as demos/bullet_playground.cpp
 /// reports its frames.
 double quantile(std::vector<double> values, double q) {
@@ -113,7 +121,9 @@ double quantile(std::vector<double> values, double q) {
 /// fail-safe particles and sub-step obstacle stops per frame, and the shares of frames that reached its
 /// fail-safe and its impact zones; per frame, what the last resorts gave particles (N s), the momentum impact
 /// zones' node moves gave the cloth (N s) and how far they moved nodes whose engine ignores it (m)
-/// (CouplingStepStats); the time of a blow-up (0: none), after which nothing more is stepped.
+/// (CouplingStepStats); the time of a blow-up (0: none), after which nothing more is stepped; per bin of 500
+/// particles at a frame's end, up to 5,000, its timed frames (frames_upto_<n>) and their median total
+/// (total_ms_median_upto_<n>, 0 without frames).
 void game_frame(benchmark::State& state, const std::string& name, const SolverRun& solver, int threads,
                 int busy, long warmup, std::optional<drench::BroadPhaseKind> broad_phase) {
   drench::set_thread_count(threads);
@@ -173,6 +183,10 @@ void game_frame(benchmark::State& state, const std::string& name, const SolverRu
   const drench::FluidStatistics fluid_before = coupled.simulation().fluid().statistics();
   drench::detail::reset_pool_stats();
   std::vector<std::vector<double>> stages(7);
+  // The whole frame's time by the particles in the level at its end, in bins of kBinParticles: the level's
+  // count rises and falls (the jets, then the run-off), and the median over all frames hides what a frame
+  // costs at a given count, which is what a game budgets by.
+  std::vector<std::vector<double>> total_by_particles(kParticleBins);
   std::size_t particles_max = 0;
   timing = true;
   for (auto _ : state) {
@@ -189,6 +203,8 @@ void game_frame(benchmark::State& state, const std::string& name, const SolverRu
     for (std::size_t k = 0; k < stages.size(); ++k)
       stages[k].push_back(values[k]);
     particles_max = std::max(particles_max, coupled.particles().size());
+    if (const std::size_t bin = particle_bin(coupled.particles().size()); bin < kParticleBins)
+      total_by_particles[bin].push_back(s.total);
     if (!report.ok()) blow_up(report);
   }
 
@@ -251,6 +267,11 @@ void game_frame(benchmark::State& state, const std::string& name, const SolverRu
   state.counters["zone_ignored_shift_per_frame"] = ccd.zone_ignored_shift / frames_done;
   state.counters["density_error_mean"] =
       substeps > 0 ? (fluid.density_error_sum - fluid_before.density_error_sum) / substeps : 0.0;
+  for (std::size_t bin = 0; bin < kParticleBins; ++bin) {
+    const std::string upto = std::to_string((bin + 1) * kBinParticles);
+    state.counters["frames_upto_" + upto] = static_cast<double>(total_by_particles[bin].size());
+    state.counters["total_ms_median_upto_" + upto] = 1e3 * quantile(total_by_particles[bin], 0.5);
+  }
 }
 
 [[noreturn]] void usage(const char* program, const std::string& problem) {

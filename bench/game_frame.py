@@ -77,6 +77,12 @@ def row_of(benchmark, blow_ups):
     for stage in STAGES:
         row[f"{stage}_ms_median"] = round(benchmark[f"{stage}_ms_median"], 3)
         row[f"{stage}_ms_p99"] = round(benchmark[f"{stage}_ms_p99"], 3)
+    # The median frame by the particles in the level at its end, in bins of 500 (frames_upto_<n>,
+    # total_ms_median_upto_<n>): what a frame costs at a given count.
+    for key in sorted((k for k in benchmark if k.startswith("frames_upto_")), key=lambda k: int(k.split("_")[-1])):
+        upto = key.split("_")[-1]
+        row[key] = int(benchmark[key])
+        row[f"total_ms_median_upto_{upto}"] = round(benchmark[f"total_ms_median_upto_{upto}"], 3)
     # A build configured with -DDRENCH_POOL_STATS=ON adds the pool's loops and waits per frame (pool_*).
     for key in sorted(k for k in benchmark if k.startswith("pool_")):
         row[key] = round(benchmark[key], 4)
