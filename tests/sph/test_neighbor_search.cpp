@@ -411,6 +411,54 @@ TEST(NeighborSearch, ListsFollowTheGridOrderOfTheirDefinition) {
   }
 }
 
+// The hashed layout's cursors, which find_self and find_for_points_of move along each row and over the rows'
+// keys from cell to cell, moving far in one step: a query row with cells 12 apart beside a row of 21 cells,
+// and query rows 14 apart beside a plane of 16 rows (each cursor takes up to four entries per step). The
+// lists must still be those of their definition, in order.
+TEST(NeighborSearch, HashedCursorsMovingFarGiveTheListsOfTheirDefinition) {
+  const Scalar radius = 0.04;
+  std::mt19937 random(81);
+  std::uniform_real_distribution<Scalar> within(0.1, 0.9);
+  Vec3Array points;
+  const auto in_cell = [&](int x, int y, int z) {
+    points.push_back(radius * Vec3(x + within(random), y + within(random), z + within(random)));
+  };
+  for (int x = 0; x <= 20; ++x) {
+    in_cell(x, 1, 1);
+    if (x % 2 == 0) in_cell(x, 1, 1);  // some cells of two points
+  }
+  in_cell(0, 0, 1);
+  in_cell(12, 0, 1);
+  for (int y = 0; y <= 15; ++y)
+    in_cell(0, y, 0);
+  in_cell(0, 14, 1);
+  points.push_back(Vec3(50.0, 0.0, 0.0));  // far apart: the cells are hashed
+  points.push_back(Vec3(-50.0, 0.0, 0.0));
+  NeighborSearch search(radius);
+  for (const Vec3Array& order : {points, z_ordered(search, points)}) {
+    search.build(order);
+    ASSERT_FALSE(search.dense()) << "the test is about hashed cells";
+    const NeighborList expected = lists_in_grid_order(order, order, radius, true);
+    NeighborList got;
+    search.find_self(got);
+    EXPECT_EQ(got.offsets, expected.offsets) << "find_self";
+    EXPECT_EQ(got.indices, expected.indices) << "find_self";
+    search.find(order, got, /*exclude_self=*/true);
+    EXPECT_EQ(got.offsets, expected.offsets) << "find";
+    EXPECT_EQ(got.indices, expected.indices) << "find";
+    NeighborSearch query_grid(radius);
+    query_grid.build(order);
+    search.find_for_points_of(query_grid, got);
+    const NeighborList cross = lists_in_grid_order(order, order, radius, false);
+    EXPECT_EQ(got.offsets, cross.offsets) << "find_for_points_of";
+    EXPECT_EQ(got.indices, cross.indices) << "find_for_points_of";
+    std::size_t pairs = 0;
+    for (std::size_t i = 0; i < order.size(); ++i)
+      pairs += expected.count(i);
+    EXPECT_GT(pairs, order.size()) << "the points should have neighbors";
+  }
+}
+
 // Another grid's points are its cells' points only if its cells are this grid's: a grid of other cells is
 // refused by name.
 TEST(NeighborSearch, FindForPointsOfAGridOfOtherCellsThrows) {

@@ -23,6 +23,15 @@ constexpr int kCellBits = 21;
 constexpr std::int64_t kCellOffset = std::int64_t{1} << (kCellBits - 1);
 constexpr std::int64_t kCellMax = (std::int64_t{1} << kCellBits) - 1;
 constexpr Index kNoIndex = std::numeric_limits<Index>::max();
+/// The hashed layout's end mark of a row in m_cell_x: above every cell's x (at most kCellMax), so the walks
+/// along a row stop at it with no test of the row's end.
+constexpr int kRowEndX = std::numeric_limits<int>::max();
+/// End marks after the last row's: rows_along reads four entries from any cursor, which stops at an end mark.
+constexpr std::size_t kRowEndPadding = 3;
+/// Keys of ~0 (above every row's) after the hashed layout's row keys: rows_along compares four keys from a
+/// cursor that stops at the first of them.
+constexpr std::size_t kRowKeyPadding = 4;
+constexpr std::uint32_t kNoRunEnd = std::numeric_limits<std::uint32_t>::max();
 
 /// Spreads the low 21 bits of v so that bit k moves to bit 3k.
 std::uint64_t spread_bits(std::uint64_t v) {
@@ -75,21 +84,43 @@ void radix_sort_by_key(std::vector<std::uint64_t>& keys, IndexArray& values, std
   }
 }
 
-/// Appends the non-empty run [b, e) of sorted points to `runs` (a NeighborSearch::CandidateRuns), joined to
-/// the last run when it starts where that one ends: the scan then reads the same points in the same order in
-/// one run. Sparse water's rows hold a cell or two, so the runs of neighbouring rows often touch, and the
-/// scans take at least a group of eight per run: joined, the PBF level's searches scan fewer, fuller groups.
+/// Gathers runs [b, e) (b <= e) of sorted points into a NeighborSearch::CandidateRuns, at most nine: each
+/// joined to the last when it starts where that one ends, left out when empty. A joined run is read by the
+/// scan in the same order as its parts; sparse water's rows hold a cell or two, so the runs of neighbouring
+/// rows often touch, and the scans take at least a group of eight per run: joined, the PBF level's searches
+/// scan fewer, fuller groups. With no branch: whether a row about a cell of sparse water is empty, or
+/// touches the last, is a coin toss (with branches, the dense layout's candidate_runs mispredicted 1.6M
+/// times in 0.9M calls in issue 41's level, 0.2M without; callgrind --branch-sim). What is not taken is
+/// written past the last run. The counts are kept here, where they need not be read back after each store to
+/// the arrays, and written by finish().
 template <class Runs>
-inline void append_run(Runs& runs, std::uint32_t b, std::uint32_t e) {
-  if (runs.runs > 0 && runs.end[runs.runs - 1] == b) {
-    runs.end[runs.runs - 1] = e;
-  } else {
-    runs.begin[runs.runs] = b;
-    runs.end[runs.runs] = e;
-    ++runs.runs;
+class RunAppender {
+ public:
+  explicit RunAppender(Runs& runs) : m_runs(runs) {}
+
+  void add(std::uint32_t b, std::uint32_t e) {
+    const int join = b == m_last_end ? 1 : 0;
+    const int taken = b != e ? 1 : 0;
+    m_runs.begin[m_count] = b;
+    m_runs.end[m_count - join] = e;  // a join's run, or the new one (an empty one joins only where it ends)
+    m_count += taken & (1 - join);
+    // taken ? e : m_last_end, by a mask: as a conditional, GCC made it a branch in the unrolled rows_along.
+    const std::uint32_t take = 0u - static_cast<std::uint32_t>(taken);
+    m_last_end = (e & take) | (m_last_end & ~take);
+    m_total += e - b;
   }
-  runs.total += e - b;
-}
+
+  void finish() const {
+    m_runs.runs = m_count;
+    m_runs.total = m_total;
+  }
+
+ private:
+  Runs& m_runs;
+  int m_count = 0;
+  std::uint32_t m_total = 0;
+  std::uint32_t m_last_end = kNoRunEnd;  // the last non-empty run's end
+};
 
 /// scan_runs with scan_candidates_lanes, compiled for each copy of DRENCH_SIMD_CLONES: the CPUs without AVX2.
 DRENCH_SIMD_CLONES std::size_t scan_runs_lanes(const Scalar* xs, const Scalar* ys, const Scalar* zs,
@@ -335,32 +366,54 @@ void NeighborSearch::build_hashed(const std::vector<Vec3i>& cells, const Vec3i& 
   }
   radix_sort_by_key(keys, m_sorted_index, dx * dy * static_cast<std::uint64_t>(dims.z()) - 1, m_keys_to,
                     m_values_to);
-  // At most n cells and rows: written by index into arrays of that size, then cut to their counts (a call of
-  // push_back per cell, not inlined, was an eighth of this function; callgrind, issue 41's level).
-  m_cell_begin.resize(n + 1);
-  m_cell_x.resize(n);
+  // At most n cells and rows, and an end mark per row: written by index into arrays of that size, then cut
+  // to their counts (a call of push_back per cell, not inlined, was an eighth of this function; callgrind,
+  // issue 41's level). Every point writes its entries and advances past those that are new, with no branch:
+  // at 1.5 points per cell whether a point starts a cell is a coin toss. What is not taken lands on the next
+  // free entry, which a later write or the end mark overwrites.
+  const std::size_t entries = 1 + 2 * n + kRowEndPadding;
+  m_cell_begin.resize(entries);
+  m_cell_x.resize(entries);
   m_row_first.resize(n + 1);
-  m_row_keys.resize(n);
-  std::size_t cell_count = 0, row_count = 0;
+  m_row_keys.resize(n + kRowKeyPadding);
+  m_cell_x[0] = kRowEndX;  // the cursor of a missing row (rows_along)
+  m_cell_begin[0] = 0;
+  std::size_t entry = 1, row_count = 0;
+  std::uint64_t last_key = ~std::uint64_t{0}, last_row = ~std::uint64_t{0};  // above every key and row
   for (std::size_t k = 0; k < n; ++k) {
-    if (k > 0 && keys[k - 1] == keys[k]) continue;
     const Vec3i& c = cells[m_sorted_index[k]];
     const std::uint64_t row = row_key(c.y(), c.z());
-    if (row_count == 0 || m_row_keys[row_count - 1] != row) {
-      m_row_keys[row_count] = row;
-      m_row_first[row_count] = static_cast<std::uint32_t>(cell_count);
-      ++row_count;
-    }
-    m_cell_x[cell_count] = c.x();
-    m_cell_begin[cell_count] = static_cast<std::uint32_t>(k);
-    ++cell_count;
+    const std::size_t new_cell = keys[k] != last_key ? 1 : 0;
+    const std::size_t new_row = row != last_row ? 1 : 0;  // a new row is a new cell
+    const auto first_point = static_cast<std::uint32_t>(k);
+    m_cell_x[entry] = kRowEndX;  // the last row's end mark, when this point starts another row
+    m_cell_begin[entry] = first_point;
+    entry += new_row & (row_count > 0 ? 1 : 0);
+    m_row_keys[row_count] = row;
+    m_row_first[row_count] = static_cast<std::uint32_t>(entry);
+    row_count += new_row;
+    m_cell_x[entry] = c.x();
+    m_cell_begin[entry] = first_point;
+    entry += new_cell;
+    last_key = keys[k];
+    last_row = row;
   }
-  m_cell_begin[cell_count] = static_cast<std::uint32_t>(n);
-  m_row_first[row_count] = static_cast<std::uint32_t>(cell_count);
-  m_cell_begin.resize(cell_count + 1);
-  m_cell_x.resize(cell_count);
+  if (row_count > 0) {
+    m_cell_x[entry] = kRowEndX;
+    m_cell_begin[entry] = static_cast<std::uint32_t>(n);
+    ++entry;
+  }
+  m_row_first[row_count] = static_cast<std::uint32_t>(entry);
+  for (std::size_t p = 0; p < kRowEndPadding; ++p) {
+    m_cell_x[entry + p] = kRowEndX;
+    m_cell_begin[entry + p] = static_cast<std::uint32_t>(n);
+  }
+  m_cell_begin.resize(entry + kRowEndPadding);
+  m_cell_x.resize(entry + kRowEndPadding);
   m_row_first.resize(row_count + 1);
-  m_row_keys.resize(row_count);
+  std::fill(m_row_keys.begin() + static_cast<std::ptrdiff_t>(row_count),
+            m_row_keys.begin() + static_cast<std::ptrdiff_t>(row_count + kRowKeyPadding), ~std::uint64_t{0});
+  m_row_keys.resize(row_count + kRowKeyPadding);
   // The table of rows is built when find() first needs it (hashed_row_range): find_self and
   // find_for_points_of walk m_row_keys in order instead, and the fluid's grid, hashed and rebuilt every PBF
   // sub-step, is searched only so.
@@ -369,7 +422,9 @@ void NeighborSearch::build_hashed(const std::vector<Vec3i>& cells, const Vec3i& 
 
 void NeighborSearch::index_rows() const {
   if (m_cells_indexed) return;
-  m_cells.build(m_row_keys);  // empty in the dense layout, which build() leaves indexed
+  // The rows' keys without their padding (build() leaves the dense layout indexed, with no keys).
+  m_cells.build(std::vector<std::uint64_t>(m_row_keys.begin(),
+                                           m_row_keys.end() - static_cast<std::ptrdiff_t>(kRowKeyPadding)));
   m_cells_indexed = true;
 }
 
@@ -377,7 +432,7 @@ bool NeighborSearch::hashed_row_range(const Vec3i& cell, std::uint32_t& begin, s
   const std::int64_t row = m_cells.find(row_key(cell.y(), cell.z()));
   if (row < 0) return false;
   const int* first = m_cell_x.data() + m_row_first[static_cast<std::size_t>(row)];
-  const int* last = m_cell_x.data() + m_row_first[static_cast<std::size_t>(row) + 1];
+  const int* last = m_cell_x.data() + m_row_first[static_cast<std::size_t>(row) + 1] - 1;  // its end mark
   const int* from = std::lower_bound(first, last, cell.x() - 1);
   const int* to = from;
   while (to != last && *to <= cell.x() + 1)
@@ -401,29 +456,35 @@ void NeighborSearch::candidate_runs(const Vec3i& cell, CandidateRuns& out) const
     const int x_first = std::max(local.x() - 1, 0);
     const int x_last = std::min(local.x() + 1, m_dims.x() - 1);
     if (x_first > x_last) return;
-    for (int z = local.z() - 1; z <= local.z() + 1; ++z) {
+    RunAppender<CandidateRuns> append(out);
+    // Unrolled, as rows_along's loops are; over dz and dy, since GCC unrolled no loop bounded by the cell.
+#pragma GCC unroll 3
+    for (int dz = -1; dz <= 1; ++dz) {
+      const int z = local.z() + dz;
       if (z < 0 || z >= m_dims.z()) continue;
-      for (int y = local.y() - 1; y <= local.y() + 1; ++y) {
+#pragma GCC unroll 3
+      for (int dy = -1; dy <= 1; ++dy) {
+        const int y = local.y() + dy;
         if (y < 0 || y >= m_dims.y()) continue;
         const std::size_t row = (static_cast<std::size_t>(z) * m_dims.y() + y) * m_dims.x();
-        const std::uint32_t b = m_cell_begin[row + x_first];
-        const std::uint32_t e = m_cell_begin[row + x_last + 1];
-        if (b >= e) continue;
-        append_run(out, b, e);
+        append.add(m_cell_begin[row + x_first], m_cell_begin[row + x_last + 1]);
       }
     }
+    append.finish();
     return;
   }
   // Nine rows of three cells along x, in the order z, y: each row one run in either layout (the dense one's
   // above).
+  RunAppender<CandidateRuns> append(out);
   for (int dz = -1; dz <= 1; ++dz) {
     for (int dy = -1; dy <= 1; ++dy) {
       std::uint32_t b, e;
       const bool found = hashed_row_range(cell + Vec3i(0, dy, dz), b, e);
       if (!found) continue;
-      append_run(out, b, e);
+      append.add(b, e);
     }
   }
+  append.finish();
 }
 
 void NeighborSearch::rows_along(const Vec3i& cell, RowCursor& rows, CandidateRuns& out) const {
@@ -432,31 +493,41 @@ void NeighborSearch::rows_along(const Vec3i& cell, RowCursor& rows, CandidateRun
   // rather than nine lookups and searches per cell (candidate_runs, which gives the same runs). The rows
   // come in order too, so the three runs of rows (z + dz, y - 1 .. y + 1) are found by walking three cursors
   // forward over the sorted row keys: nine hash lookups per row of cells were a third of find_self in issue
-  // 41's level (callgrind), where sparse water has rows of one or two cells.
+  // 41's level (callgrind), where sparse water has rows of one or two cells. The walks take a few steps at a
+  // time with no branch on each: how far a cursor moves is a coin toss there, and the loops that stepped one
+  // entry at a time were a fifth of the level's mispredicted branches (callgrind --branch-sim).
   const bool same_row = rows.valid && cell.y() == rows.y && cell.z() == rows.z;
   if (!same_row || cell.x() < rows.x) {
     const std::uint64_t* keys = m_row_keys.data();
-    const auto row_count = static_cast<std::uint32_t>(m_row_keys.size());
+    const auto row_count = static_cast<std::uint32_t>(m_row_keys.size() - kRowKeyPadding);
     const bool forward = rows.valid && row_key(cell.y(), cell.z()) > row_key(rows.y, rows.z);
     int r = 0;
+    // Unrolled, as are the nine rows below: fewer instructions, and no loop exit (which callgrind's
+    // predictor, having no history, missed once a call).
+#pragma GCC unroll 3
     for (int dz = -1; dz <= 1; ++dz) {
       const std::uint64_t first_key = row_key(cell.y() - 1, cell.z() + dz);
       std::uint32_t& first = rows.first_row[dz + 1];
       if (forward) {
-        while (first < row_count && keys[first] < first_key)
-          ++first;
+        // The keys ascend, padding included, so of the next four those below first_key are a prefix and
+        // their count a sum; the cursor never passes the padding, so the four are always there.
+        std::uint32_t step;
+        do {
+          const std::uint64_t* next = keys + first;
+          step = static_cast<std::uint32_t>((next[0] < first_key ? 1 : 0) + (next[1] < first_key ? 1 : 0) +
+                                            (next[2] < first_key ? 1 : 0) + (next[3] < first_key ? 1 : 0));
+          first += step;
+        } while (step == 4);
       } else {
         first = static_cast<std::uint32_t>(std::lower_bound(keys, keys + row_count, first_key) - keys);
       }
       std::uint32_t k = first;
+#pragma GCC unroll 3
       for (int dy = -1; dy <= 1; ++dy, ++r) {
-        if (k < row_count && keys[k] == first_key + static_cast<std::uint64_t>(dy + 1)) {
-          rows.from[r] = m_cell_x.data() + m_row_first[k];
-          rows.last[r] = m_cell_x.data() + m_row_first[k + 1];
-          ++k;
-        } else {
-          rows.from[r] = rows.last[r] = nullptr;
-        }
+        // A missing row's cursor is entry 0, a lone end mark (m_row_first has an entry for k = row_count).
+        const std::uint32_t found = keys[k] == first_key + static_cast<std::uint64_t>(dy + 1) ? 1u : 0u;
+        rows.from[r] = m_row_first[k] & (0u - found);
+        k += found;
       }
     }
     rows.valid = true;
@@ -464,21 +535,47 @@ void NeighborSearch::rows_along(const Vec3i& cell, RowCursor& rows, CandidateRun
     rows.z = cell.z();
   }
   rows.x = cell.x();
-  out.runs = 0;
-  out.total = 0;
+  RunAppender<CandidateRuns> append(out);
+  const int* xs = m_cell_x.data();
+#if defined(__SSE2__)
+  // Four entries of a row at a time: the lanes left of cx - 1, then those within cx + 1, counted from their
+  // masks. Both are prefixes of the four: a row's x ascend, and its end mark is above every x (the entries
+  // past it, another row's, are not counted). Within cx + 1 at most three cells follow the cursor, so the
+  // fourth lane or an end mark before it ends that count.
+  const __m128i left_of = _mm_set1_epi32(cell.x() - 1);
+  const __m128i right_of = _mm_set1_epi32(cell.x() + 1);
+  const auto lanes = [&](std::uint32_t at) {
+    return _mm_loadu_si128(reinterpret_cast<const __m128i*>(xs + at));
+  };
+#pragma GCC unroll 9
   for (int r = 0; r < 9; ++r) {
-    const int*& from = rows.from[r];
-    const int* last = rows.last[r];
-    while (from != last && *from < cell.x() - 1)
-      ++from;
-    const int* to = from;
-    while (to != last && *to <= cell.x() + 1)
-      ++to;
-    if (from == to) continue;
-    const std::uint32_t b = m_cell_begin[static_cast<std::size_t>(from - m_cell_x.data())];
-    const std::uint32_t e = m_cell_begin[static_cast<std::size_t>(to - m_cell_x.data())];
-    append_run(out, b, e);
+    std::uint32_t from = rows.from[r];
+    unsigned left =
+        static_cast<unsigned>(_mm_movemask_ps(_mm_castsi128_ps(_mm_cmplt_epi32(lanes(from), left_of))));
+    while (left == 0xfu) {
+      from += 4;
+      left = static_cast<unsigned>(_mm_movemask_ps(_mm_castsi128_ps(_mm_cmplt_epi32(lanes(from), left_of))));
+    }
+    from += static_cast<std::uint32_t>(__builtin_ctz(~left));
+    const unsigned beyond =
+        static_cast<unsigned>(_mm_movemask_ps(_mm_castsi128_ps(_mm_cmpgt_epi32(lanes(from), right_of))));
+    const std::uint32_t to = from + static_cast<std::uint32_t>(__builtin_ctz(beyond));
+    rows.from[r] = from;
+    append.add(m_cell_begin[from], m_cell_begin[to]);
   }
+#else
+  for (int r = 0; r < 9; ++r) {
+    std::uint32_t from = rows.from[r];
+    while (xs[from] < cell.x() - 1)
+      ++from;
+    std::uint32_t to = from;
+    while (xs[to] <= cell.x() + 1)
+      ++to;
+    rows.from[r] = from;
+    append.add(m_cell_begin[from], m_cell_begin[to]);
+  }
+#endif
+  append.finish();
 }
 
 std::size_t NeighborSearch::scan(const CandidateRuns& runs, const Vec3& x, Index self, Index* dst) const {

@@ -110,9 +110,8 @@ class NeighborSearch {
     bool valid = false;
     int x = 0, y = 0, z = 0;  // the cell of the last query
     std::uint32_t
-        first_row[3];    // per dz = -1, 0, 1: the first row (of m_row_keys) not before (z + dz, y - 1)
-    const int* from[9];  // into m_cell_x; null, with last, for an empty row
-    const int* last[9];
+        first_row[3];       // per dz = -1, 0, 1: the first row (of m_row_keys) not before (z + dz, y - 1)
+    std::uint32_t from[9];  // into m_cell_x (at most the row's end mark); 0, the lone end mark, for no row
   };
   /// Hashed mode: candidate_runs(cell, out) for cells taken in the sorted order, as find_self takes them,
   /// with `rows` kept from the previous cell.
@@ -143,18 +142,26 @@ class NeighborSearch {
   std::vector<Vec3i> m_sorted_cells;  // n: the cell of each sorted point
   Vec3 m_reach_lo = Vec3::Zero();     // the finite points' box grown by two radii (unit: m)
   Vec3 m_reach_hi = Vec3::Zero();
-  std::size_t m_count = 0;                // source points of the last build
-  mutable KeyIndexTable m_cells;          // hashed mode: the distinct rows (z, y), ascending, and their table
-  mutable bool m_cells_indexed = true;    // m_cells holds m_row_keys (index_rows)
-  std::vector<std::uint64_t> m_row_keys;  // hashed mode: the same rows' keys, ascending (rows_along)
-  std::vector<std::uint32_t> m_cell_begin;      // first sorted point of each cell; one extra end entry
+  std::size_t m_count = 0;              // source points of the last build
+  mutable KeyIndexTable m_cells;        // hashed mode: the distinct rows (z, y), ascending, and their table
+  mutable bool m_cells_indexed = true;  // m_cells holds m_row_keys (index_rows)
+  // Hashed mode: the same rows' keys, ascending (rows_along), then kRowKeyPadding keys of ~0, above all.
+  std::vector<std::uint64_t> m_row_keys;
+  // Dense mode: the first sorted point of each cell, one extra end entry. Hashed mode: one entry per entry of
+  // m_cell_x, the first sorted point of its cell, or for an end mark the end of the cells before it.
+  std::vector<std::uint32_t> m_cell_begin;
   std::vector<std::uint32_t> m_linear_scratch;  // build_dense: each point's cell, linearised
   std::vector<Vec3i> m_cells_scratch;           // build: each point's cell
   std::vector<std::uint64_t> m_keys_scratch;    // build_hashed: each point's key, then sorted
   std::vector<std::uint64_t> m_keys_to;         // build_hashed: the radix sort's scratch
   IndexArray m_values_to;
-  std::vector<int> m_cell_x;               // hashed mode: the x of each distinct cell, ascending in its row
-  std::vector<std::uint32_t> m_row_first;  // hashed mode: the first cell of each row; one extra end entry
+  // Hashed mode: an end mark (kRowEndX, above every cell's x), then per row the x of its distinct cells,
+  // ascending, and an end mark; then kRowEndPadding end marks more, so that four entries from any end mark
+  // can be read.
+  std::vector<int> m_cell_x;
+  // Hashed mode: per row, its first entry in m_cell_x; one extra entry, one past the last row's end mark (so
+  // row r's end mark is at m_row_first[r + 1] - 1).
+  std::vector<std::uint32_t> m_row_first;
   bool m_dense = false;
   CandidateScan m_scan = CandidateScan::kFourLanes;
   Vec3i m_lo = Vec3i::Zero();                        // dense mode: first cell of the grid
