@@ -14,30 +14,32 @@ namespace drench {
 namespace {
 
 /// Calls body(js, n, active, count) for the neighbors of particle i in `list`, Group::kGroupLanes at a time,
-/// as for_each_group (sph/packed_lanes.hpp), with n the list entry of the group's first lane and count the
-/// group's lanes that are i's neighbors: the entry tells where the group's gradient factors are kept.
+/// as for_each_group (sph/packed_lanes.hpp), with n the list entry of the group's first lane (where the
+/// group's gradient factors are kept) and count = (list end - n) > 0, which exceeds kGroupLanes in all but
+/// the last group: `active` marks the first min(count, kGroupLanes) lanes. One loop of ceil(neighbors /
+/// kGroupLanes) groups, each with its mask, rather than whole groups and then a remainder: the remainder's
+/// two tests on the neighbor count were mispredicted for most particles (bench_game_frame's branch
+/// simulation). Only the groups that would read past the list's last entry read copies of it instead.
 template <class Group, class Body>
 [[gnu::always_inline]] inline void for_each_entry_group(const NeighborList& list, std::size_t i,
                                                         Body&& body) {
   constexpr std::uint32_t lanes = Group::kGroupLanes;
   const Index* js = list.indices.data();
-  std::uint32_t n = list.offsets[i];
+  const std::size_t size = list.indices.size();
   const std::uint32_t end = list.offsets[i + 1];
-  typename Group::Mask all, active;
-  Group::first(lanes, all);
-  for (; n + lanes <= end; n += lanes)
-    body(js + n, n, all, lanes);
-  if (n == end) return;
-  const std::uint32_t count = end - n;
-  Group::first(count, active);
-  if (n + lanes <= list.indices.size()) {
-    body(js + n, n, active, count);
-    return;
+  typename Group::Mask active;
+  for (std::uint32_t n = list.offsets[i]; n < end; n += lanes) {
+    const std::uint32_t count = end - n;
+    Group::first(count < lanes ? count : lanes, active);
+    if (n + lanes <= size) {
+      body(js + n, n, active, count);
+    } else {
+      Index padded[lanes];
+      for (std::uint32_t l = 0; l < lanes; ++l)
+        padded[l] = js[n + (l < count ? l : count - 1)];
+      body(padded, n, active, count);
+    }
   }
-  Index padded[lanes];
-  for (std::uint32_t l = 0; l < lanes; ++l)
-    padded[l] = js[n + (l < count ? l : count - 1)];
-  body(padded, n, active, count);
 }
 
 /// The kernel's value and gradient factor of every lane (CubicSplineKernel::value_and_gradient_factor_lanes),
@@ -52,28 +54,32 @@ template <class Group, class Body>
   k.value_and_gradient_factor_lanes(r2.hi, w.hi, f.hi);
 }
 
-/// Keeps the first `count` lanes of f at out[0 .. count): a group's last lanes past i's neighbors are the
-/// next particle's entries, which another chunk's thread may be writing. V is a whole vector of T (Wide,
-/// Floats16); the LanePair overload stores per half, so that GCC keeps the halves in registers.
+/// Stores the lanes of f at out[0 .. kAll) when `whole`, else its first min(count, kAll) lanes only. The
+/// lanes past i's neighbors are other particles' entries: a later particle of the same chunk overwrites
+/// them with its own factors, but a next chunk's may be written by another thread at the same time, so
+/// whole = (the group ends within the chunk's entries). Whole stores spare the lane-by-lane loop whose
+/// exit was mispredicted for most particles (bench_game_frame's branch simulation). V is a whole vector of
+/// T (Wide, Floats16); the LanePair overload stores per half, so that GCC keeps the halves in registers.
 template <class V, class T>
-[[gnu::always_inline]] inline void store_lanes(const V& f, std::uint32_t count, T* out) {
+[[gnu::always_inline]] inline void store_lanes(const V& f, bool whole, std::uint32_t count, T* out) {
   constexpr std::uint32_t kAll = sizeof(V) / sizeof(T);
-  if (count == kAll) {
+  if (whole) {
     std::memcpy(out, &f, sizeof(V));
     return;
   }
-  for (std::uint32_t l = 0; l < count; ++l)
+  for (std::uint32_t l = 0; l < count && l < kAll; ++l)
     out[l] = f[l];
 }
 template <class V, class T>
-[[gnu::always_inline]] inline void store_lanes(const LanePair<V>& f, std::uint32_t count, T* out) {
+[[gnu::always_inline]] inline void store_lanes(const LanePair<V>& f, bool whole, std::uint32_t count,
+                                               T* out) {
   constexpr std::uint32_t kHalf = sizeof(V) / sizeof(T);
-  if (count == 2 * kHalf) {
+  if (whole) {
     std::memcpy(out, &f.lo, sizeof(V));
     std::memcpy(out + kHalf, &f.hi, sizeof(V));
     return;
   }
-  for (std::uint32_t l = 0; l < count; ++l)
+  for (std::uint32_t l = 0; l < count && l < 2 * kHalf; ++l)
     out[l] = l < kHalf ? f.lo[l] : f.hi[l - kHalf];
 }
 
@@ -94,10 +100,11 @@ constexpr std::size_t kFactorPadding = 16;
 /// of eq. 11 (unit: 1/m^2) into `denominators`; when `scorr_moves` is given, the artificial pressure's move
 /// sum_j (m_j / rho0) s_corr_ij grad W_ij (eq. 13-14, unit: m) into it, with s_corr = -scorr_scale (W /
 /// W(dq))^n; and each pair's kernel gradient factor (unit: 1/m^5) at its list entry in `fluid_factors` and
-/// `boundary_factors`, for pbf_moves at the same positions. One pass: the density, the gradients and the
-/// move of an iteration read the same neighbors at the same positions, and the three passes that each took
-/// their own square roots and gradients were a quarter of the game-like level's frame (issue 41). Compiled
-/// per CPU as the other pair loops (sph/packed_lanes.hpp), eight neighbors at a time in a fixed order.
+/// `boundary_factors`, for pbf_moves at the same positions, writing no entry of another chunk's particles
+/// (store_lanes). One pass: the density, the gradients and the move of an iteration read the same neighbors
+/// at the same positions, and the three passes that each took their own square roots and gradients were a
+/// quarter of the game-like level's frame (issue 41). Compiled per CPU as the other pair loops
+/// (sph/packed_lanes.hpp), eight neighbors at a time in a fixed order.
 DRENCH_SIMD_CLONES void pbf_constraint(const FluidContext& ctx, const PackedPointArray& x_mass,
                                        Scalar inv_rho0, Scalar scorr_scale, Scalar inv_w_dq, int scorr_n,
                                        std::size_t begin, std::size_t end, Scalar* densities,
@@ -105,6 +112,9 @@ DRENCH_SIMD_CLONES void pbf_constraint(const FluidContext& ctx, const PackedPoin
                                        Scalar* boundary_factors) {
   const CubicSplineKernel& kernel = ctx.kernel;
   const Scalar self = kernel.value(0.0);
+  // The first entries of the next chunk's particles (store_lanes).
+  const std::uint32_t fluid_limit = ctx.fluid_neighbors.offsets[end];
+  const std::uint32_t boundary_limit = ctx.boundary_neighbors.offsets[end];
   // The artificial pressure's sums exist only in the loop that takes them: eight more accumulators in every
   // iteration's loop made GCC spill the others.
   const auto rows = [&](auto lanes, auto with_scorr) __attribute__((always_inline)) {
@@ -124,7 +134,7 @@ DRENCH_SIMD_CLONES void pbf_constraint(const FluidContext& ctx, const PackedPoin
                 const V r2 = dx * dx + dy * dy + dz * dz;
                 V w, f;
                 kernel_lanes(kernel, r2, w, f);
-                store_lanes(f, count, fluid_factors + n);
+                store_lanes(f, n + Group::kGroupLanes <= fluid_limit, count, fluid_factors + n);
                 V term, c;
                 Group::select(active, p.w * w, term);
                 rho += term;
@@ -155,7 +165,7 @@ DRENCH_SIMD_CLONES void pbf_constraint(const FluidContext& ctx, const PackedPoin
                 const V r2 = dx * dx + dy * dy + dz * dz;
                 V w, f;
                 kernel_lanes(kernel, r2, w, f);
-                store_lanes(f, count, boundary_factors + n);
+                store_lanes(f, n + Group::kGroupLanes <= boundary_limit, count, boundary_factors + n);
                 V term, c;
                 Group::select(active, p.w * w, term);
                 boundary_rho += term;
@@ -284,6 +294,9 @@ DRENCH_SIMD_CLONES void pbf_constraint_float(const FluidContext& ctx, const Pack
   const float inv_w_dq_f = static_cast<float>(inv_w_dq);
   const PackedPointF* xs = x_mass.data();
   const PackedPointF* bs = boundary.data();
+  // The first entries of the next chunk's particles (store_lanes).
+  const std::uint32_t fluid_limit = ctx.fluid_neighbors.offsets[end];
+  const std::uint32_t boundary_limit = ctx.boundary_neighbors.offsets[end];
   const auto rows = [&](auto lanes, auto with_scorr) __attribute__((always_inline)) {
     using Group = decltype(lanes);
     using V = typename Group::Vec;
@@ -302,7 +315,7 @@ DRENCH_SIMD_CLONES void pbf_constraint_float(const FluidContext& ctx, const Pack
                 V w, f;
                 float_kernel_lanes(kernel, gradient_scale, r2, w, f);
                 const V mass_f = p.w * f;
-                store_lanes(mass_f, count, fluid_factors + n);
+                store_lanes(mass_f, n + Group::kGroupLanes <= fluid_limit, count, fluid_factors + n);
                 V term, c;
                 Group::select(active, p.w * w, term);
                 rho += term;
@@ -334,7 +347,7 @@ DRENCH_SIMD_CLONES void pbf_constraint_float(const FluidContext& ctx, const Pack
                 V w, f;
                 float_kernel_lanes(kernel, gradient_scale, r2, w, f);
                 const V mass_f = p.w * f;
-                store_lanes(mass_f, count, boundary_factors + n);
+                store_lanes(mass_f, n + Group::kGroupLanes <= boundary_limit, count, boundary_factors + n);
                 V term, c;
                 Group::select(active, p.w * w, term);
                 boundary_rho += term;
