@@ -272,20 +272,51 @@ template <class V>
   float_kernel_lanes(k, gradient_scale, r2.hi, w.hi, f.hi);
 }
 
+/// acc |= in each lane of `active`, the bit (j >> shift) of the index j the lane holds (a bit per block of
+/// 2^shift particles, at most 32 blocks); the indices are read from `group`, as many as the mask has lanes.
+[[gnu::always_inline]] inline void or_blocks(const Index* group, const Ints16& active, unsigned shift,
+                                             Ints16& acc) {
+  Ints16 j;
+  std::memcpy(&j, group, sizeof(j));
+  const Ints16 one = Ints16{} + 1;
+  acc |= (one << (j >> shift)) & active;
+}
+[[gnu::always_inline]] inline void or_blocks(const Index* group, const FloatHalvesGroup::Mask& active,
+                                             unsigned shift, Ints8& acc) {
+  Ints8 lo, hi;
+  std::memcpy(&lo, group, sizeof(lo));
+  std::memcpy(&hi, group + 8, sizeof(hi));
+  const Ints8 one = Ints8{} + 1;
+  acc |= ((one << (lo >> shift)) & active.lo) | ((one << (hi >> shift)) & active.hi);
+}
+
+/// The lanes of or_blocks' sum or'ed together.
+template <class A>
+[[gnu::always_inline]] inline std::uint32_t blocks_of(const A& acc) {
+  std::uint64_t words[sizeof(A) / sizeof(std::uint64_t)];
+  std::memcpy(words, &acc, sizeof(A));
+  std::uint64_t any = 0;
+  for (const std::uint64_t w : words)
+    any |= w;
+  return static_cast<std::uint32_t>(any | (any >> 32));
+}
+
 /// pbf_constraint in single precision (PbfSettings::precision): the same outputs, with the sums over
 /// neighbors taken in float, sixteen neighbors at a time (sph/float_lanes.hpp), over `x_mass` and `boundary`
 /// relative to an origin near the fluid, and converted to double. Kept per list entry, in float, is the
 /// gradient factor times the neighbor's mass m_j f_ij (Psi_b f_ib for a boundary point; unit: kg/m^5), so
 /// that the move pass needs no mass and serves particles of differing masses: wetting leaves a partly
 /// absorbed particle lighter, and the game-like level's masses differ in most frames (issue 41). The self
-/// term of the density is added in double, as sph_densities_float's. Every copy and thread count gives the
-/// same bits.
+/// term of the density is added in double, as sph_densities_float's. When `neighbor_blocks` is given, each
+/// particle's blocks of fluid neighbors (or_blocks, of 2^block_shift particles) into it, for pbf_moves_float.
+/// Every copy and thread count gives the same bits.
 DRENCH_SIMD_CLONES void pbf_constraint_float(const FluidContext& ctx, const PackedPointFArray& x_mass,
                                              const PackedPointFArray& boundary, Scalar inv_rho0,
                                              Scalar scorr_scale, Scalar inv_w_dq, int scorr_n,
                                              std::size_t begin, std::size_t end, Scalar* densities,
                                              Scalar* denominators, Vec3* scorr_moves, float* fluid_factors,
-                                             float* boundary_factors) {
+                                             float* boundary_factors, unsigned block_shift,
+                                             std::uint32_t* neighbor_blocks) {
   const FloatKernel kernel(ctx.kernel);
   const float gradient_scale =
       static_cast<float>(3.0 * (ctx.kernel.value(0.0) / 4.0) / ctx.kernel.smoothing_length());
@@ -297,13 +328,16 @@ DRENCH_SIMD_CLONES void pbf_constraint_float(const FluidContext& ctx, const Pack
   // The first entries of the next chunk's particles (store_lanes).
   const std::uint32_t fluid_limit = ctx.fluid_neighbors.offsets[end];
   const std::uint32_t boundary_limit = ctx.boundary_neighbors.offsets[end];
-  const auto rows = [&](auto lanes, auto with_scorr) __attribute__((always_inline)) {
+  const auto rows = [&](auto lanes, auto with_scorr, auto with_blocks) __attribute__((always_inline)) {
     using Group = decltype(lanes);
     using V = typename Group::Vec;
+    using Blocks = std::conditional_t<std::is_same_v<typename Group::Mask, Ints16>, Ints16, Ints8>;
     constexpr bool kScorr = decltype(with_scorr)::value;
+    constexpr bool kBlocks = decltype(with_blocks)::value;
     for (std::size_t i = begin; i < end; ++i) {
       const PackedPointF& xi = xs[i];
       V rho = {}, gx = {}, gy = {}, gz = {}, squares = {}, sx = {}, sy = {}, sz = {};
+      Blocks blocks = {};
       for_each_entry_group<Group>(
           ctx.fluid_neighbors, i,
           [&](const Index* group, std::uint32_t n, const typename Group::Mask& active, std::uint32_t count)
@@ -334,7 +368,9 @@ DRENCH_SIMD_CLONES void pbf_constraint_float(const FluidContext& ctx, const Pack
                   sy += t * dy;
                   sz += t * dz;
                 }
+                if constexpr (kBlocks) or_blocks(group, active, block_shift, blocks);
               });
+      if constexpr (kBlocks) neighbor_blocks[i] = blocks_of(blocks);
       V boundary_rho = {}, bx = {}, by = {}, bz = {};
       for_each_entry_group<Group>(
           ctx.boundary_neighbors, i,
@@ -365,10 +401,12 @@ DRENCH_SIMD_CLONES void pbf_constraint_float(const FluidContext& ctx, const Pack
     }
   };
   with_group_of_copy<FloatHalvesGroup, FloatWideGroup>([&](auto lanes) __attribute__((always_inline)) {
-    if (scorr_moves != nullptr && scorr_scale > 0.0) {
-      rows(lanes, std::true_type{});
+    if (neighbor_blocks == nullptr) {
+      rows(lanes, std::false_type{}, std::false_type{});
+    } else if (scorr_moves != nullptr && scorr_scale > 0.0) {
+      rows(lanes, std::true_type{}, std::true_type{});
     } else {
-      rows(lanes, std::false_type{});
+      rows(lanes, std::false_type{}, std::true_type{});
     }
   });
 }
@@ -403,16 +441,22 @@ template <class Group, bool kWeighted>
 }
 
 /// pbf_moves in single precision, over `x_w` and `boundary` relative to the origin of pbf_constraint_float,
-/// with the products m_j f_ij it kept: any particle masses. Every copy and thread count gives the same bits.
+/// with the products m_j f_ij it kept: any particle masses. A particle none of whose blocks of fluid
+/// neighbors (`neighbor_blocks`, pbf_constraint_float) is among `moving_blocks`, the blocks holding a
+/// particle with w != 0, is at rest (at_rest) without a look at its neighbors: the look's loop, whose exit
+/// was mispredicted at almost every particle, was most of the game-like level's move pass, where a few
+/// particles are compressed at a time (bench_game_frame). Every copy and thread count gives the same bits.
 DRENCH_SIMD_CLONES void pbf_moves_float(const FluidContext& ctx, const PackedPointFArray& x_w,
                                         const PackedPointFArray& boundary, const float* fluid_factors,
-                                        const float* boundary_factors, std::size_t begin, std::size_t end,
+                                        const float* boundary_factors, const std::uint32_t* neighbor_blocks,
+                                        std::uint32_t moving_blocks, std::size_t begin, std::size_t end,
                                         Vec3* out) {
   with_group_of_copy<FloatHalvesGroup, FloatWideGroup>([&](auto lanes) __attribute__((always_inline)) {
     using Group = decltype(lanes);
     for (std::size_t i = begin; i < end; ++i) {
       const PackedPointF& pi = x_w[i];
-      if (pi.w == 0.0f && at_rest(ctx.fluid_neighbors, i, x_w)) {
+      if (pi.w == 0.0f &&
+          ((neighbor_blocks[i] & moving_blocks) == 0 || at_rest(ctx.fluid_neighbors, i, x_w))) {
         out[i - begin] = -Vec3::Zero();
         continue;
       }
@@ -473,8 +517,13 @@ PressureStats PressurePbf::project(const FluidContext& ctx, Scalar dt) {
   m_lambda_sum.assign(n, 0.0);
   m_moves.resize(n);
   m_chunk_errors.resize((n + kParticleChunk - 1) / kParticleChunk);
+  m_neighbor_blocks.resize(single ? n : 0);
   PressureStats stats;
   if (n == 0) return stats;
+  // Blocks of 2^block_shift particles, at most 32 (pbf_moves_float).
+  unsigned block_shift = 0;
+  while (((n - 1) >> block_shift) >= 32)
+    ++block_shift;
   // The artificial pressure as the force it stands for (PbfSettings::scorr_substep): below the sub-step its
   // k holds at, its move shrinks as dt^2, so that it gives the same acceleration at every sub-step.
   Scalar scorr_scale = m_scorr_scale;
@@ -522,7 +571,8 @@ PressureStats PressurePbf::project(const FluidContext& ctx, Scalar dt) {
         pbf_constraint_float(ctx, m_points_float, m_boundary_float, inv_rho0, scorr_scale, m_inv_w_dq,
                              m_settings.scorr_n, begin, end, &particles.densities[begin],
                              &m_denominator[begin], scorr_moves, m_fluid_factors_float.data(),
-                             m_boundary_factors_float.data());
+                             m_boundary_factors_float.data(), block_shift,
+                             iteration == 0 ? m_neighbor_blocks.data() : nullptr);
       } else {
         pbf_constraint(ctx, m_points, inv_rho0, scorr_scale, m_inv_w_dq, m_settings.scorr_n, begin, end,
                        &particles.densities[begin], &m_denominator[begin], scorr_moves,
@@ -535,11 +585,17 @@ PressureStats PressurePbf::project(const FluidContext& ctx, Scalar dt) {
         const Scalar lambda = -std::min(violation, max_correction) / m_denominator[i];
         m_lambda_sum[i] += lambda;
         // dp_i = -sum_j m_j (w_i + w_j) grad W_ij - w_i sum_b Psi_b grad W_ib with w = -lambda / rho0.
+        bool moving;
         if (single) {
-          m_lambda_points_float[i].w = static_cast<float>(-lambda * inv_rho0);
+          const float w = static_cast<float>(-lambda * inv_rho0);
+          m_lambda_points_float[i].w = w;
+          moving = w != 0.0f;
         } else {
-          m_lambda_points[i].w = -lambda * inv_rho0;
+          const Scalar w = -lambda * inv_rho0;
+          m_lambda_points[i].w = w;
+          moving = w != 0.0;
         }
+        errors.moving_blocks |= std::uint32_t{moving} << (i >> block_shift);
         errors.sum += violation;
         errors.max = std::max(errors.max, violation);
       }
@@ -548,10 +604,21 @@ PressureStats PressurePbf::project(const FluidContext& ctx, Scalar dt) {
     // dp_i (eq. 12) with the kernel's gradient at the current positions: factors frozen at the prediction,
     // as PCISPH's pressure loop uses them, made the hydrostatic tank blow up within 0.1 s at every sub-step
     // count and relaxation tried, since PBF's iterations move particles by a large part of a spacing.
-    for_each_chunk(n, [&](std::size_t begin, std::size_t end) {
+    // With no particle compressed (w = 0 everywhere), every particle is at rest (at_rest), its move known
+    // without a pass, with the bits each pass gives it: in a third of the game-like level's iterations
+    // (bench_game_frame).
+    std::uint32_t moving_blocks = 0;
+    for (const ChunkErrors& errors : m_chunk_errors)
+      moving_blocks |= errors.moving_blocks;
+    if (moving_blocks == 0) {
+      const bool negated = single || ctx.uniform_mass > 0.0;
+      std::fill(m_moves.begin(), m_moves.end(), negated ? Vec3(-Vec3::Zero()) : Vec3(Vec3::Zero()));
+    }
+    for_each_chunk(moving_blocks == 0 ? 0 : n, [&](std::size_t begin, std::size_t end) {
       if (single) {
         pbf_moves_float(ctx, m_lambda_points_float, m_boundary_float, m_fluid_factors_float.data(),
-                        m_boundary_factors_float.data(), begin, end, &m_moves[begin]);
+                        m_boundary_factors_float.data(), m_neighbor_blocks.data(), moving_blocks, begin, end,
+                        &m_moves[begin]);
         return;
       }
       if (ctx.uniform_mass > 0.0) {
