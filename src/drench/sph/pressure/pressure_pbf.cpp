@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <stdexcept>
 #include <type_traits>
 
 #include <drench/common/parallel.hpp>
@@ -308,8 +309,9 @@ template <class A>
 /// that the move pass needs no mass and serves particles of differing masses: wetting leaves a partly
 /// absorbed particle lighter, and the game-like level's masses differ in most frames (issue 41). The self
 /// term of the density is added in double, as sph_densities_float's. When `neighbor_blocks` is given, each
-/// particle's blocks of fluid neighbors (or_blocks, of 2^block_shift particles) into it, for pbf_moves_float.
-/// Every copy and thread count gives the same bits.
+/// particle's blocks of fluid neighbors (or_blocks, of 2^block_shift particles) into it, for pbf_moves_float;
+/// it must be given when `scorr_moves` is (std::logic_error otherwise). Every copy and thread count gives the
+/// same bits.
 DRENCH_SIMD_CLONES void pbf_constraint_float(const FluidContext& ctx, const PackedPointFArray& x_mass,
                                              const PackedPointFArray& boundary, Scalar inv_rho0,
                                              Scalar scorr_scale, Scalar inv_w_dq, int scorr_n,
@@ -400,13 +402,20 @@ DRENCH_SIMD_CLONES void pbf_constraint_float(const FluidContext& ctx, const Pack
         scorr_moves[i - begin] = -scorr_scale * Vec3(Group::sum(sx), Group::sum(sy), Group::sum(sz));
     }
   };
+  // Three loops, not four: the artificial pressure and the blocks both belong to a sub-step's first
+  // iteration.
+  const bool scorr = scorr_moves != nullptr && scorr_scale > 0.0;
+  if (scorr && neighbor_blocks == nullptr) {
+    throw std::logic_error(
+        "pbf_constraint_float: the artificial pressure's pass records the neighbor blocks");
+  }
   with_group_of_copy<FloatHalvesGroup, FloatWideGroup>([&](auto lanes) __attribute__((always_inline)) {
-    if (neighbor_blocks == nullptr) {
-      rows(lanes, std::false_type{}, std::false_type{});
-    } else if (scorr_moves != nullptr && scorr_scale > 0.0) {
+    if (scorr) {
       rows(lanes, std::true_type{}, std::true_type{});
-    } else {
+    } else if (neighbor_blocks != nullptr) {
       rows(lanes, std::false_type{}, std::true_type{});
+    } else {
+      rows(lanes, std::false_type{}, std::false_type{});
     }
   });
 }
