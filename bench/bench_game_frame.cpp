@@ -4,7 +4,7 @@
 // drench on 1 thread and on its default (the CPUs), alone and beside one busy thread per CPU (std::threads
 // spinning from before the warm-up to the end of the run, as a game's or a renderer's threads would).
 //
-//   build-bench/bench/bench_game_frame [--frames 600] [--warmup 60] [--solvers dfsph,pcisph,pbf,pbf:2x3]
+//   build-bench/bench/bench_game_frame [--frames 600] [--warmup 60] [--solvers dfsph,pcisph,pbf,pbf:2x3,...]
 //       [--busy N] [--broad-phase grid|fcl] [--benchmark_filter=...] --benchmark_out=game_frame.json
 //       --benchmark_out_format=json
 // bench/game_frame.py runs it and writes bench/results/<machine>/game_frame.csv. Built in a build directory
@@ -47,14 +47,20 @@ constexpr drench::PressureSolverKind kKnownSolvers[] = {
     drench::PressureSolverKind::PBF,
 };
 
-/// One solver of the run: its kind and, for PBF, the sub-steps and iterations per frame when not the level's
-/// (the token `pbf:<substeps>x<iterations>`, e.g. `pbf:2x3`), so that the page can show what a cheaper
-/// setting saves and what it costs in density error.
+/// What a token's `-<name>` may leave out of the level: three of its effects and the cloth inside the fluid's
+/// sub-steps (coupling.substep_obstacle). The coupling itself stays: without it the water falls through.
+constexpr const char* kOptionalParts[] = {"viscosity", "leak_audit", "wetting", "substep_obstacle"};
+
+/// One solver of the run: its kind; for PBF, the sub-steps and iterations per frame when not the level's
+/// (the token `pbf:<substeps>x<iterations>`, e.g. `pbf:2x3`); and the parts of the level it leaves out (each
+/// `-<name>` of kOptionalParts, e.g. `pbf-leak_audit`), so that the page can show what a cheaper setting or
+/// an effect saves and what it costs.
 struct SolverRun {
   drench::PressureSolverKind kind = drench::PressureSolverKind::PBF;
-  int pbf_substeps = 0;    // 0: the level's (PbfSettings::substeps)
-  int pbf_iterations = 0;  // 0: the level's (PbfSettings::iterations)
-  std::string label;       // the token: the benchmark's <solver> part
+  int pbf_substeps = 0;              // 0: the level's (PbfSettings::substeps)
+  int pbf_iterations = 0;            // 0: the level's (PbfSettings::iterations)
+  std::string label;                 // the token: the benchmark's <solver> part
+  std::vector<std::string> without;  // of kOptionalParts
 };
 
 struct Options {
@@ -63,9 +69,9 @@ struct Options {
   int busy = 0;       // spinning threads of the busy condition; 0: one per CPU
   // The coupling's broad phase; none: the level's own (coupling.broad_phase of playground::scene).
   std::optional<drench::BroadPhaseKind> broad_phase;
-  std::vector<SolverRun> solvers = {{drench::PressureSolverKind::DFSPH, 0, 0, "dfsph"},
-                                    {drench::PressureSolverKind::PCISPH, 0, 0, "pcisph"},
-                                    {drench::PressureSolverKind::PBF, 0, 0, "pbf"}};
+  std::vector<SolverRun> solvers = {{drench::PressureSolverKind::DFSPH, 0, 0, "dfsph", {}},
+                                    {drench::PressureSolverKind::PCISPH, 0, 0, "pcisph", {}},
+                                    {drench::PressureSolverKind::PBF, 0, 0, "pbf", {}}};
 };
 
 /// Threads that spin until destroyed, one per CPU of the condition "beside busy threads": each keeps a core
@@ -133,6 +139,14 @@ void game_frame(benchmark::State& state, const std::string& name, const SolverRu
       playground::scene(static_cast<double>(warmup + frames) * playground::kDt, solver.kind);
   if (solver.pbf_substeps > 0) scene.fluid.pbf.substeps = solver.pbf_substeps;
   if (solver.pbf_iterations > 0) scene.fluid.pbf.iterations = solver.pbf_iterations;
+  for (const std::string& part : solver.without) {
+    if (part == "substep_obstacle") {
+      scene.coupling.substep_obstacle = false;
+    } else {
+      scene.effects.erase(std::remove(scene.effects.begin(), scene.effects.end(), part), scene.effects.end());
+    }
+  }
+  const bool audited = scene.has_effect("leak_audit");
   if (broad_phase) scene.coupling.broad_phase = *broad_phase;
   drench::bullet::CoupledWorld coupled(game.world, game.cloths(), scene);
   const BusyThreads spinning(busy);
@@ -244,6 +258,8 @@ void game_frame(benchmark::State& state, const std::string& name, const SolverRu
   state.counters["warmup_frames"] = static_cast<double>(warmup);
   state.counters["drench_threads"] = drench::thread_count();
   state.counters["busy_threads"] = busy;
+  // Without the audit nothing counts leaks: 0 then means not counted (leak_audit 0), not none.
+  state.counters["leak_audit"] = audited ? 1.0 : 0.0;
   state.counters["leaks"] = static_cast<double>(leaks);
   state.counters["jump_leaks"] = static_cast<double>(jump_leaks);
   state.counters["squeezed_out"] = static_cast<double>(squeezed_out);
@@ -281,7 +297,8 @@ void game_frame(benchmark::State& state, const std::string& name, const SolverRu
   std::fprintf(
       stderr,
       "%s: %s\nusage: %s [--frames N (600)] [--warmup N (60)] [--solvers NAME,... (dfsph,pcisph,pbf; "
-      "known: %s; pbf:<substeps>x<iterations> for PBF at another setting)] [--busy N (one per CPU)] "
+      "known: %s; pbf:<substeps>x<iterations> for PBF at another setting; -<part> leaves out viscosity, "
+      "leak_audit, wetting or substep_obstacle, e.g. pbf:2x3-leak_audit)] [--busy N (one per CPU)] "
       "[Google Benchmark flags]\n",
       program, problem.c_str(), program, known.c_str());
   std::exit(1);
@@ -324,10 +341,24 @@ Options parse(int argc, char** argv) {
         const std::size_t to = std::min(list.find(',', from), list.size());
         const std::string token = list.substr(from, to - from);
         from = to + 1;
+        // <solver>[-<part>...]: the level without those parts (kOptionalParts).
+        std::vector<std::string> without;
+        std::size_t dash = token.find('-');
+        const std::string solver_name = token.substr(0, dash);
+        while (dash != std::string::npos) {
+          const std::size_t next = token.find('-', dash + 1);
+          const std::string part = token.substr(dash + 1, next == std::string::npos ? next : next - dash - 1);
+          const auto* known = std::find(std::begin(kOptionalParts), std::end(kOptionalParts), part);
+          if (known == std::end(kOptionalParts))
+            usage(argv[0], "--solvers: '" + token + "': unknown part '" + part +
+                               "' (known: viscosity, leak_audit, wetting, substep_obstacle)");
+          without.push_back(part);
+          dash = next;
+        }
         // pbf:<substeps>x<iterations>: PBF at a setting other than the level's.
         int substeps = 0, iterations = 0;
-        if (token.rfind("pbf:", 0) == 0) {
-          const std::string setting = token.substr(4);
+        if (solver_name.rfind("pbf:", 0) == 0) {
+          const std::string setting = solver_name.substr(4);
           const std::size_t x = setting.find('x');
           if (x == std::string::npos)
             usage(argv[0], "--solvers: '" + token + "' must read pbf:<substeps>x<iterations>, e.g. pbf:2x3");
@@ -335,13 +366,14 @@ Options parse(int argc, char** argv) {
               count_option(argv[0], "--solvers pbf:<substeps>", setting.substr(0, x).c_str(), 1));
           iterations = static_cast<int>(
               count_option(argv[0], "--solvers pbf:...x<iterations>", setting.substr(x + 1).c_str(), 1));
-          options.solvers.push_back({drench::PressureSolverKind::PBF, substeps, iterations, token});
+          options.solvers.push_back({drench::PressureSolverKind::PBF, substeps, iterations, token, without});
           continue;
         }
-        const auto* kind = std::find_if(std::begin(kKnownSolvers), std::end(kKnownSolvers),
-                                        [&](auto k) { return token == drench::pressure_solver_name(k); });
+        const auto* kind = std::find_if(std::begin(kKnownSolvers), std::end(kKnownSolvers), [&](auto k) {
+          return solver_name == drench::pressure_solver_name(k);
+        });
         if (kind == std::end(kKnownSolvers)) usage(argv[0], "--solvers: unknown solver '" + token + "'");
-        options.solvers.push_back({*kind, 0, 0, token});
+        options.solvers.push_back({*kind, 0, 0, token, without});
       }
     } else {
       usage(argv[0], "unknown argument '" + flag + "'");

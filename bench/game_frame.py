@@ -50,6 +50,8 @@ def row_of(benchmark, blow_ups):
            "blew_up_at_s": round(benchmark["blew_up_at_s"], 4),
            "frames": int(benchmark["frames"]), "warmup_frames": int(benchmark["warmup_frames"]),
            "particles_max": int(benchmark["particles_max"]), "particles_end": int(benchmark["particles"]),
+           # 0 when the solver's token left the audit out (-leak_audit): its leaks are then not counted.
+           "leak_audit": int(benchmark.get("leak_audit", 1)),
            "leaks": int(benchmark["leaks"]),
            # Of the leaks: water a face passed between two steps (a body's face an impact zone had moved).
            "jump_leaks": int(benchmark.get("jump_leaks", 0)),
@@ -95,7 +97,8 @@ def main():
     parser.add_argument("--frames", type=int, default=DEFAULTS["frames"], help="timed frames per benchmark")
     parser.add_argument("--warmup", type=int, default=DEFAULTS["warmup"], help="untimed frames before them")
     parser.add_argument("--solvers", default=DEFAULTS["solvers"],
-                        help="comma-separated scene names; pbf:<substeps>x<iterations> for PBF at another setting")
+                        help="comma-separated scene names; pbf:<substeps>x<iterations> for PBF at another setting; "
+                             "-<part> leaves viscosity, leak_audit, wetting or substep_obstacle out, e.g. pbf-wetting")
     parser.add_argument("--busy", type=int, default=DEFAULTS["busy"],
                         help="spinning threads beside drench in the busy condition (0: one per CPU)")
     parser.add_argument("--filter", help="--benchmark_filter for the binary (a regex over the names)")
