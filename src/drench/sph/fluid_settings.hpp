@@ -124,11 +124,14 @@ struct DfsphSettings {
 /// (docs/accuracy.md).
 struct PbfSettings {
   /// Fluid sub-steps per scene step, >= 1: fixed, not cut by the CFL limit, so that a game's frame costs the
-  /// same every frame. Macklin & Mueller ran 2-4 sub-steps per 1/60 s frame; at 1/60 s the hydrostatic tank
-  /// without viscosity blows up with 2 and holds its rest density within 1% with 4 (tests/sph/test_pbf.cpp).
+  /// same every frame. Macklin & Mueller ran 2-4 sub-steps per 1/60 s frame. At 1/60 s the hydrostatic tank
+  /// without viscosity (tests/sph/test_pbf.cpp) holds its interior within 1% of the rest density with 4 (at
+  /// 4 iterations), not with 3 (1.04% over) or 2 (3.2%). docs/performance.md shows what fewer save in a
+  /// game's frame.
   int substeps = 4;
-  /// Jacobi iterations per sub-step, >= 1. Macklin & Mueller's examples ran 2-4 (their sec. 7); 4 holds a
-  /// resting tank within 1% of the rest density (tests/sph/test_pbf.cpp).
+  /// Jacobi iterations per sub-step, >= 1. Macklin & Mueller's examples ran 2-4 (their sec. 7). With 4
+  /// sub-steps the resting tank holds within 1% with 3 or 4, but with 3 its fastest particle (0.22 m/s) is
+  /// near the test's bound for settled water (0.24 m/s).
   int iterations = 4;
   /// The relaxation epsilon of their eq. 11 (constraint force mixing), as a fraction of sum_k |grad_k C|^2
   /// of a particle in a filled lattice (dimensionless), >= 0. They state epsilon in their scenes' units;
