@@ -86,8 +86,9 @@ struct PcisphSettings {
 /// sub-step.
 struct DfsphSettings {
   /// Target average density error of the constant-density solve (fraction of rest density), in (0, 1): the
-  /// mean over particles of max(rho*_i - rho0, 0) / rho0 at the velocities after the solve. 0.0005 is
-  /// SPlisHSPlasH's default (maxError 0.05%); Bender & Koschier 2015 ran their examples below 0.0001.
+  /// mean over particles of max(rho*_i - rho0, 0) / rho0 at the velocities after the solve. 0.0005 is the
+  /// maxError (0.05%) of SPlisHSPlasH's example scenes and of drench's runs beside it (docs/performance.md;
+  /// its code's own default is 0.01%); Bender & Koschier 2015 ran their examples below 0.0001.
   Scalar eta = 0.0005;
   /// Target average divergence error of the divergence-free solve (unit: 1/s), > 0: the mean over particles
   /// of max(D rho_i / Dt, 0) / rho0. Bender & Koschier 2017 and SPlisHSPlasH (maxErrorV 0.1%) state it per
