@@ -547,18 +547,19 @@ void NeighborSearch::rows_along(const Vec3i& cell, RowCursor& rows, CandidateRun
   const auto lanes = [&](std::uint32_t at) {
     return _mm_loadu_si128(reinterpret_cast<const __m128i*>(xs + at));
   };
+  const auto mask = [](__m128i lanes_compared) {
+    return static_cast<unsigned>(_mm_movemask_ps(_mm_castsi128_ps(lanes_compared)));
+  };
 #pragma GCC unroll 9
   for (int r = 0; r < 9; ++r) {
     std::uint32_t from = rows.from[r];
-    unsigned left =
-        static_cast<unsigned>(_mm_movemask_ps(_mm_castsi128_ps(_mm_cmplt_epi32(lanes(from), left_of))));
+    unsigned left = mask(_mm_cmplt_epi32(lanes(from), left_of));
     while (left == 0xfu) {
       from += 4;
-      left = static_cast<unsigned>(_mm_movemask_ps(_mm_castsi128_ps(_mm_cmplt_epi32(lanes(from), left_of))));
+      left = mask(_mm_cmplt_epi32(lanes(from), left_of));
     }
     from += static_cast<std::uint32_t>(__builtin_ctz(~left));
-    const unsigned beyond =
-        static_cast<unsigned>(_mm_movemask_ps(_mm_castsi128_ps(_mm_cmpgt_epi32(lanes(from), right_of))));
+    const unsigned beyond = mask(_mm_cmpgt_epi32(lanes(from), right_of));
     const std::uint32_t to = from + static_cast<std::uint32_t>(__builtin_ctz(beyond));
     rows.from[r] = from;
     append.add(m_cell_begin[from], m_cell_begin[to]);

@@ -60,7 +60,8 @@ class PressurePbf final : public PressureSolver {
   PackedPointFArray m_boundary_float;           // ctx.boundary, w = Psi_b (unit: kg); made at each projection
   std::vector<float> m_fluid_factors_float;     // as m_fluid_factors, in float (unit: 1/m^5)
   std::vector<float> m_boundary_factors_float;  // as m_boundary_factors, in float (unit: 1/m^5)
-  std::vector<std::uint32_t> m_neighbor_blocks;  // N: the blocks of each particle's fluid neighbors, in float
+  // N, single precision only: the blocks of each particle's fluid neighbors (pbf_constraint_float).
+  std::vector<std::uint32_t> m_neighbor_blocks;
   // Per chunk of the constraint pass: the sum and largest of the violations, and the blocks of 2^k particles
   // (k: project's block_shift) that hold a particle with w != 0 (pbf_moves_float).
   struct ChunkErrors {
