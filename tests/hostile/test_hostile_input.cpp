@@ -244,6 +244,35 @@ TEST(HostileInput, StepAndFrameCountsThatOverflowAreRefusedNamingTheKey) {
       {"time.duration gives 1e+300 steps (time.duration / time.dt_min)", "got 1 (x.json)"}));
 }
 
+// A step runs to its end (a stop signal ends the run after it): a count of passes within one step of 1e9
+// held `drench run` of the hydrostatic tank inside its first step, deaf to Ctrl-C. Every such count is at
+// most 1000, refused by its key at once and before the output folder is made.
+TEST(HostileInput, PassesPerStepOver1000AreRefusedNamingTheKey) {
+  for (const std::string key :
+       {"fluid.pbf.substeps", "fluid.pbf.iterations", "fluid.pcisph.max_iterations",
+        "fluid.dfsph.max_iterations", "fluid.dfsph.max_divergence_iterations", "cloth.substeps",
+        "cloth.position_iterations", "coupling.repulsion_sweeps", "coupling.max_ccd_iterations"}) {
+    const std::size_t dot = key.find('.'), last = key.rfind('.');
+    std::string text = "{\"" + key.substr(0, dot) + "\": {";
+    if (last != dot) text += "\"" + key.substr(dot + 1, last - dot - 1) + "\": {";
+    text += "\"" + key.substr(last + 1) + "\": 1001}}" + (last != dot ? "}" : "");
+    EXPECT_TRUE(throws_containing<SceneError>([&] { parse(text); },
+                                              {key + " must be in [1, 1000], got 1001 (x.json)"}))
+        << text;
+    EXPECT_NO_THROW(parse(text.replace(text.find("1001"), 4, "1000"))) << text;
+  }
+  // One step of 1001 (not 1e9, so that a regression fails in seconds rather than hangs).
+  const test::TempDir dir;
+  const Command c = drench_command("run " + demo("hydrostatic_tank.json") + " --steps 1 --out " +
+                                       (dir.path() / "out").string() +
+                                       " --set fluid.pressure_solver=pbf --set fluid.pbf.substeps=1001",
+                                   dir.path() / "log");
+  EXPECT_EQ(c.status, 1) << c.output;
+  EXPECT_TRUE(contains(c.output, "fluid.pbf.substeps must be in [1, 1000], got 1001")) << c.output;
+  EXPECT_LT(c.seconds, 5.0);
+  EXPECT_FALSE(fs::exists(dir.path() / "out"));
+}
+
 TEST(HostileInput, EstimateCountsWhatTheSimulationBuilds) {
   // The dam break at 10 cm: the estimate's particles are emit_box's lattice exactly, its boundary
   // particles sample_box_container's.

@@ -387,7 +387,7 @@ TEST(SceneLoader, ReadsPbfWithItsSettingsAndDefaults) {
 
 TEST(SceneLoader, RejectsBadPbfSettingsNamingTheKey) {
   EXPECT_TRUE(scene_error(R"({"fluid": {"pbf": {"substeps": 0}}})",
-                          "fluid.pbf.substeps must be >= 1, got 0 (x.json)"));
+                          "fluid.pbf.substeps must be in [1, 1000], got 0 (x.json)"));
   EXPECT_TRUE(scene_error(R"({"fluid": {"pbf": {"iterations": 2.5}}})", "fluid.pbf.iterations"));
   EXPECT_TRUE(scene_error(R"({"fluid": {"pbf": {"relaxation": -1}}})",
                           "fluid.pbf.relaxation must be >= 0, got -1 (x.json)"));
@@ -410,7 +410,7 @@ TEST(SceneLoader, RejectsBadDfsphSettingsNamingTheKey) {
   EXPECT_TRUE(scene_error(R"({"fluid": {"dfsph": {"eta_divergence": -1}}})",
                           "fluid.dfsph.eta_divergence must be > 0, got -1 (x.json)"));
   EXPECT_TRUE(scene_error(R"({"fluid": {"dfsph": {"max_divergence_iterations": 0}}})",
-                          "fluid.dfsph.max_divergence_iterations must be >= 1, got 0 (x.json)"));
+                          "fluid.dfsph.max_divergence_iterations must be in [1, 1000], got 0 (x.json)"));
   EXPECT_TRUE(
       scene_error(R"({"fluid": {"dfsph": {"min_iterations": 5, "max_iterations": 4}}})",
                   "fluid.dfsph.max_iterations must be >= fluid.dfsph.min_iterations = 5, got 4 (x.json)"));
@@ -463,7 +463,7 @@ TEST(SceneLoader, RejectsZeroPcisphEta) {
 
 TEST(SceneLoader, RejectsZeroMinIterations) {
   EXPECT_TRUE(scene_error(R"({"fluid": {"pcisph": {"min_iterations": 0}}})",
-                          "fluid.pcisph.min_iterations must be >= 1, got 0 (x.json)"));
+                          "fluid.pcisph.min_iterations must be in [1, 1000], got 0 (x.json)"));
 }
 
 TEST(SceneLoader, RejectsMaxIterationsBelowMinIterations) {

@@ -33,8 +33,8 @@ ClothSettings read_cloth(const Node& node) {
     if (cloth.pinned != "corners" && cloth.pinned != "corner" && cloth.pinned != "none")
       pinned.fail("must be one of \"corners\", \"corner\", \"none\"");
   }
-  r.read("position_iterations", cloth.position_iterations, Range{1.0, false, 1000.0, false});
-  r.read("substeps", cloth.substeps, Range{1.0, false, 1000.0, false});
+  r.read("position_iterations", cloth.position_iterations, kPassesPerStep);
+  r.read("substeps", cloth.substeps, kPassesPerStep);
   r.read("stretch_stiffness", cloth.stretch_stiffness, Range{0.0, true, 1.0, false});
   r.read("bending_stiffness", cloth.bending_stiffness, Range{0.0, false, 1.0, false});
   r.read("damping", cloth.damping, Range{0.0, false, 1.0, false});

@@ -12,13 +12,13 @@ CouplingSettings read_coupling(const Node& node) {
              "scheme", "max_ccd_iterations", "slip", "friction_coefficient", "broad_phase"});
   r.read("cloth_thickness", coupling.cloth_thickness, kPositive);
   r.read("repulsion_stiffness", coupling.repulsion_stiffness, kNonNegative);
-  r.read("repulsion_sweeps", coupling.repulsion_sweeps, kAtLeastOne);
+  r.read("repulsion_sweeps", coupling.repulsion_sweeps, kPassesPerStep);
   r.read("continuous", coupling.continuous);
   r.read("substep_obstacle", coupling.substep_obstacle);
   r.read_choice("scheme", coupling.scheme,
                 Choices<CouplingScheme>{{"carried_water", CouplingScheme::CARRIED_WATER},
                                         {"impulses", CouplingScheme::IMPULSES}});
-  r.read("max_ccd_iterations", coupling.max_ccd_iterations, kAtLeastOne);
+  r.read("max_ccd_iterations", coupling.max_ccd_iterations, kPassesPerStep);
   r.read_choice(
       "slip", coupling.slip,
       Choices<SlipCondition>{{"friction", SlipCondition::FRICTION}, {"no_slip", SlipCondition::NO_SLIP}});

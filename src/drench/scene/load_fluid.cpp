@@ -37,8 +37,8 @@ FluidSettings read_fluid(const Node& node) {
                             {"eta", "min_iterations", "max_iterations", "max_compression_per_iteration",
                              "max_relief_per_substep", "precision"});
   pcisph.read("eta", fluid.pcisph.eta, Range{0.0, true, 1.0, true});
-  pcisph.read("min_iterations", fluid.pcisph.min_iterations, kAtLeastOne);
-  pcisph.read("max_iterations", fluid.pcisph.max_iterations, kAtLeastOne);
+  pcisph.read("min_iterations", fluid.pcisph.min_iterations, kPassesPerStep);
+  pcisph.read("max_iterations", fluid.pcisph.max_iterations, kPassesPerStep);
   pcisph.read_choice("precision", fluid.pcisph.precision,
                      Choices<IterationPrecision>{{"single", IterationPrecision::SINGLE},
                                                  {"double", IterationPrecision::DOUBLE}});
@@ -49,9 +49,9 @@ FluidSettings read_fluid(const Node& node) {
                    "max_relief_per_substep", "warm_start", "precision"});
   dfsph.read("eta", fluid.dfsph.eta, Range{0.0, true, 1.0, true});
   dfsph.read("eta_divergence", fluid.dfsph.eta_divergence, kPositive);
-  dfsph.read("min_iterations", fluid.dfsph.min_iterations, kAtLeastOne);
-  dfsph.read("max_iterations", fluid.dfsph.max_iterations, kAtLeastOne);
-  dfsph.read("max_divergence_iterations", fluid.dfsph.max_divergence_iterations, kAtLeastOne);
+  dfsph.read("min_iterations", fluid.dfsph.min_iterations, kPassesPerStep);
+  dfsph.read("max_iterations", fluid.dfsph.max_iterations, kPassesPerStep);
+  dfsph.read("max_divergence_iterations", fluid.dfsph.max_divergence_iterations, kPassesPerStep);
   dfsph.read("warm_start", fluid.dfsph.warm_start);
   dfsph.read_choice("precision", fluid.dfsph.precision,
                     Choices<IterationPrecision>{{"single", IterationPrecision::SINGLE},
@@ -61,8 +61,8 @@ FluidSettings read_fluid(const Node& node) {
 
   const ObjectReader pbf(r["pbf"], {"substeps", "iterations", "relaxation", "scorr_k", "scorr_n", "scorr_dq",
                                     "max_compression_per_iteration", "scorr_substep", "precision"});
-  pbf.read("substeps", fluid.pbf.substeps, kAtLeastOne);
-  pbf.read("iterations", fluid.pbf.iterations, kAtLeastOne);
+  pbf.read("substeps", fluid.pbf.substeps, kPassesPerStep);
+  pbf.read("iterations", fluid.pbf.iterations, kPassesPerStep);
   pbf.read("relaxation", fluid.pbf.relaxation, kNonNegative);
   pbf.read("scorr_k", fluid.pbf.scorr_k, kNonNegative);
   pbf.read("scorr_n", fluid.pbf.scorr_n, kAtLeastOne);
