@@ -82,6 +82,25 @@ TEST(FluidSolver, AnInfiniteVelocityIsNonFiniteNotRunaway) {
   EXPECT_EQ(status.non_finite_particle, static_cast<std::int64_t>(id));
 }
 
+// A lone particle at 1 m/s with a CFL factor of 1e-12 (in range) has a CFL limit of 1e-14 s: one step of
+// 1 ms ends after 2^20 sub-steps of dt / 2^20 (kMaxSubstepHalvings; one more for the rounding of what
+// remains), and covers the whole step. When each sub-step was capped at a millionth of what remained of the
+// step, this step took 12.5 million.
+TEST(FluidSolver, AStepTakesAtMost2To20Substeps) {
+  FluidSettings settings;
+  settings.particle_spacing = kSpacing;
+  settings.cfl = 1e-12;
+  FluidSolver fluid(settings, Vec3::Zero(), BoundaryParticles{}, {}, false, 10.0);
+  const double mass = settings.rest_density * kSpacing * kSpacing * kSpacing;
+  fluid.particles().add(Vec3::Zero(), Vec3(1.0, 0.0, 0.0), mass, 0);
+  const double dt = 1e-3;
+  ASSERT_TRUE(fluid.step(dt).ok());
+  EXPECT_LE(fluid.statistics().max_substeps_per_step, (1 << kMaxSubstepHalvings) + 1);
+  EXPECT_GE(fluid.statistics().max_substeps_per_step, (1 << kMaxSubstepHalvings) - 1);
+  // No force acts on it: it moved 1 m/s x 1 ms, the whole step.
+  EXPECT_NEAR(fluid.particles().positions[0].x(), 1.0 * dt, 1e-12);
+}
+
 TEST(FluidSolver, KeepingAMovingBoundaryAtRestGivesTheBitsOfSettingItAgain) {
   // A block falling onto a body's floor of boundary points that does not move. Set again every step, its
   // grid is rebuilt; kept, it is not, but the next search is fresh all the same: every solver (WCSPH keeps

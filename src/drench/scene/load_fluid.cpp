@@ -22,7 +22,7 @@ FluidSettings read_fluid(const Node& node) {
   r.read("cfl", fluid.cfl, Range{0.0, true, 1.0, false});
   r.read("sort_interval", fluid.sort_interval, kAtLeastOne);
   // 20 halvings are a millionth of the step: past that a failing solve is not the step's fault.
-  r.read("substep_halvings", fluid.substep_halvings, Range{0.0, false, 20.0, false});
+  r.read("substep_halvings", fluid.substep_halvings, Range{0.0, false, kMaxSubstepHalvings, false});
   // null is "no limit", so that --set fluid.max_speed=null can undo the default.
   if (const Node c = r["max_speed"]; c.present())
     fluid.max_speed = c.value().is_null() ? std::nullopt : std::optional<Scalar>(c.number(kPositive));

@@ -203,6 +203,10 @@ struct SurfaceTensionSettings {
   SurfaceTensionModel model = SurfaceTensionModel::CSF;
 };
 
+/// The most FluidSettings::substep_halvings may be; no fluid sub-step is shorter than dt / 2^this, so that
+/// one step takes at most about a million sub-steps whatever the CFL limit.
+inline constexpr int kMaxSubstepHalvings = 20;
+
 /// The fluid of a scene (`fluid` in docs/scenes.md).
 struct FluidSettings {
   Scalar rest_density = 1000.0;    ///< rho0 (unit: kg/m^3), > 0
@@ -230,7 +234,7 @@ struct FluidSettings {
   /// solve that only stalls above eta is kept (a shorter sub-step would relieve an old compression faster:
   /// the CaughtParticle test), as is one that diverges at dt / 2^substep_halvings, with
   /// PRESSURE_NOT_CONVERGED. 0 keeps every solve. A narrow dam break's corners threw PCISPH's water at
-  /// 81 m/s without it (the NarrowDamBreakPcisph test).
+  /// 81 m/s without it (the NarrowDamBreakPcisph test). At most kMaxSubstepHalvings.
   int substep_halvings = 4;
   /// Fluid sub-steps between re-sorting particles along a z-order curve for cache locality, >= 1.
   int sort_interval = 10;

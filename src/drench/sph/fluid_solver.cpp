@@ -278,10 +278,14 @@ StepStatus FluidSolver::step(Scalar dt, SubstepConstraint* constraint) {
       continue;
     }
     const Scalar cfl = cfl_limit(speed);
-    // A NaN limit means a NaN velocity: take one sub-step so that the check below names the particle.
-    const Scalar limit = std::isnan(cfl) ? cfl : std::min(cfl, m_substep_cap);
+    // A NaN limit means a NaN velocity: take one sub-step so that the check below names the particle. No
+    // sub-step is shorter than dt / 2^20 (the shortest 20 halvings reach, so a redo still ends): capping the
+    // count of what remains instead let each sub-step take a millionth of the rest, and a CFL limit of 1e-14
+    // s cut one step into 12.5 million sub-steps (FluidSolver.AStepTakesAtMost2To20Substeps).
+    const Scalar limit =
+        std::isnan(cfl) ? cfl : std::max(std::min(cfl, m_substep_cap), std::ldexp(dt, -kMaxSubstepHalvings));
     const Scalar wanted = std::isfinite(limit) ? std::ceil(remaining / limit) : 1.0;
-    const int n = static_cast<int>(std::clamp(wanted, 1.0, 1e6));
+    const int n = static_cast<int>(std::clamp(wanted, 1.0, std::ldexp(1.0, kMaxSubstepHalvings)));
     const Scalar sub = n == 1 ? remaining : remaining / n;
     const bool may_redo = sub > shortest;
     bool redo = false;
