@@ -6,13 +6,16 @@
 
 #include <cmath>
 #include <cstdint>
+#include <functional>
 #include <limits>
 #include <optional>
 #include <string>
 
+#include <drench/common/error.hpp>
 #include <drench/scene/scene_config.hpp>
 #include <drench/sph/emitters.hpp>
 #include <drench/sph/fluid_solver.hpp>
+#include "../assertions.hpp"
 
 namespace drench {
 namespace {
@@ -99,6 +102,42 @@ TEST(FluidSolver, AStepTakesAtMost2To20Substeps) {
   EXPECT_GE(fluid.statistics().max_substeps_per_step, (1 << kMaxSubstepHalvings) - 1);
   // No force acts on it: it moved 1 m/s x 1 ms, the whole step.
   EXPECT_NEAR(fluid.particles().positions[0].x(), 1.0 * dt, 1e-12);
+}
+
+// Settings built in code (a game's SceneConfig) are held to the ranges a scene file is: a zero spacing or
+// PBF sub-steps of 0 are named before anything is built, where they divided by zero or looped without end.
+TEST(FluidSolver, RefusesSettingsOutOfRangeNamingTheField) {
+  const auto refused = [](const std::function<void(FluidSettings&)>& change, const std::string& message) {
+    FluidSettings settings;
+    change(settings);
+    return test::throws_containing<SceneError>(
+        [&] { FluidSolver(settings, Vec3::Zero(), BoundaryParticles{}, {}, false, 10.0); }, {message});
+  };
+  EXPECT_TRUE(refused([](FluidSettings& s) { s.particle_spacing = 0.0; },
+                      "fluid.particle_spacing must be > 0, got 0"));
+  EXPECT_TRUE(refused([](FluidSettings& s) { s.rest_density = std::numeric_limits<double>::quiet_NaN(); },
+                      "fluid.rest_density must be > 0, got nan"));
+  EXPECT_TRUE(refused([](FluidSettings& s) { s.cfl = 2.0; }, "fluid.cfl must be in (0, 1], got 2"));
+  EXPECT_TRUE(refused([](FluidSettings& s) { s.pbf.substeps = 0; },
+                      "fluid.pbf.substeps must be in [1, 1000], got 0"));
+  EXPECT_TRUE(refused([](FluidSettings& s) { s.pbf.iterations = 1001; },
+                      "fluid.pbf.iterations must be in [1, 1000], got 1001"));
+  EXPECT_TRUE(refused([](FluidSettings& s) { s.pcisph.min_iterations = 5, s.pcisph.max_iterations = 4; },
+                      "fluid.pcisph.max_iterations must be >= fluid.pcisph.min_iterations = 5, got 4"));
+  EXPECT_TRUE(
+      refused([](FluidSettings& s) { s.dfsph.eta = 0.0; }, "fluid.dfsph.eta must be in (0, 1), got 0"));
+  EXPECT_TRUE(refused([](FluidSettings& s) { s.pbf.scorr_substep = -1.0; },
+                      "fluid.pbf.scorr_substep must be > 0, got -1"));
+  EXPECT_TRUE(refused([](FluidSettings& s) { s.viscosity.coefficient = -0.01; },
+                      "fluid.viscosity.coefficient must be >= 0, got -0.01"));
+  // The defaults, and the scene file's extremes, pass.
+  EXPECT_NO_THROW(check_fluid_settings(FluidSettings{}));
+  FluidSettings extreme;
+  extreme.cfl = 1.0;
+  extreme.substep_halvings = kMaxSubstepHalvings;
+  extreme.pbf.substeps = extreme.pbf.iterations = kMaxPassesPerStep;
+  extreme.max_speed = std::nullopt;
+  EXPECT_NO_THROW(check_fluid_settings(extreme));
 }
 
 TEST(FluidSolver, KeepingAMovingBoundaryAtRestGivesTheBitsOfSettingItAgain) {

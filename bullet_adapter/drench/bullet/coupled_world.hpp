@@ -138,9 +138,9 @@ class CoupledWorld {
   /// @throws SceneError when the scene's dt or gravity is not finite or dt <= 0, the world's soft-body
   ///         gravity differs from the scene's or its rigid-body gravity from its soft-body gravity, a cloth
   ///         is null, repeated, not in the world or has no faces (a rope; the message names its index in
-  ///         `cloths`), the list is empty, or the coupling settings are out of range; drench::Error when a
-  ///         cloth's mesh is invalid (ClothMesh::validate), or naming the object when an object the water
-  ///         sees has a shape drench cannot use (BulletRigidBodies)
+  ///         `cloths`), the list is empty, or the fluid or coupling settings are out of range; drench::Error
+  ///         when a cloth's mesh is invalid (ClothMesh::validate), or naming the object when an object the
+  ///         water sees has a shape drench cannot use (BulletRigidBodies)
   CoupledWorld(btSoftRigidDynamicsWorld& world, const std::vector<btSoftBody*>& cloths,
                const SceneConfig& scene, const RigidBodyOptions& bodies = {});
 

@@ -21,6 +21,11 @@ using IndexArray = std::vector<Index>;
 /// A triangle as three node indices, counter-clockwise seen from the side its normal points to.
 using Triangle = std::array<Index, 3>;
 
+/// The most passes a setting may ask for within one scene step (sub-steps, iterations, sweeps, CCD rounds):
+/// a step is not interrupted (a stop signal ends a run after it), so a count of 1e9 would hold a run for
+/// years; no scene needs more than a thousand, where the published methods use a few to a hundred.
+inline constexpr int kMaxPassesPerStep = 1000;
+
 /// The 3 N coordinates of `points` as one array of doubles (x0 y0 z0 x1 ...), for loops that gather by index;
 /// nullptr when there are none. A cast, not `points.data()->data()`, which accesses a member through a null
 /// pointer when `points` is empty (UBSan), nor a select on empty(), which slowed the gradient factors

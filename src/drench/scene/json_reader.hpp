@@ -62,10 +62,8 @@ inline constexpr Range kAny{};
 inline constexpr Range kPositive{0.0, true, kInf, false};
 inline constexpr Range kNonNegative{0.0, false, kInf, false};
 inline constexpr Range kAtLeastOne{1.0, false, kInf, false};
-/// A count of passes within one scene step (sub-steps, iterations, sweeps, CCD rounds): a step is not
-/// interrupted (a stop signal ends the run after it), so a count of 1e9 would hold the run for years; no
-/// scene needs more than a thousand, where the published methods use a few to a hundred.
-inline constexpr Range kPassesPerStep{1.0, false, 1000.0, false};
+/// A count of passes within one scene step (kMaxPassesPerStep).
+inline constexpr Range kPassesPerStep{1.0, false, kMaxPassesPerStep, false};
 
 /// The names a scene may write for an enum, each with its value, in the order error messages list them.
 template <class Enum>

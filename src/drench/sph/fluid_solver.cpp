@@ -8,6 +8,7 @@
 #include <string>
 #include <utility>
 
+#include <drench/common/error.hpp>
 #include <drench/common/parallel.hpp>
 #include <drench/common/stopwatch.hpp>
 #include <drench/sph/boundary_sampling.hpp>
@@ -18,7 +19,70 @@ namespace {
 /// Skin of a neighbor search whose lists are reused over sub-steps, as a fraction of the kernel support. 0.2:
 /// (1.2)^3 = 1.73 times the candidates of an exact search, kept while no particle moves 0.1 support.
 constexpr Scalar kSkinOfSupport = 0.2;
+
+const FluidSettings& checked(const FluidSettings& settings) {
+  check_fluid_settings(settings);
+  return settings;
+}
 }  // namespace
+
+void check_fluid_settings(const FluidSettings& f) {
+  constexpr Scalar kInf = std::numeric_limits<Scalar>::infinity();
+  const auto require = [](bool ok, const std::string& key, const std::string& range, double value) {
+    if (!ok) throw SceneError("fluid." + key + " must be " + range + ", got " + format_number(value));
+  };
+  const auto positive = [&](const std::string& key, double v) {
+    require(v > 0.0 && v < kInf, key, "> 0", v);
+  };
+  const auto non_negative = [&](const std::string& key, double v) {
+    require(v >= 0.0 && v < kInf, key, ">= 0", v);
+  };
+  const auto fraction = [&](const std::string& key, double v) {
+    require(v > 0.0 && v < 1.0, key, "in (0, 1)", v);
+  };
+  const auto passes = [&](const std::string& key, int v) {
+    require(v >= 1 && v <= kMaxPassesPerStep, key, "in [1, " + std::to_string(kMaxPassesPerStep) + "]", v);
+  };
+  const auto limit = [&](const std::string& key, const std::optional<Scalar>& v) {
+    if (v) positive(key, *v);
+  };
+  positive("rest_density", f.rest_density);
+  positive("particle_spacing", f.particle_spacing);
+  require(f.cfl > 0.0 && f.cfl <= 1.0, "cfl", "in (0, 1]", f.cfl);
+  limit("max_speed", f.max_speed);
+  require(f.substep_halvings >= 0 && f.substep_halvings <= kMaxSubstepHalvings, "substep_halvings",
+          "in [0, " + std::to_string(kMaxSubstepHalvings) + "]", f.substep_halvings);
+  require(f.sort_interval >= 1, "sort_interval", ">= 1", f.sort_interval);
+  limit("wcsph.speed_of_sound", f.wcsph.speed_of_sound);
+  require(f.wcsph.exponent >= 1.0 && f.wcsph.exponent < kInf, "wcsph.exponent", ">= 1", f.wcsph.exponent);
+  limit("wcsph.max_compression", f.wcsph.max_compression);
+  fraction("pcisph.eta", f.pcisph.eta);
+  passes("pcisph.min_iterations", f.pcisph.min_iterations);
+  passes("pcisph.max_iterations", f.pcisph.max_iterations);
+  require(f.pcisph.max_iterations >= f.pcisph.min_iterations, "pcisph.max_iterations",
+          ">= fluid.pcisph.min_iterations = " + std::to_string(f.pcisph.min_iterations),
+          f.pcisph.max_iterations);
+  limit("pcisph.max_compression_per_iteration", f.pcisph.max_compression_per_iteration);
+  limit("pcisph.max_relief_per_substep", f.pcisph.max_relief_per_substep);
+  fraction("dfsph.eta", f.dfsph.eta);
+  positive("dfsph.eta_divergence", f.dfsph.eta_divergence);
+  passes("dfsph.min_iterations", f.dfsph.min_iterations);
+  passes("dfsph.max_iterations", f.dfsph.max_iterations);
+  require(f.dfsph.max_iterations >= f.dfsph.min_iterations, "dfsph.max_iterations",
+          ">= fluid.dfsph.min_iterations = " + std::to_string(f.dfsph.min_iterations),
+          f.dfsph.max_iterations);
+  passes("dfsph.max_divergence_iterations", f.dfsph.max_divergence_iterations);
+  limit("dfsph.max_relief_per_substep", f.dfsph.max_relief_per_substep);
+  passes("pbf.substeps", f.pbf.substeps);
+  passes("pbf.iterations", f.pbf.iterations);
+  non_negative("pbf.relaxation", f.pbf.relaxation);
+  non_negative("pbf.scorr_k", f.pbf.scorr_k);
+  require(f.pbf.scorr_n >= 1, "pbf.scorr_n", ">= 1", f.pbf.scorr_n);
+  fraction("pbf.scorr_dq", f.pbf.scorr_dq);
+  limit("pbf.scorr_substep", f.pbf.scorr_substep);
+  limit("pbf.max_compression_per_iteration", f.pbf.max_compression_per_iteration);
+  non_negative("viscosity.coefficient", f.viscosity.coefficient);
+}
 
 StepStatus& StepStatus::operator|=(const StepStatus& other) {
   flags |= other.flags;
@@ -95,7 +159,7 @@ std::string StepStatus::describe() const {
 FluidSolver::FluidSolver(const FluidSettings& settings, const Vec3& gravity, BoundaryParticles boundary,
                          std::vector<BoundarySettings> guards, bool with_viscosity, Scalar speed_of_sound,
                          const SurfaceTensionSettings* surface_tension)
-    : m_settings(settings),
+    : m_settings(checked(settings)),
       m_gravity(gravity),
       m_kernel(settings.particle_spacing),
       m_guards(std::move(guards)),

@@ -112,6 +112,11 @@ class SubstepConstraint {
   virtual void apply(const Vec3Array& positions_before, ParticleSet& particles, Scalar dt) = 0;
 };
 
+/// Throws SceneError naming the first field of `settings` outside its range, as "fluid.<field> must be
+/// <range>, got <value>": the ranges docs/scenes.md gives and the scene loader holds a file to, for settings
+/// built in code (a game's SceneConfig), which would otherwise divide by a zero spacing or loop without end.
+void check_fluid_settings(const FluidSettings& settings);
+
 class FluidSolver {
  public:
   /// @param gravity  (unit: m/s^2)
@@ -121,7 +126,8 @@ class FluidSolver {
   /// @param speed_of_sound  WCSPH's c and the artificial viscosity's c (unit: m/s), > 0
   /// @param surface_tension  builds the surface tension force with these settings (the "surface_tension"
   ///        effect); nullptr: none, and no pass for it
-  /// @throws std::invalid_argument when surface_tension->sigma is negative or not finite
+  /// @throws SceneError when `settings` are out of range (check_fluid_settings), before anything is built;
+  ///         std::invalid_argument when surface_tension->sigma is negative or not finite
   FluidSolver(const FluidSettings& settings, const Vec3& gravity, BoundaryParticles boundary,
               std::vector<BoundarySettings> guards, bool with_viscosity, Scalar speed_of_sound,
               const SurfaceTensionSettings* surface_tension = nullptr);
