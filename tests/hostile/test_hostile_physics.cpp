@@ -49,6 +49,34 @@ TEST(HostilePhysics, A40MetrePerSecondJetThatTearsTheClothStopsWithExit2) {
   EXPECT_NE(log.find("drench: simulation stopped: "), std::string::npos) << log;
 }
 
+// A step far too large for the pressure solve packs the water flat: the hydrostatic tank at dt 0.2 s ended
+// "ok" with exit 0 and a mean density error of 612%, every particle on the floor. PCISPH (the default) and
+// PBF now stop at the sub-step where more than half of the particles are packed past twice the rest
+// density, with exit 2 and a status that says so. (At that step DFSPH becomes non-finite, exit 2 as well, and
+// WCSPH's CFL limit, which counts its speed of sound, sub-steps it safely.)
+TEST(HostilePhysics, AStepTooLargeForThePressureSolveStopsAsCollapsedWithExit2) {
+  for (const std::string solver : {"pcisph", "pbf"}) {
+    drench::test::TempDir dir;
+    const fs::path out = dir.path() / "run";
+    const int code =
+        drench::test::run_drench("run " + scene("hydrostatic_tank.json") + " --out " + out.string() +
+                                     " --quiet --threads 1 --steps 5 --set time.dt=0.2 --set "
+                                     "fluid.pressure_solver=" +
+                                     solver,
+                                 dir.path() / "log");
+    const std::string log = drench::test::read_text(dir.path() / "log");
+    EXPECT_EQ(code, 2) << solver << ": " << log;
+    const nlohmann::json summary = nlohmann::json::parse(drench::test::read_text(out / "summary.json"));
+    const std::string status = summary["status"];
+    EXPECT_EQ(status.rfind("FLUID_COLLAPSED: ", 0), 0u) << solver << ": " << status;
+    EXPECT_NE(status.find(" of 6000 particles packed past twice the rest density"), std::string::npos)
+        << solver << ": " << status;
+    EXPECT_LT(summary["steps"].get<int>(), 5) << solver << ": stopped where it collapsed";
+    EXPECT_GT(summary["density_error"]["max"].get<double>(), 1.0)
+        << solver << ": denser than 2 rho0 on average";
+  }
+}
+
 // Fig. 4's scene, repulsion only at dt 4 ms, lets particles through the cloth (the paper's point). The run
 // goes to its end, but it says LEAKED, names the first particle and face, counts the leaks and exits 2.
 TEST(HostilePhysics, ARunThatLeakedEndsWithExit2AndNamesTheParticle) {

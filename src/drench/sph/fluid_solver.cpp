@@ -105,6 +105,10 @@ StepStatus& StepStatus::operator|=(const StepStatus& other) {
     overstretched_edge[1] = other.overstretched_edge[1];
     edge_strain = other.edge_strain;
   }
+  if (collapsed_particles < 0) {
+    collapsed_particles = other.collapsed_particles;
+    particle_count = other.particle_count;
+  }
   return *this;
 }
 
@@ -119,6 +123,13 @@ std::string StepStatus::describe() const {
     text +=
         "PRESSURE_NOT_CONVERGED: the pressure solver reached its max_iterations (fluid.pcisph or "
         "fluid.dfsph) above eta";
+  }
+  if (flags & FLUID_COLLAPSED) {
+    if (!text.empty()) text += "; ";
+    text +=
+        "FLUID_COLLAPSED: " + std::to_string(collapsed_particles) + " of " + std::to_string(particle_count) +
+        " particles packed past twice the rest density in a sub-step (lower time.dt or fluid.cfl, or raise "
+        "fluid.pbf.substeps)";
   }
   if (flags & NON_FINITE_CLOTH) {
     if (!text.empty()) text += "; ";
@@ -440,7 +451,7 @@ StepStatus FluidSolver::substep(Scalar dt, Scalar max_speed, SubstepConstraint* 
 
   // At the positions the pressure was solved at, before they move.
   if (m_boundary_packed.size() > m_static_boundary) add_moving_boundary_reactions(dt, m_particles.positions);
-  StepStatus status;
+  StepStatus status = collapse();
   if (!pressure.converged || !divergence.converged) status.flags |= StepStatus::PRESSURE_NOT_CONVERGED;
   ScopedTimer timer(m_stats.timings_s.integrate);
   if (constraint) m_positions_before = m_particles.positions;
@@ -519,7 +530,33 @@ StepStatus FluidSolver::substep_pbf(Scalar dt, Scalar max_speed, SubstepConstrai
     });
   }
   ScopedTimer timer(m_stats.timings_s.integrate);
-  return finish_substep(dt, constraint, false);
+  StepStatus status = collapse();
+  status |= finish_substep(dt, constraint, false);
+  return status;
+}
+
+StepStatus FluidSolver::collapse() const {
+  const std::size_t n = m_particles.size();
+  const Scalar packed = kCollapsedDensity * m_settings.rest_density;
+  const ScalarArray& densities = m_particles.densities;
+  // A count, so the same for any deal of the chunks. A NaN density is not counted: it comes with a NaN
+  // position, which finish_substep names.
+  const std::size_t count = parallel_reduce(
+      n, kLightChunk, std::size_t{0},
+      [&](std::size_t begin, std::size_t end) {
+        std::size_t c = 0;
+        for (std::size_t i = begin; i < end; ++i)
+          c += densities[i] > packed ? 1 : 0;
+        return c;
+      },
+      [](std::size_t a, std::size_t b) { return a + b; });
+  StepStatus status;
+  if (2 * count > n) {
+    status.flags |= StepStatus::FLUID_COLLAPSED;
+    status.collapsed_particles = static_cast<std::int64_t>(count);
+    status.particle_count = static_cast<std::int64_t>(n);
+  }
+  return status;
 }
 
 void FluidSolver::record(const PressureStats& pressure) {
