@@ -866,6 +866,13 @@ TEST(SceneLoader, ReadsTheWettingSectionAndChecksWhatItNeeds) {
   EXPECT_TRUE(
       scene_error("{" + cloth + R"("effects": ["coupling", "wetting"], "wetting": {"diffusion": -1}})",
                   "wetting.diffusion"));
+  // The explicit spread's sub-steps grow with the rates (kMaxWettingDiffusion, kMaxGravityFlow).
+  EXPECT_TRUE(
+      scene_error("{" + cloth + R"("effects": ["coupling", "wetting"], "wetting": {"diffusion": 1e6}})",
+                  "wetting.diffusion must be in [0, 1], got 1000000.0 (x.json)"));
+  EXPECT_TRUE(
+      scene_error("{" + cloth + R"("effects": ["coupling", "wetting"], "wetting": {"gravity_flow": 1e9}})",
+                  "wetting.gravity_flow must be in [0, 10], got 1000000000.0 (x.json)"));
   EXPECT_TRUE(scene_error("{" + cloth + R"("effects": ["coupling", "wetting"], "wetting": {"porosity": 1}})",
                           "porosity is not a known key"));
   EXPECT_TRUE(

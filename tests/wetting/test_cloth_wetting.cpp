@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numeric>
+#include <string>
 
 #include <gtest/gtest.h>
 
@@ -171,6 +172,57 @@ TEST(ClothWetting, AnOverfullNodeDripsOneParticleBelowTheClothUnlessTheSpotIsTak
   // 0.5 particle over capacity left: no second drop.
   EXPECT_TRUE(
       wetting.drip(p.mesh.positions_t0, velocities, gravity, particle, offset, {}, clearance, stats).empty());
+}
+
+// Settings built in code are held to the scene file's ranges: a diffusion of 1e6 m^2/s ran the explicit
+// spread for minutes a step, and one past about 1e19 overflowed its sub-step count and spread nothing.
+TEST(ClothWetting, SettingsOutOfRangeAreNamedBeforeTheMeshIsRead) {
+  const Patch p = patch(3, 0.1);
+  const auto refused = [&](const WettingSettings& settings, const std::string& message) {
+    try {
+      ClothWetting(settings, p.mesh.triangles, p.mesh.positions_t0, p.dry_masses);
+    } catch (const SceneError& e) {
+      return std::string(e.what()).find(message) != std::string::npos;
+    }
+    return false;
+  };
+  WettingSettings s;
+  s.diffusion = 1e6;
+  EXPECT_TRUE(refused(s, "wetting.diffusion must be in [0, 1], got 1000000"));
+  s = {};
+  s.gravity_flow = 11.0;
+  EXPECT_TRUE(refused(s, "wetting.gravity_flow must be in [0, 10], got 11"));
+  s = {};
+  s.absorption_rate = std::nan("");
+  EXPECT_TRUE(refused(s, "wetting.absorption_rate must be >= 0, got nan"));
+  s = {};
+  s.max_saturation = 0.0;
+  EXPECT_TRUE(refused(s, "wetting.max_saturation must be > 0, got 0"));
+}
+
+// At the largest diffusion a scene may ask for, one game step of 1/60 s on a fine patch (2.5 mm edges)
+// spreads a wet spot over the whole 10 cm patch (sqrt(D dt) = 13 cm), conserving the water and keeping every
+// node within its capacity, in a bounded count of explicit sub-steps.
+TEST(ClothWetting, TheLargestDiffusionSpreadsAcrossThePatchInOneGameStep) {
+  const Patch p = patch(41, 0.1);
+  WettingSettings settings;
+  settings.diffusion = kMaxWettingDiffusion;
+  ClothWetting wetting(settings, p.mesh.triangles, p.mesh.positions_t0, p.dry_masses);
+  ScalarArray water(p.mesh.node_count(), 0.0);
+  const std::size_t centre = 20 * 41 + 20;
+  water[centre] = wetting.capacities()[centre];
+  wetting.set_water(water);
+  const double total = wetting.held();
+  WettingStepStats stats;
+  wetting.spread(p.mesh.positions_t0, Vec3(0, -9.81, 0), 1.0 / 60.0, stats);
+  EXPECT_NEAR(wetting.held(), total, 1e-12 * total);
+  const double uniform = total / sum(wetting.capacities());
+  for (std::size_t i = 0; i < water.size(); ++i) {
+    ASSERT_LE(wetting.water()[i], wetting.capacities()[i] * (1.0 + 1e-12)) << "node " << i;
+    ASSERT_NEAR(wetting.water()[i] / wetting.capacities()[i], uniform, 0.05 * uniform) << "node " << i;
+  }
+  // dt x (the fastest node's rate, about 8 D / edge^2) / 0.5: about 4e4.
+  EXPECT_LT(stats.spread_substeps, 100000u);
 }
 
 TEST(ClothWetting, BadMeshesAndMassesAreNamed) {

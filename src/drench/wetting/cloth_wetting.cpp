@@ -17,9 +17,24 @@ constexpr double kStepFraction = 0.5;
 
 }  // namespace
 
+void check_wetting_settings(const WettingSettings& s) {
+  const auto require = [](bool ok, const std::string& key, const std::string& range, double value) {
+    if (!ok) throw SceneError("wetting." + key + " must be " + range + ", got " + format_number(value));
+  };
+  require(s.max_saturation > 0.0 && std::isfinite(s.max_saturation), "max_saturation", "> 0",
+          s.max_saturation);
+  require(s.absorption_rate >= 0.0 && std::isfinite(s.absorption_rate), "absorption_rate", ">= 0",
+          s.absorption_rate);
+  require(s.diffusion >= 0.0 && s.diffusion <= kMaxWettingDiffusion, "diffusion",
+          "in [0, " + format_number(kMaxWettingDiffusion) + "]", s.diffusion);
+  require(s.gravity_flow >= 0.0 && s.gravity_flow <= kMaxGravityFlow, "gravity_flow",
+          "in [0, " + format_number(kMaxGravityFlow) + "]", s.gravity_flow);
+}
+
 ClothWetting::ClothWetting(const WettingSettings& settings, const std::vector<Triangle>& triangles,
                            const Vec3Array& rest_positions, const ScalarArray& dry_masses)
     : m_settings(settings), m_triangles(triangles) {
+  check_wetting_settings(settings);
   const std::size_t m = rest_positions.size();
   if (dry_masses.size() != m) {
     throw Error("wetting: " + std::to_string(dry_masses.size()) + " node masses for " + std::to_string(m) +

@@ -43,13 +43,14 @@ struct WettingStepStats {
 /// The water held by one cloth of M nodes and F triangles. Not thread-safe.
 class ClothWetting {
  public:
-  /// @param settings  validated (scene loader: max_saturation > 0, the rates >= 0, all finite)
+  /// @param settings  within their ranges (check_wetting_settings, WettingSettings)
   /// @param triangles  F cloth triangles, node indices < M
   /// @param rest_positions  M node positions (unit: m) whose edge lengths the diffusion keeps as its rest
   ///        lengths (the cloth at the start of the scene)
   /// @param dry_masses  M node masses of the dry cloth (unit: kg), > 0, pinned nodes included (they hold
   ///        water too); the capacity of node i is max_saturation * dry_masses[i]
-  /// @throws drench::Error naming the node or triangle at fault: sizes that differ, an index out of range,
+  /// @throws SceneError naming the setting out of range (check_wetting_settings), before anything else;
+  ///         drench::Error naming the node or triangle at fault: sizes that differ, an index out of range,
   ///         a non-positive or non-finite mass, an edge of zero length
   ClothWetting(const WettingSettings& settings, const std::vector<Triangle>& triangles,
                const Vec3Array& rest_positions, const ScalarArray& dry_masses);
