@@ -8,6 +8,8 @@
 #include <fstream>
 #include <limits>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include <drench/common/error.hpp>
 #include <drench/scene/effect_registry.hpp>
@@ -860,21 +862,18 @@ TEST(SceneLoader, ReadsTheWettingSectionAndChecksWhatItNeeds) {
   EXPECT_EQ(c.wetting.absorption_rate, 5.0);
   EXPECT_EQ(c.wetting.diffusion, 0.001);
   EXPECT_EQ(c.wetting.gravity_flow, 0.0);
-  EXPECT_TRUE(
-      scene_error("{" + cloth + R"("effects": ["coupling", "wetting"], "wetting": {"max_saturation": 0}})",
-                  "wetting.max_saturation"));
-  EXPECT_TRUE(
-      scene_error("{" + cloth + R"("effects": ["coupling", "wetting"], "wetting": {"diffusion": -1}})",
-                  "wetting.diffusion"));
-  // The explicit spread's sub-steps grow with the rates (kMaxWettingDiffusion, kMaxGravityFlow).
-  EXPECT_TRUE(
-      scene_error("{" + cloth + R"("effects": ["coupling", "wetting"], "wetting": {"diffusion": 1e6}})",
-                  "wetting.diffusion must be in [0, 1], got 1000000.0 (x.json)"));
-  EXPECT_TRUE(
-      scene_error("{" + cloth + R"("effects": ["coupling", "wetting"], "wetting": {"gravity_flow": 1e9}})",
-                  "wetting.gravity_flow must be in [0, 10], got 1000000000.0 (x.json)"));
-  EXPECT_TRUE(scene_error("{" + cloth + R"("effects": ["coupling", "wetting"], "wetting": {"porosity": 1}})",
-                          "porosity is not a known key"));
+  // The rates' upper bounds: the explicit spread's sub-steps grow with them (kMaxWettingDiffusion,
+  // kMaxGravityFlow).
+  for (const auto& [wetting, message] : std::vector<std::pair<std::string, std::string>>{
+           {R"({"max_saturation": 0})", "wetting.max_saturation"},
+           {R"({"diffusion": -1})", "wetting.diffusion"},
+           {R"({"diffusion": 1e6})", "wetting.diffusion must be in [0, 1], got 1000000.0 (x.json)"},
+           {R"({"gravity_flow": 1e9})", "wetting.gravity_flow must be in [0, 10], got 1000000000.0 (x.json)"},
+           {R"({"porosity": 1})", "porosity is not a known key"}}) {
+    EXPECT_TRUE(scene_error(
+        "{" + cloth + R"("effects": ["coupling", "wetting"], "wetting": )" + wetting + "}", message))
+        << wetting;
+  }
   EXPECT_TRUE(
       scene_error("{" + cloth + R"("wetting": {"diffusion": 0.001}})", "effects does not list \"wetting\""));
   EXPECT_TRUE(scene_error(R"({"effects": ["wetting"]})", "effects[0] needs a cloth"));

@@ -46,6 +46,13 @@ void check_fluid_settings(const FluidSettings& f) {
   const auto limit = [&](const std::string& key, const std::optional<Scalar>& v) {
     if (v) positive(key, *v);
   };
+  // PCISPH's and DFSPH's iteration counts: each a count of passes, the most no fewer than the least.
+  const auto iterations = [&](const std::string& solver, int least, int most) {
+    passes(solver + ".min_iterations", least);
+    passes(solver + ".max_iterations", most);
+    require(most >= least, solver + ".max_iterations",
+            ">= fluid." + solver + ".min_iterations = " + std::to_string(least), most);
+  };
   positive("rest_density", f.rest_density);
   positive("particle_spacing", f.particle_spacing);
   require(f.cfl > 0.0 && f.cfl <= 1.0, "cfl", "in (0, 1]", f.cfl);
@@ -57,20 +64,12 @@ void check_fluid_settings(const FluidSettings& f) {
   require(f.wcsph.exponent >= 1.0 && f.wcsph.exponent < kInf, "wcsph.exponent", ">= 1", f.wcsph.exponent);
   limit("wcsph.max_compression", f.wcsph.max_compression);
   fraction("pcisph.eta", f.pcisph.eta);
-  passes("pcisph.min_iterations", f.pcisph.min_iterations);
-  passes("pcisph.max_iterations", f.pcisph.max_iterations);
-  require(f.pcisph.max_iterations >= f.pcisph.min_iterations, "pcisph.max_iterations",
-          ">= fluid.pcisph.min_iterations = " + std::to_string(f.pcisph.min_iterations),
-          f.pcisph.max_iterations);
+  iterations("pcisph", f.pcisph.min_iterations, f.pcisph.max_iterations);
   limit("pcisph.max_compression_per_iteration", f.pcisph.max_compression_per_iteration);
   limit("pcisph.max_relief_per_substep", f.pcisph.max_relief_per_substep);
   fraction("dfsph.eta", f.dfsph.eta);
   positive("dfsph.eta_divergence", f.dfsph.eta_divergence);
-  passes("dfsph.min_iterations", f.dfsph.min_iterations);
-  passes("dfsph.max_iterations", f.dfsph.max_iterations);
-  require(f.dfsph.max_iterations >= f.dfsph.min_iterations, "dfsph.max_iterations",
-          ">= fluid.dfsph.min_iterations = " + std::to_string(f.dfsph.min_iterations),
-          f.dfsph.max_iterations);
+  iterations("dfsph", f.dfsph.min_iterations, f.dfsph.max_iterations);
   passes("dfsph.max_divergence_iterations", f.dfsph.max_divergence_iterations);
   limit("dfsph.max_relief_per_substep", f.dfsph.max_relief_per_substep);
   passes("pbf.substeps", f.pbf.substeps);
