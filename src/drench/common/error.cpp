@@ -10,4 +10,8 @@ std::string format_number(double value) {
   return buffer;
 }
 
+void require_setting(bool ok, const std::string& key, const std::string& range, double value) {
+  if (!ok) throw SceneError(key + " must be " + range + ", got " + format_number(value));
+}
+
 }  // namespace drench

@@ -30,4 +30,8 @@ class IoError : public Error {
 /// Formats a double for error messages with enough digits to round-trip.
 std::string format_number(double value);
 
+/// Throws SceneError("<key> must be <range>, got <value>") unless `ok`: a setting built in code held to the
+/// range the scene loader gives its key (e.g. require_setting(v > 0, "fluid.cfl", "in (0, 1]", v)).
+void require_setting(bool ok, const std::string& key, const std::string& range, double value);
+
 }  // namespace drench

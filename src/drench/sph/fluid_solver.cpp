@@ -29,7 +29,7 @@ const FluidSettings& checked(const FluidSettings& settings) {
 void check_fluid_settings(const FluidSettings& f) {
   constexpr Scalar kInf = std::numeric_limits<Scalar>::infinity();
   const auto require = [](bool ok, const std::string& key, const std::string& range, double value) {
-    if (!ok) throw SceneError("fluid." + key + " must be " + range + ", got " + format_number(value));
+    require_setting(ok, "fluid." + key, range, value);
   };
   const auto positive = [&](const std::string& key, double v) {
     require(v > 0.0 && v < kInf, key, "> 0", v);
@@ -353,9 +353,9 @@ StepStatus FluidSolver::step(Scalar dt, SubstepConstraint* constraint) {
     }
     const Scalar cfl = cfl_limit(speed);
     // A NaN limit means a NaN velocity: take one sub-step so that the check below names the particle. No
-    // sub-step is shorter than dt / 2^20 (the shortest 20 halvings reach, so a redo still ends): capping the
-    // count of what remains instead let each sub-step take a millionth of the rest, and a CFL limit of 1e-14
-    // s cut one step into 12.5 million sub-steps (FluidSolver.AStepTakesAtMost2To20Substeps).
+    // sub-step is shorter than dt / 2^kMaxSubstepHalvings, the shortest the halvings reach (so a redo still
+    // ends): a cap on the count of what remains would let each sub-step take a fixed fraction of the rest,
+    // and the step would shrink geometrically (FluidSolver.AStepTakesAtMost2To20Substeps).
     const Scalar limit =
         std::isnan(cfl) ? cfl : std::max(std::min(cfl, m_substep_cap), std::ldexp(dt, -kMaxSubstepHalvings));
     const Scalar wanted = std::isfinite(limit) ? std::ceil(remaining / limit) : 1.0;
@@ -450,7 +450,7 @@ StepStatus FluidSolver::substep(Scalar dt, Scalar max_speed, SubstepConstraint* 
 
   // At the positions the pressure was solved at, before they move.
   if (m_boundary_packed.size() > m_static_boundary) add_moving_boundary_reactions(dt, m_particles.positions);
-  StepStatus status = collapse();
+  StepStatus status;
   if (!pressure.converged || !divergence.converged) status.flags |= StepStatus::PRESSURE_NOT_CONVERGED;
   ScopedTimer timer(m_stats.timings_s.integrate);
   if (constraint) m_positions_before = m_particles.positions;
@@ -529,33 +529,7 @@ StepStatus FluidSolver::substep_pbf(Scalar dt, Scalar max_speed, SubstepConstrai
     });
   }
   ScopedTimer timer(m_stats.timings_s.integrate);
-  StepStatus status = collapse();
-  status |= finish_substep(dt, constraint, false);
-  return status;
-}
-
-StepStatus FluidSolver::collapse() const {
-  const std::size_t n = m_particles.size();
-  const Scalar packed = kCollapsedDensity * m_settings.rest_density;
-  const ScalarArray& densities = m_particles.densities;
-  // A count, so the same for any deal of the chunks. A NaN density is not counted: it comes with a NaN
-  // position, which finish_substep names.
-  const std::size_t count = parallel_reduce(
-      n, kLightChunk, std::size_t{0},
-      [&](std::size_t begin, std::size_t end) {
-        std::size_t c = 0;
-        for (std::size_t i = begin; i < end; ++i)
-          c += densities[i] > packed ? 1 : 0;
-        return c;
-      },
-      [](std::size_t a, std::size_t b) { return a + b; });
-  StepStatus status;
-  if (2 * count > n) {
-    status.flags |= StepStatus::FLUID_COLLAPSED;
-    status.collapsed_particles = static_cast<std::int64_t>(count);
-    status.particle_count = static_cast<std::int64_t>(n);
-  }
-  return status;
+  return finish_substep(dt, constraint, false);
 }
 
 void FluidSolver::record(const PressureStats& pressure) {
@@ -569,12 +543,18 @@ void FluidSolver::record(const PressureStats& pressure) {
 
 StepStatus FluidSolver::finish_substep(Scalar dt, SubstepConstraint* constraint, bool integrate) {
   const std::size_t n = m_particles.size();
-  // (first non-finite particle, particles the guards moved): a min and an integer sum, so any deal.
-  using Tally = std::pair<std::size_t, std::int64_t>;
-  const auto [first_bad, guarded] = parallel_reduce(
-      n, kLightChunk, Tally(n, 0),
+  // The first non-finite particle, the particles the guards moved and those packed past kCollapsedDensity
+  // rest densities (by the densities the pressure solve left): a min and integer sums, so any deal. A NaN
+  // density is not counted as packed: it comes with a NaN position, named here as non-finite.
+  struct Tally {
+    std::size_t first_bad;
+    std::int64_t guarded = 0, packed = 0;
+  };
+  const Scalar packed_density = kCollapsedDensity * m_settings.rest_density;
+  const auto [first_bad, guarded, packed] = parallel_reduce(
+      n, kLightChunk, Tally{n},
       [&](std::size_t begin, std::size_t end) {
-        Tally t(n, 0);
+        Tally t{n};
         for (std::size_t i = begin; i < end; ++i) {
           Vec3& v = m_particles.velocities[i];
           Vec3& x = m_particles.positions[i];
@@ -587,18 +567,26 @@ StepStatus FluidSolver::finish_substep(Scalar dt, SubstepConstraint* constraint,
             x_t0 = m_positions_before[i];
           }
           for (const BoundarySettings& guard : m_guards)
-            t.second += enforce_boundary(guard, x_t0, x, v) ? 1 : 0;
-          if (!v.allFinite() || !x.allFinite()) t.first = std::min(t.first, i);
+            t.guarded += enforce_boundary(guard, x_t0, x, v) ? 1 : 0;
+          if (!v.allFinite() || !x.allFinite()) t.first_bad = std::min(t.first_bad, i);
+          t.packed += m_particles.densities[i] > packed_density ? 1 : 0;
         }
         return t;
       },
-      [](const Tally& a, const Tally& b) { return Tally(std::min(a.first, b.first), a.second + b.second); });
+      [](const Tally& a, const Tally& b) {
+        return Tally{std::min(a.first_bad, b.first_bad), a.guarded + b.guarded, a.packed + b.packed};
+      });
   m_stats.boundary_guards += guarded;
   if (constraint) constraint->apply(m_positions_before, m_particles, dt);
   StepStatus status;
   if (first_bad < n) {
     status.flags |= StepStatus::NON_FINITE_STATE;
     status.non_finite_particle = m_particles.ids[first_bad];
+  }
+  if (2 * packed > static_cast<std::int64_t>(n)) {
+    status.flags |= StepStatus::FLUID_COLLAPSED;
+    status.collapsed_particles = packed;
+    status.particle_count = static_cast<std::int64_t>(n);
   }
   return status;
 }

@@ -214,13 +214,11 @@ class FluidSolver {
   /// The densities (into particles().densities) at the current positions, with their neighbor lists.
   void compute_densities(const FluidContext& ctx);
   /// The end of a sub-step: with `integrate`, v = v_adv + dt a_pressure and x += dt v (else the positions
-  /// moved already, from m_positions_before); then the guards, the non-finite check and the constraint.
+  /// moved already, from m_positions_before); then the guards, the non-finite and collapse checks
+  /// (NON_FINITE_STATE, FLUID_COLLAPSED) and the constraint.
   StepStatus finish_substep(Scalar dt, SubstepConstraint* constraint, bool integrate);
   /// Adds a pressure solve's iterations and errors to the statistics.
   void record(const PressureStats& pressure);
-  /// FLUID_COLLAPSED when more than half of the particles' densities are over kCollapsedDensity rest
-  /// densities, else nothing.
-  StepStatus collapse() const;
   /// The solvers' view of this sub-step, with the neighbor lists of the last update.
   FluidContext context();
   /// Adds to m_moving_impulses what the sub-step's pressure gave the moving boundary points along their

@@ -19,7 +19,7 @@ constexpr double kStepFraction = 0.5;
 
 void check_wetting_settings(const WettingSettings& s) {
   const auto require = [](bool ok, const std::string& key, const std::string& range, double value) {
-    if (!ok) throw SceneError("wetting." + key + " must be " + range + ", got " + format_number(value));
+    require_setting(ok, "wetting." + key, range, value);
   };
   require(s.max_saturation > 0.0 && std::isfinite(s.max_saturation), "max_saturation", "> 0",
           s.max_saturation);

@@ -26,10 +26,9 @@ struct WettingSettings {
 };
 
 /// The fastest spreading and drainage a scene may ask for. The spread is explicit, in sub-steps of at most
-/// half a node's rate (ClothWetting::spread), so their count grows with these rates: at 1e6 m^2/s the
-/// wet_cloth scene's first step ran for minutes, and past about 1e19 the count overflowed and the water
-/// did not spread at all. 1 m^2/s (a front a metre from its source in a second) and 10 m/s (free fall over
-/// 5 m) are far beyond any cloth's wicking and drainage.
+/// half a node's rate (ClothWetting::spread), so their count grows with these rates without bound (and past
+/// a 64-bit count it overflows). 1 m^2/s (a front a metre from its source in a second) and 10 m/s (free fall
+/// over 5 m) are far beyond any cloth's wicking and drainage.
 inline constexpr double kMaxWettingDiffusion = 1.0;
 inline constexpr double kMaxGravityFlow = 10.0;
 
