@@ -14,8 +14,10 @@ namespace drench {
 class TriangleBins {
  public:
   TriangleBins() = default;
-  /// Bins every triangle of `obstacles` (borrowed; they must outlive this) into the cells of size `cell`
-  /// (unit: m, > 0) its bounding box overlaps.
+  /// Bins every triangle of `obstacles` (borrowed; they must outlive this) into the cells its bounding box
+  /// overlaps, on the finest of the levels of cells `cell` (unit: m, > 0), 2 `cell`, 4 `cell`, ... where
+  /// that box spans at most two cells along each axis. One level would bin a game's ground quad of 200 m
+  /// into 10^8 cells of 2 cm: five steps of the surface effect over it took 109 s and 8.7 GB.
   TriangleBins(const std::vector<SurfaceObstacle>& obstacles, Scalar cell);
   /// (obstacle, triangle) pairs whose bounding box overlaps the box [lo, hi], sorted, each once; `out` is
   /// replaced.
@@ -29,17 +31,22 @@ class TriangleBins {
   /// and the sort. `out` is replaced.
   void filter_box(const std::vector<std::pair<Index, Index>>& candidates, const Vec3& lo, const Vec3& hi,
                   std::vector<std::pair<Index, Index>>& out) const;
-  bool empty() const { return m_bins.empty(); }
+  bool empty() const { return m_empty; }
+  /// How many (cell, triangle) entries the levels hold: at most 8 a triangle.
+  std::size_t entry_count() const;
 
  private:
   struct Box {
     Vec3 lo, hi;
   };
-  Vec3i cell_of(const Vec3& x) const;
+  using Bins = std::unordered_map<std::uint64_t, std::vector<std::pair<Index, Index>>>;
+  /// The cell of x on a level of cells of size `size`.
+  static Vec3i cell_of(const Vec3& x, Scalar size);
   static std::uint64_t key(const Vec3i& c);
   Scalar m_cell = 1.0;
   std::vector<std::vector<Box>> m_boxes;  // per obstacle, per triangle
-  std::unordered_map<std::uint64_t, std::vector<std::pair<Index, Index>>> m_bins;
+  std::vector<Bins> m_levels;             // level k: cells of m_cell 2^k, empty where no triangle is
+  bool m_empty = true;
 };
 
 }  // namespace drench
