@@ -304,8 +304,17 @@ int run_sweep(const SweepOptions& options) {
   // all of them write to the same disk.
   ResourceLimits limits = machine_limits(options.out_dir, kDefaultMaxOutputBytes);
   limits.memory_bytes /= options.jobs;
+  if (options.jobs > 1)
+    limits.memory_of = "available to each of --jobs " + std::to_string(options.jobs) +
+                       " runs (MemAvailable / " + std::to_string(options.jobs) + ")";
   double output_bytes = 0;
+  double setting_output_bytes = 0;
   for (const SweepRun& run : runs) {
+    // A repeat is its setting again: checked once.
+    if (run.repeat > 0) {
+      output_bytes += setting_output_bytes;
+      continue;
+    }
     std::vector<std::string> all = options.overrides;
     all.insert(all.end(), run.assignments.begin(), run.assignments.end());
     nlohmann::json document = scene;
@@ -327,7 +336,8 @@ int run_sweep(const SweepOptions& options) {
     }
     const ResourceEstimate estimate = estimate_resources(config);
     check_resources(config, estimate, limits);
-    output_bytes += estimate.output_bytes.value;
+    setting_output_bytes = estimate.output_bytes.value;
+    output_bytes += setting_output_bytes;
   }
   if (!(output_bytes <= limits.disk_bytes)) {
     throw SceneError("sweep: its " + std::to_string(runs.size()) + " runs make about " +

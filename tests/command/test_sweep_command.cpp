@@ -123,4 +123,32 @@ TEST(SweepCommand, ABadSettingFailsBeforeAnyRunAndWritesNothing) {
   EXPECT_FALSE(fs::exists(out));
 }
 
+// Too many runs are refused at once (--repeat 1e9 was never refused), and runs side by side that do not fit
+// the memory say it is each run's share (--jobs 1024 blamed the emitter alone).
+TEST(SweepCommand, TooManyRunsOrJobsAreRefusedAtOnceNamingWhy) {
+  const drench::test::TempDir dir;
+  const fs::path out = dir.path() / "sweep";
+  const auto start = std::chrono::steady_clock::now();
+  EXPECT_EQ(drench::test::run_drench(
+                "sweep " + kTank + " --vary time.dt=0.001 --repeat 1000000000 --out " + out.string(),
+                dir.path() / "log.txt"),
+            1);
+  EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), 5.0);
+  const std::string repeat = drench::test::read_text(dir.path() / "log.txt");
+  EXPECT_NE(repeat.find("sweep: 1000000000 runs"), std::string::npos) << repeat;
+  EXPECT_FALSE(fs::exists(out));
+  // The dam break at 2 cm (125,000 particles, about 1 GB) needs more than MemAvailable / 1024 below 1 TB.
+  EXPECT_EQ(
+      drench::test::run_drench("sweep " + std::string(DRENCH_SOURCE_DIR) +
+                                   "/demos/scenes/dam_break.json --set fluid.particle_spacing=0.02 --vary "
+                                   "time.dt=0.001 --jobs 1024 --out " +
+                                   out.string(),
+                               dir.path() / "log.txt"),
+      1);
+  const std::string jobs = drench::test::read_text(dir.path() / "log.txt");
+  EXPECT_NE(jobs.find("available to each of --jobs 1024 runs (MemAvailable / 1024)"), std::string::npos)
+      << jobs;
+  EXPECT_FALSE(fs::exists(out));
+}
+
 }  // namespace

@@ -3,12 +3,14 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <limits>
 #include <set>
 
 #include <drench/common/error.hpp>
 #include <drench/scene/sweep.hpp>
+#include "../assertions.hpp"
 
 namespace drench {
 namespace {
@@ -81,6 +83,29 @@ TEST(Sweep, OneAtATimeVariesEachKeyAloneAndSkipsTheScenesOwnValue) {
 TEST(Sweep, AnAssignmentThatCannotApplyFailsThePlan) {
   EXPECT_THROW(plan_sweep(kScene, {parse_sweep_axis("effects[5]=1")}, {}, true, 1), SceneError);
   EXPECT_THROW(plan_sweep(kScene, {}, {}, false, 0), SceneError);
+}
+
+TEST(Sweep, MoreThan10000RunsAreRefusedBeforeAnyIsPlanned) {
+  // --repeat 1e9 was never refused (its billion runs were being built), and a 99 x 99 x 100 grid took 28 s
+  // to refuse: both are counted first, so the refusal comes at once.
+  const auto values = [](int n) {
+    std::string list;
+    for (int i = 0; i < n; ++i)
+      list += (i ? "," : "") + std::to_string(i + 1);
+    return list;
+  };
+  const std::vector<SweepAxis> grid = {parse_sweep_axis("fluid.sort_interval=" + values(99)),
+                                       parse_sweep_axis("fluid.pcisph.max_iterations=" + values(99)),
+                                       parse_sweep_axis("fluid.pcisph.min_iterations=" + values(100))};
+  const auto start = std::chrono::steady_clock::now();
+  EXPECT_TRUE(test::throws_containing<SceneError>([&] { plan_sweep(kScene, grid, {}, false, 1); },
+                                                  {"sweep: 980100 runs", "at most 10000"}));
+  EXPECT_TRUE(test::throws_containing<SceneError>([&] { plan_sweep(kScene, {}, {}, false, 1000000000); },
+                                                  {"sweep: 1000000000 runs", "--repeat 1000000000"}));
+  EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), 1.0);
+  // One at a time the axes add up: 1 + 99 + 99 + 100 settings x 33 repeats is 9,867 runs, within the bound.
+  EXPECT_EQ(plan_sweep(kScene, grid, {}, true, 33).size() % 33, 0u);
+  EXPECT_EQ(plan_sweep(kScene, {grid[0], grid[1]}, {}, false, 1).size(), 9801u);
 }
 
 TEST(Sweep, RowsTakeTheSummarysFiguresAndKeepFailures) {

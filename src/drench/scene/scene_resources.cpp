@@ -138,6 +138,8 @@ ResourceEstimate estimate_resources(const SceneConfig& config) {
                    cz = lattice(extent.z(), s, true);
       count =
           (cx + 2 * layers) * (cy + (b.open_top ? layers : 2 * layers)) * (cz + 2 * layers) - cx * cy * cz;
+      // A box beyond the doubles (max 1e200) makes that inf - inf: it is an infinite count, not NaN.
+      if (std::isnan(count)) count = kInf;
     } else {
       count = lattice(b.size[0], s, true) * lattice(b.size[1], s, true) * layers;
     }
@@ -221,7 +223,7 @@ void check_resources(const SceneConfig& config, const ResourceEstimate& e, const
   if (!(e.memory_bytes.value <= limits.memory_bytes)) {
     throw SceneError(e.memory_bytes.key + ": " + what(e.memory_bytes) + " need about " +
                      show(e.memory_bytes.value) + " bytes of memory, more than the " +
-                     show(limits.memory_bytes) + " bytes available (MemAvailable)" + source);
+                     show(limits.memory_bytes) + " bytes " + limits.memory_of + source);
   }
   const auto output = [&](const std::string& limit) {
     const double frames = std::max(e.frames.value, 1.0);

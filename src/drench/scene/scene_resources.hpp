@@ -38,6 +38,8 @@ struct ResourceLimits {
   double memory_bytes;  ///< the machine's MemAvailable (/proc/meminfo)
   double disk_bytes;    ///< free space where the output goes (statvfs)
   double output_bytes;  ///< `drench run --max-output`
+  /// Whose memory memory_bytes is, for a message ("bytes <memory_of>").
+  std::string memory_of = "available (MemAvailable)";
 };
 
 /// Estimates a validated scene's resources (parse_scene's result). Cheap: arithmetic on the settings only.

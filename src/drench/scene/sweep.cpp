@@ -101,6 +101,19 @@ SweepCase parse_sweep_case(const std::string& argument) {
 std::vector<SweepRun> plan_sweep(const nlohmann::json& scene, const std::vector<SweepAxis>& axes,
                                  const std::vector<SweepCase>& cases, bool one_at_a_time, int repeats) {
   if (repeats < 1) throw SceneError("--repeat must be >= 1, got " + std::to_string(repeats));
+  // Counted first, in double: a grid of many axes, or --repeat 1e9, would otherwise be built (and each of
+  // its settings checked) before it is found too large.
+  double count = 1.0;  // the scene (one at a time), or the grid's one combination of no axes
+  for (const SweepAxis& axis : axes) {
+    const auto values = static_cast<double>(axis.values.size());
+    count = one_at_a_time ? count + values : count * values;
+  }
+  count = (count + static_cast<double>(cases.size())) * repeats;
+  if (!(count <= kMaxSweepRuns)) {
+    throw SceneError("sweep: " + format_number(count) +
+                     " runs ((the --vary settings + the --case's) x --repeat " + std::to_string(repeats) +
+                     "); at most " + format_number(kMaxSweepRuns));
+  }
   std::vector<SweepRun> settings;
   // Every assignment is tried on the scene here, so that a bad key fails the sweep before any run.
   const auto applied = [&](const std::vector<std::string>& assignments) {

@@ -42,13 +42,18 @@ struct SweepRun {
   int repeat = 0;                        ///< 0 .. repeats - 1
 };
 
+/// The most runs a sweep may have (settings x repeats): a sweep of 10,000 runs of a second each takes hours
+/// already, and each setting is checked before the first run (a 99 x 99 x 100 grid took 28 s to plan).
+inline constexpr double kMaxSweepRuns = 10000;
+
 /// The runs of a sweep, each setting `repeats` times in a row.
 /// Grid (`one_at_a_time` false): every combination of the axes' values, then the cases.
 /// One at a time: the scene as it is, then each axis's values alone (skipping a value equal to the scene's,
 /// which would repeat the first run), then the cases.
 /// @param scene  the scene document after the sweep's `--set`s, to compare values with
-/// @throws SceneError when an assignment cannot be applied to `scene` (apply_override's errors), or when
-///         `repeats` < 1.
+/// @throws SceneError when an assignment cannot be applied to `scene` (apply_override's errors), when
+///         `repeats` < 1, or when the sweep would have more than kMaxSweepRuns runs (counted before any is
+///         planned).
 std::vector<SweepRun> plan_sweep(const nlohmann::json& scene, const std::vector<SweepAxis>& axes,
                                  const std::vector<SweepCase>& cases, bool one_at_a_time, int repeats);
 
