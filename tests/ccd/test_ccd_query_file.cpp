@@ -126,7 +126,7 @@ TEST(CcdQueryFile, ReportsAFileThatCannotBeOpened) {
                                          {missing + ": cannot read CCD query file", "No such file"}));
   EXPECT_TRUE(
       throws_containing<IoError>([&] { read_ccd_query_file(dir.path().string()); },
-                                 {dir.path().string() + ": cannot read CCD query file", "directory"}));
+                                 {dir.path().string() + ": cannot read CCD query file: it is a folder"}));
 }
 
 /// Writes the header, one good query and then `bad_line`, and checks that reading names line 5 and the

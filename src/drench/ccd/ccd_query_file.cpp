@@ -2,16 +2,14 @@
 
 #include <algorithm>
 #include <array>
-#include <cerrno>
 #include <charconv>
 #include <cmath>
-#include <cstdio>
-#include <cstring>
 #include <filesystem>
 #include <string_view>
 #include <system_error>
 
 #include <drench/common/error.hpp>
+#include <drench/common/file_text.hpp>
 
 namespace drench::ccd {
 namespace {
@@ -25,26 +23,15 @@ constexpr Vec3 VertexFaceQuery::*kVertices[8] = {
     &VertexFaceQuery::p_t1, &VertexFaceQuery::a_t1, &VertexFaceQuery::b_t1, &VertexFaceQuery::c_t1};
 constexpr const char* kVertexNames[8] = {"p_t0", "a_t0", "b_t0", "c_t0", "p_t1", "a_t1", "b_t1", "c_t1"};
 
-/// The whole file in one string: the largest file is 17 MB, and one read is several times faster than a
-/// stream extraction per token.
+/// The whole file in one string (one read is several times faster than a stream extraction per token), of at
+/// most kMaxCcdQueryFileBytes: the benchmark's largest file is 17 MB.
 std::string read_whole_file(const std::string& path) {
-  std::FILE* file = std::fopen(path.c_str(), "rb");
-  if (file == nullptr) throw IoError(path + ": cannot read CCD query file: " + std::strerror(errno));
-  constexpr std::size_t kChunk = std::size_t{1} << 20;
-  std::string text;
-  std::size_t used = 0;
-  for (;;) {
-    text.resize(used + kChunk);
-    const std::size_t count = std::fread(text.data() + used, 1, kChunk, file);
-    used += count;
-    if (count < kChunk) break;
+  try {
+    return read_file_text(path, kMaxCcdQueryFileBytes,
+                          "1 GiB (" + std::to_string(kMaxCcdQueryFileBytes) + " bytes) a CCD query file");
+  } catch (const FileTextError& e) {
+    throw IoError(path + ": cannot read CCD query file: " + e.reason());
   }
-  text.resize(used);
-  const bool failed = std::ferror(file) != 0;  // e.g. EISDIR: fopen accepts a directory, fread does not
-  const int error = errno;                     // fclose may overwrite errno
-  std::fclose(file);
-  if (failed) throw IoError(path + ": cannot read CCD query file: " + std::strerror(error));
-  return text;
 }
 
 /// A field as it appears in an error message; cut short because a corrupt line can be megabytes long.

@@ -3,12 +3,17 @@
 /// Wang et al. 2021 and Belgrod et al. 2023 converted in ../shared/data/ccd-vertex-face (README.md there
 /// describes the format). The `drench ccd` command, the CCD tests and bench/bench_ccd.cpp read them.
 
+#include <cstdint>
 #include <string>
 #include <vector>
 
 #include <drench/ccd/point_triangle_ccd.hpp>
 
 namespace drench::ccd {
+
+/// Largest query file read (unit: bytes): 1 GiB, some 2.5 million queries (the benchmark's largest file is
+/// 17 MB).
+inline constexpr std::uint64_t kMaxCcdQueryFileBytes = std::uint64_t{1} << 30;
 
 /// One query of a `*.vf.txt` file with its ground-truth label.
 struct CcdBenchmarkQuery {
@@ -28,7 +33,9 @@ struct CcdBenchmarkQuery {
 /// The rational columns r1..r24 are not read (the doubles are the same values, exactly).
 /// @param path  file to read (any length unit; the shared data are dimensionless)
 /// @return the queries, possibly none (a file of comments only)
-/// @throws IoError when the file cannot be read (`<file>: cannot read CCD query file: <reason>`), and for bad
+/// @throws IoError when the file cannot be read (`<file>: cannot read CCD query file: <reason>`), before it
+///         is opened when it is not a regular file (a folder, FIFO or device such as /dev/zero) or is larger
+///         than kMaxCcdQueryFileBytes; and for bad
 ///         content as `<file>:<line>: <problem>, got <value>`: a field count other than 50, a truth other
 ///         than `0` or `1`, a double column that is not a number, out of the double range, NaN or infinite.
 std::vector<CcdBenchmarkQuery> read_ccd_query_file(const std::string& path);

@@ -1,6 +1,5 @@
 #include <drench/io/obj_reader.hpp>
 
-#include <sys/stat.h>
 #include <tiny_obj_loader.h>
 
 #include <algorithm>
@@ -9,12 +8,11 @@
 #include <cstdint>
 #include <cstdlib>
 #include <cstring>
-#include <fstream>
-#include <iterator>
 #include <limits>
 #include <sstream>
 
 #include <drench/common/error.hpp>
+#include <drench/common/file_text.hpp>
 
 namespace drench {
 
@@ -135,23 +133,13 @@ double triangle_area(const Vec3& a, const Vec3& b, const Vec3& c) {
 }  // namespace
 
 TriangleMesh load_obj_mesh(const std::string& path, const std::string& key) {
-  // Checked before it is opened: a FIFO or a device such as /dev/zero would block or never end.
-  struct stat info {};
-  if (::stat(path.c_str(), &info) == 0) {
-    if (!S_ISREG(info.st_mode))
-      throw SceneError(obj_error(key, path, "cannot be read: not a regular file (a folder, FIFO or device)"));
-    if (static_cast<std::uint64_t>(info.st_size) > kMaxObjFileBytes) {
-      throw SceneError(obj_error(key, path,
-                                 "cannot be read: " + std::to_string(info.st_size) +
-                                     " bytes, more than the " + std::to_string(kMaxObjFileBytes) +
-                                     " (1 GiB) an OBJ file may have"));
-    }
+  std::string text;
+  try {
+    text = read_file_text(path, kMaxObjFileBytes,
+                          "1 GiB (" + std::to_string(kMaxObjFileBytes) + " bytes) an OBJ file");
+  } catch (const FileTextError& e) {
+    throw SceneError(obj_error(key, path, std::string("cannot be read: ") + e.reason()));
   }
-  std::ifstream file(path, std::ios::binary);
-  if (!file) throw SceneError(obj_error(key, path, std::string("cannot be read: ") + std::strerror(errno)));
-  const std::string text{std::istreambuf_iterator<char>(file), std::istreambuf_iterator<char>()};
-  if (file.bad())
-    throw SceneError(obj_error(key, path, std::string("cannot be read: ") + std::strerror(errno)));
   check_obj_text(key, path, text);
   tinyobj::ObjReaderConfig config;
   config.triangulate = true;
