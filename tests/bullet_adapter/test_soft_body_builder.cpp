@@ -300,8 +300,13 @@ TEST(SoftBodyBuilder, BadSettingsThrowSceneErrorNamingTheSetting) {
   expect_bad([](ClothSettings& s) { s.area_density = 0; }, {"cloth.area_density must be > 0", "got 0"});
   expect_bad([&](ClothSettings& s) { s.area_density = nan; }, {"cloth.area_density", "nan"});
   expect_bad([](ClothSettings& s) { s.pinned = "edges"; }, {"cloth.pinned must be one of", "\"edges\""});
-  expect_bad([](ClothSettings& s) { s.position_iterations = 1; }, {"cloth.position_iterations must be >= 4"});
-  expect_bad([](ClothSettings& s) { s.substeps = 0; }, {"cloth.substeps must be >= 1", "got 0"});
+  expect_bad([](ClothSettings& s) { s.position_iterations = 1; },
+             {"cloth.position_iterations must be in [4, 1000]", "got 1"});
+  expect_bad([](ClothSettings& s) { s.position_iterations = 1001; },
+             {"cloth.position_iterations must be in [4, 1000]", "got 1001"});
+  expect_bad([](ClothSettings& s) { s.substeps = 0; }, {"cloth.substeps must be in [1, 1000]", "got 0"});
+  expect_bad([](ClothSettings& s) { s.substeps = 1001; },
+             {"cloth.substeps must be in [1, 1000]", "got 1001"});
   expect_bad([](ClothSettings& s) { s.stretch_stiffness = 0; },
              {"cloth.stretch_stiffness must be in (0, 1]"});
   expect_bad([](ClothSettings& s) { s.bending_stiffness = 1.5; }, {"cloth.bending_stiffness", "got 1.5"});

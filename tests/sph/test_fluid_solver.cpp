@@ -118,6 +118,10 @@ TEST(FluidSolver, RefusesSettingsOutOfRangeNamingTheField) {
   EXPECT_TRUE(refused([](FluidSettings& s) { s.rest_density = std::numeric_limits<double>::quiet_NaN(); },
                       "fluid.rest_density must be > 0, got nan"));
   EXPECT_TRUE(refused([](FluidSettings& s) { s.cfl = 2.0; }, "fluid.cfl must be in (0, 1], got 2"));
+  EXPECT_TRUE(refused([](FluidSettings& s) { s.wcsph.speed_of_sound = 1e5; },
+                      "fluid.wcsph.speed_of_sound must be in (0, 2000], got 100000"));
+  EXPECT_TRUE(refused([](FluidSettings& s) { s.pbf.scorr_n = 2147483647; },
+                      "fluid.pbf.scorr_n must be in [1, 16], got 2147483647"));
   EXPECT_TRUE(refused([](FluidSettings& s) { s.pbf.substeps = 0; },
                       "fluid.pbf.substeps must be in [1, 1000], got 0"));
   EXPECT_TRUE(refused([](FluidSettings& s) { s.pbf.iterations = 1001; },

@@ -61,11 +61,14 @@ void validate_cloth_settings(const ClothSettings& s) {
   if (s.pinned != "corners" && s.pinned != "corner" && s.pinned != "none") {
     bad_setting("pinned", "one of \"corners\", \"corner\", \"none\"", "\"" + s.pinned + "\"");
   }
-  if (s.position_iterations < 4) {
-    bad_setting("position_iterations", ">= 4 (1 blows the 57 x 57 patch up at dt = 1 ms)",
+  if (s.position_iterations < kMinClothPositionIterations || s.position_iterations > kMaxPassesPerStep) {
+    bad_setting("position_iterations",
+                "in [" + std::to_string(kMinClothPositionIterations) + ", " +
+                    std::to_string(kMaxPassesPerStep) + "] (1 blows the 57 x 57 patch up at dt = 1 ms)",
                 std::to_string(s.position_iterations));
   }
-  if (s.substeps < 1) bad_setting("substeps", ">= 1", std::to_string(s.substeps));
+  if (s.substeps < 1 || s.substeps > kMaxPassesPerStep)
+    bad_setting("substeps", "in [1, " + std::to_string(kMaxPassesPerStep) + "]", std::to_string(s.substeps));
   check_range("stretch_stiffness", s.stretch_stiffness, 0.0, true, 1.0, false, "in (0, 1]");
   check_range("bending_stiffness", s.bending_stiffness, 0.0, false, 1.0, false, "in [0, 1]");
   check_range("damping", s.damping, 0.0, false, 1.0, false, "in [0, 1]");

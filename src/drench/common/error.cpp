@@ -1,12 +1,17 @@
 #include <drench/common/error.hpp>
 
 #include <cstdio>
+#include <cstdlib>
 
 namespace drench {
 
 std::string format_number(double value) {
+  // The shortest of 15 to 17 digits that reads back as `value`: 0.1, not 0.10000000000000001.
   char buffer[32];
-  std::snprintf(buffer, sizeof buffer, "%.17g", value);
+  for (int digits = 15; digits <= 17; ++digits) {
+    std::snprintf(buffer, sizeof buffer, "%.*g", digits, value);
+    if (std::strtod(buffer, nullptr) == value || !(value == value)) break;
+  }
   return buffer;
 }
 

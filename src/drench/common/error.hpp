@@ -27,7 +27,7 @@ class IoError : public Error {
   using Error::Error;
 };
 
-/// Formats a double for error messages with enough digits to round-trip.
+/// Formats a double for error messages in the fewest digits (15 to 17) that read back as the same double.
 std::string format_number(double value);
 
 /// Throws SceneError("<key> must be <range>, got <value>") unless `ok`: a setting built in code held to the

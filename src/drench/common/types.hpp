@@ -26,6 +26,11 @@ using Triangle = std::array<Index, 3>;
 /// years; no scene needs more than a thousand, where the published methods use a few to a hundred.
 inline constexpr int kMaxPassesPerStep = 1000;
 
+/// The largest |coordinate| and extent anything in a scene may have (unit: m): 10,000 km, past the Earth's
+/// radius, so only a typo reaches it. Beyond it frames' float32 positions lose the particles (1e300 m was
+/// written as inf), and a surface grid's int32 cells run out past 2^30 cells (2,700 km at 2.5 mm cells).
+inline constexpr double kMaxCoordinate = 1e7;
+
 /// The 3 N coordinates of `points` as one array of doubles (x0 y0 z0 x1 ...), for loops that gather by index;
 /// nullptr when there are none. A cast, not `points.data()->data()`, which accesses a member through a null
 /// pointer when `points` is empty (UBSan), nor a select on empty(), which slowed the gradient factors

@@ -17,6 +17,10 @@ namespace drench {
 
 /// A rectangular patch of cloth or a mesh from an OBJ file, as a scene describes it (docs/scenes.md,
 /// `cloth`).
+/// The fewest position iterations Bullet's cloth may take: 1 blows the 57 x 57 patch up at dt = 1 ms
+/// (../shared/notes/bullet-and-fcl.md).
+inline constexpr int kMinClothPositionIterations = 4;
+
 struct ClothSettings {
   std::string mesh = "patch";      ///< "patch" (a regular grid) or the path of an OBJ file (triangulated)
   Vec3 center = Vec3::Zero();      ///< patch centre (unit: m); the patch lies in the plane y = center.y
@@ -26,9 +30,7 @@ struct ClothSettings {
   int nodes_z = 57;                ///< patch nodes along z, >= 2
   double area_density = 0.2;       ///< mass per area (unit: kg/m^2), > 0
   std::string pinned = "corners";  ///< "corners", "none", or "corner" (one corner, x and z smallest)
-  int position_iterations = 4;     ///< Bullet's piterations, >= 4 (1 blows the 57 x 57 patch up at dt = 1 ms,
-                                   ///< ../shared/notes/bullet-and-fcl.md): the Bullet adapter's bound
-                                   ///< (validate_cloth_settings); a scene's loader accepts [1, 1000]
+  int position_iterations = 4;     ///< Bullet's piterations, in [kMinClothPositionIterations, 1000]
   int substeps = 1;  ///< cloth steps per simulation step, >= 1; the coupling still runs once per
                      ///< step. A position-based cloth stretches less under load with smaller steps
   double stretch_stiffness = 1.0;  ///< Bullet's linear stiffness kLST, in (0, 1]

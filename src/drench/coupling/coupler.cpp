@@ -63,9 +63,9 @@ void Coupler::set_adhesion(AdhesionSettings settings) {
     if (!ok) throw SceneError(what);
   };
   for (std::size_t t = 0; t < settings.work.size(); ++t) {
-    require(settings.work[t] >= 0.0 && std::isfinite(settings.work[t]),
-            "adhesion of triangle " + std::to_string(t) + " must be >= 0 and finite (N/m), got " +
-                format_number(settings.work[t]));
+    require(settings.work[t] >= 0.0 && settings.work[t] <= kMaxWorkOfAdhesion,
+            "adhesion of triangle " + std::to_string(t) + " must be in [0, " +
+                format_number(kMaxWorkOfAdhesion) + "] (N/m), got " + format_number(settings.work[t]));
   }
   require(settings.range > 0.0 && std::isfinite(settings.range),
           "adhesion range must be > 0, got " + format_number(settings.range));

@@ -87,9 +87,9 @@ enum CouplingStatus : std::uint32_t {
 /// What the "adhesion" stage of a Coupler needs (Coupler::set_adhesion).
 struct AdhesionSettings {
   /// F values, one per triangle of the mesh Coupler::step is given: the work of adhesion of water on that
-  /// face (unit: N/m = J/m^2), >= 0; Dupre's sigma (1 + cos theta) with theta the contact angle: 0.144 for
-  /// water on a face it wets fully (cotton), about 0.05 for a water-repellent one (theta 110 degrees), 0
-  /// none.
+  /// face (unit: N/m = J/m^2), in [0, kMaxWorkOfAdhesion]; Dupre's sigma (1 + cos theta) with theta the
+  /// contact angle: 0.144 for water on a face it wets fully (cotton), about 0.05 for a water-repellent one
+  /// (theta 110 degrees), 0 none.
   ScalarArray work;
   /// Distance from a face within which water is pulled towards it (unit: m), > 0: the SPH support radius.
   double range = 0.0;

@@ -37,8 +37,20 @@ enum class CouplingScheme : std::uint8_t {
   IMPULSES = 1,
 };
 
+/// The largest work of adhesion a face may have (unit: N/m): Dupre's sigma (1 + cos theta) is at most 2
+/// sigma, and mercury's sigma (0.49 N/m) is the largest of any liquid at room temperature. Far beyond it the
+/// pull throws particles into CFL sub-steps (1e200 ran over 15 s for two steps of the jet on a cloth).
+inline constexpr double kMaxWorkOfAdhesion = 1.0;
+
+/// The thickest cloth relative to the fluid's particle spacing: the SPH kernel's support (2 spacings).
+/// The pairs within the thickness grow as its square over the triangles' area: a thickness of 1 m (a typo
+/// for 1 mm) ran over 30 s for one step of a dam break on a cloth. The paper's thickest is one spacing
+/// (Table 1: 5 mm at 5 mm).
+inline constexpr double kMaxClothThicknessPerSpacing = 2.0;
+
 struct CouplingSettings {
-  /// The paper's h: the layer around the cloth where particles are repelled (unit: m), > 0.
+  /// The paper's h: the layer around the cloth where particles are repelled (unit: m), > 0 and at most
+  /// kMaxClothThicknessPerSpacing fluid particle spacings.
   double cloth_thickness = 0.001;
   /// k of eq. 4 (unit: N/m), >= 0. The elastic impulse k d dt is capped as in Bridson et al. 2002 so that it
   /// never pushes the pair apart faster than 0.1 d / dt.

@@ -46,12 +46,17 @@ TriangleMesh v_plane_mesh(const ObstacleSettings& s, const std::string& key) {
   check_positive(key, "size", s.size);
   check_positive(key, "width", s.width);
   check_positive(key, "triangle_size", s.triangle_size);
-  const int along = static_cast<int>(std::ceil(s.size / s.triangle_size - 1e-9));
-  const int across = static_cast<int>(std::ceil(s.width / s.triangle_size - 1e-9));
-  if (static_cast<double>(2 * along + 1) * (across + 1) > 1e7) {
-    throw SceneError(key + ".triangle_size " + format_number(s.triangle_size) +
-                     " makes more than 10 million nodes");
+  // Counted in double first: size / triangle_size can be far beyond an int (1e300 / 0.005).
+  const double rows_along = std::ceil(s.size / s.triangle_size - 1e-9);
+  const double rows_across = std::ceil(s.width / s.triangle_size - 1e-9);
+  if (!((2.0 * rows_along + 1.0) * (rows_across + 1.0) <= kMaxVPlaneNodes)) {
+    throw SceneError(key + ".triangle_size " + format_number(s.triangle_size) + " makes " +
+                     format_number((2.0 * rows_along + 1.0) * (rows_across + 1.0)) + " nodes of " + key +
+                     ".size " + format_number(s.size) + " x " + key + ".width " + format_number(s.width) +
+                     "; at most 10 million");
   }
+  const int along = static_cast<int>(rows_along);
+  const int across = static_cast<int>(rows_across);
   const double half = 0.5 * s.angle_deg * kPi / 180.0;
   // Row r in [-along, along] lies at distance |r| / along * size from the line where the planes meet, on the
   // plane of x < 0 for r < 0.

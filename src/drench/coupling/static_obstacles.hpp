@@ -31,11 +31,15 @@ struct ObstacleSettings {
   double adhesion = 0.072;
 };
 
+/// The most nodes a v_plane may have: far beyond what the coupling steps in a frame.
+inline constexpr double kMaxVPlaneNodes = 1e7;
+
 /// The V of ObstacleSettings: both planes on one grid of nodes, sharing the nodes where they meet (no crack
 /// to leak through), triangles counter-clockwise seen from inside the V. Small triangles, not four large
 /// ones, because the coupling's broad phase pairs particles with triangles by bounding box
 /// (coupling/broad_phase.hpp): a large slanted face would be a candidate for every particle inside the V.
-/// @throws SceneError naming `key` and the setting out of range
+/// @throws SceneError naming `key` and the setting out of range, or triangle_size when the V would have more
+///         than kMaxVPlaneNodes nodes
 TriangleMesh v_plane_mesh(const ObstacleSettings& settings, const std::string& key = "obstacles[0]");
 
 /// Throws drench::Error naming `what` and the first problem: no triangle, an index out of range, a repeated

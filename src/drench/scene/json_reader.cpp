@@ -148,9 +148,9 @@ std::string Node::string() const {
   return m_value->get<std::string>();
 }
 
-Vec3 Node::vec3() const {
+Vec3 Node::vec3(const Range& range) const {
   if (!m_value->is_array() || m_value->size() != 3) fail("must be an array of 3 numbers");
-  return Vec3(element(0).number(), element(1).number(), element(2).number());
+  return Vec3(element(0).number(range), element(1).number(range), element(2).number(range));
 }
 
 Vec3 Node::unit_vec3() const {
@@ -185,8 +185,8 @@ void ObjectReader::read(const std::string& key, bool& out) const {
   if (const Node n = m_node.child(key); n.present()) out = n.boolean();
 }
 
-void ObjectReader::read(const std::string& key, Vec3& out) const {
-  if (const Node n = m_node.child(key); n.present()) out = n.vec3();
+void ObjectReader::read(const std::string& key, Vec3& out, const Range& range) const {
+  if (const Node n = m_node.child(key); n.present()) out = n.vec3(range);
 }
 
 void ObjectReader::read_unit(const std::string& key, Vec3& out) const {

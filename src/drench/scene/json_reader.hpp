@@ -62,6 +62,10 @@ inline constexpr Range kAny{};
 inline constexpr Range kPositive{0.0, true, kInf, false};
 inline constexpr Range kNonNegative{0.0, false, kInf, false};
 inline constexpr Range kAtLeastOne{1.0, false, kInf, false};
+/// A position in a scene (kMaxCoordinate).
+inline constexpr Range kCoordinate{-kMaxCoordinate, false, kMaxCoordinate, false};
+/// A length or size in a scene, > 0 (kMaxCoordinate).
+inline constexpr Range kLength{0.0, true, kMaxCoordinate, false};
 /// A count of passes within one scene step (kMaxPassesPerStep).
 inline constexpr Range kPassesPerStep{1.0, false, kMaxPassesPerStep, false};
 
@@ -118,7 +122,8 @@ class Node {
   bool boolean() const;
   std::string string() const;
   /// An array of 3 finite numbers.
-  Vec3 vec3() const;
+  /// @param range  of each of the three numbers
+  Vec3 vec3(const Range& range = kAny) const;
   /// A non-zero vector, normalised: directions and normals are stored as unit vectors.
   Vec3 unit_vec3() const;
   /// The value of the string among `choices`.
@@ -153,7 +158,7 @@ class ObjectReader {
   void read(const std::string& key, int& out, const Range& range) const;
   void read(const std::string& key, std::int64_t& out, const Range& range) const;
   void read(const std::string& key, bool& out) const;
-  void read(const std::string& key, Vec3& out) const;
+  void read(const std::string& key, Vec3& out, const Range& range = kAny) const;
   /// A non-zero vector, stored normalised.
   void read_unit(const std::string& key, Vec3& out) const;
   template <class Enum>

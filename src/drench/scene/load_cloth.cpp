@@ -14,12 +14,12 @@ ClothSettings read_cloth(const Node& node) {
     cloth.mesh = mesh.string();
     if (cloth.mesh.empty()) mesh.fail("must be \"patch\" or the path of an OBJ file");
   }
-  r.read("center", cloth.center);
+  r.read("center", cloth.center, kCoordinate);
   if (const Node size = r["size"]; size.present()) {
     if (!size.value().is_array() || size.value().size() != 2)
       size.fail("must be an array of 2 numbers [x, z]");
-    cloth.size_x = size.element(0).number(kPositive);
-    cloth.size_z = size.element(1).number(kPositive);
+    cloth.size_x = size.element(0).number(kLength);
+    cloth.size_z = size.element(1).number(kLength);
   }
   if (const Node nodes = r["nodes"]; nodes.present()) {
     if (!nodes.value().is_array() || nodes.value().size() != 2)
@@ -33,12 +33,13 @@ ClothSettings read_cloth(const Node& node) {
     if (cloth.pinned != "corners" && cloth.pinned != "corner" && cloth.pinned != "none")
       pinned.fail("must be one of \"corners\", \"corner\", \"none\"");
   }
-  r.read("position_iterations", cloth.position_iterations, kPassesPerStep);
+  r.read("position_iterations", cloth.position_iterations,
+         Range{kMinClothPositionIterations, false, kMaxPassesPerStep, false});
   r.read("substeps", cloth.substeps, kPassesPerStep);
   r.read("stretch_stiffness", cloth.stretch_stiffness, Range{0.0, true, 1.0, false});
   r.read("bending_stiffness", cloth.bending_stiffness, Range{0.0, false, 1.0, false});
   r.read("damping", cloth.damping, Range{0.0, false, 1.0, false});
-  r.read("adhesion", cloth.adhesion, kNonNegative);
+  r.read("adhesion", cloth.adhesion, Range{0.0, false, kMaxWorkOfAdhesion, false});
   // null is "no limit", so that --set cloth.max_speed=null can undo the default.
   if (const Node c = r["max_speed"]; c.present())
     cloth.max_speed = c.value().is_null() ? std::nullopt : std::optional<double>(c.number(kPositive));

@@ -30,7 +30,7 @@ FluidSettings read_fluid(const Node& node) {
   const ObjectReader wcsph(r["wcsph"], {"speed_of_sound", "exponent", "max_compression"});
   // null is accepted as "auto" so that --set fluid.wcsph.speed_of_sound=null can undo a file's value.
   if (const Node c = wcsph["speed_of_sound"]; c.present() && !c.value().is_null())
-    fluid.wcsph.speed_of_sound = c.number(kPositive);
+    fluid.wcsph.speed_of_sound = c.number(Range{0.0, true, kMaxSpeedOfSound, false});
   wcsph.read("exponent", fluid.wcsph.exponent, kAtLeastOne);
 
   const ObjectReader pcisph(r["pcisph"],
@@ -65,7 +65,7 @@ FluidSettings read_fluid(const Node& node) {
   pbf.read("iterations", fluid.pbf.iterations, kPassesPerStep);
   pbf.read("relaxation", fluid.pbf.relaxation, kNonNegative);
   pbf.read("scorr_k", fluid.pbf.scorr_k, kNonNegative);
-  pbf.read("scorr_n", fluid.pbf.scorr_n, kAtLeastOne);
+  pbf.read("scorr_n", fluid.pbf.scorr_n, Range{1.0, false, kMaxScorrExponent, false});
   pbf.read("scorr_dq", fluid.pbf.scorr_dq, Range{0.0, true, 1.0, true});
   pbf.read_choice("precision", fluid.pbf.precision,
                   Choices<IterationPrecision>{{"single", IterationPrecision::SINGLE},

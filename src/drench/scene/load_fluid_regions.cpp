@@ -15,17 +15,17 @@ EmitterSettings read_emitter(const Node& node) {
     NozzleEmitterSettings& nozzle = emitter.nozzle;
     const ObjectReader r(node,
                          {"type", "center", "direction", "radius", "speed", "start_time", "max_particles"});
-    r.read("center", nozzle.center);
+    r.read("center", nozzle.center, kCoordinate);
     r.read_unit("direction", nozzle.direction);
-    r.read("radius", nozzle.radius, kPositive);
+    r.read("radius", nozzle.radius, kLength);
     r.read("speed", nozzle.speed, kPositive);
     r.read("start_time", nozzle.start_time, kNonNegative);
     r.read("max_particles", nozzle.max_particles, kNonNegative);
   } else {
     BoxEmitterSettings& box = emitter.box;
     const ObjectReader r(node, {"type", "min", "max", "velocity"});
-    r.read("min", box.min);
-    r.read("max", box.max);
+    r.read("min", box.min, kCoordinate);
+    r.read("max", box.max, kCoordinate);
     r.read("velocity", box.velocity);
     r.require_box(box.min, box.max);
   }
@@ -38,19 +38,19 @@ BoundarySettings read_boundary(const Node& node) {
   boundary.kind = read_type(node, Choices<Kind>{{"box", Kind::BOX}, {"plane", Kind::PLANE}});
   if (boundary.kind == Kind::BOX) {
     const ObjectReader r(node, {"type", "min", "max", "open_top", "layers"});
-    r.read("min", boundary.min);
-    r.read("max", boundary.max);
+    r.read("min", boundary.min, kCoordinate);
+    r.read("max", boundary.max, kCoordinate);
     r.read("open_top", boundary.open_top);
     r.read("layers", boundary.layers, kAtLeastOne);
     r.require_box(boundary.min, boundary.max);
   } else {
     const ObjectReader r(node, {"type", "point", "normal", "size", "layers"});
-    r.read("point", boundary.point);
+    r.read("point", boundary.point, kCoordinate);
     r.read_unit("normal", boundary.normal);
     if (const Node size = r["size"]; size.present()) {
       if (!size.value().is_array() || size.value().size() != 2) size.fail("must be an array of 2 numbers");
       for (std::size_t i = 0; i < 2; ++i)
-        boundary.size[i] = size.element(i).number(kPositive);
+        boundary.size[i] = size.element(i).number(kLength);
     }
     r.read("layers", boundary.layers, kAtLeastOne);
   }
@@ -63,12 +63,12 @@ KillRegionSettings read_kill_region(const Node& node) {
   region.kind = read_type(node, Choices<Kind>{{"plane", Kind::PLANE}, {"box", Kind::BOX}});
   if (region.kind == Kind::PLANE) {
     const ObjectReader r(node, {"type", "point", "normal"});
-    r.read("point", region.point);
+    r.read("point", region.point, kCoordinate);
     r.read_unit("normal", region.normal);
   } else {
     const ObjectReader r(node, {"type", "min", "max"});
-    r.read("min", region.min);
-    r.read("max", region.max);
+    r.read("min", region.min, kCoordinate);
+    r.read("max", region.max, kCoordinate);
     r.require_box(region.min, region.max);
   }
   return region;

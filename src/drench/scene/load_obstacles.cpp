@@ -1,6 +1,8 @@
 /// `obstacles` of a scene: static triangle meshes, the built-in V of Fig. 8 or OBJ files (ObstacleSettings,
 /// coupling/static_obstacles.hpp).
 
+#include <cmath>
+
 #include <drench/scene/load_sections.hpp>
 
 namespace drench::loader {
@@ -13,7 +15,7 @@ ObstacleSettings read_obstacle(const Node& node) {
   if (!mesh.present()) mesh.fail_without_value("is missing; must be \"v_plane\" or the path of an OBJ file");
   obstacle.mesh = mesh.string();
   if (obstacle.mesh.empty()) mesh.fail("must be \"v_plane\" or the path of an OBJ file");
-  r.read("center", obstacle.center);
+  r.read("center", obstacle.center, kCoordinate);
   const bool v_plane = obstacle.mesh == "v_plane";
   // A key of the other kind would be silently ignored.
   for (const char* key : {"angle_deg", "size", "width", "triangle_size"}) {
@@ -22,10 +24,21 @@ ObstacleSettings read_obstacle(const Node& node) {
   if (v_plane && r["scale"].present()) r["scale"].fail("applies to an OBJ mesh only");
   r.read("scale", obstacle.scale, kPositive);
   r.read("angle_deg", obstacle.angle_deg, Range{0.0, true, 180.0, true});
-  r.read("size", obstacle.size, kPositive);
-  r.read("width", obstacle.width, kPositive);
-  r.read("triangle_size", obstacle.triangle_size, kPositive);
-  r.read("adhesion", obstacle.adhesion, kNonNegative);
+  r.read("size", obstacle.size, kLength);
+  r.read("width", obstacle.width, kLength);
+  r.read("triangle_size", obstacle.triangle_size, kLength);
+  r.read("adhesion", obstacle.adhesion, Range{0.0, false, kMaxWorkOfAdhesion, false});
+  if (v_plane) {
+    // As v_plane_mesh counts them, here so that the message names the file.
+    const double nodes = (2.0 * std::ceil(obstacle.size / obstacle.triangle_size - 1e-9) + 1.0) *
+                         (std::ceil(obstacle.width / obstacle.triangle_size - 1e-9) + 1.0);
+    if (!(nodes <= kMaxVPlaneNodes)) {
+      const Node key = r["triangle_size"].present() ? r["triangle_size"]
+                       : r["size"].present()        ? r["size"]
+                                                    : r["width"];
+      key.fail("gives the V " + show(nodes) + " nodes (size and width over triangle_size); at most 1e7");
+    }
+  }
   return obstacle;
 }
 

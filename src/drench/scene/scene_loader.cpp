@@ -1,10 +1,8 @@
 #include <drench/scene/scene_loader.hpp>
 
 #include <openssl/evp.h>
-#include <sys/stat.h>
 
 #include <algorithm>
-#include <cerrno>
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
@@ -14,6 +12,7 @@
 #include <utility>
 
 #include <drench/common/error.hpp>
+#include <drench/common/file_text.hpp>
 #include <drench/scene/effect_registry.hpp>
 #include <drench/scene/json_reader.hpp>
 #include <drench/scene/load_sections.hpp>
@@ -248,6 +247,17 @@ void check_surface(const SceneConfig& config, const ObjectReader& r) {
   }
 }
 
+/// coupling.cloth_thickness at most kMaxClothThicknessPerSpacing particle spacings, where a coupling runs.
+void check_coupling(const SceneConfig& config, const ObjectReader& r) {
+  if (!config.has_effect("coupling")) return;
+  const double most = kMaxClothThicknessPerSpacing * config.fluid.particle_spacing;
+  if (!(config.coupling.cloth_thickness <= most)) {
+    fail_key(r["coupling"].child("cloth_thickness"),
+             "must be <= 2 fluid.particle_spacing = " + show(most) +
+                 " m (the kernel's support; the pairs within the thickness grow as its square)");
+  }
+}
+
 /// 1-based line and column of the character at `offset`, as an editor shows them.
 std::pair<std::size_t, std::size_t> line_and_column(const std::string& text, std::size_t offset) {
   offset = std::min(offset, text.size());
@@ -273,35 +283,17 @@ std::string parser_message(const json::exception& e) {
   return bracket == std::string::npos ? message : message.substr(bracket + 2);
 }
 
-/// The scene file's text, refused before it is opened when it is not a regular file (a folder, a FIFO or
-/// a device such as /dev/zero would block or never end) or larger than kMaxSceneFileBytes.
+/// The scene file's text: a regular file of at most kMaxSceneFileBytes (read_file_text). Too large is the
+/// scene's fault (SceneError); anything else is the file system's (IoError).
 std::string read_text_file(const std::string& path) {
-  struct stat info {};
-  if (::stat(path.c_str(), &info) != 0)
-    throw IoError(path + ": cannot read scene file: " + std::strerror(errno));
-  if (S_ISDIR(info.st_mode)) throw IoError(path + ": cannot read scene file: it is a folder");
-  if (!S_ISREG(info.st_mode))
-    throw IoError(path + ": cannot read scene file: not a regular file (a FIFO, device or socket)");
-  const auto too_large = [&](std::uint64_t bytes) {
-    return SceneError(path + ": cannot read scene file: " + std::to_string(bytes) +
-                      " bytes, more than the 16 MiB (" + std::to_string(kMaxSceneFileBytes) +
-                      " bytes) a scene file may have");
-  };
-  if (static_cast<std::uint64_t>(info.st_size) > kMaxSceneFileBytes) throw too_large(info.st_size);
-  std::FILE* file = std::fopen(path.c_str(), "rb");
-  if (file == nullptr) throw IoError(path + ": cannot read scene file: " + std::strerror(errno));
-  std::string text;
-  char buffer[65536];
-  std::size_t count = 0;
-  // Bounded again while reading: the file may have grown since stat().
-  while (text.size() <= kMaxSceneFileBytes && (count = std::fread(buffer, 1, sizeof buffer, file)) > 0)
-    text.append(buffer, count);
-  const bool failed = std::ferror(file) != 0;
-  const int error = errno;  // fclose may overwrite errno
-  std::fclose(file);
-  if (failed) throw IoError(path + ": cannot read scene file: " + std::strerror(error));
-  if (text.size() > kMaxSceneFileBytes) throw too_large(text.size());
-  return text;
+  try {
+    return read_file_text(path, kMaxSceneFileBytes,
+                          "16 MiB (" + std::to_string(kMaxSceneFileBytes) + " bytes) a scene file");
+  } catch (const FileTextError& e) {
+    const std::string message = path + ": cannot read scene file: " + e.reason();
+    if (e.kind() == FileTextError::Kind::TOO_LARGE) throw SceneError(message);
+    throw IoError(message);
+  }
 }
 
 /// Calls `visit(value)` on each value of `document` that names a file: `cloth.mesh` unless "patch",
@@ -432,6 +424,7 @@ SceneConfig parse_scene(const nlohmann::json& document, const std::string& sourc
   check_masses(config, r);
   check_emitters(config, r);
   check_surface(config, r);
+  check_coupling(config, r);
   if (!config.has_effect("adhesion")) {
     // The works of adhesion would be ignored without the effect.
     const char* problem = "sets a work of adhesion, but effects does not list \"adhesion\"";

@@ -40,6 +40,19 @@ class KinematicCloth {
   ScalarArray m_own;
 };
 
+/// `config` once the checks that join two of its sections hold, as the scene loader's do for a file: a scene
+/// built in code (a game's) meets them here, before anything is built.
+const SceneConfig& checked(const SceneConfig& config) {
+  const double spacing = config.fluid.particle_spacing;
+  if (config.has_effect("coupling") && spacing > 0.0 && std::isfinite(spacing)) {
+    const double most = kMaxClothThicknessPerSpacing * spacing;
+    require_setting(config.coupling.cloth_thickness <= most, "coupling.cloth_thickness",
+                    "<= 2 fluid.particle_spacing = " + format_number(most) + " m",
+                    config.coupling.cloth_thickness);
+  }
+  return config;
+}
+
 }  // namespace
 
 Scalar automatic_speed_of_sound(const SceneConfig& config) {
@@ -92,6 +105,44 @@ Scalar automatic_speed_of_sound(const SceneConfig& config) {
 
 namespace {
 
+std::string show_vec3(const Vec3& v) {
+  return "[" + format_number(v.x()) + ", " + format_number(v.y()) + ", " + format_number(v.z()) + "]";
+}
+
+/// Refuses, before a frame is written, a point a frame could not hold: beyond kMaxCoordinate (frames store
+/// float32; a cloth OBJ at 1e300 m was written as inf), and with the "surface" effect beyond its grid's int32
+/// cells (kMaxSurfaceGridCells), where the first frame's surface failed after the run had begun.
+/// @param mesh  the coupling's mesh: its first `cloth_nodes` nodes the cloth's, then obstacles and bodies
+void check_frame_range(const SceneConfig& config, const ClothMesh* mesh, std::size_t cloth_nodes,
+                       const Vec3Array& particles) {
+  const bool surface = config.has_effect("surface");
+  const double cell = config.surface.resolved_cell_size(config.fluid.particle_spacing);
+  const double reach = surface ? std::min(kMaxCoordinate, kMaxSurfaceGridCells * cell) : kMaxCoordinate;
+  const auto check = [&](const Vec3& x, const std::string& what) {
+    if (x.cwiseAbs().maxCoeff() <= reach) return;
+    const std::string limit = reach < kMaxCoordinate
+                                  ? "the surface grid's int32 cells reach " + format_number(reach) +
+                                        " m at surface.cell_size " + format_number(cell) +
+                                        " m; choose a larger cell"
+                                  : "a scene reaches " + format_number(kMaxCoordinate) + " m from the origin";
+    throw SceneError(what + " at " + show_vec3(x) + " m is beyond what frames hold: " + limit + " (" +
+                     config.source + ")");
+  };
+  if (mesh) {
+    for (std::size_t i = 0; i < mesh->positions_t0.size(); ++i) {
+      check(mesh->positions_t0[i], i < cloth_nodes ? "cloth node " + std::to_string(i)
+                                                   : "obstacle node " + std::to_string(i - cloth_nodes));
+    }
+  }
+  for (std::size_t i = 0; i < particles.size(); ++i)
+    check(particles[i], "particle " + std::to_string(i));
+  for (std::size_t i = 0; i < config.emitters.size(); ++i) {
+    const EmitterSettings& e = config.emitters[i];
+    if (e.kind == EmitterSettings::Kind::NOZZLE)
+      check(e.nozzle.center, "emitters[" + std::to_string(i) + "].center");
+  }
+}
+
 BoundaryParticles sample_boundaries(const SceneConfig& config) {
   const Scalar s = config.fluid.particle_spacing;
   BoundaryParticles all;
@@ -121,27 +172,36 @@ std::vector<TriangleMesh> build_obstacles(const SceneConfig& config) {
   for (std::size_t i = 0; i < config.obstacles.size(); ++i) {
     const ObstacleSettings& o = config.obstacles[i];
     const std::string key = "obstacles[" + std::to_string(i) + "]";
-    if (o.mesh == "v_plane") {
-      meshes.push_back(v_plane_mesh(o, key));
-      continue;
+    // Every refusal names the scene too: the loader's ranges cannot see what an OBJ file and a scale make.
+    try {
+      if (o.mesh == "v_plane") {
+        meshes.push_back(v_plane_mesh(o, key));
+        validate_triangle_mesh(meshes.back(), key);
+        continue;
+      }
+      if (!(o.scale > 0.0) || !std::isfinite(o.scale))
+        throw SceneError(key + ".scale must be > 0 and finite, got " + format_number(o.scale));
+      if (!o.center.allFinite()) throw SceneError(key + ".center must be finite");
+      TriangleMesh mesh = load_obj_mesh(o.mesh, key + ".mesh");
+      for (Vec3& x : mesh.positions)
+        x = o.center + o.scale * x;
+      // A scale of 1e-300 or 1e300 turns the file's triangles to points or infinities.
+      validate_triangle_mesh(mesh, key + ".mesh \"" + o.mesh + "\" at " + key + ".scale " +
+                                       format_number(o.scale) + " and center " + show_vec3(o.center));
+      meshes.push_back(std::move(mesh));
+    } catch (const Error& e) {
+      throw SceneError(std::string(e.what()) + " (" + config.source + ")");
     }
-    if (!(o.scale > 0.0) || !std::isfinite(o.scale))
-      throw SceneError(key + ".scale must be > 0 and finite, got " + format_number(o.scale));
-    if (!o.center.allFinite()) throw SceneError(key + ".center must be finite");
-    TriangleMesh mesh = load_obj_mesh(o.mesh, key + ".mesh");
-    for (Vec3& x : mesh.positions)
-      x = o.center + o.scale * x;
-    meshes.push_back(std::move(mesh));
   }
   return meshes;
 }
 
 Simulation::Simulation(const SceneConfig& config, const ClothEngineFactory& cloth_factory)
-    : Simulation(config, build_cloth(config, cloth_factory)) {}
+    : Simulation(config, build_cloth(checked(config), cloth_factory)) {}
 
 Simulation::Simulation(const SceneConfig& config, std::unique_ptr<ClothEngine> cloth,
                        std::vector<TriangleMesh> more_obstacles, RigidBodySource* bodies)
-    : m_config(config),
+    : m_config(checked(config)),
       m_speed_of_sound(config.fluid.wcsph.speed_of_sound.value_or(automatic_speed_of_sound(config))),
       m_cloth(std::move(cloth)) {
   std::vector<TriangleMesh> obstacles = build_obstacles(m_config);
@@ -185,6 +245,8 @@ Simulation::Simulation(const SceneConfig& config, std::unique_ptr<ClothEngine> c
   }
   for (const Scalar m : m_fluid->particles().masses)
     m_emitted_mass += m;
+  check_frame_range(m_config, m_engine ? &m_engine->mesh() : nullptr,
+                    m_cloth ? m_cloth->mesh().node_count() : 0, m_fluid->particles().positions);
   const ParticleSet& initial = m_fluid->particles();
   if (!initial.empty()) {
     m_energy_floor = std::numeric_limits<double>::infinity();

@@ -30,7 +30,11 @@ class Simulation {
  public:
   /// @throws SceneError when the scene cannot be built: it has a cloth but no cloth_factory, or settings
   ///         built in code fail a check the loader would have made (the coupler's; coupling.slip or
-  ///         coupling.friction_coefficient asking for tangential conditions without the "friction" effect).
+  ///         coupling.friction_coefficient asking for tangential conditions without the "friction" effect;
+  ///         coupling.cloth_thickness over 2 particle spacings with the "coupling" effect); an obstacle is
+  ///         not a valid mesh (an OBJ scaled to points); or a cloth node, obstacle node, particle or nozzle
+  ///         lies beyond kMaxCoordinate, or with the "surface" effect beyond its grid's int32 cells
+  ///         (kMaxSurfaceGridCells x surface cell size). Each message names the scene's source.
   ///         A scene whose emitters never create a particle is fine.
   /// @param cloth_factory  builds the scene's cloth (the Bullet adapter's cloth_engine_factory()); required
   ///        when the scene has a `cloth`, else SceneError
@@ -43,7 +47,7 @@ class Simulation {
   /// meshes besides the scene's `obstacles` (e.g. a Bullet world's static triangle meshes), coupled the same
   /// way. `bodies` (borrowed, or null) are the moving rigid bodies of the world the cloth is in, read at
   /// every step (coupling/rigid_bodies.hpp); without a cloth, they step their world themselves.
-  /// @throws SceneError as the other constructor; drench::Error when an obstacle is not a valid mesh
+  /// @throws SceneError as the other constructor
   Simulation(const SceneConfig& config, std::unique_ptr<ClothEngine> cloth,
              std::vector<TriangleMesh> more_obstacles = {}, RigidBodySource* bodies = nullptr);
 

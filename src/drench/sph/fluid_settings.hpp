@@ -27,11 +27,16 @@ inline const char* pressure_solver_name(PressureSolverKind kind) {
   return "";
 }
 
+/// The largest WcsphSettings::speed_of_sound (unit: m/s): above sound in water (1,480 m/s) and glycerol
+/// (1,900 m/s). A WCSPH fluid stiffer than the liquid itself gains nothing, and its CFL sub-steps grow with
+/// c: 1e5 m/s on the resting tank ran over 30 s for one step.
+inline constexpr Scalar kMaxSpeedOfSound = 2000.0;
+
 /// Weakly compressible SPH, Becker & Teschner 2007: Tait equation p = B ((rho / rho0)^gamma - 1).
 struct WcsphSettings {
   /// Numerical speed of sound c (unit: m/s), B = rho0 c^2 / gamma. Unset: 10 x the scene's expected maximum
   /// speed (sqrt(2 g H) over the scene's height H plus the fastest emitter), i.e. Mach 0.1 and about 1%
-  /// density variation (Monaghan 1994).
+  /// density variation (Monaghan 1994). At most kMaxSpeedOfSound.
   std::optional<Scalar> speed_of_sound;
   Scalar exponent = 7.0;  ///< gamma of the Tait equation (dimensionless), >= 1
   /// The largest compression (fraction of rest density, > 0) the Tait equation turns into pressure: a
@@ -118,6 +123,9 @@ struct DfsphSettings {
   IterationPrecision precision = IterationPrecision::SINGLE;
 };
 
+/// The largest PbfSettings::scorr_n: 4 times the published 4.
+inline constexpr int kMaxScorrExponent = 16;
+
 /// Position Based Fluids, Macklin & Mueller 2013 (ACM TOG 32(4)): the density constraint
 /// C_i = max(rho_i / rho0 - 1, 0) solved on positions by Jacobi iterations (their eq. 1-12), what games run
 /// (NVIDIA FleX, PhysX 5 particles). A fixed count of sub-steps and iterations makes every frame cost the
@@ -161,7 +169,9 @@ struct PbfSettings {
   /// spacing / sub-step; the game-like scene of demos/bullet_playground threw particles at 1,400 m/s without
   /// it. A resting or smoothly moving fluid stays below it.
   std::optional<Scalar> max_compression_per_iteration = 0.05;
-  int scorr_n = 4;  ///< n of s_corr, >= 1 (theirs: 4)
+  /// n of s_corr, in [1, kMaxScorrExponent] (theirs: 4). Each pair pays n - 1 multiplications in every
+  /// iteration, and a ratio W(r) / W(dq) above 1 overflows for large n.
+  int scorr_n = 4;
   Scalar scorr_dq =
       0.2;  ///< |dq| of s_corr as a fraction of the kernel support radius, in (0, 1) (theirs: 0.1-0.3)
   /// Precision of the iterations' pair sums (the constraint pass: densities, constraint gradients, s_corr;

@@ -60,7 +60,11 @@ void check_fluid_settings(const FluidSettings& f) {
   require(f.substep_halvings >= 0 && f.substep_halvings <= kMaxSubstepHalvings, "substep_halvings",
           "in [0, " + std::to_string(kMaxSubstepHalvings) + "]", f.substep_halvings);
   require(f.sort_interval >= 1, "sort_interval", ">= 1", f.sort_interval);
-  limit("wcsph.speed_of_sound", f.wcsph.speed_of_sound);
+  if (f.wcsph.speed_of_sound) {
+    const Scalar c = *f.wcsph.speed_of_sound;
+    require(c > 0.0 && c <= kMaxSpeedOfSound, "wcsph.speed_of_sound",
+            "in (0, " + format_number(kMaxSpeedOfSound) + "]", c);
+  }
   require(f.wcsph.exponent >= 1.0 && f.wcsph.exponent < kInf, "wcsph.exponent", ">= 1", f.wcsph.exponent);
   limit("wcsph.max_compression", f.wcsph.max_compression);
   fraction("pcisph.eta", f.pcisph.eta);
@@ -76,7 +80,8 @@ void check_fluid_settings(const FluidSettings& f) {
   passes("pbf.iterations", f.pbf.iterations);
   non_negative("pbf.relaxation", f.pbf.relaxation);
   non_negative("pbf.scorr_k", f.pbf.scorr_k);
-  require(f.pbf.scorr_n >= 1, "pbf.scorr_n", ">= 1", f.pbf.scorr_n);
+  require(f.pbf.scorr_n >= 1 && f.pbf.scorr_n <= kMaxScorrExponent, "pbf.scorr_n",
+          "in [1, " + std::to_string(kMaxScorrExponent) + "]", f.pbf.scorr_n);
   fraction("pbf.scorr_dq", f.pbf.scorr_dq);
   limit("pbf.scorr_substep", f.pbf.scorr_substep);
   limit("pbf.max_compression_per_iteration", f.pbf.max_compression_per_iteration);

@@ -5,6 +5,10 @@
 
 namespace drench {
 
+/// Largest |coordinate| / cell size a surface grid node may have: OpenVDB's coordinates are int32, and the
+/// dilation and the kernel's reach add a few nodes on either side.
+inline constexpr double kMaxSurfaceGridCells = 0x1p30;
+
 /// The scalar field whose zero level is the surface (docs/scenes.md, `surface.field`).
 enum class SurfaceField {
   /// Zhu & Bridson 2005: distance to the weighted mean of the particles near a node, less the particle

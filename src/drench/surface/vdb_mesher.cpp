@@ -11,6 +11,7 @@
 #include <string>
 
 #include <drench/common/error.hpp>
+#include <drench/surface/surface_settings.hpp>
 
 namespace drench {
 
@@ -35,10 +36,6 @@ void vdb_call(const char* stage, double cell, Body&& body) {
   }
 }
 
-/// Largest |coordinate| / cell a node may have: OpenVDB's coordinates are int32, and the dilation and the
-/// kernel's reach add a few nodes on either side.
-constexpr double kMaxNodeIndex = 0x1p30;
-
 }  // namespace
 
 struct VdbNodeGrid::Impl {
@@ -60,7 +57,7 @@ void VdbNodeGrid::check_range(const Vec3Array& points) const {
   const double cell = m_impl->grid->voxelSize()[0];
   for (std::size_t i = 0; i < points.size(); ++i) {
     const Vec3 node = (points[i] / cell).array().floor().matrix();
-    if (!(node.cwiseAbs().maxCoeff() <= kMaxNodeIndex)) {
+    if (!(node.cwiseAbs().maxCoeff() <= kMaxSurfaceGridCells)) {
       throw Error("surface: particle " + std::to_string(i) + " at (" + show(points[i].x()) + ", " +
                   show(points[i].y()) + ", " + show(points[i].z()) +
                   ") m is beyond the surface grid's int32 coordinates at cell size " + show(cell) +
