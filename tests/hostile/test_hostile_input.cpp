@@ -342,7 +342,7 @@ TEST(HostileInput, SettingsWhoseCostHasNoBoundAreRefusedNamingTheKey) {
   config.coupling.cloth_thickness = 1.0;
   EXPECT_TRUE(throws_containing<SceneError>(
       [&] { Simulation simulation(config); },
-      {"coupling.cloth_thickness must be <= 2 fluid.particle_spacing = 0.01 m, got 1"}));
+      {"coupling.cloth_thickness must be <= 2 fluid.particle_spacing = 0.01 m", "got 1.0 (x.json)"}));
   // (FluidSolver.RefusesSettingsOutOfRangeNamingTheField holds the fluid's bounds in code.)
 
   // The command refuses the 1 m cloth at once and writes nothing.

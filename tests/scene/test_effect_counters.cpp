@@ -28,7 +28,7 @@ TEST(Effects, EveryKnownEffectHasItsOwnCounter) {
 }
 
 // Without the "friction" effect the coupler is built without its friction stage, so tangential settings made
-// in code would be ignored: Simulation refuses them as the loader does.
+// in code would be ignored: Simulation refuses them as the loader does, naming the key that asks.
 TEST(Effects, TangentialSettingsWithoutTheFrictionEffectAreAnError) {
   for (const bool no_slip : {false, true}) {
     SceneConfig config;
@@ -37,15 +37,19 @@ TEST(Effects, TangentialSettingsWithoutTheFrictionEffectAreAnError) {
     } else {
       config.coupling.friction_coefficient = 0.3;
     }
+    config.obstacles.emplace_back();  // the V: what the coupling needs
+    config.effects = {"coupling"};
     try {
       Simulation simulation(config);
       ADD_FAILURE() << "no SceneError";
     } catch (const SceneError& e) {
-      EXPECT_NE(std::string(e.what()).find("but effects does not list \"friction\" (<code>)"),
-                std::string::npos)
-          << e.what();
+      const std::string message = e.what();
+      EXPECT_EQ(message.find(no_slip ? "coupling.slip asks" : "coupling.friction_coefficient asks"), 0u)
+          << message;
+      EXPECT_NE(message.find("but effects does not list \"friction\""), std::string::npos) << message;
+      EXPECT_NE(message.find("(<code>)"), std::string::npos) << message;
     }
-    config.effects = {"friction"};
+    config.effects = {"coupling", "friction"};
     EXPECT_NO_THROW(Simulation{config});
   }
 }

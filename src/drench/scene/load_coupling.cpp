@@ -2,6 +2,7 @@
 /// coupling/coupling_settings.hpp).
 
 #include <drench/scene/load_sections.hpp>
+#include <drench/scene/scene_names.hpp>
 
 namespace drench::loader {
 
@@ -15,16 +16,11 @@ CouplingSettings read_coupling(const Node& node) {
   r.read("repulsion_sweeps", coupling.repulsion_sweeps, kPassesPerStep);
   r.read("continuous", coupling.continuous);
   r.read("substep_obstacle", coupling.substep_obstacle);
-  r.read_choice("scheme", coupling.scheme,
-                Choices<CouplingScheme>{{"carried_water", CouplingScheme::CARRIED_WATER},
-                                        {"impulses", CouplingScheme::IMPULSES}});
+  r.read_choice("scheme", coupling.scheme, coupling_scheme_names());
   r.read("max_ccd_iterations", coupling.max_ccd_iterations, kPassesPerStep);
-  r.read_choice(
-      "slip", coupling.slip,
-      Choices<SlipCondition>{{"friction", SlipCondition::FRICTION}, {"no_slip", SlipCondition::NO_SLIP}});
+  r.read_choice("slip", coupling.slip, slip_names());
   r.read("friction_coefficient", coupling.friction_coefficient, kNonNegative);
-  r.read_choice("broad_phase", coupling.broad_phase,
-                Choices<BroadPhaseKind>{{"grid", BroadPhaseKind::GRID}, {"fcl", BroadPhaseKind::FCL}});
+  r.read_choice("broad_phase", coupling.broad_phase, broad_phase_names());
   return coupling;
 }
 

@@ -4,6 +4,7 @@
 #include <tuple>
 
 #include <drench/scene/load_sections.hpp>
+#include <drench/scene/scene_names.hpp>
 
 namespace drench::loader {
 
@@ -14,11 +15,7 @@ FluidSettings read_fluid(const Node& node) {
              "viscosity", "cfl", "max_speed", "sort_interval", "substep_halvings"});
   r.read("rest_density", fluid.rest_density, kPositive);
   r.read("particle_spacing", fluid.particle_spacing, kPositive);
-  r.read_choice("pressure_solver", fluid.pressure_solver,
-                Choices<PressureSolverKind>{{"pcisph", PressureSolverKind::PCISPH},
-                                            {"wcsph", PressureSolverKind::WCSPH},
-                                            {"dfsph", PressureSolverKind::DFSPH},
-                                            {"pbf", PressureSolverKind::PBF}});
+  r.read_choice("pressure_solver", fluid.pressure_solver, pressure_solver_names());
   r.read("cfl", fluid.cfl, Range{0.0, true, 1.0, false});
   r.read("sort_interval", fluid.sort_interval, kAtLeastOne);
   // 20 halvings are a millionth of the step: past that a failing solve is not the step's fault.
@@ -39,9 +36,7 @@ FluidSettings read_fluid(const Node& node) {
   pcisph.read("eta", fluid.pcisph.eta, Range{0.0, true, 1.0, true});
   pcisph.read("min_iterations", fluid.pcisph.min_iterations, kPassesPerStep);
   pcisph.read("max_iterations", fluid.pcisph.max_iterations, kPassesPerStep);
-  pcisph.read_choice("precision", fluid.pcisph.precision,
-                     Choices<IterationPrecision>{{"single", IterationPrecision::SINGLE},
-                                                 {"double", IterationPrecision::DOUBLE}});
+  pcisph.read_choice("precision", fluid.pcisph.precision, precision_names());
   pcisph.require_order("min_iterations", fluid.pcisph.min_iterations, "max_iterations",
                        fluid.pcisph.max_iterations);
   const ObjectReader dfsph(
@@ -53,9 +48,7 @@ FluidSettings read_fluid(const Node& node) {
   dfsph.read("max_iterations", fluid.dfsph.max_iterations, kPassesPerStep);
   dfsph.read("max_divergence_iterations", fluid.dfsph.max_divergence_iterations, kPassesPerStep);
   dfsph.read("warm_start", fluid.dfsph.warm_start);
-  dfsph.read_choice("precision", fluid.dfsph.precision,
-                    Choices<IterationPrecision>{{"single", IterationPrecision::SINGLE},
-                                                {"double", IterationPrecision::DOUBLE}});
+  dfsph.read_choice("precision", fluid.dfsph.precision, precision_names());
   dfsph.require_order("min_iterations", fluid.dfsph.min_iterations, "max_iterations",
                       fluid.dfsph.max_iterations);
 
@@ -67,9 +60,7 @@ FluidSettings read_fluid(const Node& node) {
   pbf.read("scorr_k", fluid.pbf.scorr_k, kNonNegative);
   pbf.read("scorr_n", fluid.pbf.scorr_n, Range{1.0, false, kMaxScorrExponent, false});
   pbf.read("scorr_dq", fluid.pbf.scorr_dq, Range{0.0, true, 1.0, true});
-  pbf.read_choice("precision", fluid.pbf.precision,
-                  Choices<IterationPrecision>{{"single", IterationPrecision::SINGLE},
-                                              {"double", IterationPrecision::DOUBLE}});
+  pbf.read_choice("precision", fluid.pbf.precision, precision_names());
 
   // null is "no limit" (the published WCSPH, PCISPH and DFSPH), so that --set can undo the default.
   for (auto [reader, key, limit] :
@@ -89,9 +80,7 @@ FluidSettings read_fluid(const Node& node) {
   }
 
   const ObjectReader viscosity(r["viscosity"], {"method", "coefficient"});
-  viscosity.read_choice(
-      "method", fluid.viscosity.method,
-      Choices<ViscosityKind>{{"xsph", ViscosityKind::XSPH}, {"artificial", ViscosityKind::ARTIFICIAL}});
+  viscosity.read_choice("method", fluid.viscosity.method, viscosity_names());
   viscosity.read("coefficient", fluid.viscosity.coefficient, kNonNegative);
   return fluid;
 }

@@ -4,13 +4,14 @@
 #include <cstddef>
 
 #include <drench/scene/load_sections.hpp>
+#include <drench/scene/scene_names.hpp>
 
 namespace drench::loader {
 
 EmitterSettings read_emitter(const Node& node) {
   using Kind = EmitterSettings::Kind;
   EmitterSettings emitter;
-  emitter.kind = read_type(node, Choices<Kind>{{"nozzle", Kind::NOZZLE}, {"box", Kind::BOX}});
+  emitter.kind = read_type(node, emitter_type_names());
   if (emitter.kind == Kind::NOZZLE) {
     NozzleEmitterSettings& nozzle = emitter.nozzle;
     const ObjectReader r(node,
@@ -35,7 +36,7 @@ EmitterSettings read_emitter(const Node& node) {
 BoundarySettings read_boundary(const Node& node) {
   using Kind = BoundarySettings::Kind;
   BoundarySettings boundary;
-  boundary.kind = read_type(node, Choices<Kind>{{"box", Kind::BOX}, {"plane", Kind::PLANE}});
+  boundary.kind = read_type(node, boundary_type_names());
   if (boundary.kind == Kind::BOX) {
     const ObjectReader r(node, {"type", "min", "max", "open_top", "layers"});
     r.read("min", boundary.min, kCoordinate);
@@ -60,7 +61,7 @@ BoundarySettings read_boundary(const Node& node) {
 KillRegionSettings read_kill_region(const Node& node) {
   using Kind = KillRegionSettings::Kind;
   KillRegionSettings region;
-  region.kind = read_type(node, Choices<Kind>{{"plane", Kind::PLANE}, {"box", Kind::BOX}});
+  region.kind = read_type(node, kill_region_type_names());
   if (region.kind == Kind::PLANE) {
     const ObjectReader r(node, {"type", "point", "normal"});
     r.read("point", region.point, kCoordinate);

@@ -2,6 +2,7 @@
 /// surface/surface_settings.hpp).
 
 #include <drench/scene/load_sections.hpp>
+#include <drench/scene/scene_names.hpp>
 
 namespace drench::loader {
 
@@ -9,14 +10,10 @@ SurfaceSettings read_surface(const Node& node) {
   SurfaceSettings surface;
   const ObjectReader r(node, {"field", "kernel", "cell_size", "contact_aware", "contact_offset", "smoothing",
                               "max_anisotropy", "anisotropy_scale", "isolated_scale", "min_neighbours"});
-  r.read_choice("kernel", surface.kernel,
-                Choices<SurfaceKernel>{{"isotropic", SurfaceKernel::ISOTROPIC},
-                                       {"anisotropic", SurfaceKernel::ANISOTROPIC}});
+  r.read_choice("kernel", surface.kernel, surface_kernel_names());
   // Yu & Turk's kernels are a density field's: that field unless the scene names another (an error then).
   if (surface.kernel == SurfaceKernel::ANISOTROPIC) surface.field = SurfaceField::DENSITY;
-  r.read_choice(
-      "field", surface.field,
-      Choices<SurfaceField>{{"zhu_bridson", SurfaceField::ZHU_BRIDSON}, {"density", SurfaceField::DENSITY}});
+  r.read_choice("field", surface.field, surface_field_names());
   if (surface.kernel == SurfaceKernel::ANISOTROPIC && surface.field != SurfaceField::DENSITY) {
     r["field"].fail(
         "must be \"density\" with surface.kernel \"anisotropic\" (Yu & Turk's kernels are the "

@@ -2,6 +2,7 @@
 /// sph/fluid_settings.hpp).
 
 #include <drench/scene/load_sections.hpp>
+#include <drench/scene/scene_names.hpp>
 
 namespace drench::loader {
 
@@ -9,9 +10,7 @@ SurfaceTensionSettings read_surface_tension(const Node& node) {
   SurfaceTensionSettings surface_tension;
   const ObjectReader r(node, {"sigma", "model"});
   r.read("sigma", surface_tension.sigma, kNonNegative);
-  r.read_choice("model", surface_tension.model,
-                Choices<SurfaceTensionModel>{{"csf", SurfaceTensionModel::CSF},
-                                             {"akinci", SurfaceTensionModel::AKINCI}});
+  r.read_choice("model", surface_tension.model, surface_tension_model_names());
   return surface_tension;
 }
 

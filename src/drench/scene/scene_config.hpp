@@ -55,6 +55,13 @@ struct CameraSettings {
   Scalar fov_deg = 45.0;         ///< vertical field of view (unit: degree), in (0, 180)
 };
 
+/// What a program gives a scene beside its own keys: a CoupledWorld's cloths and rigid bodies are Bullet's,
+/// not the scene's `cloth` and `obstacles`.
+struct SuppliedMeshes {
+  bool cloth = false;   ///< a cloth engine (one or more cloths) not built from `config.cloth`
+  bool meshes = false;  ///< any mesh the coupling can act on: that cloth, static meshes or rigid bodies
+};
+
 /// A complete scene. The effects named in `effects` are the only optional physics that get constructed.
 struct SceneConfig {
   std::string source = "<code>";         ///< file the scene came from, used in error messages

@@ -119,7 +119,7 @@ std::vector<std::string> read_effects(const Node& node) {
 /// What each effect needs (its registry entry's `needs`), and no settings section without its effect: an
 /// effect that needs something the scene lacks, or settings of an effect the scene does not run, would be
 /// silently ignored. The errors name the effect's place in `effects`, or the section.
-void check_effects(const SceneConfig& config, const ObjectReader& r) {
+void check_effects(const SceneConfig& config, const ObjectReader& r, const SuppliedMeshes& supplied) {
   for (const EffectEntry& effect : effect_registry()) {
     const auto listed = std::find(config.effects.begin(), config.effects.end(), effect.name);
     if (listed == config.effects.end()) {
@@ -131,9 +131,10 @@ void check_effects(const SceneConfig& config, const ObjectReader& r) {
     }
     const Node node = r["effects"].element(static_cast<std::size_t>(listed - config.effects.begin()));
     const EffectNeeds& needs = effect.needs;
-    if (needs.mesh == EffectMesh::CLOTH_OR_OBSTACLES && !config.cloth && config.obstacles.empty())
+    if (needs.mesh == EffectMesh::CLOTH_OR_OBSTACLES && !config.cloth && config.obstacles.empty() &&
+        !supplied.meshes)
       node.fail("needs a cloth or obstacles; the scene has no \"cloth\" and no \"obstacles\"");
-    if (needs.mesh == EffectMesh::CLOTH && !config.cloth)
+    if (needs.mesh == EffectMesh::CLOTH && !config.cloth && !supplied.cloth)
       node.fail("needs a cloth; the scene has no \"cloth\"");
     if (needs.effect && !config.has_effect(needs.effect))
       node.fail("needs the \"" + std::string(needs.effect) + "\" effect" + needs.why);
@@ -398,7 +399,8 @@ json parse_override_value(const std::string& text, const std::string& assignment
 
 }  // namespace
 
-SceneConfig parse_scene(const nlohmann::json& document, const std::string& source) {
+SceneConfig parse_scene(const nlohmann::json& document, const std::string& source,
+                        const SuppliedMeshes& supplied) {
   const Node root(&document, "", source);
   const ObjectReader r(
       root, {"gravity", "fluid", "emitters", "boundaries", "kill_regions", "time", "cloth", "obstacles",
@@ -419,7 +421,7 @@ SceneConfig parse_scene(const nlohmann::json& document, const std::string& sourc
   config.surface_tension = loader::read_surface_tension(r["surface_tension"]);
   config.effects = read_effects(r["effects"]);
   if (r["camera"].present()) config.camera = loader::read_camera(r["camera"]);
-  check_effects(config, r);
+  check_effects(config, r, supplied);
   check_emitter_speeds(config, r);
   check_masses(config, r);
   check_emitters(config, r);
@@ -434,8 +436,9 @@ SceneConfig parse_scene(const nlohmann::json& document, const std::string& sourc
   }
   if (config.coupling.asks_tangential() && !config.has_effect("friction")) {
     const Node coupling = r["coupling"];
-    const Node key =
-        coupling.child("slip").present() ? coupling.child("slip") : coupling.child("friction_coefficient");
+    // The key that asks: slip when it is no-slip, else the friction coefficient.
+    const Node key = config.coupling.slip == SlipCondition::NO_SLIP ? coupling.child("slip")
+                                                                    : coupling.child("friction_coefficient");
     key.fail("asks for tangential boundary conditions, but effects does not list \"friction\"");
   }
   return config;

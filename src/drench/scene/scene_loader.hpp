@@ -29,8 +29,11 @@ SceneConfig load_scene_file(const std::string& path, const std::vector<std::stri
 std::string scene_source(const std::string& path, const std::vector<std::string>& overrides);
 
 /// Validates an already parsed scene document. `source` names it in error messages.
+/// @param supplied  meshes a program gives beside the document's `cloth` and `obstacles`, which meet the
+///        effects' needs (a CoupledWorld's Bullet cloths and bodies); a file has none
 /// @throws SceneError as load_scene_file.
-SceneConfig parse_scene(const nlohmann::json& document, const std::string& source);
+SceneConfig parse_scene(const nlohmann::json& document, const std::string& source,
+                        const SuppliedMeshes& supplied = {});
 
 /// Validates a `camera` object given apart from a scene (`drench render --camera`), as parse_scene validates
 /// a scene's `camera` key; errors name it `camera.<key>` and `source`.

@@ -16,6 +16,7 @@
 #include <drench/coupling/broad_phase.hpp>
 #include <drench/coupling/cloth_obstacle.hpp>
 #include <drench/io/obj_reader.hpp>
+#include <drench/scene/scene_document.hpp>
 #include <drench/sph/boundary_sampling.hpp>
 
 namespace drench {
@@ -40,16 +41,10 @@ class KinematicCloth {
   ScalarArray m_own;
 };
 
-/// `config` once the checks that join two of its sections hold, as the scene loader's do for a file: a scene
-/// built in code (a game's) meets them here, before anything is built.
-const SceneConfig& checked(const SceneConfig& config) {
-  const double spacing = config.fluid.particle_spacing;
-  if (config.has_effect("coupling") && spacing > 0.0 && std::isfinite(spacing)) {
-    const double most = kMaxClothThicknessPerSpacing * spacing;
-    require_setting(config.coupling.cloth_thickness <= most, "coupling.cloth_thickness",
-                    "<= 2 fluid.particle_spacing = " + format_number(most) + " m",
-                    config.coupling.cloth_thickness);
-  }
+/// `config` once it passes every check its scene file would: a scene built in code (a game's) meets them
+/// here, before anything is built.
+const SceneConfig& checked(const SceneConfig& config, const SuppliedMeshes& supplied = {}) {
+  check_scene_built_in_code(config, supplied);
   return config;
 }
 
@@ -201,7 +196,7 @@ Simulation::Simulation(const SceneConfig& config, const ClothEngineFactory& clot
 
 Simulation::Simulation(const SceneConfig& config, std::unique_ptr<ClothEngine> cloth,
                        std::vector<TriangleMesh> more_obstacles, RigidBodySource* bodies)
-    : m_config(checked(config)),
+    : m_config(checked(config, {cloth && !config.cloth, cloth || !more_obstacles.empty() || bodies})),
       m_speed_of_sound(config.fluid.wcsph.speed_of_sound.value_or(automatic_speed_of_sound(config))),
       m_cloth(std::move(cloth)) {
   std::vector<TriangleMesh> obstacles = build_obstacles(m_config);

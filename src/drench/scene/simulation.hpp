@@ -28,10 +28,9 @@ namespace drench {
 /// by its entry in the effect registry (effect_registry.hpp).
 class Simulation {
  public:
-  /// @throws SceneError when the scene cannot be built: it has a cloth but no cloth_factory, or settings
-  ///         built in code fail a check the loader would have made (the coupler's; coupling.slip or
-  ///         coupling.friction_coefficient asking for tangential conditions without the "friction" effect;
-  ///         coupling.cloth_thickness over 2 particle spacings with the "coupling" effect); an obstacle is
+  /// @throws SceneError when the scene cannot be built: it has a cloth but no cloth_factory; it fails any
+  ///         check its scene file would (check_scene_built_in_code: a scene built in code is refused as that
+  ///         file, naming the JSON path and config.source); an obstacle is
   ///         not a valid mesh (an OBJ scaled to points); or a cloth node, obstacle node, particle or nozzle
   ///         lies beyond kMaxCoordinate, or with the "surface" effect beyond its grid's int32 cells
   ///         (kMaxSurfaceGridCells x surface cell size). Each message names the scene's source.

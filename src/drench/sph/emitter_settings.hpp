@@ -12,7 +12,7 @@ namespace drench {
 /// one spacing apart, from `start_time` until `max_particles` have been emitted.
 struct NozzleEmitterSettings {
   Vec3 center = Vec3::Zero();             ///< (unit: m)
-  Vec3 direction = Vec3(0.0, -1.0, 0.0);  ///< normalised on load, non-zero
+  Vec3 direction = Vec3(0.0, -1.0, 0.0);  ///< non-zero; normalised on load and by the emitter
   Scalar radius = 0.02;                   ///< (unit: m), > 0
   Scalar speed = 1.0;                     ///< (unit: m/s), > 0
   Scalar start_time = 0.0;                ///< (unit: s), >= 0

@@ -27,6 +27,9 @@ std::size_t emit_box(const BoxEmitterSettings& box, Scalar spacing, Scalar mass,
 
 NozzleEmitter::NozzleEmitter(const NozzleEmitterSettings& settings, Scalar spacing)
     : m_settings(settings), m_spacing(spacing) {
+  // The loader normalises a file's direction; one set in code may have any length, which would scale the
+  // jet's speed.
+  m_settings.direction.normalize();
   const Vec3& d = m_settings.direction;
   int least = 0;
   for (int a = 1; a < 3; ++a) {
