@@ -1,12 +1,13 @@
 # Builds and runs tests/consumer/ against drench one way, as a user's project would:
 #   cmake -DMODE=package|pkgconfig|fetchcontent|subdirectory -DDRENCH_SOURCE_DIR=<checkout> -DDRENCH_BUILD_DIR=<build>
 #         -DWORK_DIR=<scratch> [-DCONSUMER_ARGS=<-D...;-D...>] [-DEXPECT_CONFIGURE_ERROR=<regex>]
-#         [-DPKG_MODULES=<module;module>] [-DEXPECT_BUILD_ERROR=<regex>] -P run.cmake
+#         [-DPKG_MODULES=<module;module>] [-DEXPECT_BUILD_ERROR=<regex>] [-DCONFIGURE_ONLY=ON] -P run.cmake
 # package and pkgconfig install DRENCH_BUILD_DIR into WORK_DIR/prefix first (pkgconfig then compiles with the
 # flags of `pkg-config --static` of PKG_MODULES, drench-bullet by default, in that order, as a build without
 # CMake would); fetchcontent clones the checkout's HEAD.
 # With EXPECT_CONFIGURE_ERROR the consumer must fail to configure with a message matching it; with
-# EXPECT_BUILD_ERROR (pkgconfig) fail to build with one.
+# EXPECT_BUILD_ERROR (pkgconfig) fail to build with one. CONFIGURE_ONLY stops after a configure that must
+# succeed.
 cmake_minimum_required(VERSION 3.22)
 
 foreach(var MODE DRENCH_SOURCE_DIR WORK_DIR)
@@ -76,6 +77,9 @@ if(DEFINED EXPECT_CONFIGURE_ERROR)
   return()
 endif()
 run_step("configure" ${configure})
-run_step("build" ${CMAKE_COMMAND} --build "${WORK_DIR}/build" -j${cores})
+if(CONFIGURE_ONLY)
+  return()
+endif()
+run_step("build" ${CMAKE_COMMAND} --build "${WORK_DIR}/build" -j${cores} --target jet_on_pinned_cloth)
 run_step("run" "${WORK_DIR}/build/jet_on_pinned_cloth")
 message(STATUS "${step_output}")
