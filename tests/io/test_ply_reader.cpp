@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstring>
+#include <filesystem>
 #include <limits>
 #include <string>
 
@@ -207,6 +208,22 @@ TEST(PlyReader, AMissingFileIsNamed) {
     FAIL() << "no exception";
   } catch (const IoError& e) {
     EXPECT_NE(std::string(e.what()).find("/nonexistent/drench/fluid_0000.ply: cannot read"),
+              std::string::npos)
+        << e.what();
+  }
+}
+
+// A sparse frame of many gigabytes with a huge vertex count was read whole and allocated for.
+TEST(PlyReader, AFileLargerThan4GiBIsRefusedBeforeItIsRead) {
+  const test::TempDir dir;
+  const std::string path = (dir.path() / "fluid_0000.ply").string();
+  write_points_ply(path, "test", {Vec3(0, 0, 0)}, {});
+  std::filesystem::resize_file(path, kMaxPlyFileBytes + 1);  // sparse: nothing written
+  try {
+    read_ply(path);
+    FAIL() << "no exception";
+  } catch (const IoError& e) {
+    EXPECT_NE(std::string(e.what()).find(path + ": cannot read: 4294967297 bytes, more than the 4 GiB"),
               std::string::npos)
         << e.what();
   }

@@ -1,16 +1,15 @@
 #include <drench/io/ply_reader.hpp>
 
 #include <algorithm>
-#include <cerrno>
 #include <cmath>
 #include <cstdint>
-#include <cstdio>
 #include <cstring>
 #include <limits>
 #include <sstream>
 #include <utility>
 
 #include <drench/common/error.hpp>
+#include <drench/common/file_text.hpp>
 
 namespace drench {
 
@@ -356,17 +355,13 @@ PlyData parse_ply(const std::string& bytes, const std::string& name) {
 }
 
 PlyData read_ply(const std::string& path) {
-  std::FILE* file = std::fopen(path.c_str(), "rb");
-  if (file == nullptr) throw IoError(path + ": cannot read: " + std::strerror(errno));
   std::string bytes;
-  char buffer[1 << 16];
-  std::size_t count = 0;
-  while ((count = std::fread(buffer, 1, sizeof buffer, file)) > 0)
-    bytes.append(buffer, count);
-  const bool failed = std::ferror(file) != 0;
-  const int error = errno;  // fclose may overwrite errno
-  std::fclose(file);
-  if (failed) throw IoError(path + ": cannot read: " + std::strerror(error));
+  try {
+    bytes = read_file_text(path, kMaxPlyFileBytes,
+                           "4 GiB (" + std::to_string(kMaxPlyFileBytes) + " bytes) a PLY file");
+  } catch (const FileTextError& e) {
+    throw IoError(path + ": cannot read: " + e.reason());
+  }
   return parse_ply(bytes, path);
 }
 

@@ -4,6 +4,7 @@
 /// skipped, so a PLY from another program reads too as long as it is binary little-endian with float or
 /// double x y z.
 
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -35,8 +36,15 @@ struct PlyData {
 ///         is not a triangle, or a face names a vertex out of range (with the face's index).
 PlyData parse_ply(const std::string& bytes, const std::string& name);
 
-/// Reads the file at `path` and parses it as parse_ply does.
-/// @throws IoError naming `path`: the file cannot be read, or any error of parse_ply.
+/// Largest PLY file read (unit: bytes): 4 GiB, some 100 million particles as drench writes them (about 40
+/// bytes each), far beyond a frame a run can write (`--max-output` is 10 GiB for all of them).
+inline constexpr std::uint64_t kMaxPlyFileBytes = std::uint64_t{4} << 30;
+
+/// Reads the file at `path` and parses it as parse_ply does. Only a regular file of at most kMaxPlyFileBytes
+/// is opened: a frame replaced by a FIFO blocked `drench render` forever, and /dev/zero or a sparse file of
+/// many gigabytes ran it out of memory.
+/// @throws IoError naming `path`: the file is not a regular file, is larger than kMaxPlyFileBytes or cannot
+///         be read, or any error of parse_ply.
 PlyData read_ply(const std::string& path);
 
 }  // namespace drench
