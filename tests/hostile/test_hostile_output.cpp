@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 #include <signal.h>
 #include <sys/resource.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -312,6 +313,62 @@ TEST(HostileOutput, AnInterruptedReconstructLeavesTheEarlierSurfacesByteForByte)
   EXPECT_EQ(snapshot(out), before) << "the surfaces or reconstruct.json changed";
   for (const std::string& name : entries(out))
     EXPECT_EQ(name.find("reconstruct.tmp-"), std::string::npos) << "left behind: " << name;
+}
+
+// SIGINT during the last frame: reconstruct exited 0 and put the new surfaces in place, since the stop was
+// checked only before each frame.
+TEST(HostileOutput, ASignalDuringTheLastFrameStillLeavesTheEarlierSurfaces) {
+  const TempDir dir;
+  const fs::path out = dir.path() / "out";
+  const std::string scene = dir.write("tank.json", tank_scene(0.01, 100, true));  // frames 0 and 1
+  ASSERT_EQ(run_drench({"run", scene, "--out", out.string(), "--threads", "1", "--quiet"}, dir.path(),
+                       dir.path() / "log.txt"),
+            0)
+      << read_text(dir.path() / "log.txt");
+  const auto before = snapshot(out);
+  // Frame 0's staged surface marks the start of frame 1, the last, which takes about 1 s on this grid.
+  const pid_t pid = start_drench(
+      {"reconstruct", out.string(), "--set", "surface.cell_size=0.004", "--threads", "1", "--quiet"},
+      dir.path(), dir.path() / "log.txt");
+  const bool started = wait_for_file(out, 30.0, [](const fs::path& p) {
+    return p.parent_path().filename().string().rfind("reconstruct.tmp-", 0) == 0 &&
+           p.filename() == "surface_0000.ply";
+  });
+  EXPECT_TRUE(started) << read_text(dir.path() / "log.txt");
+  ::kill(pid, SIGINT);
+  EXPECT_EQ(wait_exit(pid, 30.0), 130) << read_text(dir.path() / "log.txt");
+  EXPECT_TRUE(snapshot(out) == before) << "the surfaces changed";  // not EXPECT_EQ: it would print the frames
+  EXPECT_FALSE(fs::exists(out / "reconstruct.json"));
+}
+
+// A frame that is a FIFO blocked render and reconstruct forever (SIGTERM ignored), and /dev/zero as a frame
+// ran render out of memory after 41 s. Both are refused at once, naming the frame.
+TEST(HostileOutput, AFrameThatIsNotARegularFileIsRefusedAtOnce) {
+  const TempDir dir;
+  const fs::path out = dir.path() / "out";
+  ASSERT_EQ(run_tank(dir, out, 3), 0) << read_text(dir.path() / "log.txt");
+  const fs::path frame = out / "frames/fluid_0001.ply";
+  for (const std::string kind : {"fifo", "/dev/zero"}) {
+    fs::remove(frame);
+    if (kind == "fifo")
+      ASSERT_EQ(::mkfifo(frame.c_str(), 0600), 0);
+    else
+      fs::create_symlink(kind, frame);
+    const auto before = entries(out);
+    for (const std::vector<std::string>& command :
+         {std::vector<std::string>{"render", out.string(), "--size", "64x36", "--quiet"},
+          std::vector<std::string>{"reconstruct", out.string(), "--threads", "1", "--quiet"}}) {
+      const auto start = std::chrono::steady_clock::now();
+      EXPECT_EQ(wait_exit(start_drench(command, dir.path(), dir.path() / "log.txt"), 20.0), 1)
+          << kind << " " << command[0] << ": " << read_text(dir.path() / "log.txt");
+      EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), 10.0);
+      EXPECT_NE(read_text(dir.path() / "log.txt")
+                    .find(frame.string() + ": cannot read: not a regular file (a FIFO, device or socket)"),
+                std::string::npos)
+          << kind << " " << command[0] << ": " << read_text(dir.path() / "log.txt");
+      EXPECT_EQ(entries(out), before) << kind << " " << command[0] << " wrote into the run";
+    }
+  }
 }
 
 // The same through the library's stop flag, deterministically: set before the first frame is made.

@@ -144,16 +144,19 @@ ReconstructResult reconstruct_run(const ReconstructOptions& options) {
     }
   } remove_staging{staging};
 
+  // Checked before each frame and once after the last, so that a signal during the last frame discards the
+  // surfaces too: the surfaces made so far go with the staging folder, and the result counts nothing.
+  const auto stop_requested = [&] { return options.stop && options.stop->load(std::memory_order_relaxed); };
+  const auto stopped = [&] {
+    ReconstructResult interrupted;
+    interrupted.interrupted = true;
+    interrupted.wall_seconds = wall();
+    return interrupted;
+  };
   ReconstructResult result;
   ProgressLine progress(options.progress, frames.size());
   for (const FrameFiles& frame : frames) {
-    if (options.stop && options.stop->load(std::memory_order_relaxed)) {
-      // The surfaces made so far are discarded with the staging folder: the result counts nothing.
-      ReconstructResult stopped;
-      stopped.interrupted = true;
-      stopped.wall_seconds = wall();
-      return stopped;
-    }
+    if (stop_requested()) return stopped();
     PlyData fluid, cloth;
     {
       ScopedTimer timer(read_seconds);
@@ -180,6 +183,8 @@ ReconstructResult reconstruct_run(const ReconstructOptions& options) {
     ++result.frames;
     progress.update(static_cast<std::size_t>(result.frames), wall());
   }
+
+  if (stop_requested()) return stopped();
 
   // The swap: a rename per file (no signal is checked from here on), then reconstruct.json, last.
   for (const FrameFiles& frame : frames) {
