@@ -73,7 +73,7 @@ int run_command(const std::string& scene_path, const std::string& out_dir,
                 const std::vector<std::string>& overrides, std::int64_t steps, bool quiet, bool overwrite,
                 double max_output) {
   // The folder first, before the scene is read: a run that could not write there is refused at once.
-  drench::check_output_folder(out_dir, "--out", overwrite);
+  drench::check_output_folder(out_dir, "--out", "run", drench::run_output_patterns(), overwrite);
   // Everything is validated before the output folder is touched: a bad scene writes nothing.
   g_activity = "reading the scene";
   const nlohmann::json document = drench::read_scene_document(scene_path, overrides);
@@ -147,7 +147,7 @@ int reference_command(const std::string& scene_path, const std::string& out_dir,
                       const std::vector<std::string>& overrides,
                       const drench::ReferenceRefinement& refinement, bool quiet, bool overwrite,
                       double max_output, const std::string& command_line) {
-  drench::check_output_folder(out_dir, "--out", overwrite);
+  drench::check_output_folder(out_dir, "--out", "run", drench::run_output_patterns(), overwrite);
   g_activity = "reading the scene";
   const nlohmann::json scene = drench::read_scene_document(scene_path, overrides);
   drench::parse_scene(scene, drench::scene_source(scene_path, overrides));

@@ -283,7 +283,7 @@ int run_sweep(const SweepOptions& options) {
                      "; one of " + known);
   }
   if (options.jobs < 1) throw SceneError("--jobs must be >= 1");
-  check_output_folder(options.out_dir, "--out", options.overwrite);
+  check_output_folder(options.out_dir, "--out", "sweep", sweep_output_patterns(), options.overwrite);
 
   // Every setting is validated as `drench run` would before anything is written or started.
   const nlohmann::json scene = read_scene_document(options.scene_path, options.overrides);

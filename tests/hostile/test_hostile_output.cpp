@@ -236,6 +236,45 @@ TEST(HostileOutput, OverwriteRefusesAndDeletesNothingWhenAFileIsNotDrenchs) {
   EXPECT_EQ(read_text(other / "frames/fluid_0000.ply"), "someone else's frame");
 }
 
+// --overwrite trusted any drench_run.json: a run's deleted a sweep's folder and a sweep's a run's, and a
+// forged manifest listing "*" and "*/*" had foreign files deleted.
+TEST(HostileOutput, OverwriteTrustsOnlyItsOwnCommandsManifestAndFileNames) {
+  const TempDir dir;
+  const fs::path out = dir.path() / "out";
+  ASSERT_EQ(run_tank(dir, out, 2), 0) << read_text(dir.path() / "log.txt");
+  const auto run_files = snapshot(out);
+  const std::string scene = dir.write("sweep.json", tank_scene(0.01, 100));
+  EXPECT_EQ(run_drench({"sweep", scene, "--vary", "time.dt=0.0025,0.002", "--out", out.string(),
+                        "--overwrite", "--quiet"},
+                       dir.path(), dir.path() / "log.txt"),
+            1);
+  EXPECT_NE(read_text(dir.path() / "log.txt")
+                .find("says the folder holds the output of drench run, not of drench sweep; nothing deleted"),
+            std::string::npos)
+      << read_text(dir.path() / "log.txt");
+  EXPECT_TRUE(snapshot(out) == run_files) << "the sweep changed the run's folder";
+
+  const fs::path forged = dir.path() / "forged";
+  fs::create_directories(forged / "docs");
+  std::ofstream(forged / "notes.txt") << "the user's notes\n";
+  std::ofstream(forged / "docs/thesis.tex") << "the user's thesis\n";
+  for (const std::string command : {"sweep", "run"}) {
+    std::ofstream(forged / drench::kOutputManifest)
+        << json{{"drench_version", DRENCH_VERSION}, {"command", command}, {"files", {"*", "*/*"}}}.dump();
+    const auto before = snapshot(forged);
+    EXPECT_EQ(run_tank(dir, forged, 2, {"--overwrite"}), 1) << command;
+    const std::string log = read_text(dir.path() / "log.txt");
+    if (command == "sweep")
+      EXPECT_NE(log.find("holds the output of drench sweep, not of drench run"), std::string::npos) << log;
+    else
+      EXPECT_NE(log.find((forged / "docs").string() + " was not written by drench (drench run writes no such "
+                                                      "file); nothing deleted"),
+                std::string::npos)
+          << log;
+    EXPECT_TRUE(snapshot(forged) == before) << command << ": the refused run changed the folder";
+  }
+}
+
 /// Starts a 600 s tank run, waits for its frame 1 and sends `signal`; returns the exit status.
 int interrupt_run(const TempDir& dir, const fs::path& out, int signal) {
   const std::string scene = dir.write("long.json", tank_scene(600, 100));

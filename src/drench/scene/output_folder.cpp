@@ -105,10 +105,10 @@ FolderEntries list_entries(const fs::path& dir, const std::string& flag) {
   return entries;
 }
 
-/// The patterns of the manifest an earlier run left in `dir`. @throws IoError when it is missing or
-/// unreadable
+/// The patterns of the manifest an earlier output of `command` left in `dir`. @throws IoError when it is
+/// missing, unreadable or another command's
 std::vector<std::string> read_manifest(const fs::path& dir, const std::string& flag,
-                                       const std::string& found) {
+                                       const std::string& command, const std::string& found) {
   const fs::path manifest = dir / kOutputManifest;
   const std::string refusal = flag + " " + dir.string() + " --overwrite: ";
   std::error_code ec;
@@ -118,20 +118,27 @@ std::vector<std::string> read_manifest(const fs::path& dir, const std::string& f
                   "folder");
   }
   std::vector<std::string> patterns;
+  std::string written_by;
   try {
     std::ifstream in(manifest);
     const nlohmann::json document = nlohmann::json::parse(in);
+    written_by = document.at("command").get<std::string>();
     for (const nlohmann::json& pattern : document.at("files"))
       patterns.push_back(pattern.get<std::string>());
   } catch (const nlohmann::json::exception& e) {
     throw IoError(refusal + manifest.string() + " is not a drench manifest (" + e.what() +
                   "); nothing deleted: empty the folder or choose another");
   }
+  if (written_by != command) {
+    throw IoError(refusal + manifest.string() + " says the folder holds the output of drench " + written_by +
+                  ", not of drench " + command + "; nothing deleted: choose another folder");
+  }
   return patterns;
 }
 
 /// What prepare_output_folder removes: the files and folders an earlier manifest covers.
-FolderEntries check_folder(const fs::path& dir, const std::string& flag, bool overwrite) {
+FolderEntries check_folder(const fs::path& dir, const std::string& flag, const std::string& command,
+                           const std::vector<std::string>& patterns, bool overwrite) {
   check_output_path(dir.string(), flag);
   std::error_code ec;
   if (!fs::exists(dir, ec)) return {};
@@ -146,18 +153,21 @@ FolderEntries check_folder(const fs::path& dir, const std::string& flag, bool ov
                   "mixed with this run's: choose another folder" +
                   (earlier_run ? ", or add --overwrite to replace the earlier drench run there" : ""));
   }
-  const std::vector<std::string> patterns = read_manifest(dir, flag, found);
+  const std::vector<std::string> listed = read_manifest(dir, flag, command, found);
+  const auto not_drenchs = [&](const std::string& entry, bool in_manifest) {
+    return IoError(flag + " " + dir.string() + " --overwrite: " + (dir / entry).string() +
+                   " was not written by drench (" +
+                   (in_manifest ? "drench " + command + " writes no such file"
+                                : std::string(kOutputManifest) + " does not list it") +
+                   "); nothing deleted");
+  };
   for (const std::string& folder : entries.folders) {
-    if (!folder_covered(patterns, folder)) {
-      throw IoError(flag + " " + dir.string() + " --overwrite: " + (dir / folder).string() +
-                    " was not written by drench (" + kOutputManifest + " does not list it); nothing deleted");
-    }
+    const bool in_manifest = folder_covered(listed, folder);
+    if (!in_manifest || !folder_covered(patterns, folder)) throw not_drenchs(folder, in_manifest);
   }
   for (const std::string& file : entries.files) {
-    if (!file_covered(patterns, file)) {
-      throw IoError(flag + " " + dir.string() + " --overwrite: " + (dir / file).string() +
-                    " was not written by drench (" + kOutputManifest + " does not list it); nothing deleted");
-    }
+    const bool in_manifest = file_covered(listed, file);
+    if (!in_manifest || !file_covered(patterns, file)) throw not_drenchs(file, in_manifest);
   }
   return entries;
 }
@@ -219,14 +229,15 @@ void check_output_path(const std::string& dir, const std::string& flag) {
     throw IoError(flag + " " + dir + ": exists and is not a folder; " + flag + " must name a folder");
 }
 
-void check_output_folder(const std::string& dir, const std::string& flag, bool overwrite) {
-  (void)check_folder(dir, flag, overwrite);
+void check_output_folder(const std::string& dir, const std::string& flag, const std::string& command,
+                         const std::vector<std::string>& patterns, bool overwrite) {
+  (void)check_folder(dir, flag, command, patterns, overwrite);
 }
 
 void prepare_output_folder(const std::string& dir, const std::string& flag, const std::string& command,
                            const std::vector<std::string>& patterns, bool overwrite) {
   const fs::path root(dir);
-  const FolderEntries old = check_folder(root, flag, overwrite);
+  const FolderEntries old = check_folder(root, flag, command, patterns, overwrite);
   std::error_code ec;
   // The old manifest goes last, so that whatever an interruption leaves is still covered by it.
   for (const std::string& file : old.files) {

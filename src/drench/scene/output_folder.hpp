@@ -32,15 +32,20 @@ bool output_pattern_covers(const std::string& pattern, const std::string& relati
 /// @throws IoError naming the flag and the value.
 void check_output_path(const std::string& dir, const std::string& flag);
 
-/// Checks, writing nothing, that `dir` can take a new output: it is missing or empty, or, with `overwrite`,
-/// every entry in it is covered by the manifest an earlier drench run left there.
+/// Checks, writing nothing, that `dir` can take a new output of `command`: it is missing or empty, or, with
+/// `overwrite`, it holds an earlier output of the same command (its manifest says so) and every entry in it
+/// is covered both by that manifest and by `patterns`. The manifest alone is not trusted: a run's
+/// --overwrite would have deleted a sweep's folder, and a forged manifest listing "*" any file.
+/// @param command  what is to write the folder, e.g. "run" or "sweep"
+/// @param patterns  what that command writes (run_output_patterns(), sweep_output_patterns())
 /// @throws IoError naming the flag, the folder and one file found: without `overwrite` the first entry (in
-///         name order) of a non-empty folder; with it, the first entry the manifest does not cover, or the
-///         manifest when it is missing or unreadable. check_output_path's errors too.
-void check_output_folder(const std::string& dir, const std::string& flag, bool overwrite);
+///         name order) of a non-empty folder; with it, the first entry not covered, or the manifest when it
+///         is missing, unreadable or another command's. check_output_path's errors too.
+void check_output_folder(const std::string& dir, const std::string& flag, const std::string& command,
+                         const std::vector<std::string>& patterns, bool overwrite);
 
-/// Makes `dir` ready for a new output: check_output_folder; then, with `overwrite`, removes every file the
-/// earlier manifest lists (and the folders they leave empty); then creates `dir` and writes the new
+/// Makes `dir` ready for a new output: check_output_folder; then, with `overwrite`, removes every file it
+/// found covered (and the folders they leave empty); then creates `dir` and writes the new
 /// manifest: `{"drench_version": ..., "command": command, "files": patterns}`. A refusal deletes nothing.
 /// @param command  what writes the folder, e.g. "run" or "sweep"
 /// @param patterns  what it writes (run_output_patterns(), sweep_output_patterns())
