@@ -69,9 +69,10 @@ double figure(const nlohmann::json& value) {
   return value.is_number() ? value.get<double>() : std::numeric_limits<double>::quiet_NaN();
 }
 
+/// `drench run`; `final_status`, when given, receives summary.json's "status" ("ok" or the flags raised).
 int run_command(const std::string& scene_path, const std::string& out_dir,
                 const std::vector<std::string>& overrides, std::int64_t steps, bool quiet, bool overwrite,
-                double max_output) {
+                double max_output, std::string* final_status = nullptr) {
   // The folder first, before the scene is read: a run that could not write there is refused at once.
   drench::check_output_folder(out_dir, "--out", "run", drench::run_output_patterns(), overwrite);
   // Everything is validated before the output folder is touched: a bad scene writes nothing.
@@ -109,6 +110,7 @@ int run_command(const std::string& scene_path, const std::string& out_dir,
   g_simulation_started = true;
   const drench::RunResult result = drench::run_scene(simulation, options);
   const auto& s = result.summary;
+  if (final_status) *final_status = s["status"].get<std::string>();
   std::printf(
       "%lld steps, %g s simulated in %.2f s wall; %lld particles (%lld removed); density error mean "
       "%.3g%% max %.3g%%; %lld frames in %s\n",
@@ -160,11 +162,19 @@ int reference_command(const std::string& scene_path, const std::string& out_dir,
       list += " --set " + assignment;
     std::fprintf(stderr, "drench reference: the scene with%s\n", list.c_str());
   }
-  const int status = run_command(scene_path, out_dir, all, -1, quiet, overwrite, max_output);
-  if (status != 0) {
-    std::fprintf(stderr, "drench: reference: the run did not end \"ok\", so %s has no reference.json\n",
-                 out_dir.c_str());
-    return status;
+  std::string run_status;
+  const int status = run_command(scene_path, out_dir, all, -1, quiet, overwrite, max_output, &run_status);
+  // A warning that ends a plain run with exit 0 (a pressure solve that stopped at its iteration limit) still
+  // means the refined run is not the converged answer a reference must be.
+  if (status != 0 || run_status != "ok") {
+    std::fprintf(stderr, "drench: reference: the run did not end \"ok\", so %s has no reference.json%s\n",
+                 out_dir.c_str(),
+                 status == 0 ? (" (" + run_status +
+                                "); a reference must converge: lower --eta-divisor or raise the pressure "
+                                "solver's max_iterations")
+                                   .c_str()
+                             : "");
+    return status != 0 ? status : 2;
   }
   nlohmann::json record;
   record["command"] = command_line;

@@ -275,6 +275,23 @@ TEST(HostileOutput, OverwriteTrustsOnlyItsOwnCommandsManifestAndFileNames) {
   }
 }
 
+// drench reference wrote reference.json and exited 0 after a run whose pressure solve never reached its
+// eta (PRESSURE_NOT_CONVERGED, a warning for a plain run): not the converged answer a reference must be.
+TEST(HostileOutput, AReferenceWhosePressureSolveDidNotConvergeHasNoReferenceJson) {
+  const TempDir dir;
+  const fs::path out = dir.path() / "reference";
+  const std::string scene = dir.write("tank.json", tank_scene(0.01, 100));
+  // eta / 1e6 is a density error of 1e-9, which PCISPH's 100 iterations do not reach.
+  EXPECT_EQ(run_drench({"reference", scene, "--out", out.string(), "--eta-divisor", "1e6", "--threads", "1",
+                        "--quiet"},
+                       dir.path(), dir.path() / "log.txt"),
+            2);
+  const std::string log = read_text(dir.path() / "log.txt");
+  EXPECT_NE(log.find("has no reference.json (PRESSURE_NOT_CONVERGED"), std::string::npos) << log;
+  EXPECT_TRUE(fs::exists(out / "summary.json"));
+  EXPECT_FALSE(fs::exists(out / "reference.json"));
+}
+
 /// Starts a 600 s tank run, waits for its frame 1 and sends `signal`; returns the exit status.
 int interrupt_run(const TempDir& dir, const fs::path& out, int signal) {
   const std::string scene = dir.write("long.json", tank_scene(600, 100));
