@@ -474,6 +474,8 @@ int dispatch(int argc, char** argv) {
                    "the fluid's surface: opaque (blue) or transparent (water: reflection, refraction, "
                    "absorption; the cloth seen through it)")
       ->capture_default_str();
+  render->add_flag("--overwrite", render_options.overwrite,
+                   "replace an earlier drench render in --out (only the files its drench_run.json lists)");
   render->add_flag("--video", render_options.video,
                    "also write video.mp4 through ffmpeg, when it is installed");
   render->add_flag("--quiet", quiet, "no progress line and no camera line");

@@ -479,6 +479,56 @@ TEST(HostileOutput, RenderRefusesARunWithAMissingFrameFileNamingIt) {
   EXPECT_FALSE(fs::exists(out / "render"));
 }
 
+// render --out DIR2 overwrote another program's frame_0000.png, and DIR/render took any file beside its own.
+TEST(HostileOutput, RenderWritesOnlyIntoAFolderItOwns) {
+  const TempDir dir;
+  const fs::path out = dir.path() / "out";
+  ASSERT_EQ(run_tank(dir, out, 2), 0) << read_text(dir.path() / "log.txt");
+  const auto render = [&](std::vector<std::string> extra) {
+    std::vector<std::string> arguments = {"render", out.string(), "--size", "64x36", "--quiet"};
+    arguments.insert(arguments.end(), extra.begin(), extra.end());
+    return run_drench(arguments, dir.path(), dir.path() / "log.txt");
+  };
+  const fs::path foreign = dir.path() / "pictures";
+  fs::create_directories(foreign);
+  std::ofstream(foreign / "frame_0000.png") << "the user's picture";
+  for (const bool overwrite : {false, true}) {
+    EXPECT_EQ(render(overwrite ? std::vector<std::string>{"--out", foreign.string(), "--overwrite"}
+                               : std::vector<std::string>{"--out", foreign.string()}),
+              1);
+    EXPECT_NE(read_text(dir.path() / "log.txt").find((foreign / "frame_0000.png").string()),
+              std::string::npos)
+        << read_text(dir.path() / "log.txt");
+    EXPECT_EQ(read_text(foreign / "frame_0000.png"), "the user's picture");
+    EXPECT_EQ(entries(foreign), std::vector<std::string>{"frame_0000.png"});
+  }
+
+  // A folder of its own: new, then again only with --overwrite, which clears the earlier frames.
+  const fs::path images = dir.path() / "images";
+  ASSERT_EQ(render({"--out", images.string()}), 0) << read_text(dir.path() / "log.txt");
+  EXPECT_EQ(entries(images),
+            (std::vector<std::string>{"drench_run.json", "frame_0000.png", "frame_0001.png"}));
+  EXPECT_EQ(render({"--out", images.string()}), 1);
+  EXPECT_NE(read_text(dir.path() / "log.txt").find("add --overwrite"), std::string::npos)
+      << read_text(dir.path() / "log.txt");
+  std::ofstream(images / "frame_0007.png") << "an earlier render's frame";
+  EXPECT_EQ(render({"--out", images.string(), "--overwrite"}), 0) << read_text(dir.path() / "log.txt");
+  EXPECT_EQ(entries(images),
+            (std::vector<std::string>{"drench_run.json", "frame_0000.png", "frame_0001.png"}));
+
+  // The run's own render/ folder: an earlier render's files are replaced, anything else refuses.
+  ASSERT_EQ(render({}), 0) << read_text(dir.path() / "log.txt");
+  ASSERT_EQ(render({}), 0) << read_text(dir.path() / "log.txt");
+  std::ofstream(out / "render/notes.txt") << "the user's notes";
+  const auto before = snapshot(out);
+  EXPECT_EQ(render({}), 1);
+  EXPECT_NE(read_text(dir.path() / "log.txt")
+                .find((out / "render/notes.txt").string() + " was not written by drench render"),
+            std::string::npos)
+      << read_text(dir.path() / "log.txt");
+  EXPECT_TRUE(snapshot(out) == before);
+}
+
 /// The longest run of digits in `text`.
 std::size_t longest_digit_run(const std::string& text) {
   std::size_t longest = 0, run = 0;

@@ -22,6 +22,7 @@
 #include <drench/render/png_image.hpp>
 #include <drench/render/renderer.hpp>
 #include <drench/scene/frame_files.hpp>
+#include <drench/scene/output_folder.hpp>
 #include <drench/scene/scene_loader.hpp>
 
 namespace drench::render {
@@ -196,6 +197,14 @@ RenderResult render_run(const RenderOptions& options) {
   }
   const fs::path dir(options.run_dir);
   RenderResult result;
+  // The folder first, as drench run does: a render that could not write there is refused before any frame is
+  // read.
+  const fs::path out_dir = options.out_dir.empty() ? dir / "render" : fs::path(options.out_dir);
+  result.out_dir = out_dir.string();
+  if (options.out_dir.empty())
+    check_folder_holds_only(out_dir.string(), "render", render_output_patterns());
+  else
+    check_output_folder(out_dir.string(), "--out", "render", render_output_patterns(), options.overwrite);
 
   // The scene: its camera, the particle size and the frame rate.
   const fs::path scene_path = dir / "scene.json";
@@ -263,10 +272,12 @@ RenderResult render_run(const RenderOptions& options) {
   Renderer renderer;
   result.gl = context.description();
 
-  const fs::path out_dir = options.out_dir.empty() ? dir / "render" : fs::path(options.out_dir);
-  result.out_dir = out_dir.string();
-  fs::create_directories(out_dir, ec);
-  if (ec) throw IoError(out_dir.string() + ": cannot create: " + ec.message());
+  if (options.out_dir.empty()) {
+    fs::create_directories(out_dir, ec);
+    if (ec) throw IoError(out_dir.string() + ": cannot create: " + ec.message());
+  } else {
+    prepare_output_folder(out_dir.string(), "--out", "render", render_output_patterns(), options.overwrite);
+  }
 
   // Transparent water needs the surface; frames without one keep their particles, said once at the end.
   std::int64_t particle_frames = 0;

@@ -11,8 +11,11 @@
 namespace drench::render {
 
 struct RenderOptions {
-  std::string run_dir;      ///< a `drench run --out` folder: scene.json, frames/, obstacles.ply
-  std::string out_dir;      ///< where the PNGs go; "" is `run_dir`/render
+  std::string run_dir;  ///< a `drench run --out` folder: scene.json, frames/, obstacles.ply
+  /// Where the PNGs go: "" is `run_dir`/render, which may hold only an earlier render's files; any other
+  /// folder must be new or empty, or an earlier `drench render --out`'s with `overwrite` (output_folder.hpp).
+  std::string out_dir;
+  bool overwrite = false;   ///< `--overwrite`: replace an earlier render in `out_dir`
   std::string camera_json;  ///< `--camera`: a JSON object as the scene's `camera` key; "" keeps the scene's
   int width = 1280;         ///< image width (unit: pixel), >= 1
   int height = 720;         ///< image height (unit: pixel), >= 1
@@ -61,7 +64,8 @@ WaterShading parse_water_shading(const std::string& text);
 /// nothing. Each PNG (and the MP4) is written under a temporary name and renamed.
 /// @throws drench::Error for a size < 1, a `water.refractive_index` <= 1 or an absorption < 0 (or not
 ///         finite); SceneError for a bad scene.json, a malformed `camera_json` or an
-///         unknown camera key (naming camera.<key>); IoError naming the file when scene.json or the frames
+///         unknown camera key (naming camera.<key>); IoError naming the file when the output folder is
+///         refused (a file drench render did not write), scene.json or the frames
 ///         are missing, a frame's file is missing (the first such), a frame is malformed, a file cannot be
 ///         written, or ffmpeg fails; RenderError when no headless OpenGL context can be made.
 RenderResult render_run(const RenderOptions& options);

@@ -208,6 +208,27 @@ const std::vector<std::string>& sweep_output_patterns() {
   return patterns;
 }
 
+const std::vector<std::string>& render_output_patterns() {
+  static const std::vector<std::string> patterns = {kOutputManifest, "frame_*.png", "video.mp4"};
+  return patterns;
+}
+
+void check_folder_holds_only(const std::string& dir, const std::string& command,
+                             const std::vector<std::string>& patterns) {
+  std::error_code ec;
+  if (!fs::exists(dir, ec)) return;
+  const FolderEntries entries = list_entries(dir, "drench " + command);
+  for (const std::vector<std::string>* list : {&entries.folders, &entries.files}) {
+    for (const std::string& entry : *list) {
+      if (list == &entries.folders ? folder_covered(patterns, entry) : file_covered(patterns, entry))
+        continue;
+      throw IoError((fs::path(dir) / entry).string() + " was not written by drench " + command +
+                    ", which writes only " + nlohmann::json(patterns).dump() +
+                    " there; nothing written: move it away or choose another folder");
+    }
+  }
+}
+
 bool output_pattern_covers(const std::string& pattern, const std::string& relative) {
   const std::vector<std::string> names = split_path(pattern);
   std::vector<std::string> parts = split_path(relative);

@@ -21,6 +21,17 @@ const std::vector<std::string>& run_output_patterns();
 /// `runs/*/`, each run's files (run_output_patterns()).
 const std::vector<std::string>& sweep_output_patterns();
 
+/// What `drench render --out DIR2` writes into DIR2: its manifest, `frame_*.png` and `video.mp4`.
+const std::vector<std::string>& render_output_patterns();
+
+/// Checks, writing nothing, that every entry in `dir` (when it exists) is a file `patterns` cover: the folder
+/// drench writes into inside an output folder it owns, such as DIR/render, must not hold another program's
+/// files, which it would overwrite or mix with its own.
+/// @param command  what is to write there, for the message, e.g. "render"
+/// @throws IoError naming the first entry (in name order) that no pattern covers.
+void check_folder_holds_only(const std::string& dir, const std::string& command,
+                             const std::vector<std::string>& patterns);
+
 /// Whether `relative` (a path inside an output folder, '/'-separated, e.g. "frames/fluid_0001.ply") is a
 /// file `pattern` covers: it matches the pattern, or it is a temporary of such a file (`NAME.tmp-PID`, what
 /// io/atomic_file.hpp leaves when killed mid-write).
