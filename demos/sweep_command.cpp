@@ -23,7 +23,9 @@
 #include <drench/common/error.hpp>
 #include <drench/common/parallel.hpp>
 #include <drench/common/program.hpp>
+#include <drench/compare/run_comparison.hpp>
 #include <drench/io/atomic_file.hpp>
+#include <drench/io/ply_reader.hpp>
 #include <drench/scene/output_folder.hpp>
 #include <drench/scene/run_frames.hpp>
 #include <drench/scene/scene_loader.hpp>
@@ -262,10 +264,27 @@ int run_sweep(const SweepOptions& options) {
   const bool with_reference = !options.reference_dir.empty();
   nlohmann::json reference_record;
   RunFrames reference;
+  const ComparisonSettings& measure = options.comparison;
   if (with_reference) {
     reference_record = read_reference_record(options.reference_dir);
     reference = read_run_frames(options.reference_dir);
+    check_comparison_settings(measure, reference);
+    // Every frame of the reference read once now: a damaged one was found only after all the runs.
+    for (std::size_t n = 0; n < reference.fluid_files.size(); ++n) {
+      (void)read_ply(reference.fluid_files[n]);
+      if (!reference.cloth_files.empty()) (void)read_ply(reference.cloth_files[n]);
+    }
+  } else if (!measure.gauges_x.empty() || measure.gauge_width > 0 || measure.gauge_depth > 0 ||
+             measure.cell_size > 0) {
+    throw SceneError(std::string(!measure.gauges_x.empty() ? "--gauge"
+                                 : measure.gauge_width > 0 ? "--gauge-width"
+                                 : measure.gauge_depth > 0 ? "--gauge-depth"
+                                                           : "--cell-size") +
+                     " measures the runs against a reference: it needs --reference");
   }
+  if (measure.gauges_x.empty() && (measure.gauge_width > 0 || measure.gauge_depth > 0))
+    throw SceneError(std::string(measure.gauge_width > 0 ? "--gauge-width" : "--gauge-depth") +
+                     " sets the gauges' columns: it needs at least one --gauge");
   std::vector<std::string> columns = sweep_columns();
   if (with_reference) columns.insert(columns.end(), reference_columns().begin(), reference_columns().end());
   std::string error_key = options.error_key;
@@ -281,6 +300,22 @@ int run_sweep(const SweepOptions& options) {
     throw SceneError("--error " + error_key + ": not a column" +
                      (with_reference ? "" : " (the errors against a reference need --reference)") +
                      "; one of " + known);
+  }
+  // An observable this reference does not have would be an empty column, and no plot.
+  const std::vector<std::string>& all_observables = observable_names();
+  if (with_reference &&
+      std::find(all_observables.begin(), all_observables.end(), error_key) != all_observables.end()) {
+    const std::vector<std::string> reported =
+        reported_observables(!reference.cloth_files.empty(), !measure.gauges_x.empty());
+    if (std::find(reported.begin(), reported.end(), error_key) == reported.end()) {
+      std::string list;
+      for (const std::string& name : reported)
+        list += (list.empty() ? "" : ", ") + name;
+      throw SceneError("--error " + error_key + ": the reference " + options.reference_dir +
+                       (reference.cloth_files.empty() ? " has no cloth" : " has a cloth") +
+                       (measure.gauges_x.empty() ? " and there is no --gauge" : "") +
+                       ", so the sweep measures only " + list + ", worst_relative_error");
+    }
   }
   if (options.jobs < 1) throw SceneError("--jobs must be >= 1");
   check_output_folder(options.out_dir, "--out", "sweep", sweep_output_patterns(), options.overwrite);

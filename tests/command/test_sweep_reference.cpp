@@ -123,6 +123,31 @@ TEST(SweepReference, AReferenceOfAnotherSceneOrOtherFrameTimesIsRefused) {
             1);
   EXPECT_NE(drench::test::read_text(dir.path() / "log.txt").find("reference.json"), std::string::npos)
       << drench::test::read_text(dir.path() / "log.txt");
+
+  // What the reference cannot measure is refused before any run: the surge front of a run with a cloth, a
+  // gauge without a reference, a gauge at NaN, cells smaller than a particle.
+  const auto refused = [&](const std::string& extra, const std::string& expected) {
+    const int status = drench::test::run_drench(
+        "sweep " + kScene + tiny + " --vary time.dt=0.002 --out " + out.string() + " " + extra,
+        dir.path() / "log.txt");
+    const std::string text = drench::test::read_text(dir.path() / "log.txt");
+    EXPECT_EQ(status, 1) << extra << ": " << text;
+    EXPECT_NE(text.find(expected), std::string::npos) << extra << ": " << text;
+    EXPECT_FALSE(fs::exists(out)) << extra;
+  };
+  const std::string with_reference = "--reference " + reference.string();
+  refused(with_reference + " --error front_m", "--error front_m: the reference " + reference.string() +
+                                                   " has a cloth and there is no --gauge, so the sweep "
+                                                   "measures only cloth_rms_m");
+  refused("--gauge 0.5", "--gauge measures the runs against a reference: it needs --reference");
+  refused(with_reference + " --gauge nan", "--gauge) must be in [-10000000, 10000000] m, got nan");
+  refused(with_reference + " --cell-size 1e-12", "(drench sweep --cell-size) must be 0");
+
+  // A damaged reference frame was found only once every run had finished.
+  const fs::path last = reference / "frames/fluid_0001.ply";
+  ASSERT_TRUE(fs::exists(last));
+  fs::resize_file(last, fs::file_size(last) / 2);
+  refused(with_reference, last.string() + ": truncated");
 }
 
 }  // namespace

@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <limits>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
@@ -334,7 +335,20 @@ TEST(RunComparison, RunsThatCannotBeComparedAreErrorsNamingTheFile) {
   ComparisonSettings bad;
   bad.cell_size = -0.02;
   EXPECT_TRUE(test::throws_containing<SceneError>([&] { compare_runs(reference, reference, bad); },
-                                                  {"cell_size", ">= 0", "-0.02"}));
+                                                  {"cell_size", "must be 0", "-0.02"}));
+  // A cell below the particle spacing holds at most one particle; 1e300 m is one cell for any scene.
+  for (const double cell : {1e-12, 1e300}) {
+    bad.cell_size = cell;
+    EXPECT_TRUE(test::throws_containing<SceneError>([&] { check_comparison_settings(bad, reference); },
+                                                    {"cell_size (drench sweep --cell-size)", "got"}));
+  }
+  bad = ComparisonSettings();
+  bad.gauges_x = {0.5, std::numeric_limits<double>::quiet_NaN()};
+  EXPECT_TRUE(test::throws_containing<SceneError>([&] { check_comparison_settings(bad, reference); },
+                                                  {"gauge x (drench sweep --gauge)", "got nan"}));
+  bad.gauges_x = {1e300};
+  EXPECT_TRUE(test::throws_containing<SceneError>([&] { check_comparison_settings(bad, reference); },
+                                                  {"--gauge", "got 1e+300"}));
 }
 
 // A run folder as drench run writes it: scene.json and frames/; its frames' times follow the steps.

@@ -211,16 +211,48 @@ const std::vector<std::string>& observable_names() {
   return names;
 }
 
+std::vector<std::string> reported_observables(bool cloth, bool gauges) {
+  std::vector<std::string> names;
+  for (const std::string& name : observable_names()) {
+    const bool of_cloth = name.rfind("cloth_", 0) == 0 || name == "held_kg" || name == "past_edges_kg";
+    if (name == "gauge_height_m" ? gauges : name == "front_m" ? !cloth : !of_cloth || cloth)
+      names.push_back(name);
+  }
+  return names;
+}
+
+void check_comparison_settings(const ComparisonSettings& settings, const RunFrames& reference) {
+  const auto fail = [](const std::string& setting, const std::string& option, const std::string& range,
+                       double value) {
+    return SceneError("comparison " + setting + (option.empty() ? "" : " (drench sweep " + option + ")") +
+                      " must be " + range + ", got " + format_number(value));
+  };
+  const std::string up_to = format_number(kMaxCoordinate) + "] m";
+  const double spacing = reference.particle_spacing;
+  if (!(settings.cell_size == 0 || (settings.cell_size >= spacing && settings.cell_size <= kMaxCoordinate))) {
+    throw fail("cell_size", "--cell-size",
+               "0 (four particle spacings) or in [" + format_number(spacing) +
+                   " (the reference's particle "
+                   "spacing: a smaller cell holds at most one particle), " +
+                   up_to,
+               settings.cell_size);
+  }
+  if (!(settings.held_band > 0 && settings.held_band <= kMaxCoordinate))
+    throw fail("held_band", "", "in (0, " + up_to, settings.held_band);
+  if (!(settings.gauge_width >= 0 && settings.gauge_width <= kMaxCoordinate))
+    throw fail("gauge_width", "--gauge-width", "in (0, " + up_to, settings.gauge_width);
+  if (!(settings.gauge_depth >= 0 && settings.gauge_depth <= kMaxCoordinate))
+    throw fail("gauge_depth", "--gauge-depth", "in (0, " + up_to, settings.gauge_depth);
+  for (const Scalar x : settings.gauges_x)
+    if (!(std::abs(x) <= kMaxCoordinate))
+      throw fail("gauge x", "--gauge", "in [-" + format_number(kMaxCoordinate) + ", " + up_to, x);
+  if (!(settings.time_tolerance >= 0 && settings.time_tolerance <= 1))
+    throw fail("time_tolerance", "", "in [0, 1] s", settings.time_tolerance);
+}
+
 RunComparison compare_runs(const RunFrames& run, const RunFrames& reference,
                            const ComparisonSettings& settings) {
-  if (!(settings.cell_size >= 0))
-    throw SceneError("comparison cell_size must be >= 0, got " + format_number(settings.cell_size));
-  if (!(settings.held_band > 0))
-    throw SceneError("comparison held_band must be > 0, got " + format_number(settings.held_band));
-  if (!(settings.gauge_width >= 0))
-    throw SceneError("comparison gauge_width must be >= 0, got " + format_number(settings.gauge_width));
-  if (!(settings.gauge_depth >= 0))
-    throw SceneError("comparison gauge_depth must be >= 0, got " + format_number(settings.gauge_depth));
+  check_comparison_settings(settings, reference);
   const std::size_t run_frames = run.fluid_files.size(), reference_frames = reference.fluid_files.size();
   if (reference_frames == 0)
     throw IoError(reference.dir + ": the reference has no frames (frames/fluid_0000.ply)");

@@ -89,14 +89,26 @@ struct RunComparison {
 /// (last minus first frame); gauge heights by the reference's largest gauge height.
 const std::vector<std::string>& observable_names();
 
+/// The observables compare_runs reports for a reference with or without a cloth, and with or without
+/// gauges, in observable_names() order: with a cloth the cloth's distances and sag, the water held and past
+/// its edges; without one the surge front; the mass difference always; the gauge height with gauges.
+std::vector<std::string> reported_observables(bool cloth, bool gauges);
+
+/// Checks `settings` against the reference they will measure, so that a sweep refuses them before any run.
+/// @throws SceneError naming the setting (and drench sweep's option for it) and the value: cell_size not 0
+///         and not in [the reference's particle spacing, kMaxCoordinate] (smaller cells each hold at most
+///         one particle, and the difference says nothing of where the water is), held_band not in
+///         (0, kMaxCoordinate], gauge_width or gauge_depth not 0 and not in (0, kMaxCoordinate], a gauge's x
+///         not finite or beyond kMaxCoordinate, time_tolerance not in [0, 1] s.
+void check_comparison_settings(const ComparisonSettings& settings, const RunFrames& reference);
+
 /// Compares `run` with `reference` frame by frame.
 /// @throws IoError naming the file or folder: a frame file that is missing or unreadable (read_ply's
 ///         errors), a run with more frames than the reference, or fewer when not `allow_shorter`, a frame
 ///         whose time differs from the reference's by over `time_tolerance` (both times named), a cloth in
 ///         one run and not the other, cloths whose node counts differ (both files named), or `killed_kg`
 ///         neither empty nor one per frame.
-/// @throws SceneError for settings out of range (cell_size < 0, held_band <= 0, gauge_width < 0,
-///         gauge_depth < 0).
+/// @throws SceneError for settings out of range (check_comparison_settings).
 RunComparison compare_runs(const RunFrames& run, const RunFrames& reference,
                            const ComparisonSettings& settings);
 
