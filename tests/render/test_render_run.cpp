@@ -248,7 +248,14 @@ TEST(RenderRun, BadInputIsNamedAndWritesNothing) {
 
   options.width = 0;
   EXPECT_TRUE(fails_writing_nothing<Error>(options, "the image size must be at least 1x1 pixels, got 0x180"));
+  // 2^31 pixels need about 1e11 bytes of framebuffers: refused before the frames are read, naming --size.
+  options.width = 1 << 20;
+  options.height = 1 << 11;
+  EXPECT_TRUE(fails_writing_nothing<Error>(
+      options, "an image of 1048576x2048 pixels needs about 103079215104 bytes for its framebuffers"));
+  EXPECT_TRUE(fails_writing_nothing<Error>(options, "choose a smaller size (drench render --size)"));
   options.width = 320;
+  options.height = 180;
 
   json scene = hand_made_scene(false);
   scene["camera"] = {{"fov", 30}};

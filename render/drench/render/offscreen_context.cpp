@@ -118,7 +118,9 @@ OffscreenContext::OffscreenContext(int width, int height, int samples) : m_state
     char text[96];
     std::snprintf(text, sizeof text, "framebuffer incomplete (status 0x%04x, 0x%04x)", multisampled_status,
                   resolved_status);
-    throw fail(text);
+    throw fail("an image of " + std::to_string(width) + " x " + std::to_string(height) + " pixels with " +
+               std::to_string(samples) + " samples: " + text +
+               "; this OpenGL could not allocate it: choose a smaller size (drench render --size)");
   }
   bind();
 }

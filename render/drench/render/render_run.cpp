@@ -24,6 +24,7 @@
 #include <drench/scene/frame_files.hpp>
 #include <drench/scene/output_folder.hpp>
 #include <drench/scene/scene_loader.hpp>
+#include <drench/scene/scene_resources.hpp>
 
 namespace drench::render {
 
@@ -194,6 +195,19 @@ RenderResult render_run(const RenderOptions& options) {
       throw Error("the water's absorption must be >= 0 1/m in each channel, got " +
                   format_number(water.absorption[c]) + " in channel " + std::to_string(c) +
                   " (0 red, 1 green, 2 blue)");
+  }
+  // The framebuffers and the read-back, per pixel: 4 samples of colour and depth (32 bytes), the resolved
+  // colour, the pixels read back and the PNG rows (about 16); transparent water doubles the multisampled
+  // targets and adds three full-size textures. A 16384 x 16384 image took 5.8 GB before its framebuffer
+  // failed, so the size is checked against the memory first, naming it.
+  const double bytes_per_pixel = water.shading == WaterShading::TRANSPARENT ? 96.0 : 48.0;
+  const double image_bytes = static_cast<double>(options.width) * options.height * bytes_per_pixel;
+  const double available = machine_limits("", 0).memory_bytes;
+  if (image_bytes > available) {
+    throw Error("an image of " + std::to_string(options.width) + "x" + std::to_string(options.height) +
+                " pixels needs about " + format_number(std::round(image_bytes)) +
+                " bytes for its framebuffers, more than the " + format_number(std::round(available)) +
+                " bytes available (MemAvailable): choose a smaller size (drench render --size)");
   }
   const fs::path dir(options.run_dir);
   RenderResult result;
