@@ -1273,8 +1273,15 @@ TEST(SceneLoader, RejectsHalfACameraAndAFieldOfViewOutOfRange) {
   EXPECT_TRUE(scene_error(R"({"camera": {"position": [0, 1, 2]}})", "camera.target is missing"));
   EXPECT_TRUE(scene_error(R"({"camera": {"target": [0, 1, 2]}})", "camera.position is missing"));
   EXPECT_TRUE(scene_error(R"({"camera": {"position": [0, 1, 2], "target": [0, 1, 2]}})",
-                          "camera.target must differ from camera.position"));
-  EXPECT_TRUE(scene_error(R"({"camera": {"fov_deg": 180}})", "camera.fov_deg must be in (0, 180), got 180"));
+                          "camera.target must be at least 1e-6 m from camera.position"));
+  EXPECT_TRUE(
+      scene_error(R"({"camera": {"fov_deg": 180}})", "camera.fov_deg must be in [0.1, 179], got 180"));
+  // Each drew a blank image.
+  EXPECT_TRUE(scene_error(R"({"camera": {"fov_deg": 1e-300}})", "camera.fov_deg must be in [0.1, 179]"));
+  EXPECT_TRUE(scene_error(R"({"camera": {"position": [1e300, 0, 0], "target": [0, 0, 0]}})",
+                          "camera.position[0] must be in [-10000000, 10000000], got 1e+300"));
+  EXPECT_TRUE(scene_error(R"({"camera": {"position": [1e-300, 0, 0], "target": [0, 0, 0]}})",
+                          "camera.target must be at least 1e-6 m from camera.position"));
   EXPECT_TRUE(scene_error(R"({"camera": {"position": [0, 1]}})", "camera.position"));
 }
 

@@ -15,7 +15,7 @@ namespace drench::render {
 struct Camera {
   Vec3 position = Vec3(0.0, 0.0, 1.0);  ///< eye (unit: m)
   Vec3 target = Vec3::Zero();           ///< drawn at the image's centre (unit: m), != position
-  Scalar fov_deg = 45.0;                ///< vertical field of view (unit: degree), in (0, 180)
+  Scalar fov_deg = 45.0;  ///< vertical field of view (unit: degree), in [kMinFovDeg, kMaxFovDeg]
 };
 
 /// A camera that shows all of `bounds` at `aspect`: it looks at the box's centre from above and in front

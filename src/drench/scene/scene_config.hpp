@@ -47,12 +47,20 @@ struct TimeSettings {
   Scalar frame_rate = 30.0;  ///< frames written per simulated second (unit: 1/s), >= 0; 0 writes no frames
 };
 
+/// The camera's field of view (unit: degree) lies in [kMinFovDeg, kMaxFovDeg]: narrower than a tenth of a
+/// degree, or 180 and wider, the projection draws nothing.
+inline constexpr double kMinFovDeg = 0.1;
+inline constexpr double kMaxFovDeg = 179.0;
+/// The camera's eye is at least this far from its target (unit: m): closer, the view direction is lost.
+inline constexpr double kMinCameraDistance = 1e-6;
+
 /// Where `drench render` (and the viewer) looks from, so that renders of a scene are repeatable. The
 /// simulation ignores it. Without a position and target the renderer frames the scene's bounds itself.
 struct CameraSettings {
-  std::optional<Vec3> position;  ///< eye (unit: m); given together with `target`, and apart from it
-  std::optional<Vec3> target;    ///< the point looked at, drawn at the image's centre (unit: m)
-  Scalar fov_deg = 45.0;         ///< vertical field of view (unit: degree), in (0, 180)
+  /// Eye (unit: m), within kMaxCoordinate; given together with `target`, kMinCameraDistance or more from it.
+  std::optional<Vec3> position;
+  std::optional<Vec3> target;  ///< the point looked at, drawn at the image's centre (unit: m)
+  Scalar fov_deg = 45.0;       ///< vertical field of view (unit: degree), in [kMinFovDeg, kMaxFovDeg]
 };
 
 /// What a program gives a scene beside its own keys: a CoupledWorld's cloths and rigid bodies are Bullet's,
