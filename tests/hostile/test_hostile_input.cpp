@@ -526,6 +526,13 @@ TEST(HostileInput, SurfaceCellSizeBelowTheBoundIsRefusedInRunAndReconstruct) {
   EXPECT_EQ(c.status, 1) << c.output;
   EXPECT_TRUE(contains(c.output, "surface.cell_size must be >= fluid.particle_spacing / 16")) << c.output;
   EXPECT_EQ(read_text(out / "frames" / "surface_0001.ply"), surface);  // nothing lost
+  // 1e300 made no triangle and ended 0.
+  const Command coarse =
+      drench_command("reconstruct " + out.string() + " --set surface.cell_size=1e300", dir.path() / "log3");
+  EXPECT_EQ(coarse.status, 1) << coarse.output;
+  EXPECT_TRUE(contains(coarse.output, "surface.cell_size must be <= 4 x fluid.particle_spacing = 0.2 m"))
+      << coarse.output;
+  EXPECT_EQ(read_text(out / "frames" / "surface_0001.ply"), surface);
 }
 
 TEST(HostileInput, OpenVdbFailureBecomesADrenchError) {

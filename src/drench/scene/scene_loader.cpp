@@ -47,6 +47,10 @@ constexpr double kSpacingResolution = 0x1p-35;
 /// The smallest surface.cell_size relative to fluid.particle_spacing: 1/16 gives 4096 cells per particle
 /// volume already; below it a frame's grid outgrows memory and OpenVDB's int32 coordinates.
 constexpr double kMinCellPerSpacing = 1.0 / 16.0;
+/// The largest surface.cell_size relative to fluid.particle_spacing: twice the Zhu-Bridson kernel's reach (2
+/// spacings). A coarser grid steps over water thinner than a cell: surface.cell_size = 1e300 made 0
+/// triangles and `drench reconstruct` ended 0.
+constexpr double kMaxCellPerSpacing = 4.0;
 
 /// A derived figure in a message, to 3 digits (a key's own value is shown as written).
 std::string approx(double value) {
@@ -234,7 +238,7 @@ void check_emitters(const SceneConfig& config, const ObjectReader& r) {
   }
 }
 
-/// surface.cell_size at least kMinCellPerSpacing of the particle spacing.
+/// surface.cell_size within [kMinCellPerSpacing, kMaxCellPerSpacing] of the particle spacing.
 void check_surface(const SceneConfig& config, const ObjectReader& r) {
   const double cell = config.surface.cell_size;
   if (cell <= 0.0) return;  // 0: half the spacing
@@ -245,6 +249,13 @@ void check_surface(const SceneConfig& config, const ObjectReader& r) {
         .fail("must be >= fluid.particle_spacing / 16 = " + show(least) +
               " m (finer cells give a frame's grid more cells than memory and OpenVDB's "
               "int32 coordinates hold)");
+  }
+  const double most = kMaxCellPerSpacing * config.fluid.particle_spacing;
+  if (!(cell <= most)) {
+    r["surface"]
+        .child("cell_size")
+        .fail("must be <= 4 x fluid.particle_spacing = " + show(most) +
+              " m (a coarser grid steps over water thinner than a cell, and draws it as nothing)");
   }
 }
 
