@@ -108,6 +108,27 @@ TEST(Sweep, MoreThan10000RunsAreRefusedBeforeAnyIsPlanned) {
   EXPECT_EQ(plan_sweep(kScene, {grid[0], grid[1]}, {}, false, 1).size(), 9801u);
 }
 
+// Two --vary of one key ran once, and two cases of one label ran under one name.
+TEST(Sweep, ASettingGivenTwiceIsRefusedNamingIt) {
+  const auto refused = [](const std::vector<SweepAxis>& axes, const std::vector<SweepCase>& cases,
+                          const std::string& expected) {
+    return test::throws_containing<SceneError>([&] { plan_sweep(kScene, axes, cases, false, 1); },
+                                               {expected});
+  };
+  EXPECT_TRUE(refused({parse_sweep_axis("time.dt=0.001"), parse_sweep_axis("time.dt=0.002")}, {},
+                      "--vary time.dt is given twice"));
+  EXPECT_TRUE(
+      refused({parse_sweep_axis("time.dt=0.001,1e-3")}, {}, "--vary time.dt: the value 1e-3 is given twice"));
+  EXPECT_TRUE(refused({}, {parse_sweep_case("a:time.dt=0.001"), parse_sweep_case("a:time.dt=0.002")},
+                      "--case a is given twice"));
+  EXPECT_TRUE(
+      refused({}, {parse_sweep_case("a:time.dt=0.001;time.dt=0.002")}, "--case a: time.dt is set twice"));
+  EXPECT_EQ(plan_sweep(kScene, {parse_sweep_axis("time.dt=0.001,0.002")},
+                       {parse_sweep_case("a:time.dt=0.003")}, false, 1)
+                .size(),
+            3u);
+}
+
 TEST(Sweep, RowsTakeTheSummarysFiguresAndKeepFailures) {
   const nlohmann::json summary = nlohmann::json::parse(R"({
     "status": "ok", "wall_s": 2.5, "timings_s": {"fluid": 1.25, "coupling": 0.5},

@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <limits>
+#include <set>
 
 #include <drench/common/error.hpp>
 #include <drench/scene/scene_loader.hpp>
@@ -113,6 +114,31 @@ std::vector<SweepRun> plan_sweep(const nlohmann::json& scene, const std::vector<
     throw SceneError("sweep: " + format_number(count) +
                      " runs ((the --vary settings + the --case's) x --repeat " + std::to_string(repeats) +
                      "); at most " + format_number(kMaxSweepRuns));
+  }
+  // A setting given twice ran once, or twice under one label: the report would not say which was meant.
+  // Values are compared as JSON (1e-3 is 0.001), in a set since an axis may have thousands.
+  const auto canonical = [](const std::string& value) {
+    const nlohmann::json parsed = nlohmann::json::parse(value, nullptr, false);
+    return parsed.is_discarded() ? value : parsed.dump();
+  };
+  std::set<std::string> keys;
+  for (const SweepAxis& axis : axes) {
+    if (!keys.insert(axis.key).second)
+      throw SceneError("--vary " + axis.key + " is given twice: list all its values in one --vary");
+    std::set<std::string> values;
+    for (const std::string& value : axis.values)
+      if (!values.insert(canonical(value)).second)
+        throw SceneError("--vary " + axis.key + ": the value " + value + " is given twice");
+  }
+  std::set<std::string> labels;
+  for (const SweepCase& c : cases) {
+    if (!labels.insert(c.label).second)
+      throw SceneError("--case " + c.label + " is given twice: each case needs a label of its own");
+    std::set<std::string> set_keys;
+    for (const std::string& assignment : c.assignments) {
+      const std::string key = assignment.substr(0, assignment.find('='));
+      if (!set_keys.insert(key).second) throw SceneError("--case " + c.label + ": " + key + " is set twice");
+    }
   }
   std::vector<SweepRun> settings;
   // Every assignment is tried on the scene here, so that a bad key fails the sweep before any run.
