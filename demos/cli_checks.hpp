@@ -83,4 +83,11 @@ inline CLI::Validator finite_positive() {
       "NUMBER > 0");
 }
 
+/// A check that a text option is not empty: where "" means "not given" inside drench (render's --camera and
+/// --out, sweep's --reference), an empty argument would be silently ignored.
+inline CLI::Validator non_empty() {
+  return CLI::Validator(
+      [](std::string& text) -> std::string { return text.empty() ? "must not be empty" : ""; }, "TEXT");
+}
+
 }  // namespace drench::cli

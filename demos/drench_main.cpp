@@ -54,6 +54,7 @@
 namespace {
 
 using drench::cli::finite_positive;
+using drench::cli::non_empty;
 using drench::cli::non_negative_number;
 using drench::cli::quoted_argument;
 using drench::cli::shorten_long_words;
@@ -464,11 +465,14 @@ int dispatch(int argc, char** argv) {
       "render", "draw a run's frames as PNG images, headless (render/frame_NNNN.png), and optionally an MP4");
   render->add_option("dir", render_options.run_dir, "the --out folder of a drench run (scene.json, frames/)")
       ->required();
-  render->add_option("--camera", render_options.camera_json,
-                     "camera as JSON, replacing the scene's `camera` key, e.g. "
-                     "'{\"position\": [0, 0.4, 1.2], \"target\": [0, 0, 0], \"fov_deg\": 45}'");
+  render
+      ->add_option("--camera", render_options.camera_json,
+                   "camera as JSON, replacing the scene's `camera` key, e.g. "
+                   "'{\"position\": [0, 0.4, 1.2], \"target\": [0, 0, 0], \"fov_deg\": 45}'")
+      ->check(non_empty());
   render->add_option("--size", render_size, "image size WIDTHxHEIGHT in pixels")->capture_default_str();
-  render->add_option("--out", render_options.out_dir, "folder of the images (default: DIR/render)");
+  render->add_option("--out", render_options.out_dir, "folder of the images (default: DIR/render)")
+      ->check(non_empty());
   render
       ->add_option("--water", render_water,
                    "the fluid's surface: opaque (blue) or transparent (water: reflection, refraction, "
@@ -570,8 +574,10 @@ int dispatch(int argc, char** argv) {
       "--error", sweep_options.error_key,
       "the sweep.csv column pareto.png plots against wall time (default: density_error_mean; with "
       "--reference cloth_rms_m, or front_m without a cloth)");
-  sweep->add_option("--reference", sweep_options.reference_dir,
-                    "a `drench reference` folder: each run's frames are compared with it (docs/output.md)");
+  sweep
+      ->add_option("--reference", sweep_options.reference_dir,
+                   "a `drench reference` folder: each run's frames are compared with it (docs/output.md)")
+      ->check(non_empty());
   sweep->add_option("--gauge", sweep_options.comparison.gauges_x,
                     "with --reference: x of a water-height gauge (m, repeatable), e.g. for the dam break");
   sweep

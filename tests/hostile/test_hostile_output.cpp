@@ -562,6 +562,18 @@ TEST(HostileOutput, CommandLineErrorsExit1WithAShortMessage) {
     EXPECT_EQ(message.rfind("drench: ", 0), 0u) << command << "\n" << message;
   }
   EXPECT_FALSE(fs::exists(dir.path() / "o"));
+  // An empty --camera, render --out or sweep --reference meant "not given", and was ignored.
+  for (const std::vector<std::string>& arguments :
+       {std::vector<std::string>{"render", "o", "--camera", ""},
+        std::vector<std::string>{"render", "o", "--out", ""},
+        std::vector<std::string>{"sweep", scene, "--vary", "time.dt=0.001", "--out", "o", "--reference",
+                                 ""}}) {
+    EXPECT_EQ(run_drench(arguments, dir.path(), log), 1)
+        << arguments[0] << " " << arguments[arguments.size() - 2];
+    EXPECT_NE(read_text(log).find("drench: " + arguments[arguments.size() - 2] + ": must not be empty"),
+              std::string::npos)
+        << read_text(log);
+  }
   EXPECT_EQ(run_drench({"--help"}, dir.path(), log), 0) << read_text(log);
   EXPECT_NE(read_text(log).find("Subcommands:"), std::string::npos) << read_text(log);
   EXPECT_EQ(run_drench({"--version"}, dir.path(), log), 0) << read_text(log);

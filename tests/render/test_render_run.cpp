@@ -244,6 +244,8 @@ TEST(RenderRun, BadInputIsNamedAndWritesNothing) {
       options, "camera.positon is not a known key (--camera); known: position, target, fov_deg"));
   options.camera_json = "{position: 1";
   EXPECT_TRUE(fails_writing_nothing<SceneError>(options, "--camera is not valid JSON"));
+  options.camera_json = R"({"fov_deg": 30, "fov_deg": 60})";
+  EXPECT_TRUE(fails_writing_nothing<SceneError>(options, "--camera: duplicate key \"fov_deg\""));
   options.camera_json.clear();
 
   options.width = 0;

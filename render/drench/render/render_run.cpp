@@ -22,6 +22,7 @@
 #include <drench/render/png_image.hpp>
 #include <drench/render/renderer.hpp>
 #include <drench/scene/frame_files.hpp>
+#include <drench/scene/json_reader.hpp>
 #include <drench/scene/output_folder.hpp>
 #include <drench/scene/scene_loader.hpp>
 #include <drench/scene/scene_resources.hpp>
@@ -233,7 +234,10 @@ RenderResult render_run(const RenderOptions& options) {
   if (!options.camera_json.empty()) {
     nlohmann::json camera;
     try {
-      camera = nlohmann::json::parse(options.camera_json);
+      // Strict as a scene file is: a key given twice was silently the last one.
+      camera = loader::parse_json_strict(options.camera_json, loader::kMaxJsonDepth);
+    } catch (const SceneError& e) {
+      throw SceneError("--camera: " + std::string(e.what()));
     } catch (const nlohmann::json::exception& e) {
       throw SceneError(
           "--camera is not valid JSON (" + std::string(e.what()) +
