@@ -131,6 +131,14 @@ TEST(View, BadInputIsNamedAndWritesNothing) {
   EXPECT_NE(out.status, 0);
   EXPECT_NE(out.text.find("needs --frames N"), std::string::npos) << out.text;
 
+  // A folder was found only once the frames had run, in a message that did not name the option.
+  out =
+      run(std::string(DRENCH_BINARY) + " view " + kScene + " --frames 3 --screenshot " + dir.path().string());
+  EXPECT_NE(out.status, 0);
+  EXPECT_NE(out.text.find("--screenshot " + dir.path().string() + ": exists and is not a file"),
+            std::string::npos)
+      << out.text;
+
   out = run("env -u DISPLAY -u WAYLAND_DISPLAY " + base);
   EXPECT_NE(out.status, 0);
   EXPECT_NE(out.text.find("no display: use drench render for headless images, or run under xvfb-run"),

@@ -270,6 +270,10 @@ void check_view_options(const ViewOptions& options) {
     if (!fs::is_directory(parent, ec))
       throw Error("--screenshot " + options.screenshot + ": the folder " + parent.string() +
                   " does not exist");
+    // Checked here, not when the Nth frame is written: a folder failed only after the frames had run.
+    const fs::file_status status = fs::status(options.screenshot, ec);
+    if (fs::exists(status) && !fs::is_regular_file(status))
+      throw Error("--screenshot " + options.screenshot + ": exists and is not a file; name a PNG file");
   }
   for (std::size_t i = 0; i < options.keys.size(); ++i) {
     if (!known_key(options.keys[i])) {
