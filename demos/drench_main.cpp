@@ -610,7 +610,13 @@ int dispatch(int argc, char** argv) {
                  shorten_long_words(one_line(e.what())).c_str());
     return 1;
   }
-  if (threads > 0) drench::set_thread_count(threads);
+  if (threads > 0) {
+    drench::set_thread_count(threads);
+  } else if (const std::string problem = drench::omp_num_threads_problem(); !problem.empty()) {
+    // The library would use every CPU instead, without a word.
+    std::fprintf(stderr, "drench: %s: unset it or pass --threads N\n", problem.c_str());
+    return 1;
+  }
   {
     if (run->parsed())
       return run_command(scene_path, out_dir, overrides, steps, quiet, overwrite, max_output);

@@ -574,6 +574,20 @@ TEST(HostileOutput, CommandLineErrorsExit1WithAShortMessage) {
               std::string::npos)
         << read_text(log);
   }
+  // An OMP_NUM_THREADS drench cannot read meant every CPU, without a word.
+  const char* const outer = std::getenv("OMP_NUM_THREADS");
+  const std::string kept = outer ? outer : "";
+  ASSERT_EQ(::setenv("OMP_NUM_THREADS", "abc", 1), 0);
+  EXPECT_EQ(run_drench({"run", scene, "--out", "o", "--quiet"}, dir.path(), log), 1);
+  EXPECT_NE(read_text(log).find("drench: OMP_NUM_THREADS='abc' is not a whole number in [1, "),
+            std::string::npos)
+      << read_text(log);
+  EXPECT_EQ(run_drench({"run", scene, "--out", "o", "--quiet", "--threads", "1"}, dir.path(), log), 0)
+      << read_text(log);
+  if (outer)
+    ::setenv("OMP_NUM_THREADS", kept.c_str(), 1);
+  else
+    ::unsetenv("OMP_NUM_THREADS");
   EXPECT_EQ(run_drench({"--help"}, dir.path(), log), 0) << read_text(log);
   EXPECT_NE(read_text(log).find("Subcommands:"), std::string::npos) << read_text(log);
   EXPECT_EQ(run_drench({"--version"}, dir.path(), log), 0) << read_text(log);

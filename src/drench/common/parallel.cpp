@@ -86,14 +86,19 @@ int cpu_count() {
   return n == 0 ? 1 : static_cast<int>(std::min<unsigned>(n, kMaxThreadCount));
 }
 
+/// OMP_NUM_THREADS's count (its first entry if it is a list), or 0 when it is unset or not such a count.
+int omp_num_threads() {
+  const char* env = std::getenv("OMP_NUM_THREADS");
+  if (env == nullptr) return 0;
+  char* end = nullptr;
+  const long n = std::strtol(env, &end, 10);
+  const bool whole = end != env && (*end == '\0' || *end == ',');
+  return whole && n >= 1 && n <= kMaxThreadCount ? static_cast<int>(n) : 0;
+}
+
 int default_thread_count() {
-  if (const char* env = std::getenv("OMP_NUM_THREADS")) {
-    char* end = nullptr;
-    const long n = std::strtol(env, &end, 10);
-    const bool whole = end != env && (*end == '\0' || *end == ',');
-    if (whole && n >= 1 && n <= kMaxThreadCount) return static_cast<int>(n);
-  }
-  return cpu_count();
+  const int n = omp_num_threads();
+  return n > 0 ? n : cpu_count();
 }
 
 /// The threads and the one loop they serve. A loop's caller holds m_busy for its whole loop; the job's
@@ -352,6 +357,15 @@ void set_thread_count(int n) {
 
 int thread_count() {
   return Pool::instance().wanted();
+}
+
+std::string omp_num_threads_problem() {
+  const char* env = std::getenv("OMP_NUM_THREADS");
+  if (env == nullptr || omp_num_threads() > 0) return "";
+  std::string value(env);
+  if (value.size() > 40) value = value.substr(0, 40) + "...";
+  return "OMP_NUM_THREADS='" + value + "' is not a whole number in [1, " + std::to_string(kMaxThreadCount) +
+         "]";
 }
 
 namespace detail {

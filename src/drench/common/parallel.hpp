@@ -13,6 +13,7 @@
 #include <chrono>
 #include <cstddef>
 #include <cstdint>
+#include <string>
 #include <type_traits>
 #include <utility>
 #include <vector>
@@ -37,6 +38,11 @@ void set_thread_count(int n);
 /// meaning; any other value is ignored, as libgomp ignores it), else the CPUs this process may run on (its
 /// affinity mask; std::thread::hardware_concurrency where that is not available).
 int thread_count();
+
+/// What is wrong with the environment variable OMP_NUM_THREADS as thread_count reads it, e.g.
+/// "OMP_NUM_THREADS='abc' is not a whole number in [1, 256]"; "" when it is unset or a count thread_count
+/// uses. A command tells the user, since thread_count ignores such a value without a word.
+std::string omp_num_threads_problem();
 
 namespace detail {
 
