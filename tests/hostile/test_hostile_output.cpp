@@ -177,6 +177,17 @@ TEST(HostileOutput, AnEmptyOutIsRefusedAndTheWorkingDirectoryIsUntouched) {
             std::string::npos)
       << read_text(dir.path() / "log.txt");
   EXPECT_EQ(read_text(file), "not a folder\n");
+
+  // Nor a link to nothing, which failed with a bare "File exists" after the scene was read.
+  const fs::path link = work.path() / "dangling";
+  fs::create_symlink(work.path() / "nowhere", link);
+  EXPECT_EQ(
+      run_drench({"run", scene, "--out", link.string(), "--quiet"}, work.path(), dir.path() / "log.txt"), 1);
+  EXPECT_NE(read_text(dir.path() / "log.txt")
+                .find("--out " + link.string() + ": a symbolic link to " +
+                      (work.path() / "nowhere").string() + ", which does not exist"),
+            std::string::npos)
+      << read_text(dir.path() / "log.txt");
 }
 
 // An --out holding an earlier run kept its frames, and reconstruct and render then saw both runs.

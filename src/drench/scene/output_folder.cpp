@@ -257,6 +257,10 @@ void check_output_path(const std::string& dir, const std::string& flag) {
   const fs::file_status status = fs::status(dir, ec);
   if (fs::exists(status) && !fs::is_directory(status))
     throw IoError(flag + " " + dir + ": exists and is not a folder; " + flag + " must name a folder");
+  // A link to nothing: creating the folder failed with a bare "File exists" once the scene had been read.
+  if (!fs::exists(status) && fs::is_symlink(fs::symlink_status(dir, ec)))
+    throw IoError(flag + " " + dir + ": a symbolic link to " + fs::read_symlink(dir, ec).string() +
+                  ", which does not exist; " + flag + " must name a folder");
 }
 
 void check_output_folder(const std::string& dir, const std::string& flag, const std::string& command,
