@@ -258,6 +258,31 @@ TEST(ShapeMesh, SphereVerticesAreOnItsScaledRadiusAndItsVolumeConverges) {
   }
 }
 
+// A sphere smaller than the step (a 4 mm pebble at the default max_edge) was one profile piece from pole to
+// pole: 2 vertices and pole fans naming vertices that did not exist, which corrupted the heap downstream.
+TEST(ShapeMesh, SpheresMuchSmallerThanTheStepAreStillClosedMeshes) {
+  for (const auto& [radius, max_edge] : {std::pair{0.001, 0.05}, {0.004, 0.05}, {0.5, 10.0}}) {
+    btSphereShape sphere(radius);
+    const TriangleMesh mesh = shape_mesh(sphere, with_max_edge(max_edge));
+    EXPECT_TRUE(closed_and_oriented(mesh)) << "radius " << radius;
+    for (const Triangle& t : mesh.triangles)
+      for (const Index v : t)
+        ASSERT_LT(v, mesh.positions.size()) << "radius " << radius;
+    const double r = sphere.getRadius();
+    for (const Vec3& p : mesh.positions)
+      ASSERT_NEAR(p.norm(), r, bullet_tolerance(1e-12 * r, r));
+    // The coarsest mesh, an eighth of a turn a piece along the profile and around, holds 0.77 of the ball
+    // (an octahedron holds 0.32, the 3-segment mesh of the old minimum 0.35).
+    EXPECT_GT(volume(mesh), 0.75 * 4.0 / 3.0 * kPi * r * r * r) << "radius " << radius;
+  }
+  // And one so large that its pieces overflowed an int before the mesh was counted.
+  btSphereShape huge(1e7);
+  EXPECT_TRUE(throws_containing<Error>([&] { shape_mesh(huge); }, {"SPHERE: ", "kMaxShapeMeshTriangles"}));
+  btCapsuleShape long_capsule(0.1, 2e9);
+  EXPECT_TRUE(throws_containing<Error>([&] { shape_mesh(long_capsule); },
+                                       {"CapsuleShape: ", "kMaxShapeMeshTriangles"}));
+}
+
 TEST(ShapeMesh, CapsulesAlongEachAxisAreTheirSegmentGrownByTheRadius) {
   const double radius = 0.05, height = 0.2;
   std::vector<std::unique_ptr<btCapsuleShape>> capsules;

@@ -142,7 +142,11 @@ Eigen::Vector2d direction(double angle) {
 /// its bottom pole: curved pieces in steps of at most `step`, flat caps as one piece.
 class Profile {
  public:
-  Profile(double step, Eigen::Vector2d top_pole) : m_step(step), m_points{top_pole} {}
+  /// `path`, `shape` and `max_edge` name the shape when its profile alone would outgrow
+  /// kMaxShapeMeshTriangles (each profile piece is a ring of at least 3 quads).
+  Profile(double step, Eigen::Vector2d top_pole, const std::string& path, const btCollisionShape& shape,
+          double max_edge)
+      : m_step(step), m_points{top_pole}, m_path(path), m_shape(shape), m_max_edge(max_edge) {}
 
   /// A straight piece to `end`: in steps of at most the step on a curved surface (a cylinder's or cone's
   /// side, revolved), else one piece (a flat cap, whose fan keeps its length).
@@ -150,18 +154,20 @@ class Profile {
     const Eigen::Vector2d start = m_points.back();
     const double length = (end - start).norm();
     if (!(length > 0.0)) return;
-    const int n = curved ? std::max(1, static_cast<int>(std::ceil(length / m_step))) : 1;
+    const int n = curved ? pieces(std::ceil(length / m_step)) : 1;
     for (int k = 1; k < n; ++k)
       m_points.push_back(start + (end - start) * (static_cast<double>(k) / n));
     m_points.push_back(end);
   }
 
   /// A circular arc about `center` of `radius` from angle `from` to `to` (radians in the (rho, y) plane),
-  /// starting at the last point; nothing for a zero radius (a margin of 0).
+  /// starting at the last point; nothing for a zero radius (a margin of 0). At least one piece per eighth
+  /// of a turn: a sphere smaller than the step was one piece from pole to pole, no ring, and its pole fans
+  /// named vertices that did not exist.
   void arc(const Eigen::Vector2d& center, double radius, double from, double to) {
     const double length = radius * std::abs(to - from);
     if (!(length > 0.0)) return;
-    const int n = std::max(1, static_cast<int>(std::ceil(length / m_step)));
+    const int n = pieces(std::max(std::ceil(length / m_step), std::ceil(std::abs(to - from) / (0.25 * kPi))));
     for (int k = 1; k < n; ++k)
       m_points.push_back(center + radius * direction(from + (to - from) * (static_cast<double>(k) / n)));
     m_points.push_back(center + radius * direction(to));
@@ -170,8 +176,20 @@ class Profile {
   const std::vector<Eigen::Vector2d>& points() const { return m_points; }
 
  private:
+  /// `wanted` pieces as an int, once the profile's pieces so far fit kMaxShapeMeshTriangles: a sphere of
+  /// 1e7 m overflowed the int before its mesh was counted.
+  int pieces(double wanted) {
+    m_total += wanted;
+    check_triangle_count(6.0 * m_total, m_path, m_shape, max_edge_text(m_max_edge));
+    return std::max(1, static_cast<int>(wanted));
+  }
+
   double m_step;
   std::vector<Eigen::Vector2d> m_points;
+  const std::string& m_path;
+  const btCollisionShape& m_shape;
+  double m_max_edge;
+  double m_total = 0.0;  ///< pieces so far
 };
 
 /// The profile revolved about local axis `up_axis` (a cyclic frame: e_b x e_c = e_up with b, c the next
@@ -182,10 +200,14 @@ TriangleMesh revolve(const Profile& profile, int up_axis, double step, const std
                      const btCollisionShape& shape, double max_edge) {
   const std::vector<Eigen::Vector2d>& p = profile.points();
   const int rings = static_cast<int>(p.size()) - 2;
+  // Every profile has a curved piece between its poles (Profile::arc's least pieces, a side's line).
+  if (rings < 1) fail(path, shape, "its profile has no ring between the poles (drench bug)");
   double widest = 0.0;
   for (const Eigen::Vector2d& q : p)
     widest = std::max(widest, q.x());
-  const double segments_wanted = std::max(3.0, std::ceil(2.0 * kPi * widest / step));
+  // At least an eighth of a turn a segment, as Profile::arc's pieces: a shape far smaller than the step
+  // (a pebble) is still round enough to hold water off.
+  const double segments_wanted = std::max(8.0, std::ceil(2.0 * kPi * widest / step));
   check_triangle_count(2.0 * segments_wanted * std::max(rings, 1), path, shape, max_edge_text(max_edge));
   const int n = static_cast<int>(segments_wanted);
 
@@ -231,7 +253,7 @@ TriangleMesh sphere_mesh(const btSphereShape& sphere, double max_edge, const std
   const double r = sphere.getRadius();
   check_dimension(r, "radius", path, sphere);
   const double step = max_edge / std::sqrt(2.0);
-  Profile profile(step, {0.0, r});
+  Profile profile(step, {0.0, r}, path, sphere, max_edge);
   profile.arc({0.0, 0.0}, r, kHalfPi, -kHalfPi);
   return revolve(profile, 1, step, path, sphere, max_edge);
 }
@@ -245,7 +267,7 @@ TriangleMesh capsule_mesh(const btCapsuleShape& capsule, double max_edge, const 
     fail(path, capsule, "half height must be >= 0 and finite, got " + format_number(h));
   }
   const double step = max_edge / std::sqrt(2.0);
-  Profile profile(step, {0.0, h + r});
+  Profile profile(step, {0.0, h + r}, path, capsule, max_edge);
   profile.arc({0.0, h}, r, kHalfPi, 0.0);
   profile.line_to({r, -h}, true);
   profile.arc({0.0, -h}, r, 0.0, -kHalfPi);
@@ -269,7 +291,7 @@ TriangleMesh cylinder_mesh(const btCylinderShape& cylinder, double max_edge, con
   check_dimension(r + m, "radius", path, cylinder);
   check_dimension(h + m, "half height", path, cylinder);
   const double step = max_edge / std::sqrt(2.0);
-  Profile profile(step, {0.0, h + m});
+  Profile profile(step, {0.0, h + m}, path, cylinder, max_edge);
   profile.line_to({r, h + m}, false);
   profile.arc({r, h}, m, kHalfPi, 0.0);
   profile.line_to({r + m, -h}, true);
@@ -291,7 +313,7 @@ TriangleMesh cone_mesh(const btConeShape& cone, double max_edge, const std::stri
   const double side = std::atan2(radius, height);
   const Eigen::Vector2d offset = m * direction(side);
   const double step = max_edge / std::sqrt(2.0);
-  Profile profile(step, {0.0, h + m});
+  Profile profile(step, {0.0, h + m}, path, cone, max_edge);
   profile.arc({0.0, h}, m, kHalfPi, side);
   profile.line_to(Eigen::Vector2d(radius, -h) + offset, true);
   profile.arc({radius, -h}, m, side, -kHalfPi);
