@@ -3,6 +3,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <vector>
 
@@ -68,6 +69,34 @@ TEST(RigidBoundary, OnlyDynamicBodiesHaveSamplesAndEachLiesInsideItsBody) {
     const double behind = n[axis] > 0.0 ? 0.05 - x[axis] : x[axis];
     EXPECT_NEAR(behind, boundary.inset(), 1e-12);
     EXPECT_GT(boundary.volumes()[b], 0.0);
+  }
+}
+
+// A 1 m x 4 cm x 4 cm rod: each long face, sampled as 101^2 sub-triangles similar to it, took 10,000
+// samples where its area needs a few hundred (a 1 m convex hull took 12.8 GB). Its slivers are sampled in
+// rows across instead: samples in proportion to the area, and none of the face farther than a spacing from
+// one.
+TEST(RigidBoundary, ASliverFaceTakesSamplesByItsAreaAndIsCoveredByThem) {
+  RigidSurface rod = cube(1, RigidMotion::DYNAMIC, Vec3::Zero(), 1.0);
+  const Vec3 extents(1.0, 0.04, 0.04);
+  for (Vec3& x : rod.positions_t0)
+    x = x.cwiseProduct(extents);
+  rod.positions_t1 = rod.positions_t0;
+  RigidBoundary boundary(kSpacing);
+  ASSERT_TRUE(boundary.place({rod}));
+  const double area = 2 * (1.0 * 0.04 + 1.0 * 0.04 + 0.04 * 0.04);
+  // At most 2 samples per square spacing (the similar sub-triangles gave 50).
+  EXPECT_LE(static_cast<double>(boundary.positions().size()), 2.0 * area / (kSpacing * kSpacing));
+  const Vec3Array& samples = boundary.positions();
+  // Every point of the face y = 0 (a grid of 2 mm) has a sample within a spacing, inset aside.
+  for (double x = 0.0; x <= 1.0; x += 0.002) {
+    for (double z = 0.0; z <= 0.04; z += 0.002) {
+      double nearest = INFINITY;
+      for (const Vec3& b : samples)
+        if (std::abs(b.y() - boundary.inset()) < 1e-9)
+          nearest = std::min(nearest, (b - Vec3(x, b.y(), z)).norm());
+      ASSERT_LE(nearest, kSpacing) << "at x " << x << " z " << z;
+    }
   }
 }
 

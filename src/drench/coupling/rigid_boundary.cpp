@@ -5,6 +5,7 @@
 #include <stdexcept>
 #include <unordered_set>
 
+#include <drench/common/error.hpp>
 #include <drench/sph/cubic_spline_kernel.hpp>
 #include <drench/sph/neighbor_search.hpp>
 
@@ -61,6 +62,51 @@ RigidBoundary::RigidBoundary(Scalar spacing) : m_spacing(spacing) {
   m_inset = (resting - 0.5) * spacing;
 }
 
+namespace {
+
+/// The sub-triangles per edge of a face's uniform sampling: its longest edge over the spacing, at least 1.
+double face_steps(const Vec3Array& x, const Triangle& t, Scalar spacing) {
+  const Scalar longest =
+      std::max({(x[t[1]] - x[t[0]]).norm(), (x[t[2]] - x[t[1]]).norm(), (x[t[0]] - x[t[2]]).norm()});
+  return std::max(1.0, std::ceil(longest / spacing - 1e-9));
+}
+
+/// Calls `emit` with the barycentric weights of samples of a sliver face `t` laid from the corner A opposite
+/// its shortest edge BC: rows a spacing or less apart along the face's length (u, from A), each row across
+/// the face (t, from AB to AC) in pieces of a spacing or less, a sample at each piece's middle. Every point
+/// of the face is then within about a spacing of a sample, none lies on an edge, and their count is the
+/// face's rows plus about its area over half a square spacing: a sliver's similar sub-triangles were
+/// thousands of times that.
+template <class Emit>
+void sample_sliver(const Vec3Array& x, const Triangle& t, Scalar spacing, Emit&& emit) {
+  int a = 0;
+  Scalar shortest = INFINITY;
+  for (int k = 0; k < 3; ++k) {
+    const Scalar l = (x[t[(k + 2) % 3]] - x[t[(k + 1) % 3]]).norm();
+    if (l < shortest) {
+      shortest = l;
+      a = k;
+    }
+  }
+  const int b = (a + 1) % 3, c = (a + 2) % 3;
+  const Scalar length = std::max((x[t[b]] - x[t[a]]).norm(), (x[t[c]] - x[t[a]]).norm());
+  const int rows = std::max(1, static_cast<int>(std::ceil(length / spacing - 1e-9)));
+  for (int i = 0; i < rows; ++i) {
+    const Scalar u = (i + 0.5) / rows;
+    const int pieces = std::max(1, static_cast<int>(std::ceil(u * shortest / spacing - 1e-9)));
+    for (int j = 0; j < pieces; ++j) {
+      const Scalar across = (j + 0.5) / pieces;
+      Vec3 w;
+      w[a] = 1.0 - u;
+      w[b] = u * (1.0 - across);
+      w[c] = u * across;
+      emit(w);
+    }
+  }
+}
+
+}  // namespace
+
 RigidBoundary::Body RigidBoundary::sample(const RigidSurface& surface) const {
   Body body;
   body.nodes = surface.positions_t0.size();
@@ -70,23 +116,50 @@ RigidBoundary::Body RigidBoundary::sample(const RigidSurface& surface) const {
   // or corner would push along the normal of whichever face claimed it first, off the line through the other
   // faces' pressure, and on a floating ball such pushes added up to a steady torque that spun it up (7.8
   // rad/s in 0.3 s at 1 cm, 500 kg/m^3; test RigidBodies.AFloatingBallDoesNotSpinUp).
+  // A face of steps^2 similar sub-triangles has samples a spacing apart along its longest edge but far
+  // closer across a sliver: a 1 m x 4 cm box took 80,000 samples and a 1 m convex hull of needle faces
+  // 12.8 GB. A sliver is sampled in rows across it instead (sample_sliver), about its area over half a
+  // square spacing plus its length; a face the steps suit keeps them (the same samples as before).
+  const auto sliver_count = [&](const Triangle& t) {
+    const double area = 0.5 * (x[t[1]] - x[t[0]]).cross(x[t[2]] - x[t[0]]).norm();
+    return face_steps(x, t, m_spacing) + 2.0 * area / (m_spacing * m_spacing);
+  };
+  const auto is_sliver = [&](const Triangle& t) {
+    const double steps = face_steps(x, t, m_spacing);
+    return steps * steps > 2.0 * sliver_count(t);
+  };
+  double expected = 0.0;
+  for (const Triangle& t : surface.triangles)
+    expected += is_sliver(t) ? sliver_count(t) : face_steps(x, t, m_spacing) * face_steps(x, t, m_spacing);
+  if (!(expected <= kMaxSamplesPerBody)) {
+    throw Error("a dynamic body's " + std::to_string(surface.triangles.size()) + " faces would take about " +
+                format_number(std::ceil(expected)) + " boundary samples at the fluid's spacing " +
+                format_number(m_spacing) + " m, more than kMaxSamplesPerBody = " +
+                format_number(kMaxSamplesPerBody) + ": a body this large for the water should be static");
+  }
   Vec3Array points;
+  const auto add = [&](std::size_t f, const Vec3& w, const Vec3& inset_n) {
+    const Triangle& t = surface.triangles[f];
+    body.samples.push_back({static_cast<Index>(f), w, 0.0});
+    points.push_back(w[0] * x[t[0]] + w[1] * x[t[1]] + w[2] * x[t[2]] - inset_n);
+  };
   for (std::size_t f = 0; f < surface.triangles.size(); ++f) {
     const Triangle& t = surface.triangles[f];
     const Vec3 n = outward_normal(x, t);
     if (n.squaredNorm() == 0.0) continue;
-    const Scalar longest =
-        std::max({(x[t[1]] - x[t[0]]).norm(), (x[t[2]] - x[t[1]]).norm(), (x[t[0]] - x[t[2]]).norm()});
-    const int steps = std::max(1, static_cast<int>(std::ceil(longest / m_spacing - 1e-9)));
-    for (int i = 0; i < steps; ++i) {
-      for (int j = 0; i + j < steps; ++j) {
+    const double steps = face_steps(x, t, m_spacing);
+    if (is_sliver(t)) {
+      sample_sliver(x, t, m_spacing, [&](const Vec3& w) { add(f, w, m_inset * n); });
+      continue;
+    }
+    const int whole = static_cast<int>(steps);
+    for (int i = 0; i < whole; ++i) {
+      for (int j = 0; i + j < whole; ++j) {
         // The sub-triangle pointing like the face, then (where there is one) the one pointing the other way.
         for (const Scalar third : {Scalar(1.0 / 3.0), Scalar(2.0 / 3.0)}) {
-          if (third > 0.5 && i + j + 2 > steps) continue;
-          const Scalar a = (i + third) / steps, b = (j + third) / steps;
-          const Vec3 w(1.0 - a - b, a, b);
-          body.samples.push_back({static_cast<Index>(f), w, 0.0});
-          points.push_back(w[0] * x[t[0]] + w[1] * x[t[1]] + w[2] * x[t[2]] - m_inset * n);
+          if (third > 0.5 && i + j + 2 > whole) continue;
+          const Scalar a = (i + third) / whole, b = (j + third) / whole;
+          add(f, Vec3(1.0 - a - b, a, b), m_inset * n);
         }
       }
     }
