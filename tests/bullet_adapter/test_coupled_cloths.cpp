@@ -398,8 +398,14 @@ TEST(CoupledWorldChecks, ABadTimeStepIsRefusedAndChangesNothing) {
                                         {"CoupledWorld::step: dt must be > 0 and finite", shown});
     EXPECT_TRUE(Snapshot(coupled, bodies, user.steps) == before) << "dt " << dt;
   }
+  // One step of time.dt / 200 sent a cloth node to 827 m/s (the coupling's corrections over a sliver of
+  // time); a game's frame remainder must be carried over instead.
+  expect_throw<std::invalid_argument>([&] { coupled.step(kDt / 200); },
+                                      {"CoupledWorld::step: dt", "less than the scene's time.dt / 16"});
+  EXPECT_TRUE(Snapshot(coupled, bodies, user.steps) == before);
+  EXPECT_TRUE(coupled.step(kDt / 16).ok()) << "the shortest step allowed";
   EXPECT_TRUE(coupled.step(kDt).ok()) << "a good step after the refused ones";
-  EXPECT_EQ(coupled.steps(), before.steps + 1);
+  EXPECT_EQ(coupled.steps(), before.steps + 2);
   // The cloth engines refuse them too.
   expect_throw<std::invalid_argument>([&] { coupled.cloth(0).step(-1.0); },
                                       {"BulletCloth::step: dt", "got -1 s"});

@@ -54,6 +54,10 @@ class btSoftRigidDynamicsWorld;
 
 namespace drench::bullet {
 
+/// CoupledWorld::step refuses a dt shorter than the scene's time.dt over this: the coupling's position
+/// corrections of the cloth do not shrink with the step, and Bullet makes velocities of them over it.
+inline constexpr double kMinStepDivisor = 16.0;
+
 /// The triangle meshes of the world's static rigid bodies (a btBvhTriangleMeshShape on a body of mass 0, not
 /// kinematic), in world coordinates with the shape's scaling, in the world's order; Huber et al. 2013 sec. 5
 /// treats rigid objects as such meshes. Vertices keep the game's indexing (faces sharing an edge share its
@@ -167,7 +171,7 @@ class CoupledWorld {
   /// One coupled step of dt (unit: s), in the order of this file's header. First checks the call and the
   /// world, and throws before anything changes (time, steps, particles, nodes, masses) when:
   /// - dt is not > 0 and finite: std::invalid_argument "CoupledWorld::step: dt must be > 0 and finite, got
-  ///   <dt> s";
+  ///   <dt> s"; or dt is less than the scene's time.dt / kMinStepDivisor (std::invalid_argument naming both);
   /// - a cloth is no longer in the world's soft body array (the game called world.removeSoftBody, perhaps
   ///   to delete it) or its node or face count changed (torn, cut, refined: the coupling's edges and the
   ///   wetting's nodes would no longer match): drench::Error naming the cloth's index. A removed cloth is
