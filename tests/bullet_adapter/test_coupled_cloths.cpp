@@ -466,6 +466,15 @@ TEST(CoupledWorldChecks, RigidGravityOtherThanSoftBodyGravityIsRefusedAtConstruc
   user.world.getWorldInfo().m_gravity = btVector3(0, -5, 0);
   expect_throw<Error>([&] { coupled.step(); }, {"getWorldInfo().m_gravity (0, -5, 0)"});
   EXPECT_TRUE(Snapshot(coupled, bodies, user.steps) == before);
+  // A NaN passed "differs by more than the tolerance", and every step then blamed a cloth node.
+  const btScalar nan = std::numeric_limits<btScalar>::quiet_NaN();
+  user.world.getWorldInfo().m_gravity = btVector3(0, nan, 0);
+  expect_throw<Error>([&] { coupled.step(); }, {"getWorldInfo().m_gravity (0, nan, 0)"});
+  user.world.getWorldInfo().m_gravity = btVector3(0, -9.81, 0);
+  user.world.setGravity(btVector3(nan, -9.81, 0));
+  expect_throw<Error>([&] { coupled.step(); }, {"rigid-body gravity world.getGravity() (nan, -9.81"});
+  EXPECT_TRUE(Snapshot(coupled, bodies, user.steps) == before);
+  user.world.setGravity(btVector3(0, -9.81, 0));
   user.world.getWorldInfo().m_gravity = btVector3(0, -9.81, 0);
   EXPECT_TRUE(coupled.step().ok());
 }

@@ -50,12 +50,13 @@ std::string gravity_problem(const btSoftRigidDynamicsWorld& world, const SceneCo
   // drift apart at rest. Compared as Bullet stores it: a single-precision world holds the scene's gravity
   // rounded to float.
   const Vec3 scene_gravity_in_bullet = to_vec3(to_bt(scene.gravity));
-  if ((soft_gravity - scene_gravity_in_bullet).norm() > gravity_tolerance(scene.gravity)) {
+  // Written as "not within": a NaN gravity in the world passed a "differs by more than" test.
+  if (!((soft_gravity - scene_gravity_in_bullet).norm() <= gravity_tolerance(scene.gravity))) {
     return "gravity " + format_vec3(scene.gravity) + " (" + scene.source +
            ") differs from the Bullet world's soft-body gravity getWorldInfo().m_gravity " +
            format_vec3(soft_gravity) + "; set world.getWorldInfo().m_gravity to the scene's gravity";
   }
-  if ((rigid_gravity - soft_gravity).norm() > gravity_tolerance(soft_gravity)) {
+  if (!((rigid_gravity - soft_gravity).norm() <= gravity_tolerance(soft_gravity))) {
     return "the Bullet world's rigid-body gravity world.getGravity() " + format_vec3(rigid_gravity) +
            " differs from its soft-body gravity getWorldInfo().m_gravity " + format_vec3(soft_gravity) +
            "; set world.setGravity to the scene's gravity " + format_vec3(scene.gravity) + " (" +
