@@ -24,6 +24,8 @@ struct BulletRigidBodies::Tracked {
   btTransform end;         // the object's transform then
   Vec3Array world_end;     // `local` placed by `end` (unit: m)
   std::uint64_t seen = 0;  // the last step (m_step) the object was in the world
+  int proxy_id = -1;       // its broad-phase proxy's m_uniqueId: a new proxy is a new body at this address
+  std::uint64_t instance = 0;
 };
 
 namespace {
@@ -121,7 +123,15 @@ bool BulletRigidBodies::sees(const btCollisionObject& object) const {
 
 BulletRigidBodies::Tracked* BulletRigidBodies::track(const btCollisionObject& object, int index) {
   std::unique_ptr<Tracked>& slot = m_tracked[&object];
-  if (!slot) slot = std::make_unique<Tracked>();
+  // A body removed, deleted and another added at its address between two steps is a new body: before, it
+  // started where the old one had ended and swept the water from there (137 m/s, reported ok).
+  const btBroadphaseProxy* proxy = object.getBroadphaseHandle();
+  const int proxy_id = proxy ? proxy->m_uniqueId : -1;
+  if (!slot || slot->proxy_id != proxy_id) {
+    slot = std::make_unique<Tracked>();
+    slot->proxy_id = proxy_id;
+    slot->instance = ++m_instances;
+  }
   Tracked& t = *slot;
   t.seen = m_step;
   const btCollisionShape* shape = object.getCollisionShape();
@@ -160,11 +170,15 @@ void BulletRigidBodies::begin_step(std::vector<RigidSurface>& surfaces) {
   for (int i = 0; i < objects.size(); ++i) {
     const btCollisionObject& object = *objects[i];
     if (object.getInternalType() == btCollisionObject::CO_SOFT_BODY || !sees(object)) continue;
-    const bool was_there = m_tracked.count(&object) > 0 && m_tracked[&object]->seen + 1 == m_step;
+    const auto before = m_tracked.find(&object);
+    const std::uint64_t instance_before = before != m_tracked.end() ? before->second->instance : 0;
+    const bool seen_last_step = before != m_tracked.end() && before->second->seen + 1 == m_step;
     Tracked* t = track(object, i);
+    const bool was_there = seen_last_step && t != nullptr && t->instance == instance_before;
     if (t == nullptr || t->local.triangles.empty()) continue;
     RigidSurface s;
     s.key = reinterpret_cast<std::uintptr_t>(&object);
+    s.instance = t->instance;
     s.motion = motion_of(object);
     s.triangles = t->local.triangles;
     // A body the game moved between steps (a kinematic paddle, a teleport) moves within this step, from

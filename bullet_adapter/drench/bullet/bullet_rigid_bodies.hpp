@@ -73,6 +73,7 @@ class BulletRigidBodies final : public RigidBodySource {
   std::vector<std::string> m_warnings;
   Vec3 m_impulse_given = Vec3::Zero();
   std::uint64_t m_step = 0;
+  std::uint64_t m_instances = 0;  // bodies tracked so far: each new one's RigidSurface::instance
 };
 
 }  // namespace drench::bullet

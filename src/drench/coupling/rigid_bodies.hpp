@@ -25,6 +25,9 @@ enum class RigidMotion {
 /// One rigid body's surface over one step.
 struct RigidSurface {
   std::uint64_t key = 0;  ///< the same body has the same key at every step (the adapter: its address)
+  /// Changes when `key` names a new body: a game that removes a body and adds another may get the same
+  /// address back, and the new body must not start where the old one ended.
+  std::uint64_t instance = 0;
   RigidMotion motion = RigidMotion::STATIC;
   std::vector<Triangle> triangles;  ///< F, indices < M, counter-clockwise seen from outside
   Vec3Array positions_t0;           ///< M nodes at the start of the step (unit: m)

@@ -109,6 +109,7 @@ void sample_sliver(const Vec3Array& x, const Triangle& t, Scalar spacing, Emit&&
 
 RigidBoundary::Body RigidBoundary::sample(const RigidSurface& surface) const {
   Body body;
+  body.instance = surface.instance;
   body.nodes = surface.positions_t0.size();
   body.triangles = surface.triangles.size();
   const Vec3Array& x = surface.positions_t0;
@@ -191,7 +192,7 @@ bool RigidBoundary::place(const std::vector<RigidSurface>& surfaces) {
     keys.push_back(surface.key);
     auto it = m_bodies.find(surface.key);
     if (it == m_bodies.end() || it->second.nodes != surface.positions_t0.size() ||
-        it->second.triangles != surface.triangles.size()) {
+        it->second.triangles != surface.triangles.size() || it->second.instance != surface.instance) {
       it = m_bodies.insert_or_assign(surface.key, sample(surface)).first;
       resampled = true;
     }

@@ -63,6 +63,7 @@ class RigidBoundary {
   };
   struct Body {
     std::size_t nodes = 0, triangles = 0;
+    std::uint64_t instance = 0;  // RigidSurface::instance it was sampled for
     std::vector<Sample> samples;
     Vec3Array placed_at;  // the positions_t0 of its last placing (unit: m); empty before the first
   };

@@ -448,11 +448,21 @@ void Simulation::push_rigid_bodies() {
   m_with_obstacles->apply_body_impulses(nodes);
 }
 
+std::vector<std::pair<std::uint64_t, std::uint64_t>> Simulation::rigid_body_instances() const {
+  std::vector<std::pair<std::uint64_t, std::uint64_t>> bodies;
+  if (m_with_obstacles) {
+    for (const RigidSurface& s : m_with_obstacles->rigid_surfaces())
+      bodies.emplace_back(s.key, s.instance);
+  }
+  return bodies;
+}
+
 void Simulation::audit_face_jumps_since_last_step(StepStatus& status) {
   const ClothMesh& mesh = m_engine->mesh();
   // The first step, or a mesh whose layout changed (a body came or went), has no end to compare with.
+  // A body replaced by another of the same mesh (removed, and another added) is no jump of its faces.
   if (!m_effects.leak_audit || m_audited_end.size() != mesh.node_count() ||
-      !same_triangles(m_audited_triangles, mesh.triangles)) {
+      !same_triangles(m_audited_triangles, mesh.triangles) || rigid_body_instances() != m_audited_bodies) {
     return;
   }
   ParticleSet& p = m_fluid->particles();
@@ -611,6 +621,7 @@ void Simulation::step_cloth_and_couple(Scalar dt, StepStatus& status) {
     if (m_non_finite_node < 0) {
       m_audited_end = mesh.positions_t1;
       if (!same_triangles(m_audited_triangles, mesh.triangles)) m_audited_triangles = mesh.triangles;
+      m_audited_bodies = rigid_body_instances();
     } else {
       m_audited_end.clear();
     }

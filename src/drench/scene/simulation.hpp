@@ -175,6 +175,8 @@ class Simulation {
   /// The leak audit of the faces' move from where the last audited step ended them to where the engine
   /// starts them now (audit_face_jumps), after the engine's begin_step; sets LEAKED in `status` naming the
   /// particle and face when a face crossed one.
+  /// (key, instance) of each rigid surface of the step, in order: which bodies the mesh's faces belong to.
+  std::vector<std::pair<std::uint64_t, std::uint64_t>> rigid_body_instances() const;
   void audit_face_jumps_since_last_step(StepStatus& status);
   void remove_killed();
   /// The cloth's blow-up checks after a step: the fastest node against cloth.max_speed (RUNAWAY_NODE), the
@@ -207,6 +209,7 @@ class Simulation {
   LeakAudit m_leak_audit;                     // its grid of the mesh's faces kept from step to step
   Vec3Array m_audited_end;                    // the mesh's nodes where the last audited step ended them (m)
   std::vector<Triangle> m_audited_triangles;  // the mesh's triangles then
+  std::vector<std::pair<std::uint64_t, std::uint64_t>> m_audited_bodies;  // (key, instance) of its bodies
   std::uint32_t m_coupling_status = 0;
   std::uint32_t m_last_coupling_status = 0;
   std::int64_t m_non_finite_node = -1;
