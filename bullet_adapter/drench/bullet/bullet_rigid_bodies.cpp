@@ -162,6 +162,30 @@ BulletRigidBodies::Tracked* BulletRigidBodies::track(const btCollisionObject& ob
   return &t;
 }
 
+void BulletRigidBodies::check_bodies() const {
+  const btCollisionObjectArray& objects = m_world.getCollisionObjectArray();
+  for (int i = 0; i < objects.size(); ++i) {
+    const btCollisionObject& object = *objects[i];
+    if (object.getInternalType() == btCollisionObject::CO_SOFT_BODY || !sees(object)) continue;
+    const Vec3 origin = to_vec3(object.getWorldTransform().getOrigin());
+    const Eigen::Matrix3d basis = to_matrix3(object.getWorldTransform().getBasis());
+    // allFinite first: Eigen's maxCoeff passes over a NaN.
+    if (!origin.allFinite() || !(origin.cwiseAbs().maxCoeff() <= kMaxCoordinate) || !basis.allFinite()) {
+      throw Error(describe(object, i) + " is at " + format_vec3(origin) +
+                  (basis.allFinite() ? "" : " with a non-finite rotation") + ": the water's world reaches " +
+                  format_number(kMaxCoordinate) +
+                  " m from the origin; move it back, or remove it from the world");
+    }
+    if (const btRigidBody* body = btRigidBody::upcast(&object)) {
+      const Vec3 v = to_vec3(body->getLinearVelocity()), w = to_vec3(body->getAngularVelocity());
+      if (!v.allFinite() || !w.allFinite()) {
+        throw Error(describe(object, i) + " has a non-finite velocity " + format_vec3(v) + ", angular " +
+                    format_vec3(w));
+      }
+    }
+  }
+}
+
 void BulletRigidBodies::begin_step(std::vector<RigidSurface>& surfaces) {
   ++m_step;
   surfaces.clear();

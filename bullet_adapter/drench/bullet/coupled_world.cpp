@@ -20,10 +20,6 @@ namespace drench::bullet {
 
 namespace {
 
-std::string format_vec3(const Vec3& v) {
-  return "(" + format_number(v.x()) + ", " + format_number(v.y()) + ", " + format_number(v.z()) + ")";
-}
-
 void check_scene(const SceneConfig& scene) {
   if (!(scene.time.dt > 0.0) || !std::isfinite(scene.time.dt)) {
     throw SceneError("time.dt must be > 0 and finite, got " + format_number(scene.time.dt) + " (" +
@@ -208,6 +204,7 @@ void CoupledWorld::check_world() const {
   }
   const std::string problem = gravity_problem(world, m_simulation->config());
   if (!problem.empty()) throw Error(problem + ", or build a new CoupledWorld for the new gravity");
+  if (m_rigid) m_rigid->check_bodies();
 }
 
 double CoupledWorld::water_held(std::size_t i) const {

@@ -34,10 +34,6 @@ void check_range(const std::string& key, double value, double low, bool low_open
   if (!(above && below)) bad_setting(key, range, format_number(value));
 }
 
-std::string format_vec3(const Vec3& v) {
-  return "(" + format_number(v.x()) + ", " + format_number(v.y()) + ", " + format_number(v.z()) + ")";
-}
-
 double triangle_area(const Vec3& a, const Vec3& b, const Vec3& c) {
   return 0.5 * (b - a).cross(c - a).norm();
 }

@@ -15,6 +15,10 @@ std::string format_number(double value) {
   return buffer;
 }
 
+std::string format_vec3(const Vec3& v) {
+  return "(" + format_number(v.x()) + ", " + format_number(v.y()) + ", " + format_number(v.z()) + ")";
+}
+
 void require_setting(bool ok, const std::string& key, const std::string& range, double value) {
   if (!ok) throw SceneError(key + " must be " + range + ", got " + format_number(value));
 }

@@ -5,6 +5,8 @@
 #include <stdexcept>
 #include <string>
 
+#include <drench/common/types.hpp>
+
 namespace drench {
 
 /// Base of every exception drench throws. The message always names the culprit (file, JSON path, particle or
@@ -29,6 +31,9 @@ class IoError : public Error {
 
 /// Formats a double for error messages in the fewest digits (15 to 17) that read back as the same double.
 std::string format_number(double value);
+
+/// A vector as "(x, y, z)", each as format_number writes it.
+std::string format_vec3(const Vec3& v);
 
 /// Throws SceneError("<key> must be <range>, got <value>") unless `ok`: a setting built in code held to the
 /// range the scene loader gives its key (e.g. require_setting(v > 0, "fluid.cfl", "in (0, 1]", v)).

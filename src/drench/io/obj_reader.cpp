@@ -18,10 +18,6 @@ namespace drench {
 
 namespace {
 
-std::string format_vec3(const Vec3& v) {
-  return "(" + format_number(v.x()) + ", " + format_number(v.y()) + ", " + format_number(v.z()) + ")";
-}
-
 std::string obj_error(const std::string& key, const std::string& path, const std::string& problem) {
   return key + ": OBJ file \"" + path + "\" " + problem;
 }
