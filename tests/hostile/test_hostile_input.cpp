@@ -65,6 +65,19 @@ testing::AssertionResult contains(const std::string& text, const std::string& pa
   return testing::AssertionFailure() << "\"" << text << "\" does not contain \"" << part << "\"";
 }
 
+/// `drench run` of the jet on a cloth with `--set assignment`: refused at once (exit 1 within 5 s), its
+/// message containing `expected`, and nothing written.
+void expect_jet_refused_at_once(const std::string& assignment, const std::string& expected) {
+  const test::TempDir dir;
+  const Command c = drench_command("run " + demo("jet_on_cloth.json") + " --steps 1 --out " +
+                                       (dir.path() / "out").string() + " --set " + assignment,
+                                   dir.path() / "log");
+  EXPECT_EQ(c.status, 1) << assignment << ": " << c.output;
+  EXPECT_TRUE(contains(c.output, expected)) << c.output;
+  EXPECT_LT(c.seconds, 5.0) << assignment;
+  EXPECT_FALSE(fs::exists(dir.path() / "out")) << assignment;
+}
+
 SceneConfig parse(const std::string& text) {
   return parse_scene(nlohmann::json::parse(text), "x.json");
 }
@@ -241,14 +254,7 @@ TEST(HostileInput, EmitterThatWouldEmitNothingIsRefusedNamingTheKey) {
       },
       {"fluid.particle_spacing is too fine for emitters[0]"}));
   // 1e-308 hung in the nozzle's emit loop: refused in the loader, before the loop.
-  const test::TempDir dir;
-  const Command c = drench_command("run " + demo("jet_on_cloth.json") + " --out " +
-                                       (dir.path() / "out").string() + " --set fluid.particle_spacing=1e-308",
-                                   dir.path() / "log");
-  EXPECT_EQ(c.status, 1) << c.output;
-  EXPECT_TRUE(contains(c.output, "fluid.particle_spacing")) << c.output;
-  EXPECT_LT(c.seconds, 5.0);
-  EXPECT_FALSE(fs::exists(dir.path() / "out"));
+  expect_jet_refused_at_once("fluid.particle_spacing=1e-308", "fluid.particle_spacing");
   // A layer period below what double resolves over the run's times: the loop could not advance.
   EXPECT_TRUE(throws_containing<SceneError>(
       [] {
@@ -346,14 +352,8 @@ TEST(HostileInput, SettingsWhoseCostHasNoBoundAreRefusedNamingTheKey) {
   // (FluidSolver.RefusesSettingsOutOfRangeNamingTheField holds the fluid's bounds in code.)
 
   // The command refuses the 1 m cloth at once and writes nothing.
-  const test::TempDir dir;
-  const Command c = drench_command("run " + demo("jet_on_cloth.json") + " --steps 1 --out " +
-                                       (dir.path() / "out").string() + " --set coupling.cloth_thickness=1",
-                                   dir.path() / "log");
-  EXPECT_EQ(c.status, 1) << c.output;
-  EXPECT_TRUE(contains(c.output, "coupling.cloth_thickness must be <= 2 fluid.particle_spacing")) << c.output;
-  EXPECT_LT(c.seconds, 5.0);
-  EXPECT_FALSE(fs::exists(dir.path() / "out"));
+  expect_jet_refused_at_once("coupling.cloth_thickness=1",
+                             "coupling.cloth_thickness must be <= 2 fluid.particle_spacing");
 }
 
 TEST(HostileInput, PositionsBeyondWhatFramesHoldAreRefusedBeforeTheFolder) {

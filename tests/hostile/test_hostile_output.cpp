@@ -359,13 +359,9 @@ fs::path run_with_reconstruction(const TempDir& dir) {
   return out;
 }
 
-// SIGINT during reconstruct left surfaces at two cell sizes under a reconstruct.json of one.
-TEST(HostileOutput, AnInterruptedReconstructLeavesTheEarlierSurfacesByteForByte) {
-  const TempDir dir;
-  const fs::path out = run_with_reconstruction(dir);
-  const auto before = snapshot(out);
-  // A fine grid (about 1 s a frame here), so that the reconstruction is still under way when its first new
-  // surface exists.
+/// Starts `drench reconstruct` of the run in `out` on a fine grid (about 1 s a frame here), sends SIGINT once
+/// its first new surface is staged, and returns its exit status.
+int interrupt_reconstruct_after_its_first_surface(const TempDir& dir, const fs::path& out) {
   const pid_t pid = start_drench(
       {"reconstruct", out.string(), "--set", "surface.cell_size=0.004", "--threads", "1", "--quiet"},
       dir.path(), dir.path() / "log.txt");
@@ -375,7 +371,15 @@ TEST(HostileOutput, AnInterruptedReconstructLeavesTheEarlierSurfacesByteForByte)
   });
   EXPECT_TRUE(started) << read_text(dir.path() / "log.txt");
   ::kill(pid, SIGINT);
-  EXPECT_EQ(wait_exit(pid, 30.0), 130)
+  return wait_exit(pid, 30.0);
+}
+
+// SIGINT during reconstruct left surfaces at two cell sizes under a reconstruct.json of one.
+TEST(HostileOutput, AnInterruptedReconstructLeavesTheEarlierSurfacesByteForByte) {
+  const TempDir dir;
+  const fs::path out = run_with_reconstruction(dir);
+  const auto before = snapshot(out);
+  EXPECT_EQ(interrupt_reconstruct_after_its_first_surface(dir, out), 130)
       << "the reconstruction ended before the signal? " << read_text(dir.path() / "log.txt");
   EXPECT_EQ(snapshot(out), before) << "the surfaces or reconstruct.json changed";
   for (const std::string& name : entries(out))
@@ -393,17 +397,9 @@ TEST(HostileOutput, ASignalDuringTheLastFrameStillLeavesTheEarlierSurfaces) {
             0)
       << read_text(dir.path() / "log.txt");
   const auto before = snapshot(out);
-  // Frame 0's staged surface marks the start of frame 1, the last, which takes about 1 s on this grid.
-  const pid_t pid = start_drench(
-      {"reconstruct", out.string(), "--set", "surface.cell_size=0.004", "--threads", "1", "--quiet"},
-      dir.path(), dir.path() / "log.txt");
-  const bool started = wait_for_file(out, 30.0, [](const fs::path& p) {
-    return p.parent_path().filename().string().rfind("reconstruct.tmp-", 0) == 0 &&
-           p.filename() == "surface_0000.ply";
-  });
-  EXPECT_TRUE(started) << read_text(dir.path() / "log.txt");
-  ::kill(pid, SIGINT);
-  EXPECT_EQ(wait_exit(pid, 30.0), 130) << read_text(dir.path() / "log.txt");
+  // Frame 0's staged surface marks the start of frame 1, the last.
+  EXPECT_EQ(interrupt_reconstruct_after_its_first_surface(dir, out), 130)
+      << read_text(dir.path() / "log.txt");
   EXPECT_TRUE(snapshot(out) == before) << "the surfaces changed";  // not EXPECT_EQ: it would print the frames
   EXPECT_FALSE(fs::exists(out / "reconstruct.json"));
 }
