@@ -562,6 +562,29 @@ TEST(RigidBodies, ABodyAtNaNOrFarAwayIsRefusedNamingIt) {
   EXPECT_TRUE(coupled.step().ok());
 }
 
+// A shape out of range was refused without naming its object, and one that went out of range later threw
+// from the step; caught, the step went on with the object's old mesh holding the water.
+TEST(RigidBodies, AShapeOutOfRangeIsNamedByItsObject) {
+  const Vec3 gravity(0, -9.81, 0);
+  {
+    GameWorld game(gravity);
+    game.add(std::make_unique<btSphereShape>(btScalar(1e9)), 0.0, Vec3(0, -2, 0));
+    EXPECT_TRUE(::drench::test::throws_containing<SceneError>(
+        [&] { CoupledWorld(game.world, *game.cloth, water_scene(0.01, gravity)); },
+        {"collision object 1 (SPHERE): ", "kMaxShapeMeshTriangles"}));
+  }
+  GameWorld game(gravity);
+  btRigidBody& table = game.add_box(Vec3(0.3, 0.05, 0.3), 0.0, Vec3(0, -0.05, 0));
+  CoupledWorld coupled(game.world, *game.cloth, water_scene(0.01, gravity));
+  ASSERT_TRUE(coupled.step().ok());
+  table.getCollisionShape()->setLocalScaling(btVector3(0, 1, 1));
+  ASSERT_TRUE(coupled.step().ok());
+  const std::vector<std::string> warnings = coupled.rigid_bodies()->take_warnings();
+  ASSERT_EQ(warnings.size(), 1u);
+  EXPECT_NE(warnings[0].find("collision object 1 (Box): "), std::string::npos) << warnings[0];
+  EXPECT_NE(warnings[0].find("it does not hold the water"), std::string::npos) << warnings[0];
+}
+
 TEST(RigidBodies, BulletsCollisionFilterSaysWhichObjectsTheWaterSees) {
   const Vec3 gravity(0, -9.81, 0);
   GameWorld game(gravity);

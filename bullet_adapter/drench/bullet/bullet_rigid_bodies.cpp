@@ -148,11 +148,21 @@ BulletRigidBodies::Tracked* BulletRigidBodies::track(const btCollisionObject& ob
     t.local = TriangleMesh();
     return nullptr;
   }
-  t.local = shape_mesh(*shape, m_options.mesh);
-  const std::string problem = mesh_problem(*shape, t.local);
+  std::string problem;
+  bool out_of_range = false;
+  try {
+    t.local = shape_mesh(*shape, m_options.mesh);
+    problem = mesh_problem(*shape, t.local);
+  } catch (const SceneError& e) {
+    // A shape out of range (a scaling of 0, a sphere of 1e9 m) was reported without the object, and after
+    // a caught throw the object's old mesh went on holding the water.
+    problem = e.what();
+    out_of_range = true;
+  }
   if (!problem.empty()) {
     // At construction the game is setting its level up: an error. Later a warning, and the object is left
     // out.
+    if (m_step == 0 && out_of_range) throw SceneError(describe(object, index) + ": " + problem);
     if (m_step == 0) throw Error(describe(object, index) + ": " + problem);
     m_warnings.push_back(describe(object, index) + ": " + problem + "; it does not hold the water");
     t.supported = false;
