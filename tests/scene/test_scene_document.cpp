@@ -172,6 +172,17 @@ TEST(SceneDocument, ASceneBuiltInCodeIsRefusedAsItsFileWouldBe) {
   EXPECT_TRUE(test::throws_containing<SceneError>(
       [&] { Simulation simulation(config); },
       {"emitters[0].radius must be in (0, 10000000], got 1000000000.0 (<code>)"}));
+  // Nor beyond the machine's memory: a 10 x 9.5 x 10 m block of 1 cm water built in code threw
+  // std::bad_alloc from a CoupledWorld's constructor.
+  SceneConfig block;
+  block.source = "<code>";
+  block.emitters.emplace_back();
+  block.emitters[0].kind = EmitterSettings::Kind::BOX;
+  block.emitters[0].box.min = Vec3(-5, 0.5, -5);
+  block.emitters[0].box.max = Vec3(5, 10, 5);
+  block.fluid.particle_spacing = 0.001;  // 9.5e11 particles: beyond any machine's memory
+  EXPECT_TRUE(test::throws_containing<SceneError>([&] { Simulation simulation(block); },
+                                                  {"emitters[0]", "bytes of memory", "(<code>)"}));
 }
 
 }  // namespace

@@ -17,6 +17,7 @@
 #include <drench/coupling/cloth_obstacle.hpp>
 #include <drench/io/obj_reader.hpp>
 #include <drench/scene/scene_document.hpp>
+#include <drench/scene/scene_resources.hpp>
 #include <drench/sph/boundary_sampling.hpp>
 
 namespace drench {
@@ -45,6 +46,10 @@ class KinematicCloth {
 /// here, before anything is built.
 const SceneConfig& checked(const SceneConfig& config, const SuppliedMeshes& supplied = {}) {
   check_scene_built_in_code(config, supplied);
+  // The memory too, as drench run checks it: a program's scene of a few hundred million particles threw
+  // std::bad_alloc from deep in the constructor instead of naming the emitter.
+  check_resources(config, estimate_resources(config),
+                  machine_limits("", std::numeric_limits<double>::infinity()));
   return config;
 }
 
