@@ -177,6 +177,8 @@ class CoupledWorld {
   ///   wetting's nodes would no longer match): drench::Error naming the cloth's index. A removed cloth is
   ///   never dereferenced, so deleting it after removeSoftBody is safe; deleting a body still in the world
   ///   breaks Bullet's own next step, which no check here can see;
+  /// - built to couple every soft body of the world, the world now has another count of them (one added
+  ///   since would not be coupled): drench::Error naming both counts;
   /// - the world's rigid-body or soft-body gravity is no longer the scene's (world.setGravity or
   ///   getWorldInfo().m_gravity changed since): drench::Error naming both values.
   /// Then never throws for numerical trouble: see the report.
@@ -247,7 +249,8 @@ class CoupledWorld {
     const btSoftBody* body;    // compared with the world's soft bodies before it is read
     std::size_t nodes, faces;  // when coupled
   };
-  std::vector<CoupledBody> m_bodies;           // one per cloth
+  std::vector<CoupledBody> m_bodies;  // one per cloth
+  bool m_every_soft_body = false;     // built by the constructor that couples every soft body of the world
   std::unique_ptr<BulletRigidBodies> m_rigid;  // null for the owned world; outlives m_simulation
   std::unique_ptr<Simulation> m_simulation;
 };
