@@ -121,17 +121,19 @@ RigidBoundary::Body RigidBoundary::sample(const RigidSurface& surface) const {
   // closer across a sliver: a 1 m x 4 cm box took 80,000 samples and a 1 m convex hull of needle faces
   // 12.8 GB. A sliver is sampled in rows across it instead (sample_sliver), about its area over half a
   // square spacing plus its length; a face the steps suit keeps them (the same samples as before).
-  const auto sliver_count = [&](const Triangle& t) {
-    const double area = 0.5 * (x[t[1]] - x[t[0]]).cross(x[t[2]] - x[t[0]]).norm();
-    return face_steps(x, t, m_spacing) + 2.0 * area / (m_spacing * m_spacing);
-  };
-  const auto is_sliver = [&](const Triangle& t) {
-    const double steps = face_steps(x, t, m_spacing);
-    return steps * steps > 2.0 * sliver_count(t);
-  };
+  // Per face: its steps, and whether it is a sliver (its steps^2 more than twice its rows plus its area over
+  // half a square spacing, what sample_sliver takes), decided once for the count and the sampling.
+  std::vector<double> steps(surface.triangles.size());
+  std::vector<bool> sliver(surface.triangles.size());
   double expected = 0.0;
-  for (const Triangle& t : surface.triangles)
-    expected += is_sliver(t) ? sliver_count(t) : face_steps(x, t, m_spacing) * face_steps(x, t, m_spacing);
+  for (std::size_t f = 0; f < surface.triangles.size(); ++f) {
+    const Triangle& t = surface.triangles[f];
+    steps[f] = face_steps(x, t, m_spacing);
+    const double area = 0.5 * (x[t[1]] - x[t[0]]).cross(x[t[2]] - x[t[0]]).norm();
+    const double sliver_count = steps[f] + 2.0 * area / (m_spacing * m_spacing);
+    sliver[f] = steps[f] * steps[f] > 2.0 * sliver_count;
+    expected += sliver[f] ? sliver_count : steps[f] * steps[f];
+  }
   if (!(expected <= kMaxSamplesPerBody)) {
     throw Error("a dynamic body's " + std::to_string(surface.triangles.size()) + " faces would take about " +
                 format_number(std::ceil(expected)) + " boundary samples at the fluid's spacing " +
@@ -148,12 +150,11 @@ RigidBoundary::Body RigidBoundary::sample(const RigidSurface& surface) const {
     const Triangle& t = surface.triangles[f];
     const Vec3 n = outward_normal(x, t);
     if (n.squaredNorm() == 0.0) continue;
-    const double steps = face_steps(x, t, m_spacing);
-    if (is_sliver(t)) {
+    if (sliver[f]) {
       sample_sliver(x, t, m_spacing, [&](const Vec3& w) { add(f, w, m_inset * n); });
       continue;
     }
-    const int whole = static_cast<int>(steps);
+    const int whole = static_cast<int>(steps[f]);
     for (int i = 0; i < whole; ++i) {
       for (int j = 0; i + j < whole; ++j) {
         // The sub-triangle pointing like the face, then (where there is one) the one pointing the other way.
