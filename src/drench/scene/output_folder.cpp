@@ -86,6 +86,15 @@ struct FolderEntries {
   std::vector<std::string> folders;  ///< real folders (not links to one)
 };
 
+/// The first of `entries`, folders then files, in name order, that `patterns` do not cover; "" when all are.
+std::string first_not_covered(const FolderEntries& entries, const std::vector<std::string>& patterns) {
+  for (const std::string& folder : entries.folders)
+    if (!folder_covered(patterns, folder)) return folder;
+  for (const std::string& file : entries.files)
+    if (!file_covered(patterns, file)) return file;
+  return "";
+}
+
 FolderEntries list_entries(const fs::path& dir, const std::string& flag) {
   FolderEntries entries;
   std::error_code ec;
@@ -163,20 +172,14 @@ FolderEntries check_folder(const fs::path& dir, const std::string& flag, const s
   if (entries.files.empty() && entries.folders.empty()) return {};
   const std::string& found = entries.files.empty() ? entries.folders.front() : entries.files.front();
   const std::vector<std::string> listed = read_manifest(dir, flag, command, found);
-  const auto not_drenchs = [&](const std::string& entry, bool in_manifest) {
-    return IoError(flag + " " + dir.string() + " --overwrite: " + (dir / entry).string() +
-                   " was not written by drench (" +
-                   (in_manifest ? "drench " + command + " writes no such file"
-                                : std::string(kOutputManifest) + " does not list it") +
-                   "); nothing deleted");
-  };
-  for (const std::string& folder : entries.folders) {
-    const bool in_manifest = folder_covered(listed, folder);
-    if (!in_manifest || !folder_covered(patterns, folder)) throw not_drenchs(folder, in_manifest);
-  }
-  for (const std::string& file : entries.files) {
-    const bool in_manifest = file_covered(listed, file);
-    if (!in_manifest || !file_covered(patterns, file)) throw not_drenchs(file, in_manifest);
+  // Covered by the manifest and by the command's own names both: the manifest alone may be forged.
+  for (const auto& [covering, why] : {std::pair{&listed, std::string(kOutputManifest) + " does not list it"},
+                                      std::pair{&patterns, "drench " + command + " writes no such file"}}) {
+    const std::string entry = first_not_covered(entries, *covering);
+    if (!entry.empty()) {
+      throw IoError(flag + " " + dir.string() + " --overwrite: " + (dir / entry).string() +
+                    " was not written by drench (" + why + "); nothing deleted");
+    }
   }
   return entries;
 }
@@ -226,15 +229,11 @@ void check_folder_holds_only(const std::string& dir, const std::string& command,
                              const std::vector<std::string>& patterns) {
   std::error_code ec;
   if (!fs::exists(dir, ec)) return;
-  const FolderEntries entries = list_entries(dir, "drench " + command);
-  for (const std::vector<std::string>* list : {&entries.folders, &entries.files}) {
-    for (const std::string& entry : *list) {
-      if (list == &entries.folders ? folder_covered(patterns, entry) : file_covered(patterns, entry))
-        continue;
-      throw IoError((fs::path(dir) / entry).string() + " was not written by drench " + command +
-                    ", which writes only " + nlohmann::json(patterns).dump() +
-                    " there; nothing written: move it away or choose another folder");
-    }
+  const std::string entry = first_not_covered(list_entries(dir, "drench " + command), patterns);
+  if (!entry.empty()) {
+    throw IoError((fs::path(dir) / entry).string() + " was not written by drench " + command +
+                  ", which writes only " + nlohmann::json(patterns).dump() +
+                  " there; nothing written: move it away or choose another folder");
   }
 }
 
