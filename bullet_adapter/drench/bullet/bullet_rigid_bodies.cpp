@@ -124,7 +124,8 @@ bool BulletRigidBodies::sees(const btCollisionObject& object) const {
 BulletRigidBodies::Tracked* BulletRigidBodies::track(const btCollisionObject& object, int index) {
   std::unique_ptr<Tracked>& slot = m_tracked[&object];
   // A body removed, deleted and another added at its address between two steps is a new body: before, it
-  // started where the old one had ended and swept the water from there (137 m/s, reported ok).
+  // started where the old one had ended and swept the water from there (test
+  // RigidBodies.ABodyRespawnedAtTheSameAddressStartsWhereItIsPlaced).
   const btBroadphaseProxy* proxy = object.getBroadphaseHandle();
   const int proxy_id = proxy ? proxy->m_uniqueId : -1;
   if (!slot || slot->proxy_id != proxy_id) {

@@ -205,7 +205,7 @@ void CoupledWorld::check_world() const {
     }
   }
   // Coupled as "every soft body of the world": one added since would let the water through it silently
-  // (1,538 of 1,932 particles passed a cloth added after construction).
+  // (test CoupledCloths.ASoftBodyAddedAfterEveryOneWasCoupledIsRefused).
   if (m_every_soft_body && static_cast<std::size_t>(in_world.size()) != m_bodies.size()) {
     throw Error("the world has " + std::to_string(in_world.size()) + " soft bodies, " +
                 std::to_string(m_bodies.size()) +
@@ -231,8 +231,8 @@ double CoupledWorld::water_held(std::size_t i) const {
 CoupledStepReport CoupledWorld::step(double dt) {
   check_time_step("CoupledWorld::step", dt);
   // The coupling's corrections of the cloth's positions are what the water needs, whatever the step, and
-  // Bullet turns a position change into a velocity over the step: one step of time.dt / 200 after steps of
-  // time.dt sent a cloth node to 827 m/s (1/50: 206 m/s; 1/20 and 1/10 stayed sound).
+  // Bullet turns a position change into a velocity over the step, so a far shorter step flings the cloth
+  // (test CoupledWorldChecks.ABadTimeStepIsRefusedAndChangesNothing).
   const double least = m_simulation->config().time.dt / kMinStepDivisor;
   if (dt < least) {
     throw std::invalid_argument(

@@ -199,8 +199,8 @@ RenderResult render_run(const RenderOptions& options) {
   }
   // The framebuffers and the read-back, per pixel: 4 samples of colour and depth (32 bytes), the resolved
   // colour, the pixels read back and the PNG rows (about 16); transparent water doubles the multisampled
-  // targets and adds three full-size textures. A 16384 x 16384 image took 5.8 GB before its framebuffer
-  // failed, so the size is checked against the memory first, naming it.
+  // targets and adds three full-size textures. Checked against the memory first, naming the size, rather
+  // than failing in the driver after gigabytes were taken.
   const double bytes_per_pixel = water.shading == WaterShading::TRANSPARENT ? 96.0 : 48.0;
   const double image_bytes = static_cast<double>(options.width) * options.height * bytes_per_pixel;
   const double available = machine_limits("", 0).memory_bytes;

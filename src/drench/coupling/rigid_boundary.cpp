@@ -118,11 +118,12 @@ RigidBoundary::Body RigidBoundary::sample(const RigidSurface& surface) const {
   // faces' pressure, and on a floating ball such pushes added up to a steady torque that spun it up (7.8
   // rad/s in 0.3 s at 1 cm, 500 kg/m^3; test RigidBodies.AFloatingBallDoesNotSpinUp).
   // A face of steps^2 similar sub-triangles has samples a spacing apart along its longest edge but far
-  // closer across a sliver: a 1 m x 4 cm box took 80,000 samples and a 1 m convex hull of needle faces
-  // 12.8 GB. A sliver is sampled in rows across it instead (sample_sliver), about its area over half a
-  // square spacing plus its length; a face the steps suit keeps them (the same samples as before).
-  // Per face: its steps, and whether it is a sliver (its steps^2 more than twice its rows plus its area over
-  // half a square spacing, what sample_sliver takes), decided once for the count and the sampling.
+  // closer across a sliver, thousands of times what its area needs (test
+  // RigidBoundary.ASliverFaceTakesSamplesByItsAreaAndIsCoveredByThem). A sliver is sampled in rows across it
+  // instead (sample_sliver), about its area over half a square spacing plus its length; a face the steps suit
+  // keeps them (the same samples as before). Per face: its steps, and whether it is a sliver (its steps^2
+  // more than twice its rows plus its area over half a square spacing, what sample_sliver takes), decided
+  // once for the count and the sampling.
   std::vector<double> steps(surface.triangles.size());
   std::vector<bool> sliver(surface.triangles.size());
   double expected = 0.0;

@@ -153,7 +153,7 @@ FolderEntries check_folder(const fs::path& dir, const std::string& flag, const s
   if (!fs::exists(dir, ec)) return {};
   if (!overwrite) {
     // The first entry in name order is a top-level one: listing only that level keeps a refusal of a
-    // folder such as $HOME (260,000 entries, 10.6 s when walked whole) instant.
+    // folder such as $HOME instant instead of a walk of the whole tree.
     std::string found;
     for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
       const std::string name = it->path().filename().generic_string();
