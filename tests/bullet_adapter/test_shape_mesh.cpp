@@ -843,6 +843,18 @@ TEST(ShapeMesh, MeshesTooFineForTheirShapeAreRefused) {
   o.plane_half_size = 100.0;
   o.plane_cell = 0.01;
   EXPECT_TRUE(throws_containing<Error>([&] { shape_mesh(plane, o); }, {"STATICPLANE: ", "plane_cell 0.01"}));
+  // Facet counts past int: a multi-sphere of 1e7 m threw std::length_error, naming nothing.
+  const btVector3 centre(0, 0, 0);
+  const btScalar huge = 1e7;
+  btMultiSphereShape spheres(&centre, &huge, 1);
+  EXPECT_TRUE(throws_containing<Error>([&] { shape_mesh(spheres, {}); },
+                                       {"MultiSphere: ", "max_edge 0.02", "kMaxShapeMeshTriangles"}));
+  btConvexHullShape hull;
+  for (int i = 0; i < 4; ++i)
+    hull.addPoint(btVector3(i == 1, i == 2, i == 3));
+  hull.setMargin(1e7);
+  EXPECT_TRUE(
+      throws_containing<Error>([&] { shape_mesh(hull, {}); }, {"Convex: ", "kMaxShapeMeshTriangles"}));
 }
 
 TEST(ShapeMesh, CylinderWhoseMarginExceedsItsExtentsIsRefused) {

@@ -378,8 +378,13 @@ Vec3Array cube_sphere_directions(int n) {
 
 /// Cells per cube edge so that support points of a surface whose radius of curvature is at most `radius`
 /// are at most `max_edge` apart (diagonals included); at least 4 (30-degree steps) to round small margins.
-int cube_sphere_cells(double radius, double max_edge) {
-  return std::max(4, static_cast<int>(std::ceil(2.0 * std::sqrt(2.0) * radius / max_edge)));
+/// @throws SceneError when the cube-sphere would have more than kMaxShapeMeshTriangles triangles (counted
+/// before the int, which a sphere of 1e7 m overflowed)
+int cube_sphere_cells(double radius, double max_edge, const std::string& path,
+                      const btCollisionShape& shape) {
+  const double cells = std::max(4.0, std::ceil(2.0 * std::sqrt(2.0) * radius / max_edge));
+  check_triangle_count(12.0 * (cells + 1.0) * (cells + 1.0), path, shape, max_edge_text(max_edge));
+  return static_cast<int>(cells);
 }
 
 /// `points` without the ones closer than `radius` to an earlier one (a spatial hash of cells `radius`
@@ -475,7 +480,7 @@ TriangleMesh polyhedron_mesh(const Vec3Array& points, double margin, double max_
     }
   }
   const Vec3Array& corners = core.triangles.empty() ? points : core.positions;
-  const int cells = cube_sphere_cells(margin, max_edge);
+  const int cells = cube_sphere_cells(margin, max_edge, path, shape);
   Vec3Array directions = cube_sphere_directions(cells);
   if (core.triangles.empty()) add_flat_normals(points, cells, directions);
   check_triangle_count(2.0 * static_cast<double>(directions.size() + samples.size()), path, shape,
@@ -499,7 +504,7 @@ TriangleMesh polyhedron_mesh(const Vec3Array& points, double margin, double max_
 /// curvature is at most `curvature_radius`, hulled.
 TriangleMesh support_mesh(const btConvexShape& shape, double curvature_radius, double max_edge,
                           const std::string& path) {
-  const int cells = cube_sphere_cells(curvature_radius, max_edge);
+  const int cells = cube_sphere_cells(curvature_radius, max_edge, path, shape);
   const Vec3Array directions = cube_sphere_directions(cells);
   check_triangle_count(2.0 * static_cast<double>(directions.size()), path, shape, max_edge_text(max_edge));
   Vec3Array samples;
