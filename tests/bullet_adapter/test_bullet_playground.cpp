@@ -49,7 +49,7 @@ TEST(BulletPlayground, HalfASecondAtTheGamesStepHoldsTheWaterOnBothClothsAndTheB
   ASSERT_GT(coupled.particles().size(), 500u) << "both jets ran";
 
   // Both cloths caught water: the wetting took some from each, water lies on the hammock (over it, between
-  // its lowest node less 2 cm and 5 cm over its rails), and none is behind the curtain (beyond its rearmost
+  // its lowest node less 2 cm and 5 cm over its frame), and none is behind the curtain (beyond its rearmost
   // node, within its width and height), where only a leak would take it.
   EXPECT_GT(coupled.water_held(0), 0.0) << "hammock";
   EXPECT_GT(coupled.water_held(1), 0.0) << "curtain";
@@ -76,7 +76,7 @@ TEST(BulletPlayground, HalfASecondAtTheGamesStepHoldsTheWaterOnBothClothsAndTheB
   EXPECT_EQ(behind_curtain, 0u);
 
   // The 3 kg ball lies in the hammock: well off the ground (its centre would be at its radius there), between
-  // the rails and the hammock's ends, nearly at rest.
+  // the hammock's edges, nearly at rest.
   const btVector3 ball = game.ball->getCenterOfMassPosition();
   EXPECT_GT(ball.y(), playground::kBallRadius + 0.2);
   EXPECT_GT(ball.x(), playground::kHammockX0);
@@ -107,7 +107,7 @@ TEST(BulletPlayground, TheHammockHoldsTheBallWhileWaterPoolsAroundIt) {
   }
   EXPECT_EQ(leaks, 0u);
   // Its centre never came within 0.2 m of where it would lie on the ground (its radius), and it ends between
-  // the rails and the hammock's ends.
+  // the hammock's edges.
   ::testing::Test::RecordProperty("lowest_ball_mm", static_cast<int>(1000 * lowest_ball));
   EXPECT_GT(lowest_ball, playground::kBallRadius + 0.2);
   const btVector3 ball = game.ball->getCenterOfMassPosition();
