@@ -662,6 +662,62 @@ TEST(RigidBodies, CorruptShapeDataIsRefusedBeforeItReachesTheCoupling) {
   game.world.removeRigidBody(&ground);
 }
 
+// A game's ground is a btStaticPlaneShape, unbounded. It was meshed as a square of 2 m half side about the
+// origin, and water beyond it fell through the ground without a sign. Here a block falls 10 m from the
+// origin and another slides out over the old square's edge: both rest on the plane, which is meshed under
+// the water wherever it goes.
+TEST(RigidBodies, AGroundPlaneHoldsWaterFarFromTheOriginAndSlidingAway) {
+  const Vec3 gravity(0, -9.81, 0);
+  GameWorld game(gravity);
+  game.add(std::make_unique<btStaticPlaneShape>(btVector3(0, 1, 0), 0), 0.0, Vec3::Zero());
+  SceneConfig scene = water_scene(0.01, gravity);
+  scene.time.dt = 1.0 / 240.0;
+  scene.emitters.push_back(water_block(Vec3(9.95, 0.1, -7.05), Vec3(10.05, 0.2, -6.95)));
+  scene.emitters.push_back(water_block(Vec3(1.7, 0.005, 0.0), Vec3(1.8, 0.055, 0.1), Vec3(4.0, 0, 0)));
+  CoupledWorld coupled(game.world, *game.cloth, scene);
+  std::uint64_t leaks = 0, contacts = 0;
+  for (int n = 0; n < 120; ++n) {
+    const CoupledStepReport report = coupled.step();
+    ASSERT_TRUE(report.ok()) << "step " << n << ": " << report.fluid.describe();
+    leaks += report.leak_stats.leaks;
+    contacts += report.coupling_stats.contacts + report.coupling_stats.ccd_impacts;
+  }
+  EXPECT_EQ(leaks, 0u);
+  EXPECT_GT(contacts, 0u);
+  std::size_t below = 0, far = 0, slid = 0;
+  for (const Vec3& x : coupled.particles().positions) {
+    below += x.y() < 0.0 ? 1 : 0;
+    far += x.x() > 9.0 ? 1 : 0;
+    slid += x.x() > 2.5 && x.x() < 9.0 ? 1 : 0;
+  }
+  EXPECT_EQ(below, 0u) << "particles under the ground";
+  EXPECT_GT(far, 0u);
+  EXPECT_GT(slid, 0u) << "the sliding block passed the old square's edge at x = 2 m";
+}
+
+// The plane's mesh is bounded as every shape's (kMaxShapeMeshTriangles): water spread wider than its cells
+// can cover is reported, naming the object and the option, not an exhausted memory.
+TEST(RigidBodies, AGroundPlaneTooFineForTheWatersSpreadIsReported) {
+  const Vec3 gravity(0, -9.81, 0);
+  GameWorld game(gravity);
+  game.add(std::make_unique<btStaticPlaneShape>(btVector3(0, 1, 0), 0), 0.0, Vec3::Zero());
+  SceneConfig scene = water_scene(0.01, gravity);
+  scene.emitters.push_back(water_block(Vec3(-0.5, 0.005, -0.5), Vec3(0.5, 0.015, 0.5)));
+  RigidBodyOptions options;
+  options.mesh.plane_cell = 0.0005;     // chunks of 4 mm: the 1 m square of water needs 62,500 of them
+  options.mesh.plane_half_size = 0.05;  // the first mesh, before the water is known, is small enough
+  CoupledWorld coupled(game.world, *game.cloth, scene, options);
+  std::vector<std::string> warnings;
+  for (int n = 0; n < 50; ++n) {  // the water falls its 5 mm to the plane
+    coupled.step();
+    for (std::string& w : coupled.rigid_bodies()->take_warnings())
+      warnings.push_back(std::move(w));
+  }
+  ASSERT_EQ(warnings.size(), 1u) << "reported once";
+  EXPECT_NE(warnings[0].find("collision object 1 (STATICPLANE)"), std::string::npos) << warnings[0];
+  EXPECT_NE(warnings[0].find("plane_cell"), std::string::npos) << warnings[0];
+}
+
 TEST(RigidBodies, EveryShapeHoldsAFallingBlockOfWaterAtAGamesStep) {
   every_shape_holds_falling_water(1.0 / 60.0);
 }

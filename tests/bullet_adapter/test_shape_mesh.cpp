@@ -636,6 +636,37 @@ TEST(ShapeMesh, TiltedPlaneIsASquareOfSmallCellsOnThePlane) {
   }
 }
 
+// BulletRigidBodies meshes a plane's cells under the water: two cells apart and an L of three must lie on
+// the plane, face the normal, cover a cell's area each and share the nodes of neighbouring cells.
+TEST(ShapeMesh, PlaneCellsShareTheirNodesAndFaceTheNormal) {
+  const btStaticPlaneShape plane(btVector3(1.0, 2.0, 3.0), 0.5);
+  const Vec3 n = to_vec3(plane.getPlaneNormal());
+  const PlaneFrame frame = plane_frame(plane);
+  EXPECT_NEAR(frame.axis_u.cross(frame.axis_v).dot(n.normalized()), 1.0, 1e-12);
+  const double cell = 0.25;
+  const std::vector<PlaneCell> cells = {{-3, 7}, {-2, 7}, {-2, 8}, {40, -12}};
+  const TriangleMesh mesh = plane_cells_mesh(frame, cell, cells);
+  ASSERT_EQ(mesh.triangles.size(), 8u);
+  // The L's 3 cells have 8 nodes, not 12; the lone cell 4.
+  EXPECT_EQ(mesh.positions.size(), 12u);
+  for (const Vec3& p : mesh.positions)
+    EXPECT_NEAR(n.dot(p), plane.getPlaneConstant(), 1e-12) << p.transpose();
+  EXPECT_NEAR(area(mesh), 4 * cell * cell, 1e-12);
+  for (const Triangle& t : mesh.triangles) {
+    const Vec3 normal = (mesh.positions[t[1]] - mesh.positions[t[0]])
+                            .cross(mesh.positions[t[2]] - mesh.positions[t[0]])
+                            .normalized();
+    EXPECT_NEAR(normal.dot(n.normalized()), 1.0, 1e-12);
+  }
+  // Cell (40, -12) starts at origin + 40 cell axis_u - 12 cell axis_v.
+  const Vec3 corner = frame.origin + 40 * cell * frame.axis_u - 12 * cell * frame.axis_v;
+  double nearest = std::numeric_limits<double>::infinity();
+  for (const Vec3& p : mesh.positions)
+    nearest = std::min(nearest, (p - corner).norm());
+  EXPECT_LT(nearest, 1e-12);
+  EXPECT_THROW(plane_cells_mesh(frame, 0.0, cells), SceneError);
+}
+
 // ---- heightfield ----------------------------------------------------------------------------------------
 
 /// Every vertex is the expected grid point and every grid point a vertex; interior edges shared by two faces.

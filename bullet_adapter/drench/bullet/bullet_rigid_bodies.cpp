@@ -3,11 +3,15 @@
 #include <BulletCollision/BroadphaseCollision/btBroadphaseProxy.h>
 #include <BulletCollision/CollisionDispatch/btCollisionObject.h>
 #include <BulletCollision/CollisionShapes/btCollisionShape.h>
+#include <BulletCollision/CollisionShapes/btStaticPlaneShape.h>
 #include <BulletDynamics/Dynamics/btDynamicsWorld.h>
 #include <BulletDynamics/Dynamics/btRigidBody.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <limits>
+#include <unordered_set>
 #include <utility>
 
 #include <drench/common/error.hpp>
@@ -26,9 +30,20 @@ struct BulletRigidBodies::Tracked {
   std::uint64_t seen = 0;  // the last step (m_step) the object was in the world
   int proxy_id = -1;       // its broad-phase proxy's m_uniqueId: a new proxy is a new body at this address
   std::uint64_t instance = 0;
+  // A btStaticPlaneShape (cover_plane): its grid, the chunks whose neighbourhood of `radius` chunks is
+  // meshed, and whether a cover too large was reported.
+  bool plane = false;
+  PlaneFrame frame;
+  std::unordered_set<PlaneCell, PlaneCellHash> safe;
+  std::int64_t radius = 0;
+  bool warned_too_large = false;
 };
 
 namespace {
+
+/// A plane's grid cells are meshed in square chunks of this many cells a side: the unit in which the mesh
+/// follows the water, so that it changes only when the water moves by a chunk.
+constexpr std::int64_t kPlaneChunkCells = 8;
 
 /// `local` placed by `transform`, in double whatever Bullet's precision.
 Vec3Array place(const TriangleMesh& local, const btTransform& transform) {
@@ -170,7 +185,112 @@ BulletRigidBodies::Tracked* BulletRigidBodies::track(const btCollisionObject& ob
     t.local = TriangleMesh();
     return nullptr;
   }
+  t.plane = shape->getShapeType() == STATIC_PLANE_PROXYTYPE;
+  if (t.plane) {
+    t.frame = plane_frame(static_cast<const btStaticPlaneShape&>(*shape));
+    t.safe.clear();
+    t.radius = 0;
+  }
   return &t;
+}
+
+void BulletRigidBodies::expect_points(const std::vector<const Vec3Array*>& point_sets, double reach) {
+  m_points = point_sets;
+  m_reach = std::isfinite(reach) && reach > 0.0 ? reach : 0.0;
+}
+
+bool BulletRigidBodies::cover_plane(Tracked& t, const btCollisionObject& object, int index) {
+  const double cell = m_options.mesh.plane_cell;
+  const double chunk = static_cast<double>(kPlaneChunkCells) * cell;
+  // The most chunks a plane's mesh may have: kMaxShapeMeshTriangles, as for any shape.
+  constexpr std::size_t kMaxChunks = kMaxShapeMeshTriangles / (2 * kPlaneChunkCells * kPlaneChunkCells);
+  const auto too_large = [&] {
+    if (!t.warned_too_large) {
+      m_warnings.push_back(describe(object, index) +
+                           ": the water and the cloths move over more of the plane " + "than " +
+                           std::to_string(kMaxShapeMeshTriangles) + " triangles of " + format_number(cell) +
+                           " m cells cover (kMaxShapeMeshTriangles); it holds them " +
+                           "only where it was meshed before. Raise RigidBodyOptions::mesh.plane_cell");
+      t.warned_too_large = true;
+    }
+    return false;
+  };
+  // A point this close to the plane may touch it within the step: the reach, and a cell for the cloth
+  // thickness and the kernel's support.
+  const double near = m_reach + cell;
+  const double radius_chunks = std::max(1.0, std::ceil(near / chunk));
+  // Every point's own neighbourhood of radius + 1 chunks is meshed: it alone must fit.
+  if (!(std::pow(2.0 * radius_chunks + 3.0, 2.0) <= static_cast<double>(kMaxChunks))) return too_large();
+  const auto radius = static_cast<std::int64_t>(radius_chunks);
+  const btTransform& transform = object.getWorldTransform();
+  const Eigen::Matrix3d rotation = to_matrix3(transform.getBasis());
+  const Vec3 origin = rotation * t.frame.origin + to_vec3(transform.getOrigin());
+  const Vec3 normal = rotation * t.frame.normal;
+  const Vec3 u_axis = rotation * t.frame.axis_u / chunk, v_axis = rotation * t.frame.axis_v / chunk;
+  // Chunk coordinates beyond this are far outside kMaxCoordinate at any sensible plane_cell.
+  constexpr double kFarthestChunk = 1e15;
+  const auto for_each_near_chunk = [&](auto&& visit) {
+    for (const Vec3Array* points : m_points) {
+      for (const Vec3& x : *points) {
+        const Vec3 r = x - origin;
+        if (!(std::abs(normal.dot(r)) <= near)) continue;
+        const double u = std::floor(u_axis.dot(r)), v = std::floor(v_axis.dot(r));
+        if (!(std::abs(u) < kFarthestChunk && std::abs(v) < kFarthestChunk)) continue;
+        if (!visit(PlaneCell{static_cast<std::int64_t>(u), static_cast<std::int64_t>(v)})) return;
+      }
+    }
+  };
+  // Most steps every point near the plane is in a chunk meshed around: one look-up per run of points in the
+  // same chunk (the fluid keeps its particles in spatial order).
+  bool covered = radius <= t.radius;
+  PlaneCell last{std::numeric_limits<std::int64_t>::min(), 0};
+  for_each_near_chunk([&](const PlaneCell& c) {
+    if (c == last) return true;
+    last = c;
+    covered = covered && t.safe.count(c) > 0;
+    return covered;
+  });
+  if (covered) return false;
+  using ChunkSet = std::unordered_set<PlaneCell, PlaneCellHash>;
+  ChunkSet near_chunks;
+  for_each_near_chunk([&](const PlaneCell& c) {
+    near_chunks.insert(c);
+    return near_chunks.size() <= kMaxChunks;
+  });
+  if (near_chunks.empty()) return false;  // nothing near: what is meshed stays
+  // `from` grown by `by` chunks along u (or v) into `to`; false once `to` holds more than kMaxChunks, which
+  // bounds the work as well as the mesh.
+  const auto grow = [](const ChunkSet& from, std::int64_t by, bool along_u, ChunkSet& to) {
+    for (const PlaneCell& c : from) {
+      for (std::int64_t d = -by; d <= by; ++d) {
+        to.insert(along_u ? PlaneCell{c.first + d, c.second} : PlaneCell{c.first, c.second + d});
+        if (to.size() > kMaxChunks) return false;
+      }
+    }
+    return true;
+  };
+  // Meshed: every chunk within radius + 1 of a point's, so that a point may move a chunk before the mesh
+  // must follow it. Safe: the chunks within 1 of a point's, whose neighbourhood of `radius` is all meshed.
+  ChunkSet rows, meshed, safe_rows, safe;
+  if (!grow(near_chunks, radius + 1, true, rows) || !grow(rows, radius + 1, false, meshed))
+    return too_large();
+  grow(near_chunks, 1, true, safe_rows);
+  grow(safe_rows, 1, false, safe);  // within `meshed`, so within kMaxChunks
+  // In order, so that the same points give the same mesh whatever the hash set's order.
+  std::vector<PlaneCell> chunks(meshed.begin(), meshed.end());
+  std::sort(chunks.begin(), chunks.end());
+  std::vector<PlaneCell> cells;
+  cells.reserve(chunks.size() * kPlaneChunkCells * kPlaneChunkCells);
+  for (const PlaneCell& c : chunks)
+    for (std::int64_t j = 0; j < kPlaneChunkCells; ++j)
+      for (std::int64_t i = 0; i < kPlaneChunkCells; ++i)
+        cells.push_back({c.first * kPlaneChunkCells + i, c.second * kPlaneChunkCells + j});
+  t.local = plane_cells_mesh(t.frame, cell, cells);
+  t.safe = std::move(safe);
+  t.radius = radius;
+  t.instance = ++m_instances;  // other faces: no sweep from the old mesh, no jump audit against it
+  t.has_end = false;
+  return true;
 }
 
 void BulletRigidBodies::check_bodies() const {
@@ -209,6 +329,7 @@ void BulletRigidBodies::begin_step(std::vector<RigidSurface>& surfaces) {
     const std::uint64_t instance_before = before != m_tracked.end() ? before->second->instance : 0;
     const bool seen_last_step = before != m_tracked.end() && before->second->seen + 1 == m_step;
     Tracked* t = track(object, i);
+    if (t != nullptr && t->plane && !m_points.empty()) cover_plane(*t, object, i);
     const bool was_there = seen_last_step && t != nullptr && t->instance == instance_before;
     if (t == nullptr || t->local.triangles.empty()) continue;
     RigidSurface s;
@@ -240,6 +361,7 @@ void BulletRigidBodies::begin_step(std::vector<RigidSurface>& surfaces) {
     surfaces.push_back(std::move(s));
     m_current.push_back(t);
   }
+  m_points.clear();
   // Objects no longer in the world: a body deleted and another allocated at its address must start afresh.
   for (auto it = m_tracked.begin(); it != m_tracked.end();) {
     if (it->second->seen != m_step) {

@@ -51,6 +51,9 @@ class BulletRigidBodies final : public RigidBodySource {
   /// of the leak audit's cells before it threw.
   /// @throws drench::Error naming the object (index and shape) and the value
   void check_bodies() const;
+  /// Keeps the points for begin_step, which meshes every btStaticPlaneShape under those near it (see
+  /// cover_plane).
+  void expect_points(const std::vector<const Vec3Array*>& point_sets, double reach) override;
   void begin_step(std::vector<RigidSurface>& surfaces) override;
   /// One Bullet step of dt (stepSimulation(dt, 0)): only for a world without a cloth engine.
   void step(double dt) override;
@@ -70,12 +73,18 @@ class BulletRigidBodies final : public RigidBodySource {
   /// for an unsupported shape (warned about once).
   Tracked* track(const btCollisionObject& object, int index);
   bool sees(const btCollisionObject& object) const;
+  /// A btStaticPlaneShape is unbounded: `t`'s mesh becomes the plane's grid cells, in chunks of
+  /// kPlaneChunkCells, within a few chunks of every expected point near the plane, re-meshed when a point
+  /// nears the edge of what is meshed. True when the mesh changed (it is then a new instance).
+  bool cover_plane(Tracked& t, const btCollisionObject& object, int index);
 
   btDynamicsWorld& m_world;
   RigidBodyOptions m_options;
   std::unordered_map<const btCollisionObject*, std::unique_ptr<Tracked>> m_tracked;
   std::vector<Tracked*> m_current;  // per surface of the step, its object's state
   std::vector<std::string> m_warnings;
+  std::vector<const Vec3Array*> m_points;  // expect_points' arrays, until the next begin_step
+  double m_reach = 0;
   Vec3 m_impulse_given = Vec3::Zero();
   std::uint64_t m_step = 0;
   std::uint64_t m_instances = 0;  // bodies tracked so far: each new one's RigidSurface::instance

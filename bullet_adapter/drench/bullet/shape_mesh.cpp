@@ -667,11 +667,7 @@ TriangleMesh heightfield_mesh(const btHeightfieldTerrainShape& terrain) {
 
 // ---- the unbounded plane ----------------------------------------------------------------------------------
 
-/// The plane n . x = c (Bullet's normal and constant; its plane collisions ignore local scaling and margin)
-/// as a square of half side plane_half_size about the point c n / |n|^2, in cells of at most plane_cell,
-/// counter-clockwise seen from the side n points to (the solid is the other side).
-TriangleMesh plane_mesh(const btStaticPlaneShape& plane, const ShapeMeshOptions& options,
-                        const std::string& path) {
+PlaneFrame frame_of(const btStaticPlaneShape& plane, const std::string& path) {
   const Vec3 normal = to_vec3(plane.getPlaneNormal());
   const double constant = plane.getPlaneConstant();
   if (!normal.allFinite() || !(normal.squaredNorm() > 0.0) || !std::isfinite(constant)) {
@@ -680,16 +676,29 @@ TriangleMesh plane_mesh(const btStaticPlaneShape& plane, const ShapeMeshOptions&
              format_number(normal.z()) + ") must be finite and non-zero and constant " +
              format_number(constant) + " finite");
   }
+  PlaneFrame frame;
+  frame.origin = normal * (constant / normal.squaredNorm());
+  frame.normal = normal.normalized();
+  frame.axis_u = frame.normal.unitOrthogonal();
+  frame.axis_v = frame.normal.cross(frame.axis_u);
+  return frame;
+}
+
+/// The plane n . x = c (Bullet's normal and constant; its plane collisions ignore local scaling and margin)
+/// as a square of half side plane_half_size about the point c n / |n|^2, in cells of at most plane_cell,
+/// counter-clockwise seen from the side n points to (the solid is the other side).
+TriangleMesh plane_mesh(const btStaticPlaneShape& plane, const ShapeMeshOptions& options,
+                        const std::string& path) {
+  const PlaneFrame frame = frame_of(plane, path);
   const double half = options.plane_half_size;
   const double cells_wanted = std::ceil(2.0 * half / options.plane_cell);
   check_triangle_count(2.0 * cells_wanted * cells_wanted, path, plane,
                        "ShapeMeshOptions::plane_half_size " + format_number(half) + " and plane_cell " +
                            format_number(options.plane_cell));
   const int cells = static_cast<int>(cells_wanted);
-  const Vec3 center = normal * (constant / normal.squaredNorm());
-  const Vec3 unit = normal.normalized();
-  const Vec3 t1 = unit.unitOrthogonal();
-  const Vec3 t2 = unit.cross(t1);  // t1 x t2 = unit
+  const Vec3& center = frame.origin;
+  const Vec3& t1 = frame.axis_u;
+  const Vec3& t2 = frame.axis_v;
   TriangleMesh mesh;
   mesh.positions.reserve(static_cast<std::size_t>(cells + 1) * (cells + 1));
   auto coordinate = [&](int i) { return i == cells ? half : -half + 2.0 * half * i / cells; };
@@ -851,6 +860,38 @@ TriangleMesh shape_mesh(const btCollisionShape& shape, const ShapeMeshOptions& o
     }
   }
   return build(shape, options, "");
+}
+
+PlaneFrame plane_frame(const btStaticPlaneShape& plane) {
+  return frame_of(plane, "");
+}
+
+TriangleMesh plane_cells_mesh(const PlaneFrame& frame, double cell, const std::vector<PlaneCell>& cells) {
+  if (!positive_finite(cell))
+    throw SceneError("plane grid cell must be > 0 and finite, got " + format_number(cell));
+  if (2.0 * static_cast<double>(cells.size()) > static_cast<double>(kMaxShapeMeshTriangles)) {
+    throw SceneError("a plane patch of " + std::to_string(cells.size()) +
+                     " cells would have more than "
+                     "kMaxShapeMeshTriangles = " +
+                     std::to_string(kMaxShapeMeshTriangles) + " triangles");
+  }
+  TriangleMesh mesh;
+  std::unordered_map<PlaneCell, Index, PlaneCellHash> nodes;  // by grid node: neighbouring cells share
+  const auto node = [&](std::int64_t i, std::int64_t j) {
+    const auto [it, added] = nodes.try_emplace(PlaneCell{i, j}, static_cast<Index>(mesh.positions.size()));
+    if (added) {
+      mesh.positions.push_back(frame.origin + (static_cast<double>(i) * cell) * frame.axis_u +
+                               (static_cast<double>(j) * cell) * frame.axis_v);
+    }
+    return it->second;
+  };
+  mesh.triangles.reserve(2 * cells.size());
+  for (const auto& [i, j] : cells) {
+    const Index a = node(i, j), b = node(i + 1, j), c = node(i + 1, j + 1), d = node(i, j + 1);
+    mesh.triangles.push_back({a, b, c});  // axis_u x axis_v = normal: counter-clockwise seen from it
+    mesh.triangles.push_back({a, c, d});
+  }
+  return mesh;
 }
 
 bool is_supported_shape(const btCollisionShape& shape) {

@@ -22,11 +22,15 @@
 /// btEmptyShape no triangle, a btCompoundShape its children's meshes.
 
 #include <cstddef>
+#include <cstdint>
+#include <utility>
+#include <vector>
 
 #include <drench/bullet/bullet_conversions.hpp>
 #include <drench/common/triangle_mesh.hpp>
 
 class btCollisionShape;
+class btStaticPlaneShape;
 
 namespace drench::bullet {
 
@@ -36,6 +40,7 @@ struct ShapeMeshOptions {
                                  ///< rounded margins) (unit: m), > 0
   double plane_half_size = 2.0;  ///< a btStaticPlaneShape becomes a square of this half side (unit: m), > 0,
                                  ///< centred where the plane is closest to the shape's local origin
+                                 ///< (BulletRigidBodies: until water or a cloth comes near the plane)
   double plane_cell = 0.1;  ///< the plane square's grid cell (unit: m), > 0 (small faces keep the coupling's
                             ///< bounding-box broad phase tight on tilted planes)
 };
@@ -69,5 +74,39 @@ TriangleMesh shape_mesh(const btCollisionShape& shape, const ShapeMeshOptions& o
 
 /// True when shape_mesh supports `shape` (recursively for compounds), without building it.
 bool is_supported_shape(const btCollisionShape& shape);
+
+/// A btStaticPlaneShape's plane n . x = c in the shape's local frame, with a grid on it: the plane is
+/// unbounded, so that a caller can mesh the part of it the water comes near (BulletRigidBodies does) instead
+/// of shape_mesh's fixed square.
+struct PlaneFrame {
+  Vec3 origin;  ///< c n / |n|^2, the plane's point nearest the local origin (unit: m)
+  Vec3 normal;  ///< n / |n|: the side the water stays on (the solid is the other side)
+  Vec3 axis_u;  ///< a unit vector in the plane
+  Vec3 axis_v;  ///< normal x axis_u, so that axis_u x axis_v = normal
+};
+
+/// @throws drench::SceneError naming the shape when its normal is zero or not finite or its constant is not
+///         finite
+PlaneFrame plane_frame(const btStaticPlaneShape& plane);
+
+/// One square cell of a plane's grid of side `cell` (unit: m): cell (i, j) spans origin + [i, i + 1] cell
+/// axis_u + [j, j + 1] cell axis_v.
+using PlaneCell = std::pair<std::int64_t, std::int64_t>;
+
+/// For unordered containers of PlaneCell.
+struct PlaneCellHash {
+  std::size_t operator()(const PlaneCell& c) const {
+    return static_cast<std::size_t>(static_cast<std::uint64_t>(c.first) * 0x9E3779B97F4A7C15ull ^
+                                    static_cast<std::uint64_t>(c.second));
+  }
+};
+
+/// The cells `cells` of `frame`'s grid as triangles, counter-clockwise seen from the normal's side, with
+/// the vertices of neighbouring cells shared (no crack between cells). Each vertex is computed from its grid
+/// coordinates alone, so that the same grid node is the same point in every mesh built on the same grid.
+/// @param cell  the grid's side (unit: m), > 0 and finite
+/// @param cells  distinct cells, at most kMaxShapeMeshTriangles / 2
+/// @throws drench::SceneError when cell is out of range or there are too many cells
+TriangleMesh plane_cells_mesh(const PlaneFrame& frame, double cell, const std::vector<PlaneCell>& cells);
 
 }  // namespace drench::bullet

@@ -41,6 +41,15 @@ struct RigidSurface {
 class RigidBodySource {
  public:
   virtual ~RigidBodySource() = default;
+  /// Where the water and the cloths may be during the next step: the points of `point_sets` (unit: m; the
+  /// particles, the cloths' nodes) and how far any of them may move in it, `reach` (unit: m, >= 0). A source
+  /// with an unbounded surface (a game's ground plane) meshes it under these points, wherever they are. The
+  /// arrays must stay valid until the next begin_step returns; the coupled step calls this just before it.
+  /// The default ignores them.
+  virtual void expect_points(const std::vector<const Vec3Array*>& point_sets, double reach) {
+    (void)point_sets;
+    (void)reach;
+  }
   /// The bodies now: fills `surfaces` (replacing what it held) with every body that holds water, its
   /// triangles, positions_t0 and velocities_t0, and positions_t1 = positions_t0.
   virtual void begin_step(std::vector<RigidSurface>& surfaces) = 0;

@@ -187,8 +187,10 @@ void ClothWithObstacles::rebuild() {
 void ClothWithObstacles::pull() {
   std::vector<std::uint64_t> layout = {cloth_nodes(), m_cloth ? m_cloth->mesh().triangle_count() : 0};
   for (const RigidSurface& s : m_surfaces) {
-    layout.insert(layout.end(),
-                  {s.key, static_cast<std::uint64_t>(s.motion), s.positions_t0.size(), s.triangles.size()});
+    // The instance too: a body re-meshed (a ground plane under water that moved) or replaced by another of
+    // the same counts has other triangles.
+    layout.insert(layout.end(), {s.key, s.instance, static_cast<std::uint64_t>(s.motion),
+                                 s.positions_t0.size(), s.triangles.size()});
   }
   if (!m_built || layout != m_layout) {
     rebuild();

@@ -203,7 +203,8 @@ Simulation::Simulation(const SceneConfig& config, std::unique_ptr<ClothEngine> c
                        std::vector<TriangleMesh> more_obstacles, RigidBodySource* bodies)
     : m_config(checked(config, {cloth && !config.cloth, cloth || !more_obstacles.empty() || bodies})),
       m_speed_of_sound(config.fluid.wcsph.speed_of_sound.value_or(automatic_speed_of_sound(config))),
-      m_cloth(std::move(cloth)) {
+      m_cloth(std::move(cloth)),
+      m_bodies(bodies) {
   std::vector<TriangleMesh> obstacles = build_obstacles(m_config);
   for (TriangleMesh& mesh : more_obstacles)
     obstacles.push_back(std::move(mesh));
@@ -288,6 +289,7 @@ void Simulation::check_cloth(StepStatus& status) {
       fastest_speed = node_speed;
     }
   }
+  m_last_node_speed = fastest_speed;
   if (limits.max_speed && fastest >= 0 && !(fastest_speed <= *limits.max_speed)) {
     status.flags |= StepStatus::RUNAWAY_NODE;
     status.runaway_node = fastest;
@@ -384,6 +386,7 @@ StepStatus Simulation::step(Scalar dt) {
     }
     m_emitted_mass += static_cast<double>(m_fluid->particles().size() - before) * m_fluid->particle_mass();
   }
+  if (m_bodies) tell_bodies_the_points(dt);
   if (m_engine) m_engine->begin_step();
   StepStatus jump_status;
   if (m_engine) audit_face_jumps_since_last_step(jump_status);
@@ -413,6 +416,19 @@ StepStatus Simulation::step(Scalar dt) {
     remove_killed();
   }
   return status;
+}
+
+void Simulation::tell_bodies_the_points(Scalar dt) {
+  // Gravity's pull over the step on top of the fastest speed now: the nozzles' new particles included.
+  const Scalar speed = std::max(m_fluid->max_speed(), m_last_node_speed);
+  const Scalar reach = (speed + m_config.gravity.norm() * dt) * dt;
+  if (!std::isfinite(reach)) return;  // the step reports the state that is not finite
+  std::vector<const Vec3Array*> points = {&m_fluid->particles().positions};
+  if (m_cloth) {
+    const ClothMesh& mesh = m_cloth->mesh();
+    points.push_back(mesh.positions_t1.size() == mesh.node_count() ? &mesh.positions_t1 : &mesh.positions_t0);
+  }
+  m_bodies->expect_points(points, reach);
 }
 
 double Simulation::body_seconds() const {

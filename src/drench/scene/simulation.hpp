@@ -171,6 +171,9 @@ class Simulation {
   void place_rigid_boundary();
   /// Gives the dynamic bodies what the fluid's pressure gave their boundary particles in its step.
   void push_rigid_bodies();
+  /// Tells the rigid bodies where the particles and the cloth's nodes are and how far they may move in a
+  /// step of dt (RigidBodySource::expect_points).
+  void tell_bodies_the_points(Scalar dt);
   void step_cloth_and_couple(Scalar dt, StepStatus& status);
   /// The leak audit of the faces' move from where the last audited step ended them to where the engine
   /// starts them now (audit_face_jumps), after the engine's begin_step; sets LEAKED in `status` naming the
@@ -198,6 +201,7 @@ class Simulation {
   double m_emit_seconds = 0;
   std::unique_ptr<ClothEngine> m_cloth;
   std::unique_ptr<ClothWithObstacles> m_with_obstacles;  // only with obstacles or rigid bodies
+  RigidBodySource* m_bodies = nullptr;                   // the world's rigid bodies, or none
   std::unique_ptr<RigidBoundary> m_rigid_boundary;       // only with rigid bodies and "coupling"
   ClothEngine* m_engine = nullptr;        // what the coupled step drives: m_with_obstacles, else m_cloth
   EffectParts m_effects;                  // what the scene's `effects` built (effect_registry.hpp)
@@ -223,6 +227,7 @@ class Simulation {
   double m_killed_mass = 0;
   Scalar m_max_particle_speed = 0;
   Scalar m_max_node_speed = 0;
+  Scalar m_last_node_speed = 0;  // the fastest cloth node at the end of the last step (unit: m/s)
   Scalar m_max_strain = 0;
   std::vector<std::pair<Index, Index>> m_cloth_edges;  // each edge of the cloth once, (lower, higher node)
   ScalarArray m_rest_lengths;                          // their lengths at construction (unit: m)
