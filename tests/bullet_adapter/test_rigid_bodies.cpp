@@ -718,6 +718,37 @@ TEST(RigidBodies, AGroundPlaneTooFineForTheWatersSpreadIsReported) {
   EXPECT_NE(warnings[0].find("plane_cell"), std::string::npos) << warnings[0];
 }
 
+// A game builds a compound empty and adds its children later (a level streamed in, a ship assembled). The
+// empty compound was refused as "corrupt", and one that got its children later kept its first mesh, so the
+// water passed through the new parts.
+TEST(RigidBodies, ACompoundHoldsTheWaterWithTheChildrenAddedLater) {
+  const Vec3 gravity(0, -9.81, 0);
+  GameWorld game(gravity);
+  auto owned = std::make_unique<btCompoundShape>();
+  btCompoundShape& compound = *owned;
+  game.add(std::move(owned), 0.0, Vec3::Zero());
+  SceneConfig scene = water_scene(0.01, gravity);
+  scene.time.dt = 1.0 / 240.0;
+  scene.emitters.push_back(water_block(Vec3(-0.05, 0.1, -0.05), Vec3(0.05, 0.15, 0.05)));
+  CoupledWorld coupled(game.world, *game.cloth, scene);
+  EXPECT_TRUE(coupled.step().ok());
+  btBoxShape floor(btVector3(1.0, 0.02, 1.0));
+  compound.addChildShape(btTransform(btQuaternion::getIdentity(), btVector3(0, -0.02, 0)), &floor);
+  std::uint64_t leaks = 0;
+  for (int n = 0; n < 100; ++n) {
+    const CoupledStepReport report = coupled.step();
+    ASSERT_TRUE(report.ok()) << "step " << n << ": " << report.fluid.describe();
+    leaks += report.leak_stats.leaks;
+  }
+  EXPECT_EQ(leaks, 0u);
+  EXPECT_TRUE(coupled.rigid_bodies()->take_warnings().empty());
+  std::size_t below = 0;
+  for (const Vec3& x : coupled.particles().positions)
+    below += x.y() < 0.0 ? 1 : 0;
+  EXPECT_EQ(below, 0u) << "particles fell through the compound's new floor";
+  compound.removeChildShapeByIndex(0);  // before `floor` goes
+}
+
 TEST(RigidBodies, EveryShapeHoldsAFallingBlockOfWaterAtAGamesStep) {
   every_shape_holds_falling_water(1.0 / 60.0);
 }

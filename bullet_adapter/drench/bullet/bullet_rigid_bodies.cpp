@@ -20,8 +20,7 @@ namespace drench::bullet {
 
 struct BulletRigidBodies::Tracked {
   const btCollisionShape* shape = nullptr;
-  btVector3 scaling{1, 1, 1};
-  btScalar margin = 0;
+  std::uint64_t signature = 0;  // shape_signature: a compound's children the game changes re-mesh it
   bool supported = false;
   TriangleMesh local;      // the shape's surface in the object's frame
   bool has_end = false;    // `end` and `world_end` hold the end of the last step the object took part in
@@ -71,13 +70,14 @@ std::string describe(const btCollisionObject& object, int index) {
   return "collision object " + std::to_string(index) + " (" + object.getCollisionShape()->getName() + ")";
 }
 
-/// Why `mesh` cannot be the surface of `shape`, or "": no face (but for a btEmptyShape), or a vertex that is
+/// Why `mesh` cannot be the surface of `shape`, or "": no face (but for a shape Bullet collides nothing
+/// with: a btEmptyShape, an empty compound), or a vertex that is
 /// not finite or lies outside the shape's own bounding box. Corrupt shape data does that (a heightfield built
 /// with Bullet's legacy constructor, which takes PHY_FLOAT to mean btScalar, reads doubles from floats:
 /// Bullet then culls every triangle, or hands out absurd vertices), and the coupling's broad phase must never
 /// see such boxes: FCL's tree crashes on them.
 std::string mesh_problem(const btCollisionShape& shape, const TriangleMesh& mesh) {
-  if (mesh.triangles.empty() && shape.getShapeType() != EMPTY_SHAPE_PROXYTYPE)
+  if (mesh.triangles.empty() && !collides_with_nothing(shape))
     return "its mesh has no face: its data is corrupt or degenerate";
   btTransform identity;
   identity.setIdentity();
@@ -151,12 +151,13 @@ BulletRigidBodies::Tracked* BulletRigidBodies::track(const btCollisionObject& ob
   Tracked& t = *slot;
   t.seen = m_step;
   const btCollisionShape* shape = object.getCollisionShape();
-  const btVector3 scaling = shape ? shape->getLocalScaling() : btVector3(1, 1, 1);
-  const btScalar margin = shape ? shape->getMargin() : btScalar(0);
-  if (shape == t.shape && scaling == t.scaling && margin == t.margin) return t.supported ? &t : nullptr;
+  const std::uint64_t signature = shape ? shape_signature(*shape) : 0;
+  if (shape == t.shape && signature == t.signature) return t.supported ? &t : nullptr;
   t.shape = shape;
-  t.scaling = scaling;
-  t.margin = margin;
+  t.signature = signature;
+  // Other faces, maybe as many as before: the coupling lays its mesh out anew and sweeps nothing from the
+  // old.
+  t.instance = ++m_instances;
   t.has_end = false;
   t.supported = shape != nullptr && is_supported_shape(*shape);
   if (!t.supported) {

@@ -862,6 +862,61 @@ TriangleMesh shape_mesh(const btCollisionShape& shape, const ShapeMeshOptions& o
   return build(shape, options, "");
 }
 
+bool collides_with_nothing(const btCollisionShape& shape) {
+  if (shape.getShapeType() == EMPTY_SHAPE_PROXYTYPE) return true;
+  if (shape.getShapeType() != COMPOUND_SHAPE_PROXYTYPE) return false;
+  const auto& compound = static_cast<const btCompoundShape&>(shape);
+  for (int i = 0; i < compound.getNumChildShapes(); ++i)
+    if (!collides_with_nothing(*compound.getChildShape(i))) return false;
+  return true;
+}
+
+namespace {
+
+/// FNV-1a over the bytes of `value`, continuing `hash`.
+template <class T>
+std::uint64_t mix(std::uint64_t hash, const T& value) {
+  unsigned char bytes[sizeof(T)];
+  std::memcpy(bytes, &value, sizeof(T));
+  for (unsigned char b : bytes)
+    hash = (hash ^ b) * 1099511628211ull;
+  return hash;
+}
+
+std::uint64_t mix_transform(std::uint64_t hash, const btTransform& transform) {
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c)
+      hash = mix(hash, transform.getBasis()[r][c]);
+  for (int k = 0; k < 3; ++k)
+    hash = mix(hash, transform.getOrigin()[k]);
+  return hash;
+}
+
+std::uint64_t signature(std::uint64_t hash, const btCollisionShape& shape) {
+  hash = mix(hash, shape.getShapeType());
+  hash = mix(hash, &shape);
+  const btVector3 scaling = shape.getLocalScaling();
+  for (int k = 0; k < 3; ++k)
+    hash = mix(hash, scaling[k]);
+  hash = mix(hash, shape.getMargin());
+  if (shape.getShapeType() == COMPOUND_SHAPE_PROXYTYPE) {
+    const auto& compound = static_cast<const btCompoundShape&>(shape);
+    hash = mix(hash, compound.getNumChildShapes());
+    for (int i = 0; i < compound.getNumChildShapes(); ++i)
+      hash = signature(mix_transform(hash, compound.getChildTransform(i)), *compound.getChildShape(i));
+  } else if (shape.getShapeType() == UNIFORM_SCALING_SHAPE_PROXYTYPE) {
+    const auto& scaled = static_cast<const btUniformScalingShape&>(shape);
+    hash = signature(mix(hash, scaled.getUniformScalingFactor()), *scaled.getChildShape());
+  }
+  return hash;
+}
+
+}  // namespace
+
+std::uint64_t shape_signature(const btCollisionShape& shape) {
+  return signature(14695981039346656037ull, shape);
+}
+
 PlaneFrame plane_frame(const btStaticPlaneShape& plane) {
   return frame_of(plane, "");
 }

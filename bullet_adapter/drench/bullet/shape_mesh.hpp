@@ -75,6 +75,17 @@ TriangleMesh shape_mesh(const btCollisionShape& shape, const ShapeMeshOptions& o
 /// True when shape_mesh supports `shape` (recursively for compounds), without building it.
 bool is_supported_shape(const btCollisionShape& shape);
 
+/// True when Bullet collides nothing with `shape`: a btEmptyShape, or a compound whose children all are
+/// (recursively; an empty compound too). Its mesh has no triangle, and that is no corruption.
+bool collides_with_nothing(const btCollisionShape& shape);
+
+/// A digest of what a game may change in place of `shape` that shape_mesh reads: its type, local scaling and
+/// margin and, for a compound or a btUniformScalingShape (recursively), its children, their transforms and
+/// their own digests. A cache of shape_mesh keyed by the shape's address and this follows a compound whose
+/// children the game adds, removes or moves. Not in it: the vertices of a triangle mesh or heightfield, the
+/// game's own data.
+std::uint64_t shape_signature(const btCollisionShape& shape);
+
 /// A btStaticPlaneShape's plane n . x = c in the shape's local frame, with a grid on it: the plane is
 /// unbounded, so that a caller can mesh the part of it the water comes near (BulletRigidBodies does) instead
 /// of shape_mesh's fixed square.
