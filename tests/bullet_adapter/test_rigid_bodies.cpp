@@ -749,6 +749,37 @@ TEST(RigidBodies, ACompoundHoldsTheWaterWithTheChildrenAddedLater) {
   compound.removeChildShapeByIndex(0);  // before `floor` goes
 }
 
+// A fountain's nozzle inside its own collision box emitted into the solid: the water was trapped there,
+// unseen and unreported. So was a block of water overlapping a floor. Both are refused, naming the emitter
+// and the body; water resting on the floor or a nozzle just above it is not.
+TEST(RigidBodies, WaterPutInsideASolidBodyIsRefusedNamingBoth) {
+  const Vec3 gravity(0, -9.81, 0);
+  GameWorld game(gravity);
+  game.add_box(Vec3(0.3, 0.05, 0.3), 0.0, Vec3(0, -0.05, 0));  // a floor, top at y = 0
+  game.add(std::make_unique<btStaticPlaneShape>(btVector3(0, 1, 0), -1.0), 0.0, Vec3::Zero());  // y = -1
+  SceneConfig scene = water_scene(0.01, gravity);
+  EmitterSettings nozzle;
+  nozzle.kind = EmitterSettings::Kind::NOZZLE;
+  nozzle.nozzle.center = Vec3(0.1, -0.03, 0.0);
+  nozzle.nozzle.radius = 0.01;
+  scene.emitters = {water_block(Vec3(-0.1, 0.0, -0.1), Vec3(0.0, 0.05, 0.0)), nozzle};
+  EXPECT_TRUE(::drench::test::throws_containing<SceneError>(
+      [&] { CoupledWorld coupled(game.world, *game.cloth, scene); },
+      {"emitters[1]", "nozzle", "inside collision object 1 (Box)", "water_mask"}));
+  scene.emitters[1].nozzle.center = Vec3(0.1, -1.5, 0.0);  // under the ground plane
+  EXPECT_TRUE(::drench::test::throws_containing<SceneError>(
+      [&] { CoupledWorld coupled(game.world, *game.cloth, scene); },
+      {"emitters[1]", "inside collision object 2 (STATICPLANE)"}));
+  scene.emitters[1].nozzle.center = Vec3(0.1, 0.01, 0.0);
+  scene.emitters[0] = water_block(Vec3(-0.1, -0.03, -0.1), Vec3(0.0, 0.05, 0.0));
+  EXPECT_TRUE(::drench::test::throws_containing<SceneError>(
+      [&] { CoupledWorld coupled(game.world, *game.cloth, scene); },
+      {"emitters[0]", "200 of its particles", "inside collision object 1 (Box)"}));  // deeper than 1 cm
+  scene.emitters[0] = water_block(Vec3(-0.1, 0.0, -0.1), Vec3(0.0, 0.05, 0.0));
+  CoupledWorld coupled(game.world, *game.cloth, scene);  // resting on it, and a nozzle 1 cm above it
+  EXPECT_TRUE(coupled.step().ok());
+}
+
 TEST(RigidBodies, EveryShapeHoldsAFallingBlockOfWaterAtAGamesStep) {
   every_shape_holds_falling_water(1.0 / 60.0);
 }

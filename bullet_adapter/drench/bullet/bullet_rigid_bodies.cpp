@@ -2,7 +2,9 @@
 
 #include <BulletCollision/BroadphaseCollision/btBroadphaseProxy.h>
 #include <BulletCollision/CollisionDispatch/btCollisionObject.h>
+#include <BulletCollision/CollisionDispatch/btCollisionWorld.h>
 #include <BulletCollision/CollisionShapes/btCollisionShape.h>
+#include <BulletCollision/CollisionShapes/btSphereShape.h>
 #include <BulletCollision/CollisionShapes/btStaticPlaneShape.h>
 #include <BulletDynamics/Dynamics/btDynamicsWorld.h>
 #include <BulletDynamics/Dynamics/btRigidBody.h>
@@ -410,6 +412,39 @@ void BulletRigidBodies::apply_impulses(std::size_t index, const RigidSurface& su
   // A body Bullet put to sleep would ignore the water that now lifts or pushes it.
   body->activate(true);
   m_impulse_given += to_vec3(impulse);
+}
+
+std::string BulletRigidBodies::solid_holding(const Vec3& point, double depth) const {
+  struct Deepest : btCollisionWorld::ContactResultCallback {
+    const btCollisionObject* probe = nullptr;
+    const btCollisionObject* holder = nullptr;
+    btScalar limit = 0;
+    btScalar addSingleResult(btManifoldPoint& contact, const btCollisionObjectWrapper* a, int, int,
+                             const btCollisionObjectWrapper* b, int, int) override {
+      const btCollisionObject* other =
+          a->getCollisionObject() == probe ? b->getCollisionObject() : a->getCollisionObject();
+      if (holder == nullptr && other->getInternalType() != btCollisionObject::CO_SOFT_BODY &&
+          contact.getDistance() < limit)
+        holder = other;
+      return 0;
+    }
+  };
+  const double radius = 0.5 * depth;
+  btSphereShape sphere(static_cast<btScalar>(radius));
+  btCollisionObject probe;
+  probe.setCollisionShape(&sphere);
+  probe.setWorldTransform(btTransform(btQuaternion::getIdentity(), to_bt(point)));
+  Deepest result;
+  result.probe = &probe;
+  // A sphere whose centre lies outside overlaps a face by less than its radius; one whose centre lies
+  // deeper than `depth`, by more than depth + radius.
+  result.limit = static_cast<btScalar>(-(depth + radius));
+  result.m_collisionFilterGroup = m_options.water_group;
+  result.m_collisionFilterMask = m_options.water_mask;
+  m_world.contactTest(&probe, result);
+  if (result.holder == nullptr) return "";
+  const btCollisionObjectArray& objects = m_world.getCollisionObjectArray();
+  return describe(*result.holder, objects.findLinearSearch(const_cast<btCollisionObject*>(result.holder)));
 }
 
 std::vector<std::string> BulletRigidBodies::take_warnings() {

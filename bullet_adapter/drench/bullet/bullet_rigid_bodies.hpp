@@ -63,6 +63,11 @@ class BulletRigidBodies final : public RigidBodySource {
   /// The linear impulse the water gave the dynamic bodies, summed over all steps (unit: N s): with the
   /// fluid's momentum, what a test of momentum conservation adds up.
   const Vec3& impulse_given() const { return m_impulse_given; }
+  /// The first object the water sees whose solid holds `point` deeper than `depth` (unit: m, > 0), named as
+  /// in errors ("collision object 3 (Box)"), or "" when none does. Bullet's own contact query of a small
+  /// sphere at the point: a shape with an inside (convex shapes, their compounds, a plane's lower side) can
+  /// hold it; a triangle mesh or heightfield, with no inside, never does.
+  std::string solid_holding(const Vec3& point, double depth) const;
   /// One line per object added after construction whose shape is not supported (it does not hold the
   /// water), each object once; taken (cleared) by the call.
   std::vector<std::string> take_warnings();
