@@ -480,14 +480,36 @@ std::vector<std::pair<std::uint64_t, std::uint64_t>> Simulation::rigid_body_inst
 
 void Simulation::audit_face_jumps_since_last_step(StepStatus& status) {
   const ClothMesh& mesh = m_engine->mesh();
-  // The first step, or a mesh whose layout changed (a body came or went), has no end to compare with.
-  // A body replaced by another of the same mesh (removed, and another added) is no jump of its faces.
-  if (!m_effects.leak_audit || m_audited_end.size() != mesh.node_count() ||
-      !same_triangles(m_audited_triangles, mesh.triangles) || rigid_body_instances() != m_audited_bodies) {
-    return;
+  if (!m_effects.leak_audit || m_audited_end.empty()) return;  // the first step: no end to compare with
+  const bool same_layout = m_audited_end.size() == mesh.node_count() &&
+                           same_triangles(m_audited_triangles, mesh.triangles) &&
+                           rigid_body_instances() == m_audited_bodies;
+  const std::vector<Triangle>* faces = &mesh.triangles;
+  const Vec3Array* end = &m_audited_end;
+  const Vec3Array* start = &mesh.positions_t0;
+  std::vector<Triangle> cloth_faces;
+  Vec3Array cloth_end, cloth_start;
+  if (!same_layout) {
+    // A body came, went or was re-meshed: its faces have no end to compare with (one replaced by another
+    // is no jump of its faces). The cloth's, first in the mesh, still have theirs (test
+    // RigidBodies.AClothJumpingThroughTheWaterIsALeakEvenWhenABodyCameMeanwhile).
+    const std::size_t nodes = m_cloth ? m_cloth->mesh().node_count() : 0;
+    const std::size_t triangles = m_cloth ? m_cloth->mesh().triangle_count() : 0;
+    if (triangles == 0 || m_audited_end.size() < nodes || m_audited_triangles.size() < triangles ||
+        mesh.triangles.size() < triangles ||
+        !std::equal(mesh.triangles.begin(), mesh.triangles.begin() + static_cast<long>(triangles),
+                    m_audited_triangles.begin())) {
+      return;
+    }
+    cloth_faces.assign(mesh.triangles.begin(), mesh.triangles.begin() + static_cast<long>(triangles));
+    cloth_end.assign(m_audited_end.begin(), m_audited_end.begin() + static_cast<long>(nodes));
+    cloth_start.assign(mesh.positions_t0.begin(), mesh.positions_t0.begin() + static_cast<long>(nodes));
+    faces = &cloth_faces;
+    end = &cloth_end;
+    start = &cloth_start;
   }
   ParticleSet& p = m_fluid->particles();
-  if (audit_face_jumps(p.positions, mesh.triangles, m_audited_end, mesh.positions_t0, m_leak_stats) > 0) {
+  if (audit_face_jumps(p.positions, *faces, *end, *start, m_leak_stats) > 0) {
     status.flags |= StepStatus::LEAKED;
     status.leaked_particle = p.ids[static_cast<std::size_t>(m_leak_stats.leak_particle)];
     status.leaked_triangle = m_leak_stats.leak_triangle;
