@@ -44,7 +44,7 @@ namespace {
 
 /// A plane's grid cells are meshed in square chunks of this many cells a side: the unit in which the mesh
 /// follows the water, so that it changes only when the water moves by a chunk.
-constexpr std::int64_t kPlaneChunkCells = 8;
+constexpr std::int64_t kPlaneChunkCells = 4;
 
 /// `local` placed by `transform`, in double whatever Bullet's precision.
 Vec3Array place(const TriangleMesh& local, const btTransform& transform) {
