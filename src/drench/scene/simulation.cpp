@@ -246,6 +246,9 @@ Simulation::Simulation(const SceneConfig& config, std::unique_ptr<ClothEngine> c
   }
   for (const Scalar m : m_fluid->particles().masses)
     m_emitted_mass += m;
+  m_last_particle_speed = m_fluid->max_speed();
+  for (const auto& e : m_config.emitters)
+    if (e.kind == EmitterSettings::Kind::NOZZLE) m_nozzle_speed = std::max(m_nozzle_speed, e.nozzle.speed);
   check_frame_range(m_config, m_engine ? &m_engine->mesh() : nullptr,
                     m_cloth ? m_cloth->mesh().node_count() : 0, m_fluid->particles().positions);
   const ParticleSet& initial = m_fluid->particles();
@@ -405,6 +408,7 @@ StepStatus Simulation::step(Scalar dt) {
   // `!(a <= b)` rather than std::max, so that a NaN speed stays NaN in the summary.
   const Scalar particle_speed = m_fluid->max_speed();
   if (!(particle_speed <= m_max_particle_speed)) m_max_particle_speed = particle_speed;
+  m_last_particle_speed = particle_speed;
   if (m_cloth) check_cloth(status);
   ++m_steps;
   m_time += dt;
@@ -419,8 +423,9 @@ StepStatus Simulation::step(Scalar dt) {
 }
 
 void Simulation::tell_bodies_the_points(Scalar dt) {
-  // Gravity's pull over the step on top of the fastest speed now: the nozzles' new particles included.
-  const Scalar speed = std::max(m_fluid->max_speed(), m_last_node_speed);
+  // Gravity's pull over the step on top of the fastest speed at the end of the last one, or of a nozzle's new
+  // particles: no pass over the particles of its own.
+  const Scalar speed = std::max({m_last_particle_speed, m_last_node_speed, m_nozzle_speed});
   const Scalar reach = (speed + m_config.gravity.norm() * dt) * dt;
   if (!std::isfinite(reach)) return;  // the step reports the state that is not finite
   std::vector<const Vec3Array*> points = {&m_fluid->particles().positions};

@@ -227,7 +227,9 @@ class Simulation {
   double m_killed_mass = 0;
   Scalar m_max_particle_speed = 0;
   Scalar m_max_node_speed = 0;
-  Scalar m_last_node_speed = 0;  // the fastest cloth node at the end of the last step (unit: m/s)
+  Scalar m_last_node_speed = 0;      // the fastest cloth node at the end of the last step (unit: m/s)
+  Scalar m_last_particle_speed = 0;  // the fastest particle then (unit: m/s)
+  Scalar m_nozzle_speed = 0;         // the fastest nozzle's speed (unit: m/s)
   Scalar m_max_strain = 0;
   std::vector<std::pair<Index, Index>> m_cloth_edges;  // each edge of the cloth once, (lower, higher node)
   ScalarArray m_rest_lengths;                          // their lengths at construction (unit: m)
