@@ -14,6 +14,7 @@
 #include <limits>
 
 #include <drench/scene/simulation.hpp>
+#include "../assertions.hpp"
 #include "bullet_test_helpers.hpp"
 
 namespace drench::bullet {
@@ -274,6 +275,29 @@ TEST(CoupledWorld, NonFiniteClothIsReportedAndNotCoupled) {
   EXPECT_FALSE(report.ok());
   EXPECT_FALSE(report.coupled);
   EXPECT_GE(report.non_finite_node, 0);
+}
+
+// Each CoupledWorld steps its Bullet world once a step: two on one world, both stepped, stepped it twice a
+// frame, and each one's cloth then started its steps where the other's step had left it (reported only
+// later, as leaks). The one that steps after the other did is refused, changing nothing; a second one built
+// to replace the first, or to inspect, is not.
+TEST(CoupledWorld, TwoCoupledWorldsSteppingOneBulletWorldInTurnAreRefused) {
+  UserWorld user;
+  CoupledWorld first(user.world, *user.cloth, jet_scene());
+  EXPECT_TRUE(first.step().ok());
+  {
+    CoupledWorld second(user.world, *user.cloth, jet_scene());
+    EXPECT_TRUE(second.step().ok());
+    EXPECT_EQ(user.steps, 2);
+    const double time = first.time();
+    EXPECT_TRUE(::drench::test::throws_containing<Error>(
+        [&] { first.step(); }, {"another CoupledWorld stepped this Bullet world", "one CoupledWorld"}));
+    EXPECT_EQ(first.time(), time);
+    EXPECT_EQ(user.steps, 2) << "the refused step did not step the world";
+    EXPECT_TRUE(second.step().ok()) << "the one that stepped last goes on";
+  }
+  CoupledWorld again(user.world, *user.cloth, jet_scene());  // built now, it may step
+  EXPECT_TRUE(again.step().ok());
 }
 
 TEST(CoupledWorld, AttachRefusesASoftBodyGravityOtherThanTheScenes) {

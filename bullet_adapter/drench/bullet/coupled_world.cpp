@@ -8,7 +8,9 @@
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <mutex>
 #include <string>
+#include <unordered_map>
 
 #include <drench/bullet/shape_mesh.hpp>
 #include <drench/common/error.hpp>
@@ -173,6 +175,57 @@ void check_particles_outside_solids(const SceneConfig& scene, const Vec3Array& p
 
 }  // namespace
 
+/// Who stepped each game world: every CoupledWorld steps its world once a step, so when two couple one world
+/// and both step, each one's cloth starts its next step where the other's step left it (reported only later,
+/// as leaks). Several may exist (one built to replace another, one built to inspect); the one that steps
+/// after another stepped the world since its own last step is refused (test
+/// CoupledWorld.TwoCoupledWorldsSteppingOneBulletWorldInTurnAreRefused).
+struct CoupledWorld::WorldClaim {
+  explicit WorldClaim(const btSoftRigidDynamicsWorld& claimed) : world(&claimed) {
+    const std::lock_guard<std::mutex> lock(mutex());
+    Entry& entry = entries()[world];
+    ++entry.users;
+    seen = entry.steps;
+  }
+  ~WorldClaim() {
+    const std::lock_guard<std::mutex> lock(mutex());
+    const auto it = entries().find(world);
+    if (--it->second.users == 0) entries().erase(it);
+  }
+  WorldClaim(const WorldClaim&) = delete;
+  WorldClaim& operator=(const WorldClaim&) = delete;
+
+  /// @throws drench::Error when another CoupledWorld stepped the world since this one's last step
+  void check() const {
+    const std::lock_guard<std::mutex> lock(mutex());
+    if (entries().at(world).steps != seen) {
+      throw Error(
+          "another CoupledWorld stepped this Bullet world since this one's last step: each steps the world "
+          "once a step, so this one's cloths are no longer where its step left them; couple every cloth "
+          "through one CoupledWorld (CoupledWorld(world, {cloth_a, cloth_b}, scene)), and step only that");
+    }
+  }
+  void stepped() {
+    const std::lock_guard<std::mutex> lock(mutex());
+    seen = ++entries().at(world).steps;
+  }
+
+  struct Entry {
+    std::uint64_t steps = 0;  // CoupledWorld steps of the world
+    int users = 0;            // CoupledWorlds of the world alive
+  };
+  static std::mutex& mutex() {
+    static std::mutex m;
+    return m;
+  }
+  static std::unordered_map<const void*, Entry>& entries() {
+    static std::unordered_map<const void*, Entry> worlds;
+    return worlds;
+  }
+  const void* world;
+  std::uint64_t seen = 0;  // the world's step count after this one's last step (or at its construction)
+};
+
 std::vector<TriangleMesh> static_triangle_meshes(const btCollisionWorld& world) {
   std::vector<TriangleMesh> meshes;
   const btCollisionObjectArray& objects = world.getCollisionObjectArray();
@@ -207,7 +260,7 @@ CoupledWorld::CoupledWorld(const SceneConfig& scene) : CoupledWorld(own(scene), 
 
 CoupledWorld::CoupledWorld(std::unique_ptr<BulletClothSet> cloths, const SceneConfig& scene,
                            btSoftRigidDynamicsWorld* world, const RigidBodyOptions* bodies)
-    : m_cloths(cloths.get()) {
+    : m_claim(world ? std::make_unique<WorldClaim>(*world) : nullptr), m_cloths(cloths.get()) {
   for (std::size_t i = 0; i < m_cloths->cloth_count(); ++i)
     m_bodies.push_back({&m_cloths->cloth(i).body(), m_cloths->node_count(i), m_cloths->triangle_count(i)});
   // After the cloths' checks, so that a wrong gravity or a missing cloth is named before any shape.
@@ -289,6 +342,7 @@ CoupledStepReport CoupledWorld::step(double dt) {
         "frame's remainder over to the next frame (as btDiscreteDynamicsWorld::stepSimulation does)");
   }
   check_world();
+  if (m_claim) m_claim->check();
   CoupledStepReport report;
   Simulation& sim = *m_simulation;
   const CouplingStepStats coupling_before = sim.coupling_stats();
@@ -304,6 +358,7 @@ CoupledStepReport CoupledWorld::step(double dt) {
     ScopedTimer total(report.seconds.total);
     report.fluid = sim.step(dt);
   }
+  if (m_claim) m_claim->stepped();
   report.non_finite_node = sim.non_finite_cloth_node();
   report.non_finite_cloth_node = m_cloths->locate_node(report.non_finite_node);
   if (report.fluid.flags & StepStatus::LEAKED)

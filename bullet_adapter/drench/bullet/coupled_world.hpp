@@ -244,7 +244,11 @@ class CoupledWorld {
   /// Throws drench::Error when a cloth left the world or changed its counts, or a gravity changed.
   void check_world() const;
 
-  BulletClothSet* m_cloths;  // owned by m_simulation
+  /// Tells whether another CoupledWorld stepped the game's world since this one's last step
+  /// (coupled_world.cpp).
+  struct WorldClaim;
+  std::unique_ptr<WorldClaim> m_claim;  // null for the world this class owns
+  BulletClothSet* m_cloths;             // owned by m_simulation
   struct CoupledBody {
     const btSoftBody* body;    // compared with the world's soft bodies before it is read
     std::size_t nodes, faces;  // when coupled
