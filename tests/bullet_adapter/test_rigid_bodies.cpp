@@ -704,7 +704,7 @@ TEST(RigidBodies, AGroundPlaneTooFineForTheWatersSpreadIsReported) {
   SceneConfig scene = water_scene(0.01, gravity);
   scene.emitters.push_back(water_block(Vec3(-0.5, 0.005, -0.5), Vec3(0.5, 0.015, 0.5)));
   RigidBodyOptions options;
-  options.mesh.plane_cell = 0.0005;     // chunks of 4 mm: the 1 m square of water needs 62,500 of them
+  options.mesh.plane_cell = 0.0005;     // chunks of 2 mm: the 1 m square needs 250,000, the limit 125,000
   options.mesh.plane_half_size = 0.05;  // the first mesh, before the water is known, is small enough
   CoupledWorld coupled(game.world, *game.cloth, scene, options);
   std::vector<std::string> warnings;
@@ -812,6 +812,41 @@ TEST(RigidBodies, AClothJumpingThroughTheWaterIsALeakEvenWhenABodyCameMeanwhile)
     game.world.removeSoftBody(sheet);
     delete sheet;
   }
+}
+
+// A hull the game grows in place (addPoint: same address, scaling and margin) kept its first mesh, and the
+// water fell through what it had grown into.
+TEST(RigidBodies, AHullGrownInPlaceHoldsTheWaterWithItsNewPoints) {
+  const Vec3 gravity(0, -9.81, 0);
+  GameWorld game(gravity);
+  auto owned = std::make_unique<btConvexHullShape>();
+  btConvexHullShape& hull = *owned;
+  hull.setMargin(0.0);
+  for (const btVector3& p : {btVector3(-0.8, -0.05, -0.8), btVector3(-0.7, -0.05, -0.8),
+                             btVector3(-0.8, -0.05, -0.7), btVector3(-0.8, 0.0, -0.8)})
+    hull.addPoint(p);
+  game.add(std::move(owned), 0.0, Vec3::Zero());
+  SceneConfig scene = water_scene(0.01, gravity);
+  scene.time.dt = 1.0 / 240.0;
+  scene.emitters.push_back(water_block(Vec3(-0.05, 0.1, -0.05), Vec3(0.05, 0.15, 0.05)));
+  CoupledWorld coupled(game.world, *game.cloth, scene);
+  EXPECT_TRUE(coupled.step().ok());
+  // A slab 1.6 m square, its top at y = 0.
+  for (const btVector3& p : {btVector3(0.8, -0.05, -0.8), btVector3(0.8, -0.05, 0.8),
+                             btVector3(-0.8, -0.05, 0.8), btVector3(-0.8, 0.0, -0.8),
+                             btVector3(0.8, 0.0, -0.8), btVector3(0.8, 0.0, 0.8), btVector3(-0.8, 0.0, 0.8)})
+    hull.addPoint(p);
+  std::uint64_t leaks = 0;
+  for (int n = 0; n < 100; ++n) {
+    const CoupledStepReport report = coupled.step();
+    ASSERT_TRUE(report.ok()) << "step " << n << ": " << report.fluid.describe();
+    leaks += report.leak_stats.leaks;
+  }
+  EXPECT_EQ(leaks, 0u);
+  std::size_t below = 0;
+  for (const Vec3& x : coupled.particles().positions)
+    below += x.y() < 0.0 ? 1 : 0;
+  EXPECT_EQ(below, 0u) << "particles fell through the grown hull";
 }
 
 TEST(RigidBodies, EveryShapeHoldsAFallingBlockOfWaterAtAGamesStep) {

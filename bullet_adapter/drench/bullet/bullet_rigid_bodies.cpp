@@ -38,6 +38,7 @@ struct BulletRigidBodies::Tracked {
   std::unordered_set<PlaneCell, PlaneCellHash> safe;
   std::int64_t radius = 0;
   bool warned_too_large = false;
+  std::uint64_t retry_step = 0;  // after a cover too large, the step (m_step) to try again
 };
 
 namespace {
@@ -202,12 +203,16 @@ void BulletRigidBodies::expect_points(const std::vector<const Vec3Array*>& point
   m_reach = std::isfinite(reach) && reach > 0.0 ? reach : 0.0;
 }
 
-bool BulletRigidBodies::cover_plane(Tracked& t, const btCollisionObject& object, int index) {
+bool BulletRigidBodies::cover_plane(Tracked& t, const btCollisionObject& object, int index,
+                                    const std::vector<const Vec3Array*>& points) {
   const double cell = m_options.mesh.plane_cell;
   const double chunk = static_cast<double>(kPlaneChunkCells) * cell;
   // The most chunks a plane's mesh may have: kMaxShapeMeshTriangles, as for any shape.
   constexpr std::size_t kMaxChunks = kMaxShapeMeshTriangles / (2 * kPlaneChunkCells * kPlaneChunkCells);
+  if (m_step < t.retry_step) return false;
   const auto too_large = [&] {
+    // Asked again only after a second of 60 steps: a cover that failed costs its whole attempt each time.
+    t.retry_step = m_step + 60;
     if (!t.warned_too_large) {
       m_warnings.push_back(describe(object, index) +
                            ": the water and the cloths move over more of the plane " + "than " +
@@ -218,8 +223,8 @@ bool BulletRigidBodies::cover_plane(Tracked& t, const btCollisionObject& object,
     }
     return false;
   };
-  // A point this close to the plane may touch it within the step: the reach, and a cell for the cloth
-  // thickness and the kernel's support.
+  // A point this close to the plane may meet it within the step (the reach has the coupling's range), and a
+  // cell of slack (test RigidBodies.AGroundPlaneHoldsWaterFarFromTheOriginAndSlidingAway).
   const double near = m_reach + cell;
   const double radius_chunks = std::max(1.0, std::ceil(near / chunk));
   // Every point's own neighbourhood of radius + 1 chunks is meshed: it alone must fit.
@@ -233,8 +238,8 @@ bool BulletRigidBodies::cover_plane(Tracked& t, const btCollisionObject& object,
   // Chunk coordinates beyond this are far outside kMaxCoordinate at any sensible plane_cell.
   constexpr double kFarthestChunk = 1e15;
   const auto for_each_near_chunk = [&](auto&& visit) {
-    for (const Vec3Array* points : m_points) {
-      for (const Vec3& x : *points) {
+    for (const Vec3Array* set : points) {
+      for (const Vec3& x : *set) {
         const Vec3 r = x - origin;
         if (!(std::abs(normal.dot(r)) <= near)) continue;
         const double u = std::floor(u_axis.dot(r)), v = std::floor(v_axis.dot(r));
@@ -322,6 +327,9 @@ void BulletRigidBodies::check_bodies() const {
 
 void BulletRigidBodies::begin_step(std::vector<RigidSurface>& surfaces) {
   ++m_step;
+  // Taken, so that no later step reads them, even one after a throw below.
+  std::vector<const Vec3Array*> points;
+  points.swap(m_points);
   surfaces.clear();
   m_current.clear();
   const btCollisionObjectArray& objects = m_world.getCollisionObjectArray();
@@ -332,7 +340,7 @@ void BulletRigidBodies::begin_step(std::vector<RigidSurface>& surfaces) {
     const std::uint64_t instance_before = before != m_tracked.end() ? before->second->instance : 0;
     const bool seen_last_step = before != m_tracked.end() && before->second->seen + 1 == m_step;
     Tracked* t = track(object, i);
-    if (t != nullptr && t->plane && !m_points.empty()) cover_plane(*t, object, i);
+    if (t != nullptr && t->plane && !points.empty()) cover_plane(*t, object, i, points);
     const bool was_there = seen_last_step && t != nullptr && t->instance == instance_before;
     if (t == nullptr || t->local.triangles.empty()) continue;
     RigidSurface s;
@@ -364,7 +372,6 @@ void BulletRigidBodies::begin_step(std::vector<RigidSurface>& surfaces) {
     surfaces.push_back(std::move(s));
     m_current.push_back(t);
   }
-  m_points.clear();
   // Objects no longer in the world: a body deleted and another allocated at its address must start afresh.
   for (auto it = m_tracked.begin(); it != m_tracked.end();) {
     if (it->second->seen != m_step) {

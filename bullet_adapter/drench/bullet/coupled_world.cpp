@@ -148,7 +148,8 @@ void check_nozzles_outside_solids(const SceneConfig& scene, const BulletRigidBod
   }
 }
 
-/// The same for the boxes of water, particle by particle: a block overlapping a wall or a floor.
+/// The same for the boxes of water, particle by particle (those within the emitter's box): a block
+/// overlapping a wall or a floor.
 void check_particles_outside_solids(const SceneConfig& scene, const Vec3Array& particles,
                                     const BulletRigidBodies& bodies) {
   for (std::size_t i = 0; i < scene.emitters.size(); ++i) {
@@ -267,8 +268,10 @@ CoupledWorld::CoupledWorld(std::unique_ptr<BulletClothSet> cloths, const SceneCo
   if (world) m_rigid = std::make_unique<BulletRigidBodies>(*world, *bodies);
   m_simulation =
       std::make_unique<Simulation>(scene, std::move(cloths), std::vector<TriangleMesh>{}, m_rigid.get());
-  // After the Simulation's checks of the scene (a NaN nozzle, a spacing of 0) and before the first step.
+  // After the Simulation's checks of the scene (a NaN nozzle, a spacing of 0) and before the first step; the
+  // broad phase's boxes first, for bodies the game placed after adding them (Bullet's own step does this).
   if (m_rigid) {
+    world->updateAabbs();
     check_nozzles_outside_solids(scene, *m_rigid);
     check_particles_outside_solids(scene, m_simulation->particles().positions, *m_rigid);
   }

@@ -899,6 +899,14 @@ std::uint64_t signature(std::uint64_t hash, const btCollisionShape& shape) {
   for (int k = 0; k < 3; ++k)
     hash = mix(hash, scaling[k]);
   hash = mix(hash, shape.getMargin());
+  // The local box catches what the game changes in place without a new address or scaling: a hull's
+  // addPoint, a triangle mesh refitted (Bullet caches these boxes, so this costs little).
+  btTransform identity;
+  identity.setIdentity();
+  btVector3 low, high;
+  shape.getAabb(identity, low, high);
+  for (int k = 0; k < 3; ++k)
+    hash = mix(mix(hash, low[k]), high[k]);
   if (shape.getShapeType() == COMPOUND_SHAPE_PROXYTYPE) {
     const auto& compound = static_cast<const btCompoundShape&>(shape);
     hash = mix(hash, compound.getNumChildShapes());

@@ -79,11 +79,11 @@ bool is_supported_shape(const btCollisionShape& shape);
 /// (recursively; an empty compound too). Its mesh has no triangle, and that is no corruption.
 bool collides_with_nothing(const btCollisionShape& shape);
 
-/// A digest of what a game may change in place of `shape` that shape_mesh reads: its type, local scaling and
-/// margin and, for a compound or a btUniformScalingShape (recursively), its children, their transforms and
-/// their own digests. A cache of shape_mesh keyed by the shape's address and this follows a compound whose
-/// children the game adds, removes or moves. Not in it: the vertices of a triangle mesh or heightfield, the
-/// game's own data.
+/// A digest of what a game may change in place of `shape` that shape_mesh reads: its type, local scaling,
+/// margin and local bounding box and, for a compound or a btUniformScalingShape (recursively), its children,
+/// their transforms and their own digests. A cache of shape_mesh keyed by the shape's address and this
+/// follows a compound whose children the game adds, removes or moves. Not in it: the vertices of a triangle
+/// mesh or heightfield, the game's own data.
 std::uint64_t shape_signature(const btCollisionShape& shape);
 
 /// A btStaticPlaneShape's plane n . x = c in the shape's local frame, with a grid on it: the plane is

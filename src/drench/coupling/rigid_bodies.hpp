@@ -42,7 +42,8 @@ class RigidBodySource {
  public:
   virtual ~RigidBodySource() = default;
   /// Where the water and the cloths may be during the next step: the points of `point_sets` (unit: m; the
-  /// particles, the cloths' nodes) and how far any of them may move in it, `reach` (unit: m, >= 0). A source
+  /// particles, the cloths' nodes) and how near to them a face may meet one within it, `reach` (unit: m,
+  /// >= 0: their motion over the step and the coupling's range). A source
   /// with an unbounded surface (a game's ground plane) meshes it under these points, wherever they are. The
   /// arrays must stay valid until the next begin_step returns; the coupled step calls this just before it.
   /// The default ignores them.

@@ -426,7 +426,10 @@ void Simulation::tell_bodies_the_points(Scalar dt) {
   // Gravity's pull over the step on top of the fastest speed at the end of the last one, or of a nozzle's new
   // particles: no pass over the particles of its own.
   const Scalar speed = std::max({m_last_particle_speed, m_last_node_speed, m_nozzle_speed});
-  const Scalar reach = (speed + m_config.gravity.norm() * dt) * dt;
+  // And the coupling's range: a point within the cloth thickness of a face is pushed off it (eq. 1-4), and
+  // a particle spacing more for the pressure and impulses the step adds.
+  const Scalar reach = (speed + m_config.gravity.norm() * dt) * dt + m_config.coupling.cloth_thickness +
+                       m_config.fluid.particle_spacing;
   if (!std::isfinite(reach)) return;  // the step reports the state that is not finite
   std::vector<const Vec3Array*> points = {&m_fluid->particles().positions};
   if (m_cloth) {
