@@ -1,5 +1,5 @@
 // bullet_playground: water in a game's world. The world is the game's, built with plain Bullet calls
-// (demos/bullet_playground_world.hpp): a ground plane, a table, a hammock pinned along its long edges, a
+// (demos/bullet_playground_world.hpp): a ground plane, a table, a hammock pinned all round, a
 // curtain pinned along its top, a 3 kg ball and a lighter one dropped into the hammock, a light crate on the
 // table. drench adds two jets and wetting through one CoupledWorld for both cloths, and the game steps it at
 // its fixed 1/60 s instead of world.stepSimulation.
