@@ -695,6 +695,38 @@ TEST(RigidBodies, AGroundPlaneHoldsWaterFarFromTheOriginAndSlidingAway) {
   EXPECT_GT(slid, 0u) << "the sliding block passed the old square's edge at x = 2 m";
 }
 
+// A room of six planes, as a game walls a level with them: water thrown at a corner 3 m from the origin
+// stays inside, each plane meshed under the water where it meets it, walls and ceiling included.
+TEST(RigidBodies, ARoomOfSixPlanesHoldsWaterThrownIntoACorner) {
+  const Vec3 gravity(0, -9.81, 0);
+  GameWorld game(gravity);
+  const Vec3 lo(2.6, 0.0, -0.4), hi(3.2, 0.5, 0.4);  // the room's inside (unit: m)
+  for (int axis = 0; axis < 3; ++axis) {
+    btVector3 normal(0, 0, 0);
+    normal[axis] = 1;
+    game.add(std::make_unique<btStaticPlaneShape>(normal, static_cast<btScalar>(lo[axis])), 0.0,
+             Vec3::Zero());
+    game.add(std::make_unique<btStaticPlaneShape>(-normal, static_cast<btScalar>(-hi[axis])), 0.0,
+             Vec3::Zero());
+  }
+  SceneConfig scene = water_scene(0.01, gravity);
+  scene.time.dt = 1.0 / 240.0;
+  scene.emitters.push_back(water_block(Vec3(2.8, 0.2, -0.1), Vec3(2.9, 0.3, 0.0), Vec3(2.0, 1.0, 2.0)));
+  CoupledWorld coupled(game.world, *game.cloth, scene);
+  std::uint64_t leaks = 0;
+  for (int n = 0; n < 120; ++n) {
+    const CoupledStepReport report = coupled.step();
+    ASSERT_TRUE(report.ok()) << "step " << n << ": " << report.fluid.describe();
+    leaks += report.leak_stats.leaks;
+  }
+  EXPECT_EQ(leaks, 0u);
+  std::size_t outside = 0;
+  for (const Vec3& x : coupled.particles().positions)
+    outside += (x.array() < lo.array()).any() || (x.array() > hi.array()).any() ? 1 : 0;
+  EXPECT_EQ(outside, 0u) << "particles out of the room";
+  EXPECT_TRUE(coupled.rigid_bodies()->take_warnings().empty());
+}
+
 // The plane's mesh is bounded as every shape's (kMaxShapeMeshTriangles): water spread wider than its cells
 // can cover is reported, naming the object and the option, not an exhausted memory.
 TEST(RigidBodies, AGroundPlaneTooFineForTheWatersSpreadIsReported) {
