@@ -15,6 +15,7 @@
 #include <cmath>
 #include <cstdio>
 #include <functional>
+#include <limits>
 #include <memory>
 #include <string>
 #include <vector>
@@ -100,6 +101,34 @@ Vec3 fluid_momentum(const CoupledWorld& coupled) {
 
 Vec3 body_momentum(const btRigidBody& body) {
   return to_vec3(body.getLinearVelocity()) / static_cast<double>(body.getInvMass());
+}
+
+/// A 10 cm block of water 10-15 cm over the origin, stepped at 1/240 s: what the tests of a body the game
+/// changes in place drop on it.
+SceneConfig block_over_origin_scene(const Vec3& gravity) {
+  SceneConfig scene = water_scene(0.01, gravity);
+  scene.time.dt = 1.0 / 240.0;
+  scene.emitters.push_back(water_block(Vec3(-0.05, 0.1, -0.05), Vec3(0.05, 0.15, 0.05)));
+  return scene;
+}
+
+/// Steps `coupled` `steps` times and returns the leaks its audit counted; a step that is not ok fails the
+/// test, naming it, and ends the stepping (the count is then the largest there is).
+std::uint64_t leaks_over_steps(CoupledWorld& coupled, int steps) {
+  std::uint64_t leaks = 0;
+  for (int n = 0; n < steps; ++n) {
+    const CoupledStepReport report = coupled.step();
+    EXPECT_TRUE(report.ok()) << "step " << n << ": " << report.fluid.describe();
+    if (!report.ok()) return std::numeric_limits<std::uint64_t>::max();
+    leaks += report.leak_stats.leaks;
+  }
+  return leaks;
+}
+
+/// Particles of `coupled` where `where` holds.
+std::size_t particles_where(const CoupledWorld& coupled, const std::function<bool(const Vec3&)>& where) {
+  const Vec3Array& x = coupled.particles().positions;
+  return static_cast<std::size_t>(std::count_if(x.begin(), x.end(), where));
 }
 
 /// Particles strictly inside `body`'s box of half extents `half` (unit: m), with a margin `inset` (m).
@@ -713,17 +742,11 @@ TEST(RigidBodies, ARoomOfSixPlanesHoldsWaterThrownIntoACorner) {
   scene.time.dt = 1.0 / 240.0;
   scene.emitters.push_back(water_block(Vec3(2.8, 0.2, -0.1), Vec3(2.9, 0.3, 0.0), Vec3(2.0, 1.0, 2.0)));
   CoupledWorld coupled(game.world, *game.cloth, scene);
-  std::uint64_t leaks = 0;
-  for (int n = 0; n < 120; ++n) {
-    const CoupledStepReport report = coupled.step();
-    ASSERT_TRUE(report.ok()) << "step " << n << ": " << report.fluid.describe();
-    leaks += report.leak_stats.leaks;
-  }
-  EXPECT_EQ(leaks, 0u);
-  std::size_t outside = 0;
-  for (const Vec3& x : coupled.particles().positions)
-    outside += (x.array() < lo.array()).any() || (x.array() > hi.array()).any() ? 1 : 0;
-  EXPECT_EQ(outside, 0u) << "particles out of the room";
+  EXPECT_EQ(leaks_over_steps(coupled, 120), 0u);
+  const auto out_of_room = [&](const Vec3& x) {
+    return (x.array() < lo.array()).any() || (x.array() > hi.array()).any();
+  };
+  EXPECT_EQ(particles_where(coupled, out_of_room), 0u) << "particles out of the room";
   EXPECT_TRUE(coupled.rigid_bodies()->take_warnings().empty());
 }
 
@@ -759,25 +782,14 @@ TEST(RigidBodies, ACompoundHoldsTheWaterWithTheChildrenAddedLater) {
   auto owned = std::make_unique<btCompoundShape>();
   btCompoundShape& compound = *owned;
   game.add(std::move(owned), 0.0, Vec3::Zero());
-  SceneConfig scene = water_scene(0.01, gravity);
-  scene.time.dt = 1.0 / 240.0;
-  scene.emitters.push_back(water_block(Vec3(-0.05, 0.1, -0.05), Vec3(0.05, 0.15, 0.05)));
-  CoupledWorld coupled(game.world, *game.cloth, scene);
+  CoupledWorld coupled(game.world, *game.cloth, block_over_origin_scene(gravity));
   EXPECT_TRUE(coupled.step().ok());
   btBoxShape floor(btVector3(1.0, 0.02, 1.0));
   compound.addChildShape(btTransform(btQuaternion::getIdentity(), btVector3(0, -0.02, 0)), &floor);
-  std::uint64_t leaks = 0;
-  for (int n = 0; n < 100; ++n) {
-    const CoupledStepReport report = coupled.step();
-    ASSERT_TRUE(report.ok()) << "step " << n << ": " << report.fluid.describe();
-    leaks += report.leak_stats.leaks;
-  }
-  EXPECT_EQ(leaks, 0u);
+  EXPECT_EQ(leaks_over_steps(coupled, 100), 0u);
   EXPECT_TRUE(coupled.rigid_bodies()->take_warnings().empty());
-  std::size_t below = 0;
-  for (const Vec3& x : coupled.particles().positions)
-    below += x.y() < 0.0 ? 1 : 0;
-  EXPECT_EQ(below, 0u) << "particles fell through the compound's new floor";
+  EXPECT_EQ(particles_where(coupled, [](const Vec3& x) { return x.y() < 0.0; }), 0u)
+      << "particles fell through the compound's new floor";
   compound.removeChildShapeByIndex(0);  // before `floor` goes
 }
 
@@ -858,27 +870,16 @@ TEST(RigidBodies, AHullGrownInPlaceHoldsTheWaterWithItsNewPoints) {
                              btVector3(-0.8, -0.05, -0.7), btVector3(-0.8, 0.0, -0.8)})
     hull.addPoint(p);
   game.add(std::move(owned), 0.0, Vec3::Zero());
-  SceneConfig scene = water_scene(0.01, gravity);
-  scene.time.dt = 1.0 / 240.0;
-  scene.emitters.push_back(water_block(Vec3(-0.05, 0.1, -0.05), Vec3(0.05, 0.15, 0.05)));
-  CoupledWorld coupled(game.world, *game.cloth, scene);
+  CoupledWorld coupled(game.world, *game.cloth, block_over_origin_scene(gravity));
   EXPECT_TRUE(coupled.step().ok());
   // A slab 1.6 m square, its top at y = 0.
   for (const btVector3& p : {btVector3(0.8, -0.05, -0.8), btVector3(0.8, -0.05, 0.8),
                              btVector3(-0.8, -0.05, 0.8), btVector3(-0.8, 0.0, -0.8),
                              btVector3(0.8, 0.0, -0.8), btVector3(0.8, 0.0, 0.8), btVector3(-0.8, 0.0, 0.8)})
     hull.addPoint(p);
-  std::uint64_t leaks = 0;
-  for (int n = 0; n < 100; ++n) {
-    const CoupledStepReport report = coupled.step();
-    ASSERT_TRUE(report.ok()) << "step " << n << ": " << report.fluid.describe();
-    leaks += report.leak_stats.leaks;
-  }
-  EXPECT_EQ(leaks, 0u);
-  std::size_t below = 0;
-  for (const Vec3& x : coupled.particles().positions)
-    below += x.y() < 0.0 ? 1 : 0;
-  EXPECT_EQ(below, 0u) << "particles fell through the grown hull";
+  EXPECT_EQ(leaks_over_steps(coupled, 100), 0u);
+  EXPECT_EQ(particles_where(coupled, [](const Vec3& x) { return x.y() < 0.0; }), 0u)
+      << "particles fell through the grown hull";
 }
 
 TEST(RigidBodies, EveryShapeHoldsAFallingBlockOfWaterAtAGamesStep) {
