@@ -203,32 +203,33 @@ void BulletRigidBodies::expect_points(const std::vector<const Vec3Array*>& point
   m_reach = std::isfinite(reach) && reach > 0.0 ? reach : 0.0;
 }
 
-bool BulletRigidBodies::cover_plane(Tracked& t, const btCollisionObject& object, int index,
+void BulletRigidBodies::cover_plane(Tracked& t, const btCollisionObject& object, int index,
                                     const std::vector<const Vec3Array*>& points) {
   const double cell = m_options.mesh.plane_cell;
   const double chunk = static_cast<double>(kPlaneChunkCells) * cell;
   // The most chunks a plane's mesh may have: kMaxShapeMeshTriangles, as for any shape.
   constexpr std::size_t kMaxChunks = kMaxShapeMeshTriangles / (2 * kPlaneChunkCells * kPlaneChunkCells);
-  if (m_step < t.retry_step) return false;
+  if (m_step < t.retry_step) return;
   const auto too_large = [&] {
-    // Asked again only after a second of 60 steps: a cover that failed costs its whole attempt each time.
+    // Tried again 60 steps later: a cover that fails costs its whole attempt each time.
     t.retry_step = m_step + 60;
-    if (!t.warned_too_large) {
-      m_warnings.push_back(describe(object, index) +
-                           ": the water and the cloths move over more of the plane " + "than " +
-                           std::to_string(kMaxShapeMeshTriangles) + " triangles of " + format_number(cell) +
-                           " m cells cover (kMaxShapeMeshTriangles); it holds them " +
-                           "only where it was meshed before. Raise RigidBodyOptions::mesh.plane_cell");
-      t.warned_too_large = true;
-    }
-    return false;
+    if (t.warned_too_large) return;
+    m_warnings.push_back(describe(object, index) +
+                         ": the water and the cloths move over more of the plane than " +
+                         std::to_string(kMaxShapeMeshTriangles) + " triangles of " + format_number(cell) +
+                         " m cells cover (kMaxShapeMeshTriangles); it holds them only where it was meshed "
+                         "before. Raise RigidBodyOptions::mesh.plane_cell");
+    t.warned_too_large = true;
   };
   // A point this close to the plane may meet it within the step (the reach has the coupling's range), and a
   // cell of slack (test RigidBodies.AGroundPlaneHoldsWaterFarFromTheOriginAndSlidingAway).
   const double near = m_reach + cell;
   const double radius_chunks = std::max(1.0, std::ceil(near / chunk));
   // Every point's own neighbourhood of radius + 1 chunks is meshed: it alone must fit.
-  if (!(std::pow(2.0 * radius_chunks + 3.0, 2.0) <= static_cast<double>(kMaxChunks))) return too_large();
+  if (!(std::pow(2.0 * radius_chunks + 3.0, 2.0) <= static_cast<double>(kMaxChunks))) {
+    too_large();
+    return;
+  }
   const auto radius = static_cast<std::int64_t>(radius_chunks);
   const btTransform& transform = object.getWorldTransform();
   const Eigen::Matrix3d rotation = to_matrix3(transform.getBasis());
@@ -258,14 +259,14 @@ bool BulletRigidBodies::cover_plane(Tracked& t, const btCollisionObject& object,
     covered = covered && t.safe.count(c) > 0;
     return covered;
   });
-  if (covered) return false;
+  if (covered) return;
   using ChunkSet = std::unordered_set<PlaneCell, PlaneCellHash>;
   ChunkSet near_chunks;
   for_each_near_chunk([&](const PlaneCell& c) {
     near_chunks.insert(c);
     return near_chunks.size() <= kMaxChunks;
   });
-  if (near_chunks.empty()) return false;  // nothing near: what is meshed stays
+  if (near_chunks.empty()) return;  // nothing near: what is meshed stays
   // `from` grown by `by` chunks along u (or v) into `to`; false once `to` holds more than kMaxChunks, which
   // bounds the work as well as the mesh.
   const auto grow = [](const ChunkSet& from, std::int64_t by, bool along_u, ChunkSet& to) {
@@ -280,8 +281,10 @@ bool BulletRigidBodies::cover_plane(Tracked& t, const btCollisionObject& object,
   // Meshed: every chunk within radius + 1 of a point's, so that a point may move a chunk before the mesh
   // must follow it. Safe: the chunks within 1 of a point's, whose neighbourhood of `radius` is all meshed.
   ChunkSet rows, meshed, safe_rows, safe;
-  if (!grow(near_chunks, radius + 1, true, rows) || !grow(rows, radius + 1, false, meshed))
-    return too_large();
+  if (!grow(near_chunks, radius + 1, true, rows) || !grow(rows, radius + 1, false, meshed)) {
+    too_large();
+    return;
+  }
   grow(near_chunks, 1, true, safe_rows);
   grow(safe_rows, 1, false, safe);  // within `meshed`, so within kMaxChunks
   // In order, so that the same points give the same mesh whatever the hash set's order.
@@ -298,7 +301,6 @@ bool BulletRigidBodies::cover_plane(Tracked& t, const btCollisionObject& object,
   t.radius = radius;
   t.instance = ++m_instances;  // other faces: no sweep from the old mesh, no jump audit against it
   t.has_end = false;
-  return true;
 }
 
 void BulletRigidBodies::check_bodies() const {

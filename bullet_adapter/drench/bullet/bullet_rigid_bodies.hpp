@@ -80,8 +80,8 @@ class BulletRigidBodies final : public RigidBodySource {
   bool sees(const btCollisionObject& object) const;
   /// A btStaticPlaneShape is unbounded: `t`'s mesh becomes the plane's grid cells, in chunks of
   /// kPlaneChunkCells, within a few chunks of every expected point near the plane, re-meshed when a point
-  /// nears the edge of what is meshed. True when the mesh changed (it is then a new instance).
-  bool cover_plane(Tracked& t, const btCollisionObject& object, int index,
+  /// nears the edge of what is meshed; a new mesh is a new instance.
+  void cover_plane(Tracked& t, const btCollisionObject& object, int index,
                    const std::vector<const Vec3Array*>& points);
 
   btDynamicsWorld& m_world;

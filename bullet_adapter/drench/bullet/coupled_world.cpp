@@ -131,45 +131,34 @@ LeakAuditStats difference(const LeakAuditStats& a, const LeakAuditStats& b) {
   return d;
 }
 
-/// Water put inside a solid body is trapped there: a nozzle whose centre is inside one (a fountain inside its
-/// collision box) emitted into it, unseen and unreported. Refused naming the emitter and the body.
-void check_nozzles_outside_solids(const SceneConfig& scene, const BulletRigidBodies& bodies) {
+/// Water put inside a solid body is trapped there, unseen and unreported: a nozzle whose centre is inside one
+/// (a fountain inside its collision box), or a box of water overlapping a wall or a floor, particle by
+/// particle (those within the emitter's box). Refused naming the emitter and the body.
+void check_water_outside_solids(const SceneConfig& scene, const Vec3Array& particles,
+                                const BulletRigidBodies& bodies) {
+  const double depth = scene.fluid.particle_spacing;
   for (std::size_t i = 0; i < scene.emitters.size(); ++i) {
     const EmitterSettings& e = scene.emitters[i];
-    if (e.kind != EmitterSettings::Kind::NOZZLE) continue;
-    const std::string holder = bodies.solid_holding(e.nozzle.center, scene.fluid.particle_spacing);
-    if (!holder.empty()) {
-      throw SceneError("emitters[" + std::to_string(i) + "]: the nozzle's centre " +
-                       format_vec3(e.nozzle.center) + " lies inside " + holder +
-                       ", where its water would be trapped; move the nozzle out of it, or let the water pass "
+    std::string what;  // what of the emitter lies inside which body, or ""
+    if (e.kind == EmitterSettings::Kind::NOZZLE) {
+      const std::string holder = bodies.solid_holding(e.nozzle.center, depth);
+      if (!holder.empty())
+        what = "the nozzle's centre " + format_vec3(e.nozzle.center) + " lies inside " + holder;
+    } else {
+      std::size_t inside = 0;
+      for (const Vec3& x : particles) {
+        if ((x.array() < e.box.min.array()).any() || (x.array() > e.box.max.array()).any()) continue;
+        const std::string holder = bodies.solid_holding(x, depth);
+        if (holder.empty()) continue;
+        if (inside++ == 0) what = "the first at " + format_vec3(x) + " inside " + holder;
+      }
+      if (inside > 0) what = std::to_string(inside) + " of its particles lie inside a solid body, " + what;
+    }
+    if (!what.empty()) {
+      throw SceneError("emitters[" + std::to_string(i) + "]: " + what +
+                       ", where its water would be trapped; move it out of the body, or let the water pass "
                        "the object (RigidBodyOptions::water_mask) (" +
                        scene.source + ")");
-    }
-  }
-}
-
-/// The same for the boxes of water, particle by particle (those within the emitter's box): a block
-/// overlapping a wall or a floor.
-void check_particles_outside_solids(const SceneConfig& scene, const Vec3Array& particles,
-                                    const BulletRigidBodies& bodies) {
-  for (std::size_t i = 0; i < scene.emitters.size(); ++i) {
-    const EmitterSettings& e = scene.emitters[i];
-    if (e.kind != EmitterSettings::Kind::BOX) continue;
-    std::size_t inside = 0;
-    std::string first;
-    for (const Vec3& x : particles) {
-      if ((x.array() < e.box.min.array()).any() || (x.array() > e.box.max.array()).any()) continue;
-      const std::string holder = bodies.solid_holding(x, scene.fluid.particle_spacing);
-      if (holder.empty()) continue;
-      if (inside++ == 0) first = format_vec3(x) + " inside " + holder;
-    }
-    if (inside > 0) {
-      throw SceneError(
-          "emitters[" + std::to_string(i) + "]: " + std::to_string(inside) +
-          " of its particles lie inside a solid body, the first at " + first +
-          ", where they would be trapped; move the box of water out of it, or let the water pass "
-          "the object (RigidBodyOptions::water_mask) (" +
-          scene.source + ")");
     }
   }
 }
@@ -181,20 +170,20 @@ void check_particles_outside_solids(const SceneConfig& scene, const Vec3Array& p
 /// as leaks). Several may exist (one built to replace another, one built to inspect); the one that steps
 /// after another stepped the world since its own last step is refused (test
 /// CoupledWorld.TwoCoupledWorldsSteppingOneBulletWorldInTurnAreRefused).
-struct CoupledWorld::WorldClaim {
-  explicit WorldClaim(const btSoftRigidDynamicsWorld& claimed) : world(&claimed) {
+struct CoupledWorld::WorldSteps {
+  explicit WorldSteps(const btSoftRigidDynamicsWorld& stepped) : world(&stepped) {
     const std::lock_guard<std::mutex> lock(mutex());
     Entry& entry = entries()[world];
     ++entry.users;
     seen = entry.steps;
   }
-  ~WorldClaim() {
+  ~WorldSteps() {
     const std::lock_guard<std::mutex> lock(mutex());
     const auto it = entries().find(world);
     if (--it->second.users == 0) entries().erase(it);
   }
-  WorldClaim(const WorldClaim&) = delete;
-  WorldClaim& operator=(const WorldClaim&) = delete;
+  WorldSteps(const WorldSteps&) = delete;
+  WorldSteps& operator=(const WorldSteps&) = delete;
 
   /// @throws drench::Error when another CoupledWorld stepped the world since this one's last step
   void check() const {
@@ -261,7 +250,7 @@ CoupledWorld::CoupledWorld(const SceneConfig& scene) : CoupledWorld(own(scene), 
 
 CoupledWorld::CoupledWorld(std::unique_ptr<BulletClothSet> cloths, const SceneConfig& scene,
                            btSoftRigidDynamicsWorld* world, const RigidBodyOptions* bodies)
-    : m_claim(world ? std::make_unique<WorldClaim>(*world) : nullptr), m_cloths(cloths.get()) {
+    : m_world_steps(world ? std::make_unique<WorldSteps>(*world) : nullptr), m_cloths(cloths.get()) {
   for (std::size_t i = 0; i < m_cloths->cloth_count(); ++i)
     m_bodies.push_back({&m_cloths->cloth(i).body(), m_cloths->node_count(i), m_cloths->triangle_count(i)});
   // After the cloths' checks, so that a wrong gravity or a missing cloth is named before any shape.
@@ -272,8 +261,7 @@ CoupledWorld::CoupledWorld(std::unique_ptr<BulletClothSet> cloths, const SceneCo
   // broad phase's boxes first, for bodies the game placed after adding them (Bullet's own step does this).
   if (m_rigid) {
     world->updateAabbs();
-    check_nozzles_outside_solids(scene, *m_rigid);
-    check_particles_outside_solids(scene, m_simulation->particles().positions, *m_rigid);
+    check_water_outside_solids(scene, m_simulation->particles().positions, *m_rigid);
   }
 }
 
@@ -345,7 +333,7 @@ CoupledStepReport CoupledWorld::step(double dt) {
         "frame's remainder over to the next frame (as btDiscreteDynamicsWorld::stepSimulation does)");
   }
   check_world();
-  if (m_claim) m_claim->check();
+  if (m_world_steps) m_world_steps->check();
   CoupledStepReport report;
   Simulation& sim = *m_simulation;
   const CouplingStepStats coupling_before = sim.coupling_stats();
@@ -361,7 +349,7 @@ CoupledStepReport CoupledWorld::step(double dt) {
     ScopedTimer total(report.seconds.total);
     report.fluid = sim.step(dt);
   }
-  if (m_claim) m_claim->stepped();
+  if (m_world_steps) m_world_steps->stepped();
   report.non_finite_node = sim.non_finite_cloth_node();
   report.non_finite_cloth_node = m_cloths->locate_node(report.non_finite_node);
   if (report.fluid.flags & StepStatus::LEAKED)

@@ -246,9 +246,9 @@ class CoupledWorld {
 
   /// Tells whether another CoupledWorld stepped the game's world since this one's last step
   /// (coupled_world.cpp).
-  struct WorldClaim;
-  std::unique_ptr<WorldClaim> m_claim;  // null for the world this class owns
-  BulletClothSet* m_cloths;             // owned by m_simulation
+  struct WorldSteps;
+  std::unique_ptr<WorldSteps> m_world_steps;  // null for the world this class owns
+  BulletClothSet* m_cloths;                   // owned by m_simulation
   struct CoupledBody {
     const btSoftBody* body;    // compared with the world's soft bodies before it is read
     std::size_t nodes, faces;  // when coupled

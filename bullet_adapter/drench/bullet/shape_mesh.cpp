@@ -934,8 +934,7 @@ TriangleMesh plane_cells_mesh(const PlaneFrame& frame, double cell, const std::v
     throw SceneError("plane grid cell must be > 0 and finite, got " + format_number(cell));
   if (2.0 * static_cast<double>(cells.size()) > static_cast<double>(kMaxShapeMeshTriangles)) {
     throw SceneError("a plane patch of " + std::to_string(cells.size()) +
-                     " cells would have more than "
-                     "kMaxShapeMeshTriangles = " +
+                     " cells would have more than kMaxShapeMeshTriangles = " +
                      std::to_string(kMaxShapeMeshTriangles) + " triangles");
   }
   TriangleMesh mesh;
