@@ -259,6 +259,26 @@ void FluidSolver::add_moving_boundary_reactions(Scalar dt, const Vec3Array& posi
   }
 }
 
+void FluidSolver::add_pbf_boundary_reactions(Scalar dt) {
+  const NeighborList& bn = m_neighbors.boundary();
+  const std::vector<PressurePbf::BoundaryPush>& pushes = m_pbf->boundary_pushes();
+  // As add_moving_boundary_reactions, with the pushes the projection summed over its iterations. In particle
+  // order, one thread: the same bits for any thread count.
+  for (std::size_t k = 0; k < pushes.size();) {
+    const Index i = pushes[k].particle;
+    Vec3 along_faces = Vec3::Zero();
+    for (; k < pushes.size() && pushes[k].particle == i; ++k) {
+      const Index b = bn.indices[pushes[k].entry];
+      const Vec3& push = pushes[k].push;
+      const Vec3& n = m_moving_normals[b - m_static_boundary];
+      const Vec3 normal_part = push.dot(n) * n;
+      m_moving_impulses[b - m_static_boundary] += normal_part;
+      along_faces += push - normal_part;
+    }
+    m_pressure_accelerations[i] += along_faces / (m_particles.masses[i] * dt);
+  }
+}
+
 Scalar FluidSolver::particle_mass() const {
   const Scalar s = m_settings.particle_spacing;
   return m_settings.rest_density * s * s * s;
@@ -498,14 +518,10 @@ StepStatus FluidSolver::substep_pbf(Scalar dt, Scalar max_speed, SubstepConstrai
       }
     });
   }
-  // Where the lists' gradient factors hold: a moving body's reaction is taken there (the projection may move
-  // a particle pressed by a body far from it, and factor times distance would then grow without bound: the
-  // game-like scene threw particles at 31,000 m/s).
-  if (m_boundary_packed.size() > m_static_boundary) m_predicted = m_particles.positions;
   PressureStats pressure;
   {
     ScopedTimer timer(m_stats.timings_s.pressure);
-    pressure = m_pbf->project(ctx, dt);
+    pressure = m_pbf->project(ctx, dt, m_static_boundary);
   }
   record(pressure);
   {
@@ -523,7 +539,7 @@ StepStatus FluidSolver::substep_pbf(Scalar dt, Scalar max_speed, SubstepConstrai
       ++m_viscosity_counter.passes;
     }
     m_pressure_accelerations.assign(n, Vec3::Zero());
-    if (m_boundary_packed.size() > m_static_boundary) add_moving_boundary_reactions(dt, m_predicted);
+    if (m_boundary_packed.size() > m_static_boundary) add_pbf_boundary_reactions(dt);
     // The viscosity changes velocities only (their Algorithm 1, line 22); what a moving body gives back
     // along its faces moves the particle as a pressure acceleration would.
     parallel_for(n, kLightChunk, [&](std::size_t begin, std::size_t end) {

@@ -188,7 +188,8 @@ class FluidSolver {
   void keep_moving_boundary();
   /// B impulses the fluid's pressure gave the moving boundary particles in the last step() (unit: N s),
   /// sum over sub-steps and particles i of m_i dt w_i Psi_b grad W_ib (PressureSolver::
-  /// boundary_pressure_factors): the opposite of what they gave the fluid.
+  /// boundary_pressure_factors; PBF's over its iterations, PressurePbf::boundary_pushes): the opposite of
+  /// what they gave the fluid.
   const Vec3Array& moving_boundary_impulses() const { return m_moving_impulses; }
 
   /// Fastest particle speed (unit: m/s); NaN when a velocity is NaN.
@@ -225,6 +226,9 @@ class FluidSolver {
   /// normals, and takes the rest of their push on the fluid back from m_pressure_accelerations.
   /// @param positions  N particle positions at which the neighbor lists' gradient factors were computed
   void add_moving_boundary_reactions(Scalar dt, const Vec3Array& positions);
+  /// add_moving_boundary_reactions for PBF, from the pushes its projection summed over its iterations
+  /// (PressurePbf::boundary_pushes).
+  void add_pbf_boundary_reactions(Scalar dt);
   /// Index of the fastest particle (the first of equals); 0 when there are none.
   std::size_t fastest_particle() const;
   /// The CFL sub-step for the fastest particle moving at `max_speed` (unit: s); infinite when nothing moves.
@@ -243,7 +247,6 @@ class FluidSolver {
   VerletNeighborLists m_neighbors;
   PackedPointArray m_positions_mass;  // positions (unit: m), w = mass (unit: kg), for the densities
   Vec3Array m_positions_before;       // sub-step start positions, kept only for a SubstepConstraint (and PBF)
-  Vec3Array m_predicted;              // PBF's prediction, kept only when a body moves
   std::unique_ptr<PressureSolver> m_pressure;
   PressurePbf* m_pbf = nullptr;  // m_pressure when the scene's solver is PBF
   std::unique_ptr<NonPressureForce> m_viscosity;

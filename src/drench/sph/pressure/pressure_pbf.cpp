@@ -505,7 +505,7 @@ PressurePbf::PressurePbf(const FluidSettings& settings)
   m_inv_w_dq = 1.0 / kernel.value(m_settings.scorr_dq * kernel.support_radius());
 }
 
-PressureStats PressurePbf::project(const FluidContext& ctx, Scalar dt) {
+PressureStats PressurePbf::project(const FluidContext& ctx, Scalar dt, std::size_t first_moving) {
   ParticleSet& particles = ctx.particles;
   const std::size_t n = particles.size();
   const Scalar rho0 = ctx.rest_density;
@@ -527,6 +527,17 @@ PressureStats PressurePbf::project(const FluidContext& ctx, Scalar dt) {
   m_moves.resize(n);
   m_chunk_errors.resize((n + kParticleChunk - 1) / kParticleChunk);
   m_neighbor_blocks.resize(single ? n : 0);
+  // The pairs of particles and moving boundary points: few (the water touching a body), found once, since
+  // the lists hold for the whole projection.
+  m_boundary_pushes.clear();
+  if (first_moving < ctx.boundary.size()) {
+    for (std::size_t i = 0; i < n; ++i) {
+      for (std::uint32_t k = bn.offsets[i]; k < bn.offsets[i + 1]; ++k) {
+        if (bn.indices[k] >= first_moving)
+          m_boundary_pushes.push_back({static_cast<Index>(i), static_cast<Index>(k), Vec3::Zero()});
+      }
+    }
+  }
   PressureStats stats;
   if (n == 0) return stats;
   // Blocks of 2^block_shift particles, at most 32 (pbf_moves_float).
@@ -610,6 +621,21 @@ PressureStats PressurePbf::project(const FluidContext& ctx, Scalar dt) {
       }
       m_chunk_errors[begin / kParticleChunk] = errors;
     });
+    // The moving points' share of this iteration's moves, with its lambdas and the gradient factors the
+    // constraint pass kept at its positions, as pbf_moves takes them. In particle order, one thread: the same
+    // bits for any thread count.
+    for (BoundaryPush& pair : m_boundary_pushes) {
+      const Index i = pair.particle;
+      const PackedPoint& b = ctx.boundary[bn.indices[pair.entry]];
+      const PackedPoint& xi = m_points[i];
+      // w_i Psi_b f_ib as the move pass reads them: Psi_b f_ib kept per entry in single precision, f_ib in
+      // double.
+      const Scalar w_factor = single
+                                  ? Scalar{m_lambda_points_float[i].w} * m_boundary_factors_float[pair.entry]
+                                  : m_lambda_points[i].w * b.w * m_boundary_factors[pair.entry];
+      if (w_factor == 0.0) continue;
+      pair.push += (particles.masses[i] / dt * w_factor) * Vec3(xi.x - b.x, xi.y - b.y, xi.z - b.z);
+    }
     // dp_i (eq. 12) with the kernel's gradient at the current positions: factors frozen at the prediction,
     // as PCISPH's pressure loop uses them, made the hydrostatic tank blow up within 0.1 s at every sub-step
     // count and relaxation tried, since PBF's iterations move particles by a large part of a spacing.
@@ -703,7 +729,7 @@ PressureStats PressurePbf::solve(const FluidContext& ctx, const Vec3Array& veloc
   const Vec3Array start = x;
   for (std::size_t i = 0; i < x.size(); ++i)
     x[i] += dt * velocities_adv[i];
-  const PressureStats stats = project(ctx, dt);
+  const PressureStats stats = project(ctx, dt, ctx.boundary.size());
   accelerations.resize(x.size());
   for (std::size_t i = 0; i < x.size(); ++i)
     accelerations[i] = (x[i] - start[i] - dt * velocities_adv[i]) / (dt * dt);
