@@ -584,6 +584,29 @@ TEST(RigidBodies, ABodyRespawnedAtTheSameAddressStartsWhereItIsPlaced) {
 
 // A body the game put at NaN was accepted and every step blamed a cloth node that did not exist; one parked
 // at 1e15 m took 2 GB of the leak audit's cells before the step threw bad_alloc.
+// A body the game throws through the water throws water past fluid.max_speed: the fluid checks the speed
+// before it moves the particles, after the bodies pushed them in the step before, so that step ended ok and
+// a run whose last step it was ended ok with a particle at 100 m/s.
+TEST(RigidBodies, WaterThrownPastTheSpeedLimitEndsTheStepThatThrewIt) {
+  const Vec3 gravity = Vec3::Zero();
+  GameWorld game(gravity);
+  btRigidBody& shot = game.add_box(Vec3::Constant(0.02), 0.2, Vec3(-0.3, 0.05, 0.05));
+  shot.setLinearVelocity(btVector3(100.0, 0.0, 0.0));
+  SceneConfig scene = water_scene(0.01, gravity);
+  scene.time.dt = 1.0 / 60.0;
+  scene.fluid.pressure_solver = PressureSolverKind::PBF;
+  scene.fluid.max_speed = 50.0;
+  scene.emitters.push_back(water_block(Vec3::Zero(), Vec3(0.1, 0.1, 0.1)));
+  CoupledWorld coupled(game.world, *game.cloth, scene);
+  const CoupledStepReport report = coupled.step();
+  EXPECT_GT(shot.getCenterOfMassPosition().x(), 0.2) << "the box went through the water in this step (m)";
+  ASSERT_GT(coupled.simulation().fluid().max_speed(), 50.0) << "it threw water past the limit (m/s)";
+  EXPECT_TRUE(report.failed());
+  EXPECT_TRUE(report.fluid.flags & StepStatus::RUNAWAY_PARTICLE) << report.fluid.describe();
+  EXPECT_NE(report.fluid.describe().find("over fluid.max_speed"), std::string::npos)
+      << report.fluid.describe();
+}
+
 TEST(RigidBodies, ABodyAtNaNOrFarAwayIsRefusedNamingIt) {
   const Vec3 gravity(0, -9.81, 0);
   GameWorld game(gravity);

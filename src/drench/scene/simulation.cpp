@@ -419,6 +419,12 @@ StepStatus Simulation::step(Scalar dt) {
     ScopedTimer timer(m_emit_seconds);
     remove_killed();
   }
+  // The coupling and the bodies changed velocities after the fluid's own check: a particle they threw past
+  // fluid.max_speed ends this step, as the next would end it before moving it (the particles the kill
+  // regions removed are gone from both).
+  if (!(status.flags & StepStatus::RUNAWAY_PARTICLE)) {
+    status |= m_config.kill_regions.empty() ? m_fluid->speed_check(particle_speed) : m_fluid->speed_check();
+  }
   return status;
 }
 

@@ -279,6 +279,21 @@ void FluidSolver::add_pbf_boundary_reactions(Scalar dt) {
   }
 }
 
+StepStatus FluidSolver::speed_check() const {
+  return speed_check(max_speed());
+}
+
+StepStatus FluidSolver::speed_check(Scalar speed) const {
+  StepStatus status;
+  // An infinite speed is left to the non-finite check, which names it as such.
+  if (m_settings.max_speed && std::isfinite(speed) && speed > *m_settings.max_speed) {
+    status.flags |= StepStatus::RUNAWAY_PARTICLE;
+    status.runaway_particle = m_particles.ids[fastest_particle()];
+    status.runaway_speed = speed;
+  }
+  return status;
+}
+
 Scalar FluidSolver::particle_mass() const {
   const Scalar s = m_settings.particle_spacing;
   return m_settings.rest_density * s * s * s;
@@ -357,15 +372,11 @@ StepStatus FluidSolver::step(Scalar dt, SubstepConstraint* constraint) {
   bool redone = false;
   while (true) {
     const Scalar speed = max_speed();
-    // An infinite speed is left to the non-finite check, which names it as such.
-    if (m_settings.max_speed && std::isfinite(speed) && speed > *m_settings.max_speed) {
-      // Past it the CFL limit would cut the step into up to a million sub-steps: a blown-up run would crawl
-      // for hours instead of saying so (the WCSPH rows of bench/accuracy_sweep.py's stability sweep).
-      status.flags |= StepStatus::RUNAWAY_PARTICLE;
-      status.runaway_particle = m_particles.ids[fastest_particle()];
-      status.runaway_speed = speed;
-      break;
-    }
+    // Past fluid.max_speed the CFL limit would cut the step into up to a million sub-steps: a blown-up run
+    // would crawl for hours instead of saying so (the WCSPH rows of bench/accuracy_sweep.py's stability
+    // sweep).
+    status |= speed_check(speed);
+    if (status.flags & StepStatus::RUNAWAY_PARTICLE) break;
     if (m_pbf) {
       // A fixed count of equal sub-steps: a game's frame costs the same every frame (PbfSettings).
       const int left = m_settings.pbf.substeps - count;

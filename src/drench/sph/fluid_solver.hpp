@@ -194,6 +194,13 @@ class FluidSolver {
 
   /// Fastest particle speed (unit: m/s); NaN when a velocity is NaN.
   Scalar max_speed() const;
+  /// RUNAWAY_PARTICLE, naming the fastest particle, when one is faster than settings().max_speed now (the
+  /// test step() makes before each sub-step); else ok. For a caller that changes velocities after step()
+  /// (the coupling's impulses, a body's push), so that the step that threw a particle says so: the last
+  /// step of a run would otherwise end ok.
+  StepStatus speed_check() const;
+  /// speed_check() with the fastest speed known: `speed` = max_speed() now (unit: m/s).
+  StepStatus speed_check(Scalar speed) const;
   /// The longest step the CFL limit allows now, cfl spacing / (max_speed() + signal speed) (unit: s): step()
   /// takes one sub-step for any dt up to it. Infinite when nothing moves (and WCSPH's signal speed is 0), and
   /// for PBF, whose sub-steps are fixed.
