@@ -16,8 +16,9 @@
 // loop, and the reported time is the mean ms per frame; the median and the 99th percentile per stage, which
 // Google Benchmark cannot compute over iterations, are counters. The warm-up (60 frames, 1 s, by default)
 // lets the jets' water reach the hammock and the curtain, so that the timed frames are the level in play, not
-// its empty first second; the jets run out (4,000 particles each) at about 3-4 s, and the water then drains,
-// so the 600 frames (t = 1 ... 11 s) hold the jets, the pooled water and its run-off.
+// its empty first second; the jets run out (4,000 particles each) at about 3-4 s, and the water that stays
+// pools in the hammock (pinned all round), so the 600 frames (t = 1 ... 11 s) hold the jets and the pooled
+// water.
 
 #include <benchmark/benchmark.h>
 
@@ -198,8 +199,8 @@ void game_frame(benchmark::State& state, const std::string& name, const SolverRu
   drench::detail::reset_pool_stats();
   std::vector<std::vector<double>> stages(7);
   // The whole frame's time by the particles in the level at its end, in bins of kBinParticles: the level's
-  // count rises and falls (the jets, then the run-off), and the median over all frames hides what a frame
-  // costs at a given count, which is what a game budgets by.
+  // count rises and falls (the jets, then the water squeezed out or run off), and the median over all frames
+  // hides what a frame costs at a given count, which is what a game budgets by.
   std::vector<std::vector<double>> total_by_particles(kParticleBins);
   std::size_t particles_max = 0;
   timing = true;
