@@ -104,6 +104,7 @@ CouplingStepStats difference(const CouplingStepStats& a, const CouplingStepStats
   d.obstacle_stops = a.obstacle_stops - b.obstacle_stops;
   d.stopped_particles = a.stopped_particles - b.stopped_particles;
   d.stopped_nodes = a.stopped_nodes - b.stopped_nodes;
+  d.carried_by_zones = a.carried_by_zones - b.carried_by_zones;
   d.last_resort_impulse = a.last_resort_impulse - b.last_resort_impulse;
   d.zone_cloth_momentum = a.zone_cloth_momentum - b.zone_cloth_momentum;
   d.zone_ignored_shift = a.zone_ignored_shift - b.zone_ignored_shift;

@@ -159,6 +159,7 @@ nlohmann::json make_summary(const Simulation& sim, double wall_seconds, const st
     s["failsafe_activations"] = c.failsafe_activations;
     s["stopped_particles"] = c.stopped_particles;
     s["stopped_nodes"] = c.stopped_nodes;
+    s["carried_by_zones"] = c.carried_by_zones;
     s["squeezed_out"] = c.squeezed_out;
     s["squeezed_out_kg"] = c.squeezed_out_mass;
     s["obstacle_stops"] = c.obstacle_stops;
