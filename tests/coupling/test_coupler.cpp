@@ -458,48 +458,64 @@ TEST(Coupler, AParticleCaughtBetweenTwoPinnedLayersIsSqueezedOut) {
   EXPECT_EQ(fold.mesh.positions_t1, given.positions_t1);
 }
 
+/// One coupling step of 4 ms, with 4 CCD rounds before the fail-safe, of particles at rest at `starts` (unit:
+/// m) between and around two sheets: the upper one a body, turned by 0.01 rad about the z axis through
+/// (0.3, 0, 0.2) and lowered by 12 mm, its nodes held by their engine; the lower one rising by 12 mm, its
+/// nodes weighing 10 g.
+struct TurningBodyStep {
+  const Eigen::Matrix3d turn = Eigen::AngleAxisd(0.01, Vec3::UnitZ()).toRotationMatrix();
+  const Vec3 pivot{0.3, 0.0, 0.2}, drop{0.0, -0.012, 0.0};
+  ClothMesh mesh = two_sheets(0.002, 0.0, -0.003, 0.012);
+  ClothMesh given;
+  Particles particles;
+  CouplingStepStats stats;
+  std::uint32_t status = COUPLING_OK;
+
+  Vec3 body_motion(const Vec3& x) const { return turn * (x - pivot) + pivot + drop; }
+
+  explicit TurningBodyStep(const std::vector<Vec3>& starts) {
+    for (std::size_t i = 0; i < 4; ++i)
+      mesh.positions_t1[i] = body_motion(mesh.positions_t0[i]);
+    given = mesh;
+    const double dt = 0.004;
+    for (const Vec3& x : starts)
+      particles.add(x, Vec3::Zero(), dt, kMass);
+    CouplingSettings settings;
+    settings.max_ccd_iterations = 4;
+    Coupler coupler(settings);
+    ScalarArray own(mesh.node_count(), 1.0 / 0.01);  // the lower sheet: 10 g nodes
+    for (std::size_t i = 0; i < 4; ++i)
+      own[i] = 0.0;  // the body's, held by its engine
+    status = coupler.step(particles.view(), mesh, dt, stats, &own);
+  }
+  std::size_t leaks() {
+    LeakAuditStats audit;
+    return audit_leaks(particles.x0, particles.x1, mesh, audit);
+  }
+};
+
 // A body turning as it falls through a particle onto a sheet rising under it: the zone takes the body's
 // one rigid motion (Kabsch's fit of its held nodes), so the particle and the sheet's caught nodes turn and
 // fall with the body's face, as if stuck to it, and stay on their sides. The body's nodes end exactly where
 // they were given: a move would leave the particle inside the body at the next step (jump_leaks).
 TEST(Coupler, AZoneWithATurningBodyTakesTheBodysRigidMotion) {
-  ClothMesh mesh = two_sheets(0.002, 0.0, -0.003, 0.012);
-  // The upper sheet is the body: turned by 0.01 rad about the z axis through the particle's start, and
-  // lowered by 12 mm.
-  const double angle = 0.01;
-  const Eigen::Matrix3d turn = Eigen::AngleAxisd(angle, Vec3::UnitZ()).toRotationMatrix();
-  const Vec3 pivot(0.3, 0.0, 0.2), drop(0.0, -0.012, 0.0);
-  const auto body_motion = [&](const Vec3& x) -> Vec3 { return turn * (x - pivot) + pivot + drop; };
-  for (std::size_t i = 0; i < 4; ++i)
-    mesh.positions_t1[i] = body_motion(mesh.positions_t0[i]);
-  const ClothMesh given = mesh;
-  const double dt = 0.004;
-  Particles particles;
-  particles.add(Vec3(0.3, 0.0, 0.2), Vec3::Zero(), dt, kMass);
-  CouplingSettings settings;
-  settings.max_ccd_iterations = 4;
-  Coupler coupler(settings);
-  ScalarArray own(mesh.node_count(), 1.0 / 0.01);  // the lower sheet: 10 g nodes
-  for (std::size_t i = 0; i < 4; ++i)
-    own[i] = 0.0;  // the body's, held by its engine
-  CouplingStepStats stats;
-  const std::uint32_t status = coupler.step(particles.view(), mesh, dt, stats, &own);
-  ASSERT_NE(status & COUPLING_ZONES_STOPPED, 0u)
+  TurningBodyStep step({Vec3(0.3, 0.0, 0.2)});
+  ASSERT_NE(step.status & COUPLING_ZONES_STOPPED, 0u)
       << "the step must need the last resort, else it tests nothing";
-  EXPECT_EQ(status & COUPLING_UNRESOLVED, 0u);
-  EXPECT_EQ(stats.squeezed_out, 0u) << "one rigid motion serves the zone";
-  EXPECT_EQ(stats.zone_ignored_shift, 0.0);
-  LeakAuditStats audit;
-  EXPECT_EQ(audit_leaks(particles.x0, particles.x1, mesh, audit), 0u);
+  EXPECT_EQ(step.status & COUPLING_UNRESOLVED, 0u);
+  EXPECT_EQ(step.stats.squeezed_out, 0u) << "one rigid motion serves the zone";
+  EXPECT_EQ(step.stats.zone_ignored_shift, 0.0);
+  EXPECT_EQ(step.leaks(), 0u);
   // The body's nodes are never written; the particle and every node that moved off its given end moved
   // with the body's motion (rounding of the fit: 1e-12 m).
+  const ClothMesh& mesh = step.mesh;
   for (std::size_t i = 0; i < 4; ++i)
-    EXPECT_EQ(mesh.positions_t1[i], given.positions_t1[i]) << "body node " << i;
-  EXPECT_LT((particles.x1[0] - body_motion(particles.x0[0])).norm(), 1e-12);
+    EXPECT_EQ(mesh.positions_t1[i], step.given.positions_t1[i]) << "body node " << i;
+  EXPECT_LT((step.particles.x1[0] - step.body_motion(step.particles.x0[0])).norm(), 1e-12);
   std::size_t turned = 0;
   for (std::size_t i = 4; i < mesh.node_count(); ++i) {
-    if (mesh.positions_t1[i] == given.positions_t1[i]) continue;
-    EXPECT_LT((mesh.positions_t1[i] - body_motion(mesh.positions_t0[i])).norm(), 1e-12) << "node " << i;
+    if (mesh.positions_t1[i] == step.given.positions_t1[i]) continue;
+    EXPECT_LT((mesh.positions_t1[i] - step.body_motion(mesh.positions_t0[i])).norm(), 1e-12) << "node " << i;
     ++turned;
   }
   EXPECT_EQ(turned, 3u) << "the lower sheet's triangle under the particle";
@@ -511,36 +527,17 @@ TEST(Coupler, AZoneWithATurningBodyTakesTheBodysRigidMotion) {
 // zone. Joining it moved more nodes, whose water joined in turn: zones of up to 1,500 particles grew so
 // between a ball and a hammock (bench_game_frame).
 TEST(Coupler, WaterUnderAFaceAZoneMovesIsCarriedByItNotJoined) {
-  ClothMesh mesh = two_sheets(0.002, 0.0, -0.003, 0.012);
-  const double angle = 0.01;
-  const Eigen::Matrix3d turn = Eigen::AngleAxisd(angle, Vec3::UnitZ()).toRotationMatrix();
-  const Vec3 pivot(0.3, 0.0, 0.2), drop(0.0, -0.012, 0.0);
-  const auto body_motion = [&](const Vec3& x) -> Vec3 { return turn * (x - pivot) + pivot + drop; };
-  for (std::size_t i = 0; i < 4; ++i)
-    mesh.positions_t1[i] = body_motion(mesh.positions_t0[i]);
-  const double dt = 0.004;
-  Particles particles;
-  particles.add(Vec3(0.3, 0.0, 0.2), Vec3::Zero(), dt, kMass);
   // 8 mm under the sheet; the zone moves the sheet's face there by the body's motion to about 13.5 mm down.
   const Vec3 under(0.35, -0.011, 0.15);
-  particles.add(under, Vec3::Zero(), dt, kMass);
-  CouplingSettings settings;
-  settings.max_ccd_iterations = 4;
-  Coupler coupler(settings);
-  ScalarArray own(mesh.node_count(), 1.0 / 0.01);
-  for (std::size_t i = 0; i < 4; ++i)
-    own[i] = 0.0;
-  CouplingStepStats stats;
-  const std::uint32_t status = coupler.step(particles.view(), mesh, dt, stats, &own);
-  ASSERT_NE(status & COUPLING_ZONES_STOPPED, 0u)
+  TurningBodyStep step({Vec3(0.3, 0.0, 0.2), under});
+  ASSERT_NE(step.status & COUPLING_ZONES_STOPPED, 0u)
       << "the step must need the last resort, else it tests nothing";
-  EXPECT_EQ(status & COUPLING_UNRESOLVED, 0u);
-  LeakAuditStats audit;
-  EXPECT_EQ(audit_leaks(particles.x0, particles.x1, mesh, audit), 0u);
-  EXPECT_EQ(stats.stopped_particles, 1u) << "the particle between the body and the sheet only";
-  EXPECT_EQ(stats.carried_by_zones, 1u);
-  EXPECT_LT((particles.x1[0] - body_motion(particles.x0[0])).norm(), 1e-12);
-  EXPECT_LT(particles.x1[1].y(), under.y()) << "carried down, under the sheet";
+  EXPECT_EQ(step.status & COUPLING_UNRESOLVED, 0u);
+  EXPECT_EQ(step.leaks(), 0u);
+  EXPECT_EQ(step.stats.stopped_particles, 1u) << "the particle between the body and the sheet only";
+  EXPECT_EQ(step.stats.carried_by_zones, 1u);
+  EXPECT_LT((step.particles.x1[0] - step.body_motion(step.particles.x0[0])).norm(), 1e-12);
+  EXPECT_LT(step.particles.x1[1].y(), under.y()) << "carried down, under the sheet";
 }
 
 TEST(Coupler, RejectsBadSettingsNamingThem) {
