@@ -358,7 +358,7 @@ CoupledStepReport CoupledWorld::step(double dt) {
   report.coupling = sim.last_coupling_status();
   report.coupling_stats = difference(sim.coupling_stats(), coupling_before);
   report.leak_stats = difference(sim.leak_stats(), leaks_before);
-  report.coupled = sim.config().has_effect("coupling") && report.ok();
+  report.coupled = sim.last_step_coupled();
   report.emitted = static_cast<std::size_t>(sim.created() - created_before);
   report.removed = static_cast<std::size_t>(sim.removed() - removed_before);
   report.seconds.emit = sim.emit_seconds() - emit_before;

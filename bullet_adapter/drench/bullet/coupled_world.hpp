@@ -84,7 +84,8 @@ struct CoupledStepReport {
   /// its body's m_faces; cloth -1 when the face is a static mesh's (fluid.leaked_triangle, in the contact
   /// mesh, where the static meshes' faces follow the cloths').
   ClothElement leaked_cloth_face;
-  /// The coupler ran: the scene lists "coupling" and neither the fluid nor the cloth went non-finite.
+  /// The coupler ran: the scene lists "coupling" and neither the fluid nor the cloth had failed before it
+  /// (Simulation::last_step_coupled).
   bool coupled = false;
   std::size_t emitted = 0;  ///< particles the nozzles added
   std::size_t removed = 0;  ///< particles the kill regions removed

@@ -41,8 +41,8 @@ struct CouplingStepStats {
   /// left a collision (COUPLING_ZONES_STOPPED)
   std::uint64_t stopped_particles = 0;
   std::uint64_t stopped_nodes = 0;
-  /// Particles outside the impact zones that the zones' move of a face carried with it rather than joining
-  /// them (move_impact_zones)
+  /// Carries of particles outside the impact zones by a zone's move of a face they hit, rather than joining
+  /// them (move_impact_zones); a particle carried in two rounds counts twice
   std::uint64_t carried_by_zones = 0;
   /// What the last resorts (the fail-safe's and the impact zones' moves, StepContext::place) gave particles:
   /// the sum of |m dv| (unit: N s). Each is booked against its triangle's nodes as an impulse is.

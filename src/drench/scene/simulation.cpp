@@ -381,6 +381,7 @@ Scalar Simulation::next_dt() const {
 }
 
 StepStatus Simulation::step(Scalar dt) {
+  m_last_coupled = false;
   {
     ScopedTimer timer(m_emit_seconds);
     const std::size_t before = m_fluid->particles().size();
@@ -602,6 +603,7 @@ void Simulation::step_cloth_and_couple(Scalar dt, StepStatus& status) {
   }
   // A cloth or fluid that went non-finite is not coupled: its state means nothing any more.
   const bool coupled = m_effects.coupler && m_non_finite_node < 0 && status.ok();
+  m_last_coupled = coupled;
   m_last_coupling_status = 0;
   if (coupled) {
     ScopedTimer timer(m_coupling_seconds);

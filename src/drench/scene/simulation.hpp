@@ -129,6 +129,9 @@ class Simulation {
   std::uint32_t coupling_status() const { return m_coupling_status; }
   /// COUPLING_* flags of the last step.
   std::uint32_t last_coupling_status() const { return m_last_coupling_status; }
+  /// The coupler ran in the last step: the scene lists "coupling", and the fluid and the cloth were finite
+  /// and ok when it would (a check after it, as the end-of-step speed limit, does not undo it).
+  bool last_step_coupled() const { return m_last_coupled; }
   /// Index of the first cloth node that was not finite after the cloth's own last step, or -1; the coupling
   /// was then skipped and the step reports NON_FINITE_STATE.
   std::int64_t non_finite_cloth_node() const { return m_non_finite_node; }
@@ -216,6 +219,7 @@ class Simulation {
   std::vector<std::pair<std::uint64_t, std::uint64_t>> m_audited_bodies;  // (key, instance) of its bodies
   std::uint32_t m_coupling_status = 0;
   std::uint32_t m_last_coupling_status = 0;
+  bool m_last_coupled = false;
   std::int64_t m_non_finite_node = -1;
   Scalar m_time = 0;
   double m_cloth_seconds = 0;

@@ -40,7 +40,9 @@ struct StepStatus {
     /// A cloth node's position became NaN or infinite after the cloth's own step; `non_finite_node` names it
     /// and the coupling was skipped. Lower dt, raise the cloth's position iterations, check its masses.
     NON_FINITE_CLOTH = 1u << 2,
-    /// A particle moved faster than fluid.max_speed at the start of a sub-step; `runaway_particle` names its
+    /// A particle moved faster than fluid.max_speed at the start of a sub-step or, in a Simulation, at the
+    /// end
+    /// of a step (speed_check); `runaway_particle` names its
     /// id and `runaway_speed` its speed. The run has blown up: lower dt or the CFL factor.
     RUNAWAY_PARTICLE = 1u << 3,
     /// A particle ended the step on the other side of a cloth or obstacle face than it started (the leak
