@@ -177,7 +177,7 @@ TEST(RigidBodies, AFloatingBallDoesNotSpinUp) {
 
 // PBF at a game's step (issue 41): the body's reaction is what each iteration's boundary term gave the
 // water (PressurePbf::boundary_pushes), and the draft follows Archimedes (bench/buoyancy.py
-// --solver pbf: 0.326, 0.533 and 0.671 for 250, 500 and 750 kg/m^3 at 1 cm).
+// --solver pbf: 0.326, 0.533 and 0.683 for 250, 500 and 750 kg/m^3 at 1 cm).
 TEST(RigidBodies, ABallOfHalfTheWatersDensityFloatsHalfSubmergedWithPbfAtAGamesStep) {
   const buoyancy::Draft draft = buoyancy::settled_draft(0.01, 500.0, PressureSolverKind::PBF, 1.0 / 60.0);
   EXPECT_EQ(draft.failure, "") << "step " << draft.failed_step;

@@ -269,6 +269,13 @@ std::uint32_t move_impact_zones(StepContext& ctx, TriangleBroadPhase& broad_phas
     return true;
   };
   const auto start_of = [&](std::size_t e) { return e < n ? ctx.x0()[e] : cloth.positions_t0[e - n]; };
+  // Every pair's impacts under the motion as the round left it, querying only the changed pairs.
+  const auto impacts_now = [&] {
+    update_pairs(ctx, broad_phase, only, fresh, all, merged);
+    known.query_changed(ctx, fresh);
+    ctx.clear_changes();
+    earliest_impacts(ctx, known.known(), impacts);
+  };
   struct Zone {
     Vec3 kinematic = Vec3::Zero(), weighted = Vec3::Zero();
     double kinematic_count = 0.0, mass = 0.0;
@@ -373,20 +380,14 @@ std::uint32_t move_impact_zones(StepContext& ctx, TriangleBroadPhase& broad_phas
         ctx.move_node(node, end);
       }
     }
-    update_pairs(ctx, broad_phase, only, fresh, all, merged);
-    known.query_changed(ctx, fresh);
-    ctx.clear_changes();
-    earliest_impacts(ctx, known.known(), impacts);
+    impacts_now();
     if (shifted.empty()) continue;
     // A particle outside the zones that now hits a face whose nodes a zone just moved is carried by the
-    // face's move at the point it hits (as the fail-safe carries one), before it may join: the water
-    // resting on a cloth ends within 1% of the thickness of its faces, so any move of a zone's cloth nodes
-    // made it hit, and joining it moved more nodes, whose water joined in turn. Between a ball and the
-    // hammock of bench_game_frame's level a fifth of the frames grew zones of 100-1,500 particles so, and
-    // those frames' coupling took 12 ms against 4.5 ms. A later round that moves the face back (a zone that
-    // lost its particles returns its nodes where they were given) leaves the particle where it was carried:
-    // no crossing, and at most the zone's move too far. Carried particles that followed their faces in every
-    // later round squeezed water out again there (75 particles in 300 frames, where none).
+    // face's move at the point it hits, as the fail-safe carries one, and joins only if it still hits: water
+    // resting on a cloth ends within 1% of the thickness of its faces, so joining it let the zones grow
+    // through a whole pool (between a ball and the hammock of bench_game_frame's level). A later round that
+    // moves the face back leaves the particle where it was carried: no crossing, at most the zone's move too
+    // far; following the face in every round squeezed water out there again.
     bool carried = false;
     for (const auto& [p, impact] : impacts) {
       if (index[p] != kNone) continue;
@@ -402,10 +403,7 @@ std::uint32_t move_impact_zones(StepContext& ctx, TriangleBroadPhase& broad_phas
       zone_move[node] = Vec3::Zero();
     shifted.clear();
     if (!carried) continue;
-    update_pairs(ctx, broad_phase, only, fresh, all, merged);
-    known.query_changed(ctx, fresh);
-    ctx.clear_changes();
-    earliest_impacts(ctx, known.known(), impacts);
+    impacts_now();
   }
   if (impacts.empty()) return COUPLING_ZONES_STOPPED;
   if (unresolved) *unresolved = {impacts.front().first, impacts.front().second.triangle};

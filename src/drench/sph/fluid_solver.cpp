@@ -249,10 +249,7 @@ void FluidSolver::add_moving_boundary_reactions(Scalar dt, const Vec3Array& posi
       // The fluid got -dt w_i Psi_b grad W_ib per unit mass (Akinci et al. 2012 eq. 10); the body takes the
       // opposite of its normal part, and the fluid gives back the rest.
       const Vec3 push = (scale * m_boundary_packed[b].w * static_cast<Scalar>(factors[k])) * (xi - points[b]);
-      const Vec3& n = m_moving_normals[b - m_static_boundary];
-      const Vec3 normal_part = push.dot(n) * n;
-      m_moving_impulses[b - m_static_boundary] += normal_part;
-      along_faces += push - normal_part;
+      along_faces += book_boundary_push(b, push);
       moving = true;
     }
     if (moving) m_pressure_accelerations[i] += along_faces / (m_particles.masses[i] * dt);
@@ -267,16 +264,17 @@ void FluidSolver::add_pbf_boundary_reactions(Scalar dt) {
   for (std::size_t k = 0; k < pushes.size();) {
     const Index i = pushes[k].particle;
     Vec3 along_faces = Vec3::Zero();
-    for (; k < pushes.size() && pushes[k].particle == i; ++k) {
-      const Index b = bn.indices[pushes[k].entry];
-      const Vec3& push = pushes[k].push;
-      const Vec3& n = m_moving_normals[b - m_static_boundary];
-      const Vec3 normal_part = push.dot(n) * n;
-      m_moving_impulses[b - m_static_boundary] += normal_part;
-      along_faces += push - normal_part;
-    }
+    for (; k < pushes.size() && pushes[k].particle == i; ++k)
+      along_faces += book_boundary_push(bn.indices[pushes[k].entry], pushes[k].push);
     m_pressure_accelerations[i] += along_faces / (m_particles.masses[i] * dt);
   }
+}
+
+Vec3 FluidSolver::book_boundary_push(Index b, const Vec3& push) {
+  const Vec3& n = m_moving_normals[b - m_static_boundary];
+  const Vec3 normal_part = push.dot(n) * n;
+  m_moving_impulses[b - m_static_boundary] += normal_part;
+  return push - normal_part;
 }
 
 StepStatus FluidSolver::speed_check() const {

@@ -41,9 +41,8 @@ struct StepStatus {
     /// and the coupling was skipped. Lower dt, raise the cloth's position iterations, check its masses.
     NON_FINITE_CLOTH = 1u << 2,
     /// A particle moved faster than fluid.max_speed at the start of a sub-step or, in a Simulation, at the
-    /// end
-    /// of a step (speed_check); `runaway_particle` names its
-    /// id and `runaway_speed` its speed. The run has blown up: lower dt or the CFL factor.
+    /// end of a step (speed_check); `runaway_particle` names its id and `runaway_speed` its speed. The run
+    /// has blown up: lower dt or the CFL factor.
     RUNAWAY_PARTICLE = 1u << 3,
     /// A particle ended the step on the other side of a cloth or obstacle face than it started (the leak
     /// audit's transversal crossing), or the continuous handling could not rule one out; `leaked_particle`
@@ -238,6 +237,9 @@ class FluidSolver {
   /// add_moving_boundary_reactions for PBF, from the pushes its projection summed over its iterations
   /// (PressurePbf::boundary_pushes).
   void add_pbf_boundary_reactions(Scalar dt);
+  /// Books moving boundary point b's push on a particle (unit: N s): the body takes its part along b's face
+  /// normal (m_moving_impulses); returns the rest, which the particle keeps.
+  Vec3 book_boundary_push(Index b, const Vec3& push);
   /// Index of the fastest particle (the first of equals); 0 when there are none.
   std::size_t fastest_particle() const;
   /// The CFL sub-step for the fastest particle moving at `max_speed` (unit: s); infinite when nothing moves.
