@@ -229,8 +229,9 @@ struct FluidSettings {
   PbfSettings pbf;
   ViscositySettings viscosity;
   /// CFL factor lambda (dimensionless), in (0, 1]: a fluid sub-step never exceeds lambda spacing / v_max,
-  /// with v_max the fastest particle (plus the speed of sound for WCSPH). PBF ignores it (PbfSettings::
-  /// substeps).
+  /// with v_max the fastest particle (plus the speed of sound for WCSPH), and at least sqrt(|g| H), the
+  /// speed of a surface wave in water as deep as the particles' extent H along gravity, so that water at
+  /// rest is not stepped at the whole frame. PBF ignores it (PbfSettings::substeps).
   Scalar cfl = 0.4;
   /// A particle faster than this stops the run with RUNAWAY_PARTICLE (unit: m/s), > 0; nullopt: no limit.
   /// Far above any flow of water, so only a blow-up reaches it, which would otherwise crawl: the CFL limit

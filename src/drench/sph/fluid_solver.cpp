@@ -351,9 +351,42 @@ std::size_t FluidSolver::fastest_particle() const {
 
 Scalar FluidSolver::cfl_limit(Scalar max_speed) const {
   if (m_pbf) return std::numeric_limits<Scalar>::infinity();
-  const Scalar speed = max_speed + m_pressure->signal_speed();
+  // Limited by the particles' speed alone, a resting tank's sub-steps grew to the whole step as it slowed,
+  // and at 1/60 s such steps stirred it again: the hydrostatic tank never settled (DFSPH) or threw a
+  // particle at 1,000 m/s (PCISPH) (HydrostaticTank*.SettlesAtTheGamesStep). Where jets are faster than the
+  // waves they set the limit as before: bench_game_frame's level and jet_on_cloth take the same sub-steps.
+  const Scalar flow = max_speed + m_pressure->signal_speed();
+  const Scalar speed = std::isnan(flow) ? flow : std::max(flow, gravity_wave_speed());
   if (!(speed > 0.0)) return std::numeric_limits<Scalar>::infinity();
   return m_settings.cfl * m_settings.particle_spacing / speed;
+}
+
+Scalar FluidSolver::gravity_wave_speed() const {
+  const Scalar g = m_gravity.norm();
+  if (!(g > 0.0) || m_particles.empty()) return 0.0;
+  const Vec3 up = -m_gravity / g;
+  const auto& x = m_particles.positions;
+  struct Range {
+    Scalar lo, hi;
+  };
+  const Scalar inf = std::numeric_limits<Scalar>::infinity();
+  const Range range = parallel_reduce(
+      x.size(), kLightChunk, Range{inf, -inf},
+      [&](std::size_t begin, std::size_t end) {
+        Range r{inf, -inf};
+        for (std::size_t i = begin; i < end; ++i) {
+          const Scalar h = x[i].dot(up);
+          r.lo = std::min(r.lo, h);
+          r.hi = std::max(r.hi, h);
+        }
+        return r;
+      },
+      [](const Range& a, const Range& b) {
+        return Range{std::min(a.lo, b.lo), std::max(a.hi, b.hi)};
+      });
+  // A NaN position drops out of min and max; the step's non-finite check names it.
+  const Scalar depth = range.hi - range.lo;
+  return depth > 0.0 ? std::sqrt(g * depth) : 0.0;
 }
 
 StepStatus FluidSolver::step(Scalar dt, SubstepConstraint* constraint) {

@@ -202,9 +202,10 @@ class FluidSolver {
   StepStatus speed_check() const;
   /// speed_check() with the fastest speed known: `speed` = max_speed() now (unit: m/s).
   StepStatus speed_check(Scalar speed) const;
-  /// The longest step the CFL limit allows now, cfl spacing / (max_speed() + signal speed) (unit: s): step()
-  /// takes one sub-step for any dt up to it. Infinite when nothing moves (and WCSPH's signal speed is 0), and
-  /// for PBF, whose sub-steps are fixed.
+  /// The longest step the CFL limit allows now, cfl spacing / max(max_speed() + signal speed, gravity wave
+  /// speed) (unit: s; FluidSettings::cfl): step() takes one sub-step for any dt up to it. Infinite when
+  /// nothing moves and there is no gravity (and WCSPH's signal speed is 0), and for PBF, whose sub-steps are
+  /// fixed.
   Scalar cfl_step() const { return cfl_limit(max_speed()); }
 
  private:
@@ -244,6 +245,9 @@ class FluidSolver {
   std::size_t fastest_particle() const;
   /// The CFL sub-step for the fastest particle moving at `max_speed` (unit: s); infinite when nothing moves.
   Scalar cfl_limit(Scalar max_speed) const;
+  /// sqrt(|g| H), H the particles' extent along gravity (unit: m/s): the fastest surface wave in water that
+  /// deep (shallow water); 0 without gravity or particles.
+  Scalar gravity_wave_speed() const;
 
   FluidSettings m_settings;
   Vec3 m_gravity;
