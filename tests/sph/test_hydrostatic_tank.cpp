@@ -148,10 +148,9 @@ TEST(HydrostaticTankDfsph, SettlesToHydrostaticPressureDensityAndHeight) {
   expect_hydrostatic(settle({"fluid.pressure_solver=dfsph"}));
 }
 
-// A game steps the fluid at 1/60 s. Limited by the particles' speed alone, the sub-steps of water coming to
-// rest grew to the whole step, and at such steps PCISPH threw a particle at 1,006 m/s within 60 steps and
-// DFSPH's tank still moved at 0.53 m/s after 2 s; the surface waves' speed bounds them now
-// (FluidSettings::cfl).
+// A game steps the fluid at 1/60 s: water coming to rest must not be sub-stepped at the whole step, where
+// PCISPH threw a particle at 1,006 m/s within 60 steps and DFSPH's tank moved at 0.53 m/s after 2 s; the
+// surface waves' CFL bound (FluidSettings::cfl) holds both.
 TEST(HydrostaticTankPcisph, SettlesAtTheGamesStep) {
   expect_hydrostatic(settle({"time.dt=0.016666666666666666"}));
 }

@@ -38,7 +38,7 @@ struct TimeSettings {
   /// Step of the whole simulation (unit: s), > 0; the fluid may sub-step inside it. With `adaptive`, the
   /// largest step.
   Scalar dt = 0.005;
-  /// Each step is the fluid's CFL step, fluid.cfl spacing / (v_max + signal speed), within [dt_min, dt], cut
+  /// Each step is the fluid's CFL step (FluidSolver::cfl_step, FluidSettings::cfl), within [dt_min, dt], cut
   /// to land on every frame's time and on the duration: no fluid sub-steps unless a step is at dt_min. The
   /// cloth and the coupling take the same steps; the fluid's step stays a sub-step of the scene's.
   bool adaptive = false;

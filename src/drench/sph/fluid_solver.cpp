@@ -351,12 +351,11 @@ std::size_t FluidSolver::fastest_particle() const {
 
 Scalar FluidSolver::cfl_limit(Scalar max_speed) const {
   if (m_pbf) return std::numeric_limits<Scalar>::infinity();
-  // Limited by the particles' speed alone, a resting tank's sub-steps grew to the whole step as it slowed,
-  // and at 1/60 s such steps stirred it again: the hydrostatic tank never settled (DFSPH) or threw a
-  // particle at 1,000 m/s (PCISPH) (HydrostaticTank*.SettlesAtTheGamesStep). Where jets are faster than the
-  // waves they set the limit as before: bench_game_frame's level and jet_on_cloth take the same sub-steps.
-  const Scalar flow = max_speed + m_pressure->signal_speed();
-  const Scalar speed = std::isnan(flow) ? flow : std::max(flow, gravity_wave_speed());
+  // Water at rest has no speed to limit its sub-steps, and PCISPH's and DFSPH's solves at a whole 1/60 s
+  // step stir it or blow up (HydrostaticTank*.SettlesAtTheGamesStep); a sub-step under its surface waves'
+  // CFL holds it. Jets faster than the waves keep their limit (bench_game_frame, jet_on_cloth: the same
+  // sub-steps).
+  const Scalar speed = std::max(max_speed + m_pressure->signal_speed(), gravity_wave_speed());
   if (!(speed > 0.0)) return std::numeric_limits<Scalar>::infinity();
   return m_settings.cfl * m_settings.particle_spacing / speed;
 }
@@ -384,7 +383,8 @@ Scalar FluidSolver::gravity_wave_speed() const {
       [](const Range& a, const Range& b) {
         return Range{std::min(a.lo, b.lo), std::max(a.hi, b.hi)};
       });
-  // A NaN position drops out of min and max; the step's non-finite check names it.
+  // h is std::min's and std::max's second argument, so a NaN position is never chosen; the step's
+  // non-finite check names it.
   const Scalar depth = range.hi - range.lo;
   return depth > 0.0 ? std::sqrt(g * depth) : 0.0;
 }

@@ -204,8 +204,8 @@ class FluidSolver {
   StepStatus speed_check(Scalar speed) const;
   /// The longest step the CFL limit allows now, cfl spacing / max(max_speed() + signal speed, gravity wave
   /// speed) (unit: s; FluidSettings::cfl): step() takes one sub-step for any dt up to it. Infinite when
-  /// nothing moves and there is no gravity (and WCSPH's signal speed is 0), and for PBF, whose sub-steps are
-  /// fixed.
+  /// nothing moves and the particles have no extent along gravity (or there is none), and for PBF, whose
+  /// sub-steps are fixed.
   Scalar cfl_step() const { return cfl_limit(max_speed()); }
 
  private:
@@ -243,7 +243,8 @@ class FluidSolver {
   Vec3 book_boundary_push(Index b, const Vec3& push);
   /// Index of the fastest particle (the first of equals); 0 when there are none.
   std::size_t fastest_particle() const;
-  /// The CFL sub-step for the fastest particle moving at `max_speed` (unit: s); infinite when nothing moves.
+  /// The CFL sub-step for the fastest particle moving at `max_speed` (unit: s), no longer than the
+  /// particles' surface waves allow (gravity_wave_speed); infinite when neither moves.
   Scalar cfl_limit(Scalar max_speed) const;
   /// sqrt(|g| H), H the particles' extent along gravity (unit: m/s): the fastest surface wave in water that
   /// deep (shallow water); 0 without gravity or particles.
