@@ -27,6 +27,27 @@ std::string scene(const std::string& name) {
   return std::string(DRENCH_SOURCE_DIR) + "/demos/scenes/" + name;
 }
 
+/// A drench run's exit code, its log and its summary.json.
+struct TankRun {
+  int code = 0;
+  std::string log;
+  nlohmann::json summary;
+};
+
+/// The hydrostatic tank run for 5 steps of 0.2 s with `solver`, one thread, in `dir`.
+TankRun tank_at_a_fifth_of_a_second(const std::string& solver, const drench::test::TempDir& dir) {
+  const fs::path out = dir.path() / "run";
+  TankRun run;
+  run.code = drench::test::run_drench("run " + scene("hydrostatic_tank.json") + " --out " + out.string() +
+                                          " --quiet --threads 1 --steps 5 --set time.dt=0.2 --set "
+                                          "fluid.pressure_solver=" +
+                                          solver,
+                                      dir.path() / "log");
+  run.log = drench::test::read_text(dir.path() / "log");
+  run.summary = nlohmann::json::parse(drench::test::read_text(out / "summary.json"));
+  return run;
+}
+
 // The jet at 40 m/s on the default cloth at dt 4 ms tore the cloth (edges 34 times their length, nodes at
 // 138 m/s) and ended "ok" with exit 0. Now the cloth's checks stop it within the first steps the jet reaches
 // the cloth, with exit 2 and a status naming the node or edge.
@@ -54,16 +75,10 @@ TEST(HostilePhysics, A40MetrePerSecondJetThatTearsTheClothStopsWithExit2) {
 // fixed, now stops at the sub-step where more than half of the particles are packed past twice the rest
 // density, with exit 2 and a status that says so.
 TEST(HostilePhysics, AStepTooLargeForThePressureSolveStopsAsCollapsedWithExit2) {
-  drench::test::TempDir dir;
-  const fs::path out = dir.path() / "run";
-  const int code =
-      drench::test::run_drench("run " + scene("hydrostatic_tank.json") + " --out " + out.string() +
-                                   " --quiet --threads 1 --steps 5 --set time.dt=0.2 --set "
-                                   "fluid.pressure_solver=pbf",
-                               dir.path() / "log");
-  const std::string log = drench::test::read_text(dir.path() / "log");
-  EXPECT_EQ(code, 2) << log;
-  const nlohmann::json summary = nlohmann::json::parse(drench::test::read_text(out / "summary.json"));
+  const drench::test::TempDir dir;
+  const TankRun run = tank_at_a_fifth_of_a_second("pbf", dir);
+  EXPECT_EQ(run.code, 2) << run.log;
+  const nlohmann::json& summary = run.summary;
   const std::string status = summary["status"];
   EXPECT_EQ(status.rfind("FLUID_COLLAPSED: ", 0), 0u) << status;
   EXPECT_NE(status.find(" of 6000 particles packed past twice the rest density"), std::string::npos)
@@ -77,17 +92,10 @@ TEST(HostilePhysics, AStepTooLargeForThePressureSolveStopsAsCollapsedWithExit2) 
 // whole, PCISPH packs the tank flat and DFSPH becomes non-finite.
 TEST(HostilePhysics, AStepTooLargeForThePressureSolveIsSubsteppedByPcisphAndDfsph) {
   for (const std::string solver : {"pcisph", "dfsph"}) {
-    drench::test::TempDir dir;
-    const fs::path out = dir.path() / "run";
-    const int code =
-        drench::test::run_drench("run " + scene("hydrostatic_tank.json") + " --out " + out.string() +
-                                     " --quiet --threads 1 --steps 5 --set time.dt=0.2 --set "
-                                     "fluid.pressure_solver=" +
-                                     solver,
-                                 dir.path() / "log");
-    const std::string log = drench::test::read_text(dir.path() / "log");
-    EXPECT_EQ(code, 0) << solver << ": " << log;
-    const nlohmann::json summary = nlohmann::json::parse(drench::test::read_text(out / "summary.json"));
+    const drench::test::TempDir dir;
+    const TankRun run = tank_at_a_fifth_of_a_second(solver, dir);
+    EXPECT_EQ(run.code, 0) << solver << ": " << run.log;
+    const nlohmann::json& summary = run.summary;
     // PCISPH may spend its max_iterations in a sub-step (PRESSURE_NOT_CONVERGED, which does not stop a
     // run); nothing collapsed, blew up or became non-finite.
     const std::string status = summary["status"];
