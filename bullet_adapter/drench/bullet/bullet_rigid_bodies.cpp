@@ -334,6 +334,7 @@ void BulletRigidBodies::begin_step(std::vector<RigidSurface>& surfaces) {
   points.swap(m_points);
   surfaces.clear();
   m_current.clear();
+  m_appeared.clear();
   const btCollisionObjectArray& objects = m_world.getCollisionObjectArray();
   for (int i = 0; i < objects.size(); ++i) {
     const btCollisionObject& object = *objects[i];
@@ -345,6 +346,9 @@ void BulletRigidBodies::begin_step(std::vector<RigidSurface>& surfaces) {
     if (t != nullptr && t->plane && !points.empty()) cover_plane(*t, object, i, points);
     const bool was_there = seen_last_step && t != nullptr && t->instance == instance_before;
     if (t == nullptr || t->local.triangles.empty()) continue;
+    // A body the game adds after construction (or replaces, or re-meshes) may close its faces around water:
+    // release_trapped looks inside it. A plane's new mesh is the same plane.
+    if (!was_there && !t->plane) m_appeared.push_back(&object);
     RigidSurface s;
     s.key = reinterpret_cast<std::uintptr_t>(&object);
     s.instance = t->instance;
@@ -421,6 +425,61 @@ void BulletRigidBodies::apply_impulses(std::size_t index, const RigidSurface& su
   // A body Bullet put to sleep would ignore the water that now lifts or pushes it.
   body->activate(true);
   m_impulse_given += to_vec3(impulse);
+}
+
+std::size_t BulletRigidBodies::release_trapped(Vec3Array& positions, Vec3Array& velocities, double gap) {
+  // The deepest contact of the probe with the body: its distance and the direction (unit) that moves the
+  // probe out, whichever of the pair Bullet's algorithm took first.
+  struct Deepest : btCollisionWorld::ContactResultCallback {
+    const btCollisionObject* probe = nullptr;
+    btScalar distance = 0;
+    btVector3 out{0, 0, 0};
+    btScalar addSingleResult(btManifoldPoint& contact, const btCollisionObjectWrapper* a, int, int,
+                             const btCollisionObjectWrapper*, int, int) override {
+      if (contact.getDistance() < distance) {
+        distance = contact.getDistance();
+        // The normal on B points from B towards A.
+        out = a->getCollisionObject() == probe ? contact.m_normalWorldOnB : -contact.m_normalWorldOnB;
+      }
+      return 0;
+    }
+  };
+  // A body made of several solids (a compound) may hold a point moved out of one in the next.
+  constexpr int kMaxMoves = 4;
+  const btScalar radius = static_cast<btScalar>(0.5 * gap);
+  btSphereShape sphere(radius);
+  btCollisionObject probe;
+  probe.setCollisionShape(&sphere);
+  std::size_t released = 0;
+  for (const btCollisionObject* object : m_appeared) {
+    btVector3 lo, hi;
+    object->getCollisionShape()->getAabb(object->getWorldTransform(), lo, hi);
+    const Vec3 low = to_vec3(lo), high = to_vec3(hi);
+    auto* body = const_cast<btCollisionObject*>(object);
+    const btRigidBody* rigid = btRigidBody::upcast(object);
+    for (std::size_t k = 0; k < positions.size(); ++k) {
+      Vec3& x = positions[k];
+      if ((x.array() < low.array()).any() || (x.array() > high.array()).any()) continue;
+      bool moved = false;
+      for (int move = 0; move < kMaxMoves; ++move) {
+        probe.setWorldTransform(btTransform(btQuaternion::getIdentity(), to_bt(x)));
+        Deepest deepest;
+        deepest.probe = &probe;
+        m_world.contactPairTest(&probe, body, deepest);
+        // The probe's centre lies inside when it overlaps the face by more than its radius.
+        if (!(deepest.distance < -radius)) break;
+        const double depth = -static_cast<double>(deepest.distance) - static_cast<double>(radius);
+        x += (depth + gap) * to_vec3(deepest.out).normalized();
+        moved = true;
+      }
+      if (!moved) continue;
+      ++released;
+      velocities[k] =
+          rigid ? to_vec3(rigid->getVelocityInLocalPoint(to_bt(x) - rigid->getCenterOfMassPosition()))
+                : Vec3::Zero();
+    }
+  }
+  return released;
 }
 
 std::string BulletRigidBodies::solid_holding(const Vec3& point, double depth) const {

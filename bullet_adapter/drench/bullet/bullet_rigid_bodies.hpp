@@ -59,6 +59,10 @@ class BulletRigidBodies final : public RigidBodySource {
   void step(double dt) override;
   void end_positions(std::vector<RigidSurface>& surfaces) override;
   void apply_impulses(std::size_t index, const RigidSurface& surface, const Vec3* node_impulses) override;
+  /// Bullet's contact query of a sphere of radius gap / 2 at each point inside the box of an object that
+  /// appeared in the last begin_step gives the point's depth and the way out (its deepest contact); a
+  /// triangle mesh, a heightfield or a plane has no inside and holds none.
+  std::size_t release_trapped(Vec3Array& positions, Vec3Array& velocities, double gap) override;
 
   /// The linear impulse the water gave the dynamic bodies, summed over all steps (unit: N s): with the
   /// fluid's momentum, what a test of momentum conservation adds up.
@@ -68,8 +72,9 @@ class BulletRigidBodies final : public RigidBodySource {
   /// sphere at the point: a shape with an inside (convex shapes, their compounds, a plane's lower side) can
   /// hold it; a triangle mesh or heightfield, with no inside, never does.
   std::string solid_holding(const Vec3& point, double depth) const;
-  /// One line per object added after construction whose shape is not supported (it does not hold the
-  /// water), each object once; taken (cleared) by the call.
+  /// One line per finding since the last call, taken (cleared) by the call: an object added after
+  /// construction whose shape is not supported (it does not hold the water, each object once), or a plane's
+  /// mesh too wide.
   std::vector<std::string> take_warnings();
 
  private:
@@ -88,6 +93,8 @@ class BulletRigidBodies final : public RigidBodySource {
   RigidBodyOptions m_options;
   std::unordered_map<const btCollisionObject*, std::unique_ptr<Tracked>> m_tracked;
   std::vector<Tracked*> m_current;  // per surface of the step, its object's state
+  // The objects of the last begin_step that were not in the step before as they are now
+  std::vector<const btCollisionObject*> m_appeared;
   std::vector<std::string> m_warnings;
   std::vector<const Vec3Array*> m_points;  // expect_points' arrays, until the next begin_step
   double m_reach = 0;

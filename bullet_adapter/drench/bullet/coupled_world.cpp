@@ -111,6 +111,7 @@ CouplingStepStats difference(const CouplingStepStats& a, const CouplingStepStats
   d.squeezed_out = a.squeezed_out - b.squeezed_out;
   d.squeezed_out_mass = a.squeezed_out_mass - b.squeezed_out_mass;
   d.squeezed_out_momentum = a.squeezed_out_momentum - b.squeezed_out_momentum;
+  d.released_from_bodies = a.released_from_bodies - b.released_from_bodies;
   d.slip_sum_mps = a.slip_sum_mps - b.slip_sum_mps;
   d.vertical_impulse_on_cloth = a.vertical_impulse_on_cloth - b.vertical_impulse_on_cloth;
   d.seconds_repulsion = a.seconds_repulsion - b.seconds_repulsion;

@@ -61,6 +61,9 @@ struct CouplingStepStats {
   std::uint64_t squeezed_out = 0;
   double squeezed_out_mass = 0.0;
   Vec3 squeezed_out_momentum = Vec3::Zero();
+  /// Particles that a body new in the step held inside its solid, moved out of it before the water moved
+  /// (RigidBodySource::release_trapped)
+  std::uint64_t released_from_bodies = 0;
   double slip_sum_mps = 0.0;  ///< sum over contacts of the relative tangential speed after coupling
   double vertical_impulse_on_cloth = 0.0;  ///< sum of the y components of the impulses on cloth nodes (N s)
   double seconds_repulsion = 0.0;          ///< wall time of proximity + repulsion + friction (unit: s)

@@ -392,6 +392,11 @@ StepStatus Simulation::step(Scalar dt) {
   }
   if (m_bodies) tell_bodies_the_points(dt);
   if (m_engine) m_engine->begin_step();
+  if (m_bodies) {
+    ParticleSet& p = m_fluid->particles();
+    m_coupling_stats.released_from_bodies +=
+        m_bodies->release_trapped(p.positions, p.velocities, 0.5 * m_config.fluid.particle_spacing);
+  }
   StepStatus jump_status;
   if (m_engine) audit_face_jumps_since_last_step(jump_status);
   // The cloth at its start positions is an obstacle inside the fluid's sub-steps
