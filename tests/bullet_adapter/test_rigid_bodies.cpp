@@ -645,6 +645,73 @@ TEST(RigidBodies, ABodyAddedInsideWaterMovesTheWaterOutOfIt) {
   }
 }
 
+// A kinematic box the game teleports into resting water and later 100 m away: with teleported() each jump
+// places it anew, as a body just added. Swept instead (without the call), the 1 m jump into the water threw
+// it at up to 26 m/s and the jump out at 24,000 m/s (RUNAWAY_PARTICLE). In the water, the particles inside
+// it move out and none is flung; leaving, it takes no water with it.
+TEST(RigidBodies, AKinematicBodyTeleportedIsPlacedAnewNotSwept) {
+  const Vec3 gravity(0, -9.81, 0);
+  GameWorld game(gravity);
+  game.add_box(Vec3(0.3, 0.05, 0.3), 0.0, Vec3(0, -0.05, 0));  // a floor
+  const double half = 0.03;
+  btRigidBody& box = game.add_box(Vec3::Constant(half), 0.0, Vec3(1.0, 0.04, 0.0));
+  box.setCollisionFlags(box.getCollisionFlags() | btCollisionObject::CF_KINEMATIC_OBJECT);
+  box.setActivationState(DISABLE_DEACTIVATION);
+  SceneConfig scene = water_scene(0.01, gravity);
+  scene.time.dt = 1.0 / 240.0;
+  scene.emitters.push_back(water_block(Vec3(-0.1, 0.0, -0.1), Vec3(0.1, 0.08, 0.1)));
+  CoupledWorld coupled(game.world, *game.cloth, scene);
+  for (int n = 0; n < 30; ++n)
+    ASSERT_TRUE(coupled.step().ok()) << n;
+  const std::size_t particles = coupled.particles().size();
+
+  const auto teleport = [&](const Vec3& centre) {
+    const btTransform place(btQuaternion::getIdentity(), to_bt(centre));
+    box.getMotionState()->setWorldTransform(place);
+    box.setWorldTransform(place);
+    box.setInterpolationWorldTransform(place);
+    coupled.rigid_bodies()->teleported(box);
+  };
+  // Steps the world `steps` times; how many particles moved out of the box, the water's fastest particle
+  // about the origin (unit: m/s) and the leaks, with no water inside the box after any step.
+  struct Run {
+    std::uint64_t released = 0, leaks = 0;
+    double fastest = 0.0;
+  };
+  const auto run = [&](int steps) {
+    Run r;
+    for (int n = 0; n < steps; ++n) {
+      const CoupledStepReport report = coupled.step();
+      EXPECT_TRUE(report.ok()) << n << ": " << report.fluid.describe();
+      r.released += report.coupling_stats.released_from_bodies;
+      r.leaks += report.leak_stats.leaks;
+      const ParticleSet& p = coupled.particles();
+      const btTransform to_box = box.getWorldTransform().inverse();
+      for (std::size_t i = 0; i < p.size(); ++i) {
+        const double depth = half - to_vec3(to_box(to_bt(p.positions[i]))).cwiseAbs().maxCoeff();
+        EXPECT_LT(depth, 0.001) << "particle " << i << " inside the box after step " << n;
+        if (std::abs(p.positions[i].x()) < 0.1 && std::abs(p.positions[i].z()) < 0.1)
+          r.fastest = std::max(r.fastest, p.velocities[i].norm());
+      }
+    }
+    return r;
+  };
+
+  teleport(Vec3(0.0, 0.04, 0.0));
+  const Run in = run(60);
+  EXPECT_GT(in.released, 100u) << "the box's place was full of water";
+  // The water about the box only slumps: no faster than free fall from its 8 cm (1.25 m/s) and then some.
+  EXPECT_LT(in.fastest, 1.5);
+  EXPECT_EQ(in.leaks, 0u);
+
+  teleport(Vec3(100.0, 0.04, 0.0));
+  const Run out = run(10);
+  EXPECT_EQ(out.released, 0u);
+  EXPECT_LT(out.fastest, 1.5) << "the water left behind only settles";
+  EXPECT_EQ(out.leaks, 0u);
+  EXPECT_EQ(coupled.particles().size(), particles) << "no water lost";
+}
+
 // A body the game throws through the water throws water past fluid.max_speed: the fluid checks the speed
 // before it moves the particles, after the bodies pushed them in the step before, so that step ended ok and
 // a run whose last step it was ended ok with a particle at 100 m/s.

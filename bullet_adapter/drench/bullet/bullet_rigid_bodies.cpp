@@ -343,6 +343,11 @@ void BulletRigidBodies::begin_step(std::vector<RigidSurface>& surfaces) {
     const std::uint64_t instance_before = before != m_tracked.end() ? before->second->instance : 0;
     const bool seen_last_step = before != m_tracked.end() && before->second->seen + 1 == m_step;
     Tracked* t = track(object, i);
+    if (t != nullptr && m_teleported.count(&object) > 0) {
+      // Placed anew, as another body: its faces have no start to sweep from, nor an end to audit for a jump.
+      t->instance = ++m_instances;
+      t->has_end = false;
+    }
     if (t != nullptr && t->plane && !points.empty()) cover_plane(*t, object, i, points);
     const bool was_there = seen_last_step && t != nullptr && t->instance == instance_before;
     if (t == nullptr || t->local.triangles.empty()) continue;
@@ -378,6 +383,7 @@ void BulletRigidBodies::begin_step(std::vector<RigidSurface>& surfaces) {
     surfaces.push_back(std::move(s));
     m_current.push_back(t);
   }
+  m_teleported.clear();
   // Objects no longer in the world: a body deleted and another allocated at its address must start afresh.
   for (auto it = m_tracked.begin(); it != m_tracked.end();) {
     if (it->second->seen != m_step) {
@@ -425,6 +431,10 @@ void BulletRigidBodies::apply_impulses(std::size_t index, const RigidSurface& su
   // A body Bullet put to sleep would ignore the water that now lifts or pushes it.
   body->activate(true);
   m_impulse_given += to_vec3(impulse);
+}
+
+void BulletRigidBodies::teleported(const btCollisionObject& object) {
+  m_teleported.insert(&object);
 }
 
 std::size_t BulletRigidBodies::release_trapped(Vec3Array& positions, Vec3Array& velocities, double gap) {

@@ -10,6 +10,7 @@
 #include <memory>
 #include <string>
 #include <unordered_map>
+#include <unordered_set>
 #include <vector>
 
 #include <LinearMath/btTransform.h>
@@ -59,6 +60,14 @@ class BulletRigidBodies final : public RigidBodySource {
   void step(double dt) override;
   void end_positions(std::vector<RigidSurface>& surfaces) override;
   void apply_impulses(std::size_t index, const RigidSurface& surface, const Vec3* node_impulses) override;
+  /// Takes the move of `object` since the last step as a teleport: the next step places it where the game
+  /// put it, as a body just added (the water inside its solid there moves out, release_trapped), instead of
+  /// sweeping the water from where the last step left it, which throws the water in its path at the
+  /// teleport's speed. For a respawn or a reset, as PhysX's setGlobalPose beside setKinematicTarget and
+  /// Jolt's SetPosition beside MoveKinematic. Set the body's interpolation transform to the new place too
+  /// (btRigidBody::setInterpolationWorldTransform), or Bullet gives a kinematic body the teleport's speed.
+  /// Call it between steps; an object the water does not see is ignored.
+  void teleported(const btCollisionObject& object);
   /// Bullet's contact query of a sphere of radius gap / 2 at each point inside the box of an object that
   /// appeared in the last begin_step gives the point's depth and the way out (its deepest contact); a
   /// triangle mesh, a heightfield or a plane has no inside and holds none.
@@ -95,6 +104,7 @@ class BulletRigidBodies final : public RigidBodySource {
   std::vector<Tracked*> m_current;  // per surface of the step, its object's state
   // The objects of the last begin_step that were not in the step before as they are now
   std::vector<const btCollisionObject*> m_appeared;
+  std::unordered_set<const btCollisionObject*> m_teleported;  // teleported() since the last begin_step
   std::vector<std::string> m_warnings;
   std::vector<const Vec3Array*> m_points;  // expect_points' arrays, until the next begin_step
   double m_reach = 0;
