@@ -438,51 +438,85 @@ void BulletRigidBodies::teleported(const btCollisionObject& object) {
 }
 
 std::size_t BulletRigidBodies::release_trapped(Vec3Array& positions, Vec3Array& velocities, double gap) {
-  // The deepest contact of the probe with the body: its distance and the direction (unit) that moves the
-  // probe out, whichever of the pair Bullet's algorithm took first.
-  struct Deepest : btCollisionWorld::ContactResultCallback {
+  // The probe's deepest contact and whether some contact overlaps it by more than its radius (its centre
+  // lies inside a solid); `out` moves the probe out of that contact, whichever of the pair Bullet's algorithm
+  // took first (the normal on B points from B towards A).
+  struct Contacts : btCollisionWorld::ContactResultCallback {
     const btCollisionObject* probe = nullptr;
     btScalar distance = 0;
     btVector3 out{0, 0, 0};
     btScalar addSingleResult(btManifoldPoint& contact, const btCollisionObjectWrapper* a, int, int,
-                             const btCollisionObjectWrapper*, int, int) override {
-      if (contact.getDistance() < distance) {
+                             const btCollisionObjectWrapper* b, int, int) override {
+      const bool probe_is_a = a->getCollisionObject() == probe;
+      const btCollisionObject* other = probe_is_a ? b->getCollisionObject() : a->getCollisionObject();
+      if (other->getInternalType() != btCollisionObject::CO_SOFT_BODY && contact.getDistance() < distance) {
         distance = contact.getDistance();
-        // The normal on B points from B towards A.
-        out = a->getCollisionObject() == probe ? contact.m_normalWorldOnB : -contact.m_normalWorldOnB;
+        out = probe_is_a ? contact.m_normalWorldOnB : -contact.m_normalWorldOnB;
       }
       return 0;
     }
   };
-  // A body made of several solids (a compound) may hold a point moved out of one in the next.
-  constexpr int kMaxMoves = 4;
   const btScalar radius = static_cast<btScalar>(0.5 * gap);
   btSphereShape sphere(radius);
   btCollisionObject probe;
   probe.setCollisionShape(&sphere);
+  // The probe's contacts at x with `object`, or with every solid the water sees when it is null.
+  const auto contacts = [&](const Vec3& x, btCollisionObject* object) {
+    probe.setWorldTransform(btTransform(btQuaternion::getIdentity(), to_bt(x)));
+    Contacts c;
+    c.probe = &probe;
+    if (object != nullptr) {
+      m_world.contactPairTest(&probe, object, c);
+    } else {
+      c.m_collisionFilterGroup = m_options.water_group;
+      c.m_collisionFilterMask = m_options.water_mask;
+      m_world.contactTest(&probe, c);
+    }
+    return c;
+  };
   std::size_t released = 0;
+  std::vector<std::pair<double, Vec3>> ways;  // (length, end) of each way out of the body
   for (const btCollisionObject* object : m_appeared) {
     btVector3 lo, hi;
     object->getCollisionShape()->getAabb(object->getWorldTransform(), lo, hi);
     const Vec3 low = to_vec3(lo), high = to_vec3(hi);
+    const double beyond = 2.0 * (high - low).norm() + gap;  // a ray from this far starts outside the body
     auto* body = const_cast<btCollisionObject*>(object);
     const btRigidBody* rigid = btRigidBody::upcast(object);
+    const Eigen::Matrix3d axes = to_matrix3(object->getWorldTransform().getBasis());
     for (std::size_t k = 0; k < positions.size(); ++k) {
       Vec3& x = positions[k];
       if ((x.array() < low.array()).any() || (x.array() > high.array()).any()) continue;
-      bool moved = false;
-      for (int move = 0; move < kMaxMoves; ++move) {
-        probe.setWorldTransform(btTransform(btQuaternion::getIdentity(), to_bt(x)));
-        Deepest deepest;
-        deepest.probe = &probe;
-        m_world.contactPairTest(&probe, body, deepest);
-        // The probe's centre lies inside when it overlaps the face by more than its radius.
-        if (!(deepest.distance < -radius)) break;
-        const double depth = -static_cast<double>(deepest.distance) - static_cast<double>(radius);
-        x += (depth + gap) * to_vec3(deepest.out).normalized();
-        moved = true;
+      const Contacts inside = contacts(x, body);
+      if (!(inside.distance < -radius)) continue;
+      // The ways out: through the nearest face (the deepest contact's normal) and along the body's axes
+      // both ways, each to `gap` beyond the face a ray from outside meets first. The shortest that ends in
+      // no solid wins: the nearest face alone put the water under a crate spawned on the ground into the
+      // ground.
+      ways.clear();
+      const auto try_way = [&](const Vec3& direction) {
+        if (!(direction.squaredNorm() > 0.0)) return;
+        const Vec3 d = direction.normalized();
+        const btVector3 from = to_bt(x + beyond * d), to = to_bt(x);
+        btCollisionWorld::ClosestRayResultCallback hit(from, to);
+        btCollisionWorld::rayTestSingle(btTransform(btQuaternion::getIdentity(), from),
+                                        btTransform(btQuaternion::getIdentity(), to), body,
+                                        object->getCollisionShape(), object->getWorldTransform(), hit);
+        if (!hit.hasHit()) return;
+        const Vec3 end = to_vec3(hit.m_hitPointWorld) + gap * d;
+        ways.emplace_back((end - x).norm(), end);
+      };
+      try_way(to_vec3(inside.out));
+      for (int axis = 0; axis < 3; ++axis) {
+        try_way(axes.col(axis));
+        try_way(-axes.col(axis));
       }
-      if (!moved) continue;
+      std::sort(ways.begin(), ways.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+      const auto free = std::find_if(ways.begin(), ways.end(), [&](const auto& way) {
+        return !(contacts(way.second, nullptr).distance < -radius);
+      });
+      if (free == ways.end()) continue;  // no way out ends outside every solid: it stays
+      x = free->second;
       ++released;
       velocities[k] =
           rigid ? to_vec3(rigid->getVelocityInLocalPoint(to_bt(x) - rigid->getCenterOfMassPosition()))

@@ -69,8 +69,10 @@ class BulletRigidBodies final : public RigidBodySource {
   /// Call it between steps; an object the water does not see is ignored.
   void teleported(const btCollisionObject& object);
   /// Bullet's contact query of a sphere of radius gap / 2 at each point inside the box of an object that
-  /// appeared in the last begin_step gives the point's depth and the way out (its deepest contact); a
-  /// triangle mesh, a heightfield or a plane has no inside and holds none.
+  /// appeared in the last begin_step tells a point inside it (a triangle mesh, a heightfield or a plane has
+  /// no inside and holds none). The ways out tried are along its deepest contact's normal and the object's
+  /// three axes both ways, each to where a ray from outside meets the object; the same query on the whole
+  /// world (the water's collision filter) rejects an end inside a solid.
   std::size_t release_trapped(Vec3Array& positions, Vec3Array& velocities, double gap) override;
 
   /// The linear impulse the water gave the dynamic bodies, summed over all steps (unit: N s): with the

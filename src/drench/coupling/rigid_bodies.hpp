@@ -63,10 +63,11 @@ class RigidBodySource {
   /// about the centre of mass as an angular impulse. Static and kinematic bodies take nothing.
   virtual void apply_impulses(std::size_t index, const RigidSurface& surface, const Vec3* node_impulses) = 0;
   /// Called after begin_step, before the water moves: moves every point that a body new in that step (added,
-  /// replaced or re-meshed since the step before) holds inside its solid out through its nearest face, to
-  /// `gap` outside it, and gives it the body's velocity there. The body's faces close around the water it
-  /// appears in, and the coupling, which keeps every particle on its side of a face, would keep that water
-  /// inside for good. Not a physical motion: the water's momentum changes by what the move gives it.
+  /// replaced or re-meshed since the step before) holds inside its solid out of it, by the shortest way the
+  /// source finds that ends `gap` outside the body and inside no other solid, and gives it the body's
+  /// velocity there; a point with no such way stays. The body's faces close around the water it appears in,
+  /// and the coupling, which keeps every particle on its side of a face, would keep that water inside for
+  /// good. Not a physical motion: the water's momentum changes by what the move gives it.
   /// @param positions, velocities  N points and their velocities (unit: m, m/s), changed in place
   /// @param gap  how far outside the face a moved point ends (unit: m), > 0
   /// @return how many points moved. The default moves none: a source whose bodies have no inside.
