@@ -13,6 +13,7 @@
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <unordered_map>
 #include <unordered_set>
 #include <utility>
 
@@ -347,13 +348,23 @@ void BulletRigidBodies::begin_step(std::vector<RigidSurface>& surfaces) {
       // Placed anew, as another body: its faces have no start to sweep from, nor an end to audit for a jump.
       t->instance = ++m_instances;
       t->has_end = false;
+      // A kinematic body's new place is in its motion state until Bullet's step reads it, which would then
+      // sweep it there after all and give it the jump's speed (btRigidBody::saveKinematicState): it is
+      // there now, and was there before.
+      btRigidBody* body = btRigidBody::upcast(objects[i]);
+      if (body != nullptr && body->isKinematicObject() && body->getMotionState() != nullptr) {
+        btTransform place;
+        body->getMotionState()->getWorldTransform(place);
+        body->setWorldTransform(place);
+        body->setInterpolationWorldTransform(place);
+      }
     }
     if (t != nullptr && t->plane && !points.empty()) cover_plane(*t, object, i, points);
     const bool was_there = seen_last_step && t != nullptr && t->instance == instance_before;
     if (t == nullptr || t->local.triangles.empty()) continue;
     // A body the game adds after construction (or replaces, or re-meshes) may close its faces around water:
     // release_trapped looks inside it. A plane's new mesh is the same plane.
-    if (!was_there && !t->plane) m_appeared.push_back(&object);
+    if (!was_there && !t->plane) m_appeared.emplace_back(&object, t);
     RigidSurface s;
     s.key = reinterpret_cast<std::uintptr_t>(&object);
     s.instance = t->instance;
@@ -437,10 +448,12 @@ void BulletRigidBodies::teleported(const btCollisionObject& object) {
   m_teleported.insert(&object);
 }
 
-std::size_t BulletRigidBodies::release_trapped(Vec3Array& positions, Vec3Array& velocities, double gap) {
-  // The probe's deepest contact and whether some contact overlaps it by more than its radius (its centre
-  // lies inside a solid); `out` moves the probe out of that contact, whichever of the pair Bullet's algorithm
-  // took first (the normal on B points from B towards A).
+std::size_t BulletRigidBodies::release_trapped(Vec3Array& positions, Vec3Array& velocities, double gap,
+                                               std::vector<std::uint8_t>& displaced) {
+  displaced.clear();
+  if (m_appeared.empty()) return 0;
+  // The probe's deepest contact with an object; `out` moves the probe out of it, whichever of the pair
+  // Bullet's algorithm took first (the normal on B points from B towards A).
   struct Contacts : btCollisionWorld::ContactResultCallback {
     const btCollisionObject* probe = nullptr;
     btScalar distance = 0;
@@ -456,6 +469,7 @@ std::size_t BulletRigidBodies::release_trapped(Vec3Array& positions, Vec3Array& 
       return 0;
     }
   };
+  // The probe's centre lies inside a solid when a contact overlaps it by more than its radius.
   const btScalar radius = static_cast<btScalar>(0.5 * gap);
   btSphereShape sphere(radius);
   btCollisionObject probe;
@@ -474,54 +488,164 @@ std::size_t BulletRigidBodies::release_trapped(Vec3Array& positions, Vec3Array& 
     }
     return c;
   };
+
+  // Each appeared object: its box and, for a convex shape, its mesh's face planes (the faces that hold the
+  // water: exact, where Bullet's own query rounds a box's edges and corners by its margin, up to 4 cm, and
+  // missed the water there).
+  struct Appeared {
+    btCollisionObject* object;
+    Vec3 low, high;
+    bool convex;
+    std::vector<Vec3> normals;  // outward, unit
+    std::vector<double> offsets;
+  };
+  std::vector<Appeared> bodies;
+  for (const auto& [object, tracked] : m_appeared) {
+    Appeared a{const_cast<btCollisionObject*>(object),  Vec3::Zero(), Vec3::Zero(),
+               object->getCollisionShape()->isConvex(), {},           {}};
+    if (a.convex) {
+      const Vec3Array world = place(tracked->local, object->getWorldTransform());
+      a.low = Vec3::Constant(std::numeric_limits<double>::infinity());
+      a.high = -a.low;
+      for (const Vec3& v : world) {
+        a.low = a.low.cwiseMin(v);
+        a.high = a.high.cwiseMax(v);
+      }
+      for (const Triangle& f : tracked->local.triangles) {
+        const Vec3 n = (world[f[1]] - world[f[0]]).cross(world[f[2]] - world[f[0]]);
+        if (!(n.norm() > 0.0)) continue;
+        a.normals.push_back(n.normalized());
+        a.offsets.push_back(a.normals.back().dot(world[f[0]]));
+      }
+    } else {
+      btVector3 lo, hi;
+      object->getCollisionShape()->getAabb(object->getWorldTransform(), lo, hi);
+      a.low = to_vec3(lo);
+      a.high = to_vec3(hi);
+    }
+    bodies.push_back(std::move(a));
+  }
+  m_appeared.clear();  // once per appearance, and never with objects the game may delete before a next call
+
+  // Which body holds each point (its index + 1; 0: none), the first that does.
+  std::vector<std::uint32_t> holder(positions.size(), 0);
+  std::size_t trapped = 0;
+  for (std::size_t b = 0; b < bodies.size(); ++b) {
+    const Appeared& a = bodies[b];
+    for (std::size_t k = 0; k < positions.size(); ++k) {
+      const Vec3& x = positions[k];
+      if (holder[k] != 0 || !x.allFinite() || (x.array() < a.low.array()).any() ||
+          (x.array() > a.high.array()).any())
+        continue;
+      bool inside = false;
+      if (a.convex) {
+        inside = !a.normals.empty();
+        for (std::size_t f = 0; f < a.normals.size() && inside; ++f)
+          inside = a.offsets[f] - a.normals[f].dot(x) > 0.0;
+      } else {
+        inside = contacts(x, a.object).distance < -radius;
+      }
+      if (inside) {
+        holder[k] = static_cast<std::uint32_t>(b + 1);
+        ++trapped;
+      }
+    }
+  }
+  if (trapped == 0) return 0;
+
+  // The points outside every appeared body, hashed in cells of 2 room (a key may stand for several far
+  // apart: only the distance decides); `room` (unit: m) is the least distance a way out must end from any
+  // of them or from a point moved before. Ending nearer, it would squeeze the water there: moved into the
+  // water about a large crate (a 5 cm slab through one face into one layer), the water's pressure threw it
+  // at 174 m/s.
+  const double room = gap;
+  const auto cell_of = [&](const Vec3& x) {
+    return Eigen::Vector3i((x / (2.0 * room)).array().floor().cast<int>());
+  };
+  const auto key_of = [](const Eigen::Vector3i& c) {
+    return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(c.x()) & 0x1fffff) << 42) |
+           (static_cast<std::uint64_t>(static_cast<std::uint32_t>(c.y()) & 0x1fffff) << 21) |
+           (static_cast<std::uint64_t>(static_cast<std::uint32_t>(c.z()) & 0x1fffff));
+  };
+  std::unordered_map<std::uint64_t, std::vector<Vec3>> cells;
+  for (std::size_t k = 0; k < positions.size(); ++k) {
+    if (holder[k] == 0 && positions[k].allFinite())
+      cells[key_of(cell_of(positions[k]))].push_back(positions[k]);
+  }
+  const auto has_room = [&](const Vec3& x) {
+    const Eigen::Vector3i c = cell_of(x);
+    for (int i = -1; i <= 1; ++i) {
+      for (int j = -1; j <= 1; ++j) {
+        for (int l = -1; l <= 1; ++l) {
+          const auto it = cells.find(key_of(c + Eigen::Vector3i(i, j, l)));
+          if (it == cells.end()) continue;
+          for (const Vec3& y : it->second) {
+            if ((y - x).squaredNorm() < room * room) return false;
+          }
+        }
+      }
+    }
+    return true;
+  };
+
   std::size_t released = 0;
   std::vector<std::pair<double, Vec3>> ways;  // (length, end) of each way out of the body
-  for (const btCollisionObject* object : m_appeared) {
-    btVector3 lo, hi;
-    object->getCollisionShape()->getAabb(object->getWorldTransform(), lo, hi);
-    const Vec3 low = to_vec3(lo), high = to_vec3(hi);
-    const double beyond = 2.0 * (high - low).norm() + gap;  // a ray from this far starts outside the body
-    auto* body = const_cast<btCollisionObject*>(object);
-    const btRigidBody* rigid = btRigidBody::upcast(object);
-    const Eigen::Matrix3d axes = to_matrix3(object->getWorldTransform().getBasis());
-    for (std::size_t k = 0; k < positions.size(); ++k) {
-      Vec3& x = positions[k];
-      if ((x.array() < low.array()).any() || (x.array() > high.array()).any()) continue;
-      const Contacts inside = contacts(x, body);
-      if (!(inside.distance < -radius)) continue;
-      // The ways out: through the nearest face (the deepest contact's normal) and along the body's axes
-      // both ways, each to `gap` beyond the face a ray from outside meets first. The shortest that ends in
-      // no solid wins: the nearest face alone put the water under a crate spawned on the ground into the
-      // ground.
-      ways.clear();
+  for (std::size_t k = 0; k < positions.size(); ++k) {
+    if (holder[k] == 0) continue;
+    const Appeared& a = bodies[holder[k] - 1];
+    Vec3& x = positions[k];
+    ways.clear();
+    if (a.convex) {
+      // A way out crosses one face plane, to `gap` beyond it.
+      for (std::size_t f = 0; f < a.normals.size(); ++f) {
+        const double below = a.offsets[f] - a.normals[f].dot(x);
+        ways.emplace_back(below + gap, x + (below + gap) * a.normals[f]);
+      }
+    } else {
+      // Along the deepest contact's normal and the object's three axes both ways, each to `gap` beyond the
+      // face a ray from outside meets first.
+      const double beyond = 2.0 * (a.high - a.low).norm() + gap;  // a ray from this far starts outside
       const auto try_way = [&](const Vec3& direction) {
         if (!(direction.squaredNorm() > 0.0)) return;
         const Vec3 d = direction.normalized();
         const btVector3 from = to_bt(x + beyond * d), to = to_bt(x);
         btCollisionWorld::ClosestRayResultCallback hit(from, to);
         btCollisionWorld::rayTestSingle(btTransform(btQuaternion::getIdentity(), from),
-                                        btTransform(btQuaternion::getIdentity(), to), body,
-                                        object->getCollisionShape(), object->getWorldTransform(), hit);
+                                        btTransform(btQuaternion::getIdentity(), to), a.object,
+                                        a.object->getCollisionShape(), a.object->getWorldTransform(), hit);
         if (!hit.hasHit()) return;
         const Vec3 end = to_vec3(hit.m_hitPointWorld) + gap * d;
         ways.emplace_back((end - x).norm(), end);
       };
-      try_way(to_vec3(inside.out));
+      try_way(to_vec3(contacts(x, a.object).out));
+      const Eigen::Matrix3d axes = to_matrix3(a.object->getWorldTransform().getBasis());
       for (int axis = 0; axis < 3; ++axis) {
         try_way(axes.col(axis));
         try_way(-axes.col(axis));
       }
-      std::sort(ways.begin(), ways.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
-      const auto free = std::find_if(ways.begin(), ways.end(), [&](const auto& way) {
-        return !(contacts(way.second, nullptr).distance < -radius);
-      });
-      if (free == ways.end()) continue;  // no way out ends outside every solid: it stays
-      x = free->second;
-      ++released;
-      velocities[k] =
-          rigid ? to_vec3(rigid->getVelocityInLocalPoint(to_bt(x) - rigid->getCenterOfMassPosition()))
-                : Vec3::Zero();
     }
+    // The shortest way that ends with room and in no solid (the nearest face alone put the water under a
+    // crate spawned on the ground into the ground), and is no longer than kMaxWay gaps; with none, the body
+    // displaces the point. Longer ways took the water of a column through a large crate to its far faces
+    // and its top, 0.8 m up, whence it fell back.
+    constexpr double kMaxWay = 4.0;
+    std::sort(ways.begin(), ways.end(), [](const auto& u, const auto& v) { return u.first < v.first; });
+    const auto free = std::find_if(ways.begin(), ways.end(), [&](const auto& way) {
+      return way.first <= kMaxWay * gap && has_room(way.second) &&
+             !(contacts(way.second, nullptr).distance < -radius);
+    });
+    if (free == ways.end()) {
+      if (displaced.empty()) displaced.assign(positions.size(), 0);
+      displaced[k] = 1;
+      continue;
+    }
+    x = free->second;
+    cells[key_of(cell_of(x))].push_back(x);
+    const btRigidBody* rigid = btRigidBody::upcast(a.object);
+    velocities[k] = rigid
+                        ? to_vec3(rigid->getVelocityInLocalPoint(to_bt(x) - rigid->getCenterOfMassPosition()))
+                        : Vec3::Zero();
+    ++released;
   }
   return released;
 }

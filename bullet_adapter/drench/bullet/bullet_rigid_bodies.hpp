@@ -11,6 +11,7 @@
 #include <string>
 #include <unordered_map>
 #include <unordered_set>
+#include <utility>
 #include <vector>
 
 #include <LinearMath/btTransform.h>
@@ -64,16 +65,20 @@ class BulletRigidBodies final : public RigidBodySource {
   /// put it, as a body just added (the water inside its solid there moves out, release_trapped), instead of
   /// sweeping the water from where the last step left it, which throws the water in its path at the
   /// teleport's speed. For a respawn or a reset, as PhysX's setGlobalPose beside setKinematicTarget and
-  /// Jolt's SetPosition beside MoveKinematic. Set the body's interpolation transform to the new place too
-  /// (btRigidBody::setInterpolationWorldTransform), or Bullet gives a kinematic body the teleport's speed.
-  /// Call it between steps; an object the water does not see is ignored.
+  /// Jolt's SetPosition beside MoveKinematic. A kinematic body moved through its motion state is put there
+  /// at once (its world and interpolation transforms), so that Bullet's step neither sweeps it nor gives it
+  /// the jump's speed. Call it between steps, after moving the object; one the water does not see is
+  /// ignored.
   void teleported(const btCollisionObject& object);
-  /// Bullet's contact query of a sphere of radius gap / 2 at each point inside the box of an object that
-  /// appeared in the last begin_step tells a point inside it (a triangle mesh, a heightfield or a plane has
-  /// no inside and holds none). The ways out tried are along its deepest contact's normal and the object's
-  /// three axes both ways, each to where a ray from outside meets the object; the same query on the whole
-  /// world (the water's collision filter) rejects an end inside a solid.
-  std::size_t release_trapped(Vec3Array& positions, Vec3Array& velocities, double gap) override;
+  /// A point lies inside a convex object when it is behind every face plane of the object's mesh (the faces
+  /// that hold the water; Bullet's own shape rounds a box's edges by its margin), inside another object when
+  /// Bullet's contact query of a sphere of radius gap / 2 overlaps it by more than its radius (a triangle
+  /// mesh, a heightfield or a plane has no inside and holds none). The ways out tried cross each face plane
+  /// of a convex object, or follow another object's deepest contact normal and its three axes both ways to
+  /// where a ray from outside meets it; the same query on the whole world (the water's collision filter)
+  /// rejects an end inside a solid. Runs on the calling thread, which must be the only one using the world.
+  std::size_t release_trapped(Vec3Array& positions, Vec3Array& velocities, double gap,
+                              std::vector<std::uint8_t>& displaced) override;
 
   /// The linear impulse the water gave the dynamic bodies, summed over all steps (unit: N s): with the
   /// fluid's momentum, what a test of momentum conservation adds up.
@@ -105,7 +110,7 @@ class BulletRigidBodies final : public RigidBodySource {
   std::unordered_map<const btCollisionObject*, std::unique_ptr<Tracked>> m_tracked;
   std::vector<Tracked*> m_current;  // per surface of the step, its object's state
   // The objects of the last begin_step that were not in the step before as they are now
-  std::vector<const btCollisionObject*> m_appeared;
+  std::vector<std::pair<const btCollisionObject*, const Tracked*>> m_appeared;
   std::unordered_set<const btCollisionObject*> m_teleported;  // teleported() since the last begin_step
   std::vector<std::string> m_warnings;
   std::vector<const Vec3Array*> m_points;  // expect_points' arrays, until the next begin_step

@@ -112,6 +112,9 @@ CouplingStepStats difference(const CouplingStepStats& a, const CouplingStepStats
   d.squeezed_out_mass = a.squeezed_out_mass - b.squeezed_out_mass;
   d.squeezed_out_momentum = a.squeezed_out_momentum - b.squeezed_out_momentum;
   d.released_from_bodies = a.released_from_bodies - b.released_from_bodies;
+  d.displaced_by_bodies = a.displaced_by_bodies - b.displaced_by_bodies;
+  d.displaced_mass = a.displaced_mass - b.displaced_mass;
+  d.displaced_momentum = a.displaced_momentum - b.displaced_momentum;
   d.slip_sum_mps = a.slip_sum_mps - b.slip_sum_mps;
   d.vertical_impulse_on_cloth = a.vertical_impulse_on_cloth - b.vertical_impulse_on_cloth;
   d.seconds_repulsion = a.seconds_repulsion - b.seconds_repulsion;

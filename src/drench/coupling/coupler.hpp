@@ -61,9 +61,13 @@ struct CouplingStepStats {
   std::uint64_t squeezed_out = 0;
   double squeezed_out_mass = 0.0;
   Vec3 squeezed_out_momentum = Vec3::Zero();
-  /// Particles that a body new in the step held inside its solid, moved out of it before the water moved
-  /// (RigidBodySource::release_trapped)
+  /// Particles that a body new in the step held inside its solid, moved out of it before the water moved,
+  /// and those it displaced (no room outside), removed; their mass (unit: kg) and momentum m v at removal
+  /// (unit: N s) (RigidBodySource::release_trapped)
   std::uint64_t released_from_bodies = 0;
+  std::uint64_t displaced_by_bodies = 0;
+  double displaced_mass = 0.0;
+  Vec3 displaced_momentum = Vec3::Zero();
   double slip_sum_mps = 0.0;  ///< sum over contacts of the relative tangential speed after coupling
   double vertical_impulse_on_cloth = 0.0;  ///< sum of the y components of the impulses on cloth nodes (N s)
   double seconds_repulsion = 0.0;          ///< wall time of proximity + repulsion + friction (unit: s)

@@ -394,8 +394,17 @@ StepStatus Simulation::step(Scalar dt) {
   if (m_engine) m_engine->begin_step();
   if (m_bodies) {
     ParticleSet& p = m_fluid->particles();
-    m_coupling_stats.released_from_bodies +=
-        m_bodies->release_trapped(p.positions, p.velocities, 0.5 * m_config.fluid.particle_spacing);
+    m_coupling_stats.released_from_bodies += m_bodies->release_trapped(
+        p.positions, p.velocities, 0.5 * m_config.fluid.particle_spacing, m_displaced);
+    if (!m_displaced.empty()) {
+      for (std::size_t i = 0; i < p.size(); ++i) {
+        if (!m_displaced[i]) continue;
+        ++m_coupling_stats.displaced_by_bodies;
+        m_coupling_stats.displaced_mass += p.masses[i];
+        m_coupling_stats.displaced_momentum += p.masses[i] * p.velocities[i];
+      }
+      m_removed += static_cast<std::int64_t>(p.remove_flagged(m_displaced));
+    }
   }
   StepStatus jump_status;
   if (m_engine) audit_face_jumps_since_last_step(jump_status);

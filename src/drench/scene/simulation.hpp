@@ -205,6 +205,7 @@ class Simulation {
   std::unique_ptr<ClothEngine> m_cloth;
   std::unique_ptr<ClothWithObstacles> m_with_obstacles;  // only with obstacles or rigid bodies
   RigidBodySource* m_bodies = nullptr;                   // the world's rigid bodies, or none
+  std::vector<std::uint8_t> m_displaced;                 // per particle, what a body that appeared displaced
   std::unique_ptr<RigidBoundary> m_rigid_boundary;       // only with rigid bodies and "coupling"
   ClothEngine* m_engine = nullptr;        // what the coupled step drives: m_with_obstacles, else m_cloth
   EffectParts m_effects;                  // what the scene's `effects` built (effect_registry.hpp)
