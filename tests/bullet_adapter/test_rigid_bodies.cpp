@@ -584,6 +584,16 @@ TEST(RigidBodies, ABodyRespawnedAtTheSameAddressStartsWhereItIsPlaced) {
   crate->~btRigidBody();
 }
 
+/// Adds a 60 cm floor (its top at y = 0) to `game` and returns a scene of a 20 x 8 x 20 cm block of water
+/// on it at 1 cm, stepped at 1/240 s: the water that bodies the game adds or teleports appear in.
+SceneConfig water_on_a_floor(GameWorld& game, const Vec3& gravity) {
+  game.add_box(Vec3(0.3, 0.05, 0.3), 0.0, Vec3(0, -0.05, 0));
+  SceneConfig scene = water_scene(0.01, gravity);
+  scene.time.dt = 1.0 / 240.0;
+  scene.emitters.push_back(water_block(Vec3(-0.1, 0.0, -0.1), Vec3(0.1, 0.08, 0.1)));
+  return scene;
+}
+
 // A box the game adds in the middle of resting water closes its faces around particles, which the coupling
 // keeps on their side of every face: before, they stayed inside it for good (36 of them still after 0.5 s),
 // and the run went on ok. In the step the box appears, those within two spacings of a face with room beyond
@@ -611,11 +621,7 @@ TEST(RigidBodies, ABodyAddedInsideWaterMovesTheWaterOutOfIt) {
     const double half = c.half;
     const Vec3 gravity(0, -9.81, 0);
     GameWorld game(gravity);
-    game.add_box(Vec3(0.3, 0.05, 0.3), 0.0, Vec3(0, -0.05, 0));  // a floor
-    SceneConfig scene = water_scene(0.01, gravity);
-    scene.time.dt = 1.0 / 240.0;
-    scene.emitters.push_back(water_block(Vec3(-0.1, 0.0, -0.1), Vec3(0.1, 0.08, 0.1)));
-    CoupledWorld coupled(game.world, *game.cloth, scene);
+    CoupledWorld coupled(game.world, *game.cloth, water_on_a_floor(game, gravity));
     for (int n = 0; n < 30; ++n)
       ASSERT_TRUE(coupled.step().ok()) << n;
 
@@ -684,14 +690,11 @@ TEST(RigidBodies, ABodyAddedInsideWaterMovesTheWaterOutOfIt) {
 TEST(RigidBodies, AKinematicBodyTeleportedIsPlacedAnewNotSwept) {
   const Vec3 gravity(0, -9.81, 0);
   GameWorld game(gravity);
-  game.add_box(Vec3(0.3, 0.05, 0.3), 0.0, Vec3(0, -0.05, 0));  // a floor
+  const SceneConfig scene = water_on_a_floor(game, gravity);
   const double half = 0.03;
   btRigidBody& box = game.add_box(Vec3::Constant(half), 0.0, Vec3(1.0, 0.04, 0.0));
   box.setCollisionFlags(box.getCollisionFlags() | btCollisionObject::CF_KINEMATIC_OBJECT);
   box.setActivationState(DISABLE_DEACTIVATION);
-  SceneConfig scene = water_scene(0.01, gravity);
-  scene.time.dt = 1.0 / 240.0;
-  scene.emitters.push_back(water_block(Vec3(-0.1, 0.0, -0.1), Vec3(0.1, 0.08, 0.1)));
   CoupledWorld coupled(game.world, *game.cloth, scene);
   for (int n = 0; n < 30; ++n)
     ASSERT_TRUE(coupled.step().ok()) << n;
