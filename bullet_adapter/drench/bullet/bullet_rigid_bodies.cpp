@@ -363,8 +363,9 @@ void BulletRigidBodies::begin_step(std::vector<RigidSurface>& surfaces) {
     const bool was_there = seen_last_step && t != nullptr && t->instance == instance_before;
     if (t == nullptr || t->local.triangles.empty()) continue;
     // A body the game adds after construction (or replaces, or re-meshes) may close its faces around water:
-    // release_trapped looks inside it. A plane's new mesh is the same plane.
-    if (!was_there && !t->plane) m_appeared.emplace_back(&object, t);
+    // release_trapped looks inside it. A concave shape (a triangle mesh, a heightfield, a plane, whose new
+    // cover is the same plane) has no inside to look in, only a query per particle in its box.
+    if (!was_there && !object.getCollisionShape()->isConcave()) m_appeared.emplace_back(&object, t);
     RigidSurface s;
     s.key = reinterpret_cast<std::uintptr_t>(&object);
     s.instance = t->instance;
