@@ -599,26 +599,31 @@ SceneConfig water_on_a_floor(GameWorld& game, const Vec3& gravity) {
 // and the run went on ok. In the step the box appears, those within two spacings of a face with room beyond
 // it move out, and the box displaces the rest (removed, their mass booked); no water is inside it or the
 // floor afterwards, whether the box is static, falls as a dynamic body, or stands on the floor (where the
-// nearest face alone put 52 particles into the floor) or is a compound, and none is flung (moved into the
-// water by a large crate, a 5 cm slab squeezed into one layer threw it at 174 m/s). Within 1 mm of a face a
-// particle may count either way.
+// nearest face alone put 52 particles into the floor), is a compound or a ball, and none is flung (moved
+// into the water by a large crate, a 5 cm slab squeezed into one layer threw it at 174 m/s). Within 1 mm of a
+// face (and a ball's facets' depth) a particle may count either way.
 TEST(RigidBodies, ABodyAddedInsideWaterMovesTheWaterOutOfIt) {
+  enum class Shape { BOX, COMPOUND, SPHERE };
   struct Case {
     const char* name;
-    double mass;    // kg; 0: static
-    double half;    // of the cube's side (unit: m)
-    Vec3 centre;    // m
-    bool compound;  // the cube as the one child of a btCompoundShape: Bullet's query, not the mesh's planes
+    double mass;  // kg; 0: static
+    double half;  // of the cube's side, or the sphere's radius (unit: m)
+    Vec3 centre;  // m
+    Shape shape;  // COMPOUND: the cube as the one child of a btCompoundShape (Bullet's query, not the planes)
   };
   // The large crate stands on the floor with its edge in the water: Bullet rounds its edges by its 4 cm
   // margin, and a query of Bullet's shape left the water in that rounding inside the crate's faces.
-  for (const Case& c : {Case{"static", 0.0, 0.03, Vec3(0.0, 0.04, 0.0), false},
-                        Case{"dynamic", 0.5, 0.03, Vec3(0.0, 0.04, 0.0), false},
-                        Case{"on the floor", 0.0, 0.03, Vec3(0.0, 0.03, 0.0), false},
-                        Case{"large crate", 0.0, 0.4, Vec3(0.45, 0.4, 0.0), false},
-                        Case{"compound", 0.0, 0.03, Vec3(0.0, 0.04, 0.0), true}}) {
+  for (const Case& c : {Case{"static", 0.0, 0.03, Vec3(0.0, 0.04, 0.0), Shape::BOX},
+                        Case{"dynamic", 0.5, 0.03, Vec3(0.0, 0.04, 0.0), Shape::BOX},
+                        Case{"on the floor", 0.0, 0.03, Vec3(0.0, 0.03, 0.0), Shape::BOX},
+                        Case{"large crate", 0.0, 0.4, Vec3(0.45, 0.4, 0.0), Shape::BOX},
+                        Case{"compound", 0.0, 0.03, Vec3(0.0, 0.04, 0.0), Shape::COMPOUND},
+                        Case{"ball", 0.0, 0.04, Vec3(0.0, 0.04, 0.0), Shape::SPHERE}}) {
     SCOPED_TRACE(c.name);
     const double half = c.half;
+    // A ball's facets (of at most ShapeMeshOptions::max_edge) lie inside it by up to max_edge^2 / (8 r).
+    const double tolerance =
+        0.001 + (c.shape == Shape::SPHERE ? std::pow(ShapeMeshOptions{}.max_edge, 2) / (8.0 * half) : 0.0);
     const Vec3 gravity(0, -9.81, 0);
     GameWorld game(gravity);
     CoupledWorld coupled(game.world, *game.cloth, water_on_a_floor(game, gravity));
@@ -626,18 +631,21 @@ TEST(RigidBodies, ABodyAddedInsideWaterMovesTheWaterOutOfIt) {
       ASSERT_TRUE(coupled.step().ok()) << n;
 
     btRigidBody& box = [&]() -> btRigidBody& {
-      if (!c.compound) return game.add_box(Vec3::Constant(half), c.mass, c.centre);
+      if (c.shape == Shape::BOX) return game.add_box(Vec3::Constant(half), c.mass, c.centre);
+      if (c.shape == Shape::SPHERE) return game.add(std::make_unique<btSphereShape>(half), c.mass, c.centre);
       game.shapes.push_back(std::make_unique<btBoxShape>(to_bt(Vec3::Constant(half))));
       auto compound = std::make_unique<btCompoundShape>();
       compound->addChildShape(btTransform::getIdentity(), game.shapes.back().get());
       return game.add(std::move(compound), c.mass, c.centre);
     }();
-    // How deep each particle lies inside the box (unit: m; negative outside).
+    // How deep each particle lies inside the body (unit: m; negative outside).
     const auto depths = [&] {
       const btTransform to_box = box.getWorldTransform().inverse();
       std::vector<double> d;
-      for (const Vec3& x : coupled.particles().positions)
-        d.push_back(half - to_vec3(to_box(to_bt(x))).cwiseAbs().maxCoeff());
+      for (const Vec3& x : coupled.particles().positions) {
+        const Vec3 local = to_vec3(to_box(to_bt(x)));
+        d.push_back(half - (c.shape == Shape::SPHERE ? local.norm() : local.cwiseAbs().maxCoeff()));
+      }
       return d;
     };
     const auto count_deeper = [](const std::vector<double>& d, double than) {
@@ -658,7 +666,7 @@ TEST(RigidBodies, ABodyAddedInsideWaterMovesTheWaterOutOfIt) {
       displaced_mass += report.coupling_stats.displaced_mass;
       leaks += report.leak_stats.leaks;
       squeezed_out += report.coupling_stats.squeezed_out;
-      EXPECT_EQ(count_deeper(depths(), 0.001), 0u) << "water inside the box after step " << n;
+      EXPECT_EQ(count_deeper(depths(), tolerance), 0u) << "water inside the body after step " << n;
       const ParticleSet& p = coupled.particles();
       for (std::size_t i = 0; i < p.size(); ++i) {
         const Vec3& x = p.positions[i];
@@ -669,7 +677,7 @@ TEST(RigidBodies, ABodyAddedInsideWaterMovesTheWaterOutOfIt) {
       }
     }
     EXPECT_GT(released, 0u) << "the water by the faces has room outside";
-    EXPECT_GE(released + displaced, count_deeper(before, 0.001));
+    EXPECT_GE(released + displaced, count_deeper(before, tolerance));
     EXPECT_LE(released + displaced, count_deeper(before, -0.001));
     // None lost but what the box displaced and what the falling box squeezes out against the floor
     // (CouplingStepStats), with its mass booked.
