@@ -359,13 +359,16 @@ void BulletRigidBodies::begin_step(std::vector<RigidSurface>& surfaces) {
         body->setInterpolationWorldTransform(place);
       }
     }
+    // Before a plane's new cover, which is the same plane.
+    const bool appeared = !(seen_last_step && t != nullptr && t->instance == instance_before);
     if (t != nullptr && t->plane && !points.empty()) cover_plane(*t, object, i, points);
     const bool was_there = seen_last_step && t != nullptr && t->instance == instance_before;
     if (t == nullptr || t->local.triangles.empty()) continue;
     // A body the game adds after construction (or replaces, or re-meshes) may close its faces around water:
-    // release_trapped looks inside it. A concave shape (a triangle mesh, a heightfield, a plane, whose new
-    // cover is the same plane) has no inside to look in, only a query per particle in its box.
-    if (!was_there && !object.getCollisionShape()->isConcave()) m_appeared.emplace_back(&object, t);
+    // release_trapped looks inside it. Another concave shape (a triangle mesh, a heightfield) has no inside
+    // to look in, only a query per particle in its box.
+    if (appeared && (t->plane || !object.getCollisionShape()->isConcave()))
+      m_appeared.emplace_back(&object, t);
     RigidSurface s;
     s.key = reinterpret_cast<std::uintptr_t>(&object);
     s.instance = t->instance;
@@ -496,15 +499,24 @@ std::size_t BulletRigidBodies::release_trapped(Vec3Array& positions, Vec3Array& 
   struct Appeared {
     btCollisionObject* object;
     Vec3 low, high;
-    bool convex;
+    bool convex;                // or a plane: the meet of its face planes
     std::vector<Vec3> normals;  // outward, unit
     std::vector<double> offsets;
   };
   std::vector<Appeared> bodies;
   for (const auto& [object, tracked] : m_appeared) {
-    Appeared a{const_cast<btCollisionObject*>(object),  Vec3::Zero(), Vec3::Zero(),
-               object->getCollisionShape()->isConvex(), {},           {}};
-    if (a.convex) {
+    Appeared a;
+    a.object = const_cast<btCollisionObject*>(object);
+    a.convex = object->getCollisionShape()->isConvex() || tracked->plane;
+    if (tracked->plane) {
+      // The solid is the side away from the water (PlaneFrame::normal), all of it.
+      const btTransform& placed = object->getWorldTransform();
+      const Vec3 normal = to_matrix3(placed.getBasis()) * tracked->frame.normal;
+      a.normals.push_back(normal);
+      a.offsets.push_back(normal.dot(to_vec3(placed(to_bt(tracked->frame.origin)))));
+      a.low = Vec3::Constant(-std::numeric_limits<double>::infinity());
+      a.high = -a.low;
+    } else if (a.convex) {
       const Vec3Array world = place(tracked->local, object->getWorldTransform());
       a.low = Vec3::Constant(std::numeric_limits<double>::infinity());
       a.high = -a.low;

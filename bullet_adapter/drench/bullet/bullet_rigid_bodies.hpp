@@ -71,12 +71,13 @@ class BulletRigidBodies final : public RigidBodySource {
   /// ignored.
   void teleported(const btCollisionObject& object);
   /// A point lies inside a convex object when it is behind every face plane of the object's mesh (the faces
-  /// that hold the water; Bullet's own shape rounds a box's edges by its margin), inside another object when
-  /// Bullet's contact query of a sphere of radius gap / 2 overlaps it by more than its radius (a triangle
-  /// mesh, a heightfield or a plane has no inside and holds none). The ways out tried cross each face plane
-  /// of a convex object, or follow another object's deepest contact normal and its three axes both ways to
-  /// where a ray from outside meets it; the same query on the whole world (the water's collision filter)
-  /// rejects an end inside a solid. Runs on the calling thread, which must be the only one using the world.
+  /// that hold the water; Bullet's own shape rounds a box's edges by its margin), inside a plane when below
+  /// it, inside another object when Bullet's contact query of a sphere of radius gap / 2 overlaps it by more
+  /// than its radius (a triangle mesh or a heightfield has no inside and holds none). The ways out tried
+  /// cross each face plane of a convex object, or follow another object's deepest contact normal and its
+  /// three axes both ways to where a ray from outside meets it; the same query on the whole world (the
+  /// water's collision filter) rejects an end inside a solid. Runs on the calling thread, which must be the
+  /// only one using the world.
   std::size_t release_trapped(Vec3Array& positions, Vec3Array& velocities, double gap,
                               std::vector<std::uint8_t>& displaced) override;
 
