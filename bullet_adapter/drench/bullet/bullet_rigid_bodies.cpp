@@ -70,6 +70,30 @@ RigidMotion motion_of(const btCollisionObject& object) {
   return RigidMotion::DYNAMIC;
 }
 
+/// Bullet's contact query of a small sphere, the probe, against objects other than soft bodies: the first
+/// object found that overlaps it by more than `limit` (a negative distance), and the deepest contact with the
+/// way that moves the probe out of it, whichever of the pair Bullet's algorithm took first (the normal on B
+/// points from B towards A). solid_holding and release_trapped ask it.
+struct ProbeContacts : btCollisionWorld::ContactResultCallback {
+  const btCollisionObject* probe = nullptr;
+  btScalar limit = 0;
+  const btCollisionObject* holder = nullptr;
+  btScalar distance = 0;
+  btVector3 out{0, 0, 0};
+  btScalar addSingleResult(btManifoldPoint& contact, const btCollisionObjectWrapper* a, int, int,
+                           const btCollisionObjectWrapper* b, int, int) override {
+    const bool probe_is_a = a->getCollisionObject() == probe;
+    const btCollisionObject* other = probe_is_a ? b->getCollisionObject() : a->getCollisionObject();
+    if (other->getInternalType() == btCollisionObject::CO_SOFT_BODY) return 0;
+    if (holder == nullptr && contact.getDistance() < limit) holder = other;
+    if (contact.getDistance() < distance) {
+      distance = contact.getDistance();
+      out = probe_is_a ? contact.m_normalWorldOnB : -contact.m_normalWorldOnB;
+    }
+    return 0;
+  }
+};
+
 std::string describe(const btCollisionObject& object, int index) {
   return "collision object " + std::to_string(index) + " (" + object.getCollisionShape()->getName() + ")";
 }
@@ -456,23 +480,6 @@ std::size_t BulletRigidBodies::release_trapped(Vec3Array& positions, Vec3Array& 
                                                std::vector<std::uint8_t>& displaced) {
   displaced.clear();
   if (m_appeared.empty()) return 0;
-  // The probe's deepest contact with an object; `out` moves the probe out of it, whichever of the pair
-  // Bullet's algorithm took first (the normal on B points from B towards A).
-  struct Contacts : btCollisionWorld::ContactResultCallback {
-    const btCollisionObject* probe = nullptr;
-    btScalar distance = 0;
-    btVector3 out{0, 0, 0};
-    btScalar addSingleResult(btManifoldPoint& contact, const btCollisionObjectWrapper* a, int, int,
-                             const btCollisionObjectWrapper* b, int, int) override {
-      const bool probe_is_a = a->getCollisionObject() == probe;
-      const btCollisionObject* other = probe_is_a ? b->getCollisionObject() : a->getCollisionObject();
-      if (other->getInternalType() != btCollisionObject::CO_SOFT_BODY && contact.getDistance() < distance) {
-        distance = contact.getDistance();
-        out = probe_is_a ? contact.m_normalWorldOnB : -contact.m_normalWorldOnB;
-      }
-      return 0;
-    }
-  };
   // The probe's centre lies inside a solid when a contact overlaps it by more than its radius.
   const btScalar radius = static_cast<btScalar>(0.5 * gap);
   btSphereShape sphere(radius);
@@ -481,7 +488,7 @@ std::size_t BulletRigidBodies::release_trapped(Vec3Array& positions, Vec3Array& 
   // The probe's contacts at x with `object`, or with every solid the water sees when it is null.
   const auto contacts = [&](const Vec3& x, btCollisionObject* object) {
     probe.setWorldTransform(btTransform(btQuaternion::getIdentity(), to_bt(x)));
-    Contacts c;
+    ProbeContacts c;
     c.probe = &probe;
     if (object != nullptr) {
       m_world.contactPairTest(&probe, object, c);
@@ -664,26 +671,12 @@ std::size_t BulletRigidBodies::release_trapped(Vec3Array& positions, Vec3Array& 
 }
 
 std::string BulletRigidBodies::solid_holding(const Vec3& point, double depth) const {
-  struct Deepest : btCollisionWorld::ContactResultCallback {
-    const btCollisionObject* probe = nullptr;
-    const btCollisionObject* holder = nullptr;
-    btScalar limit = 0;
-    btScalar addSingleResult(btManifoldPoint& contact, const btCollisionObjectWrapper* a, int, int,
-                             const btCollisionObjectWrapper* b, int, int) override {
-      const btCollisionObject* other =
-          a->getCollisionObject() == probe ? b->getCollisionObject() : a->getCollisionObject();
-      if (holder == nullptr && other->getInternalType() != btCollisionObject::CO_SOFT_BODY &&
-          contact.getDistance() < limit)
-        holder = other;
-      return 0;
-    }
-  };
   const double radius = 0.5 * depth;
   btSphereShape sphere(static_cast<btScalar>(radius));
   btCollisionObject probe;
   probe.setCollisionShape(&sphere);
   probe.setWorldTransform(btTransform(btQuaternion::getIdentity(), to_bt(point)));
-  Deepest result;
+  ProbeContacts result;
   result.probe = &probe;
   // A sphere whose centre lies outside overlaps a face by less than its radius; one whose centre lies
   // deeper than `depth`, by more than depth + radius.
