@@ -594,6 +594,35 @@ SceneConfig water_on_a_floor(GameWorld& game, const Vec3& gravity) {
   return scene;
 }
 
+/// What the steps after a body appeared did: the coupling's figures summed over them, and the water's fastest
+/// particle (unit: m/s) within `about` (unit: m) of the y axis in x and z, where the bodies appear.
+struct AfterAppearing {
+  std::uint64_t released = 0, displaced = 0, squeezed_out = 0, leaks = 0;
+  double displaced_mass = 0.0, fastest = 0.0;
+};
+
+/// Steps `coupled` `steps` times, expecting each step ok, and calls `check(n)` after step n.
+AfterAppearing step_after_appearing(CoupledWorld& coupled, int steps, double about,
+                                    const std::function<void(int)>& check) {
+  AfterAppearing r;
+  for (int n = 0; n < steps; ++n) {
+    const CoupledStepReport report = coupled.step();
+    EXPECT_TRUE(report.ok()) << n << ": " << report.fluid.describe();
+    r.released += report.coupling_stats.released_from_bodies;
+    r.displaced += report.coupling_stats.displaced_by_bodies;
+    r.displaced_mass += report.coupling_stats.displaced_mass;
+    r.squeezed_out += report.coupling_stats.squeezed_out;
+    r.leaks += report.leak_stats.leaks;
+    const ParticleSet& p = coupled.particles();
+    for (std::size_t i = 0; i < p.size(); ++i) {
+      if (std::abs(p.positions[i].x()) < about && std::abs(p.positions[i].z()) < about)
+        r.fastest = std::max(r.fastest, p.velocities[i].norm());
+    }
+    check(n);
+  }
+  return r;
+}
+
 // A box the game adds in the middle of resting water closes its faces around particles, which the coupling
 // keeps on their side of every face: before, they stayed inside it for good (36 of them still after 0.5 s),
 // and the run went on ok. In the step the box appears, those within two spacings of a face with room beyond
@@ -655,39 +684,27 @@ TEST(RigidBodies, ABodyAddedInsideWaterMovesTheWaterOutOfIt) {
     const std::size_t particles = before.size();
     ASSERT_GT(count_deeper(before, 0.02), 0u) << "the box must be added where the water is";
 
-    std::uint64_t released = 0, displaced = 0, leaks = 0, squeezed_out = 0;
-    double displaced_mass = 0.0;
-    double fastest = 0.0;  // of the water about the box (unit: m/s)
-    for (int n = 0; n < 60; ++n) {
-      const CoupledStepReport report = coupled.step();
-      ASSERT_TRUE(report.ok()) << n << ": " << report.fluid.describe();
-      released += report.coupling_stats.released_from_bodies;
-      displaced += report.coupling_stats.displaced_by_bodies;
-      displaced_mass += report.coupling_stats.displaced_mass;
-      leaks += report.leak_stats.leaks;
-      squeezed_out += report.coupling_stats.squeezed_out;
+    const AfterAppearing r = step_after_appearing(coupled, 60, 0.1, [&](int n) {
       EXPECT_EQ(count_deeper(depths(), tolerance), 0u) << "water inside the body after step " << n;
-      const ParticleSet& p = coupled.particles();
-      for (std::size_t i = 0; i < p.size(); ++i) {
-        const Vec3& x = p.positions[i];
-        EXPECT_FALSE(std::abs(x.x()) < 0.299 && std::abs(x.z()) < 0.299 && x.y() < -0.001 && x.y() > -0.099)
+      const Vec3Array& x = coupled.particles().positions;
+      for (std::size_t i = 0; i < x.size(); ++i) {
+        EXPECT_FALSE(std::abs(x[i].x()) < 0.299 && std::abs(x[i].z()) < 0.299 && x[i].y() < -0.001 &&
+                     x[i].y() > -0.099)
             << "particle " << i << " inside the floor after step " << n;
-        if (std::abs(x.x()) < 0.1 && std::abs(x.z()) < 0.1)
-          fastest = std::max(fastest, p.velocities[i].norm());
       }
-    }
-    EXPECT_GT(released, 0u) << "the water by the faces has room outside";
-    EXPECT_GE(released + displaced, count_deeper(before, tolerance));
-    EXPECT_LE(released + displaced, count_deeper(before, -0.001));
+    });
+    EXPECT_GT(r.released, 0u) << "the water by the faces has room outside";
+    EXPECT_GE(r.released + r.displaced, count_deeper(before, tolerance));
+    EXPECT_LE(r.released + r.displaced, count_deeper(before, -0.001));
     // None lost but what the box displaced and what the falling box squeezes out against the floor
     // (CouplingStepStats), with its mass booked.
-    EXPECT_EQ(coupled.particles().size() + displaced + squeezed_out, particles);
-    EXPECT_NEAR(displaced_mass, static_cast<double>(displaced) * coupled.particles().common_mass(),
-                1e-12 * displaced_mass);
-    EXPECT_EQ(leaks, 0u);
+    EXPECT_EQ(coupled.particles().size() + r.displaced + r.squeezed_out, particles);
+    EXPECT_NEAR(r.displaced_mass, static_cast<double>(r.displaced) * coupled.particles().common_mass(),
+                1e-12 * r.displaced_mass);
+    EXPECT_EQ(r.leaks, 0u);
     // The water about the box only slumps: no faster than free fall from its 8 cm (1.25 m/s) and then some.
     // A move out of the box taken as a velocity would be up to 3.5 cm in a 4.2 ms step, 8 m/s.
-    EXPECT_LT(fastest, 1.5);
+    EXPECT_LT(r.fastest, 1.5);
   }
 }
 
@@ -712,25 +729,16 @@ TEST(RigidBodies, AGroundPlaneAddedUnderWaterLiftsTheWaterOverIt) {
   ASSERT_GT(below, 0u);
   game.add(std::make_unique<btStaticPlaneShape>(btVector3(0, 1, 0), static_cast<btScalar>(level)), 0.0,
            Vec3::Zero());
-  std::uint64_t released = 0, displaced = 0, leaks = 0;
-  double fastest = 0.0;
-  for (int n = 0; n < 30; ++n) {
-    const CoupledStepReport report = coupled.step();
-    ASSERT_TRUE(report.ok()) << n << ": " << report.fluid.describe();
-    released += report.coupling_stats.released_from_bodies;
-    displaced += report.coupling_stats.displaced_by_bodies;
-    leaks += report.leak_stats.leaks;
-    EXPECT_EQ(count_below(level - 0.001), 0u) << "water under the plane after step " << n;
-    for (const Vec3& v : coupled.particles().velocities)
-      fastest = std::max(fastest, v.norm());
-  }
-  EXPECT_GT(released, 0u) << "the water by the plane has room over it";
-  EXPECT_GE(released + displaced, below);
-  EXPECT_LE(released + displaced, below_or_at);
-  EXPECT_EQ(coupled.particles().size() + displaced, particles);
-  EXPECT_EQ(leaks, 0u);
+  const AfterAppearing r = step_after_appearing(
+      coupled, 30, std::numeric_limits<double>::infinity(),
+      [&](int n) { EXPECT_EQ(count_below(level - 0.001), 0u) << "water under the plane after step " << n; });
+  EXPECT_GT(r.released, 0u) << "the water by the plane has room over it";
+  EXPECT_GE(r.released + r.displaced, below);
+  EXPECT_LE(r.released + r.displaced, below_or_at);
+  EXPECT_EQ(coupled.particles().size() + r.displaced, particles);
+  EXPECT_EQ(r.leaks, 0u);
   // The water only slumps on: no faster than free fall from its 8 cm (1.25 m/s) and then some.
-  EXPECT_LT(fastest, 1.5);
+  EXPECT_LT(r.fastest, 1.5);
 }
 
 // A kinematic box the game teleports into resting water and later 100 m away: with teleported() each jump
@@ -755,35 +763,18 @@ TEST(RigidBodies, AKinematicBodyTeleportedIsPlacedAnewNotSwept) {
     box.getMotionState()->setWorldTransform(btTransform(btQuaternion::getIdentity(), to_bt(centre)));
     coupled.rigid_bodies()->teleported(box);
   };
-  // Steps the world `steps` times; how many particles moved out of the box or it displaced, the water's
-  // fastest particle about the origin (unit: m/s) and the leaks, with no water inside the box after any
-  // step.
-  struct Run {
-    std::uint64_t released = 0, displaced = 0, leaks = 0;
-    double fastest = 0.0;
-  };
-  const auto run = [&](int steps) {
-    Run r;
-    for (int n = 0; n < steps; ++n) {
-      const CoupledStepReport report = coupled.step();
-      EXPECT_TRUE(report.ok()) << n << ": " << report.fluid.describe();
-      r.released += report.coupling_stats.released_from_bodies;
-      r.displaced += report.coupling_stats.displaced_by_bodies;
-      r.leaks += report.leak_stats.leaks;
-      const ParticleSet& p = coupled.particles();
-      const btTransform to_box = box.getWorldTransform().inverse();
-      for (std::size_t i = 0; i < p.size(); ++i) {
-        const double depth = half - to_vec3(to_box(to_bt(p.positions[i]))).cwiseAbs().maxCoeff();
-        EXPECT_LT(depth, 0.001) << "particle " << i << " inside the box after step " << n;
-        if (std::abs(p.positions[i].x()) < 0.1 && std::abs(p.positions[i].z()) < 0.1)
-          r.fastest = std::max(r.fastest, p.velocities[i].norm());
-      }
+  // No water inside the box after a step.
+  const auto none_inside = [&](int n) {
+    const btTransform to_box = box.getWorldTransform().inverse();
+    const Vec3Array& x = coupled.particles().positions;
+    for (std::size_t i = 0; i < x.size(); ++i) {
+      const double depth = half - to_vec3(to_box(to_bt(x[i]))).cwiseAbs().maxCoeff();
+      EXPECT_LT(depth, 0.001) << "particle " << i << " inside the box after step " << n;
     }
-    return r;
   };
 
   teleport(Vec3(0.0, 0.04, 0.0));
-  const Run in = run(60);
+  const AfterAppearing in = step_after_appearing(coupled, 60, 0.1, none_inside);
   EXPECT_GT(in.released + in.displaced, 100u) << "the box's place was full of water";
   EXPECT_GT(in.released, 0u) << "the water by the faces has room outside";
   // The water about the box only slumps: no faster than free fall from its 8 cm (1.25 m/s) and then some.
@@ -791,7 +782,7 @@ TEST(RigidBodies, AKinematicBodyTeleportedIsPlacedAnewNotSwept) {
   EXPECT_EQ(in.leaks, 0u);
 
   teleport(Vec3(100.0, 0.04, 0.0));
-  const Run out = run(10);
+  const AfterAppearing out = step_after_appearing(coupled, 10, 0.1, none_inside);
   EXPECT_EQ(out.released + out.displaced, 0u);
   EXPECT_LT(out.fastest, 1.5) << "the water left behind only settles";
   EXPECT_EQ(out.leaks, 0u);
