@@ -500,9 +500,9 @@ std::size_t BulletRigidBodies::release_trapped(Vec3Array& positions, Vec3Array& 
     return c;
   };
 
-  // Each appeared object: its box and, for a convex shape, its mesh's face planes (the faces that hold the
-  // water: exact, where Bullet's own query rounds a box's edges and corners by its margin, up to 4 cm, and
-  // missed the water there).
+  // Each appeared object: its box and, for a convex shape, its mesh's face planes: the faces that hold the
+  // water, where Bullet's own shape rounds a box's edges by its margin and would leave the water there inside
+  // (the large crate of RigidBodies.ABodyAddedInsideWaterMovesTheWaterOutOfIt).
   struct Appeared {
     btCollisionObject* object;
     Vec3 low, high;
@@ -575,9 +575,8 @@ std::size_t BulletRigidBodies::release_trapped(Vec3Array& positions, Vec3Array& 
 
   // The points outside every appeared body, hashed in cells of 2 room (a key may stand for several far
   // apart: only the distance decides); `room` (unit: m) is the least distance a way out must end from any
-  // of them or from a point moved before. Ending nearer, it would squeeze the water there: moved into the
-  // water about a large crate (a 5 cm slab through one face into one layer), the water's pressure threw it
-  // at 174 m/s.
+  // of them or from a point moved before: ending nearer, it would squeeze the water there into one layer,
+  // which the pressure throws (the large crate of RigidBodies.ABodyAddedInsideWaterMovesTheWaterOutOfIt).
   const double room = gap;
   const auto cell_of = [&](const Vec3& x) {
     return Eigen::Vector3i((x / (2.0 * room)).array().floor().cast<int>());
@@ -644,10 +643,10 @@ std::size_t BulletRigidBodies::release_trapped(Vec3Array& positions, Vec3Array& 
         try_way(-axes.col(axis));
       }
     }
-    // The shortest way that ends with room and in no solid (the nearest face alone put the water under a
-    // crate spawned on the ground into the ground), and is no longer than kMaxWay gaps; with none, the body
-    // displaces the point. Longer ways took the water of a column through a large crate to its far faces
-    // and its top, 0.8 m up, whence it fell back.
+    // The shortest way that ends with room and in no solid (a crate standing on the ground would otherwise
+    // put its water into the ground), and is no longer than kMaxWay gaps, so that the water leaves by a near
+    // face, not a large body's far faces or top; with none, the body displaces the point (the cases of
+    // RigidBodies.ABodyAddedInsideWaterMovesTheWaterOutOfIt).
     constexpr double kMaxWay = 4.0;
     std::sort(ways.begin(), ways.end(), [](const auto& u, const auto& v) { return u.first < v.first; });
     const auto free = std::find_if(ways.begin(), ways.end(), [&](const auto& way) {
