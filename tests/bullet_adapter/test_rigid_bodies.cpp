@@ -789,6 +789,77 @@ TEST(RigidBodies, AKinematicBodyTeleportedIsPlacedAnewNotSwept) {
   EXPECT_EQ(coupled.particles().size() + in.displaced, particles) << "no water lost but what it displaced";
 }
 
+/// The height of `sheet` (a cloth without folds) over the point (x, z), by its faces' vertical projections
+/// (unit: m); NaN where no face lies over or under the point.
+double sheet_height_at(const btSoftBody& sheet, double x, double z) {
+  for (int f = 0; f < sheet.m_faces.size(); ++f) {
+    const btSoftBody::Face& face = sheet.m_faces[f];
+    const btVector3 &a = face.m_n[0]->m_x, &b = face.m_n[1]->m_x, &c = face.m_n[2]->m_x;
+    // Barycentric weights of (x, z) in the face's projection on the xz plane.
+    const double d = (b.z() - c.z()) * (a.x() - c.x()) + (c.x() - b.x()) * (a.z() - c.z());
+    if (d == 0.0) continue;
+    const double u = ((b.z() - c.z()) * (x - c.x()) + (c.x() - b.x()) * (z - c.z())) / d;
+    const double v = ((c.z() - a.z()) * (x - c.x()) + (a.x() - c.x()) * (z - c.z())) / d;
+    const double w = 1.0 - u - v;
+    if (u >= 0.0 && v >= 0.0 && w >= 0.0) return u * a.y() + v * b.y() + w * c.y();
+  }
+  return std::numeric_limits<double>::quiet_NaN();
+}
+
+// A box the game adds into water pooled on a cloth, its bottom face between the cloth and the water's lowest
+// layer: for the water inside the box by that face, the shortest way out goes down, through the cloth, into
+// the air under it. A way out must stay on the water's side of every cloth, so that water leaves by another
+// face or is displaced; none ends under the cloth.
+TEST(RigidBodies, WaterMovedOutOfAnAddedBodyStaysOnItsSideOfTheCloth) {
+  const Vec3 gravity(0, -9.81, 0);
+  GameWorld game(gravity);
+  // A 40 cm sheet 15 cm up, pinned all round, with a 16 x 3 x 16 cm block of water on it.
+  btSoftBody* sheet = btSoftBodyHelpers::CreatePatch(game.world.getWorldInfo(), btVector3(-0.2, 0.15, -0.2),
+                                                     btVector3(0.2, 0.15, -0.2), btVector3(-0.2, 0.15, 0.2),
+                                                     btVector3(0.2, 0.15, 0.2), 21, 21, 0, true);
+  sheet->setTotalMass(0.08);
+  for (int i = 0; i < sheet->m_nodes.size(); ++i) {
+    const btVector3& x = sheet->m_nodes[i].m_x;
+    if (std::abs(x.x()) > 0.199 || std::abs(x.z()) > 0.199) sheet->setMass(i, 0);
+  }
+  sheet->m_cfg.piterations = 100;
+  sheet->m_cfg.kDP = 0.05;
+  game.world.addSoftBody(sheet);
+  SceneConfig scene = water_scene(0.01, gravity);
+  scene.time.dt = 1.0 / 240.0;
+  scene.emitters.push_back(water_block(Vec3(-0.08, 0.155, -0.08), Vec3(0.08, 0.185, 0.08)));
+  {
+    CoupledWorld coupled(game.world, *sheet, scene);
+    for (int n = 0; n < 60; ++n)
+      ASSERT_TRUE(coupled.step().ok()) << n;
+    const std::size_t particles = coupled.particles().size();
+    const double cloth = sheet_height_at(*sheet, 0.0, 0.0);
+    double water = std::numeric_limits<double>::infinity();
+    for (const Vec3& x : coupled.particles().positions) {
+      if (std::abs(x.x()) < 0.03 && std::abs(x.z()) < 0.03) water = std::min(water, x.y());
+    }
+    ASSERT_GT(water - cloth, 0.0005) << "the water's lowest layer must rest over the cloth";
+    const double half = 0.03;
+    game.add_box(Vec3::Constant(half), 0.0, Vec3(0.0, 0.5 * (cloth + water) + half, 0.0));
+
+    const auto under_the_cloth = [&](int n) {
+      const Vec3Array& x = coupled.particles().positions;
+      for (std::size_t i = 0; i < x.size(); ++i) {
+        const double below = sheet_height_at(*sheet, x[i].x(), x[i].z()) - x[i].y();
+        EXPECT_FALSE(below > 0.001) << "particle " << i << " " << below << " m under the cloth after step "
+                                    << n;
+      }
+    };
+    under_the_cloth(-1);
+    const AfterAppearing r = step_after_appearing(coupled, 20, 0.1, under_the_cloth);
+    EXPECT_GT(r.released + r.displaced, 50u) << "the box's place was full of water";
+    EXPECT_EQ(r.leaks, 0u);
+    EXPECT_EQ(coupled.particles().size() + r.displaced + r.squeezed_out, particles);
+  }
+  game.world.removeSoftBody(sheet);
+  delete sheet;
+}
+
 // A body the game throws through the water throws water past fluid.max_speed: the fluid checks the speed
 // before it moves the particles, after the bodies pushed them in the step before, so that step ended ok and
 // a run whose last step it was ended ok with a particle at 100 m/s.

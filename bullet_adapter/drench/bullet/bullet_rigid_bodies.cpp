@@ -477,6 +477,7 @@ void BulletRigidBodies::teleported(const btCollisionObject& object) {
 }
 
 std::size_t BulletRigidBodies::release_trapped(Vec3Array& positions, Vec3Array& velocities, double gap,
+                                               const CrossingTest& crosses,
                                                std::vector<std::uint8_t>& displaced) {
   displaced.clear();
   if (m_appeared.empty()) return 0;
@@ -644,14 +645,15 @@ std::size_t BulletRigidBodies::release_trapped(Vec3Array& positions, Vec3Array& 
       }
     }
     // The shortest way that ends with room and in no solid (a crate standing on the ground would otherwise
-    // put its water into the ground), and is no longer than kMaxWay gaps, so that the water leaves by a near
-    // face, not a large body's far faces or top; with none, the body displaces the point (the cases of
-    // RigidBodies.ABodyAddedInsideWaterMovesTheWaterOutOfIt).
+    // put its water into the ground), crosses no cloth, and is no longer than kMaxWay gaps, so that the
+    // water leaves by a near face, not a large body's far faces or top; with none, the body displaces the
+    // point (the cases of RigidBodies.ABodyAddedInsideWaterMovesTheWaterOutOfIt and
+    // RigidBodies.WaterMovedOutOfAnAddedBodyStaysOnItsSideOfTheCloth).
     constexpr double kMaxWay = 4.0;
     std::sort(ways.begin(), ways.end(), [](const auto& u, const auto& v) { return u.first < v.first; });
     const auto free = std::find_if(ways.begin(), ways.end(), [&](const auto& way) {
       return way.first <= kMaxWay * gap && has_room(way.second) &&
-             !(contacts(way.second, nullptr).distance < -radius);
+             !(contacts(way.second, nullptr).distance < -radius) && !(crosses && crosses(x, way.second));
     });
     if (free == ways.end()) {
       if (displaced.empty()) displaced.assign(positions.size(), 0);

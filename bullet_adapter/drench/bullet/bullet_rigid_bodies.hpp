@@ -76,10 +76,10 @@ class BulletRigidBodies final : public RigidBodySource {
   /// than its radius (a triangle mesh or a heightfield has no inside and holds none). The ways out tried
   /// cross each face plane of a convex object, or follow another object's deepest contact normal and its
   /// three axes both ways to where a ray from outside meets it; the same query on the whole world (the
-  /// water's collision filter) rejects an end inside a solid. Runs on the calling thread, which must be the
-  /// only one using the world.
+  /// water's collision filter) rejects an end inside a solid, and `crosses` a way through a cloth. Runs on
+  /// the calling thread, which must be the only one using the world.
   std::size_t release_trapped(Vec3Array& positions, Vec3Array& velocities, double gap,
-                              std::vector<std::uint8_t>& displaced) override;
+                              const CrossingTest& crosses, std::vector<std::uint8_t>& displaced) override;
 
   /// The linear impulse the water gave the dynamic bodies, summed over all steps (unit: N s): with the
   /// fluid's momentum, what a test of momentum conservation adds up.

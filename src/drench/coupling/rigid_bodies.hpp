@@ -9,6 +9,7 @@
 /// RigidBodySource.
 
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 #include <drench/common/types.hpp>
@@ -62,24 +63,31 @@ class RigidBodySource {
   /// to be applied to its body at the nodes' end positions: the sum as a linear impulse, the sum of moments
   /// about the centre of mass as an angular impulse. Static and kinematic bodies take nothing.
   virtual void apply_impulses(std::size_t index, const RigidSurface& surface, const Vec3* node_impulses) = 0;
+  /// Whether a point moved straight from `from` to `to` (unit: m) would cross a face the water stays on one
+  /// side of (a cloth's, where it starts the step): release_trapped's ways out must not.
+  using CrossingTest = std::function<bool(const Vec3& from, const Vec3& to)>;
+
   /// Called after begin_step, before the water moves: moves every point that a body new in that step (added,
   /// replaced or re-meshed since the step before) holds inside its solid out of it, by the shortest way the
-  /// source finds that ends `gap` outside the body, inside no other solid and no nearer than `gap` to any
-  /// other point, and gives it the body's velocity there; flags the points with no such way in `displaced`
-  /// (the water the body displaces, which the caller removes). The body's faces close around the water it
-  /// appears in, and the coupling, which keeps every particle on its side of a face, would keep that water
-  /// inside for good; moved into the water about it, it would be squeezed. Not a physical motion: the
-  /// water's momentum changes by what the move gives it.
+  /// source finds that ends `gap` outside the body, inside no other solid, no nearer than `gap` to any other
+  /// point and without crossing a cloth (`crosses`), and gives it the body's velocity there; flags the points
+  /// with no such way in `displaced` (the water the body displaces, which the caller removes). The body's
+  /// faces close around the water it appears in, and the coupling, which keeps every particle on its side of
+  /// a face, would keep that water inside for good; moved into the water about it, it would be squeezed. Not
+  /// a physical motion: the water's momentum changes by what the move gives it.
   /// @param positions, velocities  N points and their velocities (unit: m, m/s), changed in place
   /// @param gap  how far outside the face a moved point ends, and the least distance to another (unit: m),
   ///        > 0: half a particle spacing
+  /// @param crosses  true for a way that crosses a cloth (a way under a body's face into water pooled on a
+  ///        cloth goes through it: RigidBodies.WaterMovedOutOfAnAddedBodyStaysOnItsSideOfTheCloth)
   /// @param displaced  output: empty when no point is displaced, else N flags
   /// @return how many points moved. The default moves none: a source whose bodies have no inside.
   virtual std::size_t release_trapped(Vec3Array& positions, Vec3Array& velocities, double gap,
-                                      std::vector<std::uint8_t>& displaced) {
+                                      const CrossingTest& crosses, std::vector<std::uint8_t>& displaced) {
     (void)positions;
     (void)velocities;
     (void)gap;
+    (void)crosses;
     displaced.clear();
     return 0;
   }
