@@ -12,6 +12,8 @@
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <stdexcept>
+#include <string>
 
 #include <drench/scene/simulation.hpp>
 #include "../assertions.hpp"
@@ -314,6 +316,74 @@ TEST(CoupledWorld, AttachRefusesAClothThatIsNotInTheWorld) {
   expect_scene_error([&] { CoupledWorld(user.world, *stray, jet_scene()); },
                      {"not in the Bullet world", "addSoftBody"});
   delete stray;
+}
+
+// A game passes its measured frame time to step_frame, which takes it in the scene's fixed steps as Bullet's
+// stepSimulation(frame, max_steps, fixed step) does: frames of 1/60 s are four steps of 1/240 s each, a frame
+// shorter than a step is carried to the next, and a hitch of a quarter second takes at most max_steps steps
+// and drops the rest. Each step is one Bullet step of the game's world, whose falling sphere gains g dt per
+// step and no more; passed to step(dt), the hitch would have been one step of 0.25 s, 60 times the scene's.
+TEST(CoupledWorldFrames, AHitchIsTakenInFixedStepsAndTheRestDropped) {
+  UserWorld user;
+  SceneConfig scene = jet_scene();
+  const double dt = 1.0 / 240.0;
+  scene.time.dt = dt;
+  CoupledWorld coupled(user.world, *user.cloth, scene);
+  const auto expect_fallen_for = [&](int steps) {
+    EXPECT_EQ(user.steps, steps);
+    EXPECT_EQ(coupled.steps(), steps);
+    EXPECT_NEAR(coupled.time(), steps * dt, 1e-12);
+    EXPECT_NEAR(user.sphere.getLinearVelocity().y(), -9.81 * steps * dt,
+                bullet_tolerance(1e-12, 9.81 * steps * steps * dt));
+  };
+  for (int frame = 1; frame <= 3; ++frame) {
+    const CoupledFrameReport r = coupled.step_frame(1.0 / 60.0, 4);
+    EXPECT_EQ(r.steps.size(), 4u) << "frame " << frame;
+    EXPECT_TRUE(r.ok());
+    EXPECT_EQ(r.dropped_seconds, 0.0);
+    EXPECT_LT(r.carried_seconds, 1e-12);
+    expect_fallen_for(4 * frame);
+  }
+  // Two frames of 0.6 steps: the first takes none, the second one, carrying 0.2 of a step.
+  CoupledFrameReport r = coupled.step_frame(0.6 * dt, 4);
+  EXPECT_EQ(r.steps.size(), 0u);
+  EXPECT_NEAR(r.carried_seconds, 0.6 * dt, 1e-15);
+  r = coupled.step_frame(0.6 * dt, 4);
+  EXPECT_EQ(r.steps.size(), 1u);
+  EXPECT_NEAR(r.carried_seconds, 0.2 * dt, 1e-15);
+  expect_fallen_for(13);
+  // The hitch: 60.2 steps owed, 4 taken, 56 dropped, 0.2 carried.
+  r = coupled.step_frame(0.25, 4);
+  EXPECT_EQ(r.steps.size(), 4u);
+  EXPECT_TRUE(r.ok());
+  EXPECT_NEAR(r.dropped_seconds, 56 * dt, 1e-12);
+  EXPECT_NEAR(r.carried_seconds, 0.2 * dt, 1e-12);
+  expect_fallen_for(17);
+  // Bullet's default of one step a frame.
+  r = coupled.step_frame(0.25);
+  EXPECT_EQ(r.steps.size(), 1u);
+  EXPECT_NEAR(r.dropped_seconds, 59 * dt, 1e-12);
+  expect_fallen_for(18);
+
+  // Bad values are refused, naming them, and change nothing: not the steps, not the time carried.
+  for (const double bad : {-0.001, std::nan(""), std::numeric_limits<double>::infinity()}) {
+    EXPECT_THROW(
+        {
+          try {
+            coupled.step_frame(bad, 4);
+          } catch (const std::invalid_argument& e) {
+            EXPECT_NE(std::string(e.what()).find("frame_seconds must be >= 0 and finite"), std::string::npos)
+                << e.what();
+            throw;
+          }
+        },
+        std::invalid_argument);
+  }
+  EXPECT_THROW(coupled.step_frame(1.0 / 60.0, 0), std::invalid_argument);
+  expect_fallen_for(18);
+  r = coupled.step_frame(0.8 * dt, 4);
+  EXPECT_EQ(r.steps.size(), 1u) << "the 0.2 step carried before the refused calls is still owed";
+  expect_fallen_for(19);
 }
 
 TEST(CoupledWorld, BadSceneTimeStepIsRefused) {

@@ -373,4 +373,35 @@ CoupledStepReport CoupledWorld::step(double dt) {
   return report;
 }
 
+CoupledFrameReport CoupledWorld::step_frame(double frame_seconds, int max_steps) {
+  if (!(frame_seconds >= 0.0) || !std::isfinite(frame_seconds)) {
+    throw std::invalid_argument("CoupledWorld::step_frame: frame_seconds must be >= 0 and finite, got " +
+                                format_number(frame_seconds) + " s");
+  }
+  if (max_steps < 1) {
+    throw std::invalid_argument("CoupledWorld::step_frame: max_steps must be >= 1, got " +
+                                std::to_string(max_steps));
+  }
+  const double dt = m_simulation->config().time.dt;
+  const double owed = m_owed_seconds + frame_seconds;
+  // A frame of exactly k steps (1/60 s at a step of 1/240 s) divides to k within rounding, either side of
+  // it: the tolerance takes the k steps, where Bullet's float division takes k - 1 in some frames and k + 1
+  // in the next.
+  const double whole = std::floor(owed / dt + 1e-9);
+  const double taken = std::min(whole, static_cast<double>(max_steps));
+  CoupledFrameReport report;
+  report.dropped_seconds = (whole - taken) * dt;
+  const double carried = std::max(0.0, owed - whole * dt);
+  for (int n = 0; n < static_cast<int>(taken); ++n) {
+    report.steps.push_back(step(dt));
+    if (!report.steps.back().ok()) {
+      report.dropped_seconds += (taken - static_cast<double>(n + 1)) * dt;
+      break;
+    }
+  }
+  m_owed_seconds = carried;
+  report.carried_seconds = carried;
+  return report;
+}
+
 }  // namespace drench::bullet

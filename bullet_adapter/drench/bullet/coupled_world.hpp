@@ -33,6 +33,7 @@
 /// zero, one or several Bullet steps per call, and a step taken outside this class has no fluid step beside
 /// it. Bullet's rigid bodies in the same world are stepped by stage 6 as usual.
 
+#include <algorithm>
 #include <cstdint>
 #include <memory>
 #include <vector>
@@ -111,6 +112,27 @@ struct CoupledStepReport {
   bool failed() const { return !ok() || fluid.failed(); }
 };
 
+/// What one frame of a game did (CoupledWorld::step_frame).
+struct CoupledFrameReport {
+  /// The coupled steps the frame took, in order, each of the scene's time.dt; a step that is not ok() is the
+  /// last (the state is no longer worth stepping).
+  std::vector<CoupledStepReport> steps;
+  /// Time the frame owed beyond its max_steps steps, or after a step that was not ok, and did not simulate
+  /// (unit: s): the world runs behind the game's clock by it, as Bullet's stepSimulation drops it.
+  double dropped_seconds = 0;
+  /// Time owed that is less than one step, carried to the next frame (unit: s, in [0, time.dt)); divided by
+  /// time.dt, how far past the last step the game's clock is (to interpolate what it draws).
+  double carried_seconds = 0;
+  /// Every step ok (true for a frame that took none).
+  bool ok() const {
+    return std::all_of(steps.begin(), steps.end(), [](const CoupledStepReport& r) { return r.ok(); });
+  }
+  /// Some step failed (CoupledStepReport::failed: not ok, or a particle leaked).
+  bool failed() const {
+    return std::any_of(steps.begin(), steps.end(), [](const CoupledStepReport& r) { return r.failed(); });
+  }
+};
+
 class CoupledWorld {
  public:
   /// Couples a world and the cloths the caller owns (and keeps alive, and no longer steps itself): one
@@ -186,6 +208,19 @@ class CoupledWorld {
   CoupledStepReport step(double dt);
   /// One coupled step of the scene's time.dt.
   CoupledStepReport step() { return step(m_simulation->config().time.dt); }
+  /// A game's frame of `frame_seconds` at the scene's fixed time.dt, as
+  /// btDiscreteDynamicsWorld::stepSimulation(frame_seconds, max_steps, time.dt) steps a world: the time owed
+  /// (this frame's and what earlier frames carried) is taken in whole steps, at most max_steps of them (the
+  /// rest dropped), and less than a step is carried to the next frame. A game that passes its measured frame
+  /// time to step(dt) instead gets a step as long as its slowest frame: after a hitch, one step of a tenth of
+  /// a second, longer than the cloth's and the fluid's stable steps (the test
+  /// CoupledWorldFrames.AHitchIsTakenInFixedStepsAndTheRestDropped). The world's time (time()) advances by
+  /// whole steps only.
+  /// @param frame_seconds  the game's frame time (unit: s), >= 0 and finite
+  /// @param max_steps  the most steps one frame takes, >= 1 (Bullet's maxSubSteps; its default is 1)
+  /// @throws std::invalid_argument naming the value when frame_seconds or max_steps is out of range, before
+  ///         anything changes; what step() throws, from the first step before anything changes
+  CoupledFrameReport step_frame(double frame_seconds, int max_steps = 1);
 
   const ParticleSet& particles() const { return m_simulation->particles(); }
   FluidSolver& fluid() { return m_simulation->fluid(); }
@@ -256,6 +291,7 @@ class CoupledWorld {
   };
   std::vector<CoupledBody> m_bodies;  // one per cloth
   bool m_every_soft_body = false;     // built by the constructor that couples every soft body of the world
+  double m_owed_seconds = 0;          // frame time not yet stepped, < time.dt (step_frame)
   std::unique_ptr<BulletRigidBodies> m_rigid;  // null for the owned world; outlives m_simulation
   std::unique_ptr<Simulation> m_simulation;
 };
