@@ -3,6 +3,7 @@
 
 #include <drench/bullet/coupled_world.hpp>
 
+#include <BulletCollision/CollisionDispatch/btGhostObject.h>
 #include <BulletCollision/CollisionShapes/btHeightfieldTerrainShape.h>
 #include <BulletCollision/CollisionShapes/btTriangleShape.h>
 #include <BulletSoftBody/btSoftBodyHelpers.h>
@@ -962,6 +963,53 @@ TEST(RigidBodies, BulletsCollisionFilterSaysWhichObjectsTheWaterSees) {
   EXPECT_GT(on_held, 100u) << "the seen slab holds its water";
   EXPECT_GT(below_passed, 100u) << "the other's water fell through it";
   EXPECT_EQ(particles_inside(coupled, held, Vec3(0.06, 0.01, 0.06)), 0u);
+}
+
+// Bullet's triggers: objects with CF_NO_CONTACT_RESPONSE, which Bullet's solver lets every body pass (a
+// btGhostObject sensor in the SensorTrigger group, as Bullet's own examples add one, and a rigid body made a
+// trigger). With the default filter the water saw them, and they held it as walls do. Now the water passes
+// them as bodies do, water placed inside one is not refused, and one added into the water moves none of it.
+TEST(RigidBodies, TriggersWithoutContactResponseLetTheWaterPass) {
+  const Vec3 gravity(0, -9.81, 0);
+  GameWorld game(gravity);
+  game.add_box(Vec3(0.3, 0.05, 0.3), 0.0, Vec3(0, -0.15, 0));  // a floor, its top at y = -0.1
+  btBoxShape slab(btVector3(0.06, 0.01, 0.06));
+  btGhostObject sensor;
+  sensor.setCollisionShape(&slab);
+  sensor.setWorldTransform(btTransform(btQuaternion::getIdentity(), btVector3(-0.1, 0, 0)));
+  sensor.setCollisionFlags(sensor.getCollisionFlags() | btCollisionObject::CF_NO_CONTACT_RESPONSE);
+  game.world.addCollisionObject(&sensor, btBroadphaseProxy::SensorTrigger,
+                                btBroadphaseProxy::AllFilter & ~btBroadphaseProxy::SensorTrigger);
+  btRigidBody& trigger = game.add_box(Vec3(0.06, 0.01, 0.06), 0.0, Vec3(0.1, 0.0, 0.0));
+  trigger.setCollisionFlags(trigger.getCollisionFlags() | btCollisionObject::CF_NO_CONTACT_RESPONSE);
+  SceneConfig scene = water_scene(0.01, gravity);
+  // A block over each, the sensor's reaching into it.
+  scene.emitters.push_back(water_block(Vec3(-0.13, -0.005, -0.03), Vec3(-0.07, 0.09, 0.03)));
+  scene.emitters.push_back(water_block(Vec3(0.07, 0.05, -0.03), Vec3(0.13, 0.09, 0.03)));
+  scene.time.dt = 1.0 / 240.0;
+  {
+    CoupledWorld coupled(game.world, *game.cloth, scene);
+    const std::size_t particles = coupled.particles().size();
+    btRigidBody& added = game.add_box(Vec3(0.03, 0.03, 0.03), 0.0, Vec3(-0.1, 0.06, 0.0));
+    added.setCollisionFlags(added.getCollisionFlags() | btCollisionObject::CF_NO_CONTACT_RESPONSE);
+    std::uint64_t moved = 0;
+    for (int n = 0; n < 150; ++n) {
+      const CoupledStepReport report = coupled.step();
+      ASSERT_TRUE(report.ok()) << "step " << n;
+      moved += report.coupling_stats.released_from_bodies + report.coupling_stats.displaced_by_bodies;
+    }
+    EXPECT_EQ(coupled.rigid_surfaces().size(), 1u) << "only the floor holds the water";
+    EXPECT_EQ(moved, 0u) << "a trigger added into the water moves none of it";
+    EXPECT_EQ(coupled.particles().size(), particles);
+    std::size_t under_sensor = 0, under_trigger = 0;
+    for (const Vec3& x : coupled.particles().positions) {
+      if (x.x() < 0.0 && x.y() < -0.02) ++under_sensor;
+      if (x.x() > 0.0 && x.y() < -0.02) ++under_trigger;
+    }
+    EXPECT_GT(under_sensor, 100u) << "the water fell through the sensor";
+    EXPECT_GT(under_trigger, 100u) << "the water fell through the trigger body";
+  }
+  game.world.removeCollisionObject(&sensor);
 }
 
 TEST(RigidBodies, AShapeDrenchCannotUseIsNamedNeverIgnored) {

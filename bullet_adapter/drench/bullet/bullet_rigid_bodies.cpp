@@ -70,11 +70,28 @@ RigidMotion motion_of(const btCollisionObject& object) {
   return RigidMotion::DYNAMIC;
 }
 
+/// Whether the water sees `object`, whose broad-phase proxy is `proxy`: Bullet's collision filter between the
+/// water's group and mask and the object's, and the object's contact response. Bullet's solver lets every
+/// body pass an object with CF_NO_CONTACT_RESPONSE (a trigger, a sensor ghost), and so does the water
+/// (RigidBodies.TriggersWithoutContactResponseLetTheWaterPass).
+bool water_sees(const btCollisionObject& object, const btBroadphaseProxy& proxy,
+                const RigidBodyOptions& options) {
+  return object.hasContactResponse() && (proxy.m_collisionFilterGroup & options.water_mask) != 0 &&
+         (options.water_group & proxy.m_collisionFilterMask) != 0;
+}
+
 /// Bullet's contact query of a small sphere, the probe, against objects other than soft bodies: the first
 /// object found that overlaps it by more than `limit` (a negative distance), and the deepest contact with the
 /// way that moves the probe out of it, whichever of the pair Bullet's algorithm took first (the normal on B
 /// points from B towards A). solid_holding and release_trapped ask it.
 struct ProbeContacts : btCollisionWorld::ContactResultCallback {
+  /// The water's filter, or null for a query of one object (contactPairTest, which asks no filter).
+  const RigidBodyOptions* water = nullptr;
+  bool needsCollision(btBroadphaseProxy* proxy) const override {
+    if (water == nullptr) return ContactResultCallback::needsCollision(proxy);
+    const auto* object = static_cast<const btCollisionObject*>(proxy->m_clientObject);
+    return object != probe && water_sees(*object, *proxy, *water);
+  }
   const btCollisionObject* probe = nullptr;
   btScalar limit = 0;
   const btCollisionObject* holder = nullptr;
@@ -160,8 +177,7 @@ BulletRigidBodies::~BulletRigidBodies() = default;
 bool BulletRigidBodies::sees(const btCollisionObject& object) const {
   const btBroadphaseProxy* proxy = object.getBroadphaseHandle();
   if (proxy == nullptr) return false;  // not in a world's broad phase: Bullet collides nothing with it either
-  return (proxy->m_collisionFilterGroup & m_options.water_mask) != 0 &&
-         (m_options.water_group & proxy->m_collisionFilterMask) != 0;
+  return water_sees(object, *proxy, m_options);
 }
 
 BulletRigidBodies::Tracked* BulletRigidBodies::track(const btCollisionObject& object, int index) {
@@ -494,8 +510,7 @@ std::size_t BulletRigidBodies::release_trapped(Vec3Array& positions, Vec3Array& 
     if (object != nullptr) {
       m_world.contactPairTest(&probe, object, c);
     } else {
-      c.m_collisionFilterGroup = m_options.water_group;
-      c.m_collisionFilterMask = m_options.water_mask;
+      c.water = &m_options;
       m_world.contactTest(&probe, c);
     }
     return c;
@@ -682,8 +697,7 @@ std::string BulletRigidBodies::solid_holding(const Vec3& point, double depth) co
   // A sphere whose centre lies outside overlaps a face by less than its radius; one whose centre lies
   // deeper than `depth`, by more than depth + radius.
   result.limit = static_cast<btScalar>(-(depth + radius));
-  result.m_collisionFilterGroup = m_options.water_group;
-  result.m_collisionFilterMask = m_options.water_mask;
+  result.water = &m_options;
   m_world.contactTest(&probe, result);
   if (result.holder == nullptr) return "";
   const btCollisionObjectArray& objects = m_world.getCollisionObjectArray();

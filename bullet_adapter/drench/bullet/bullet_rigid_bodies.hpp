@@ -32,8 +32,9 @@ struct RigidBodyOptions {
   ShapeMeshOptions mesh;
   /// The water's collision filter group and mask, as a btCollisionObject's: an object holds the water when
   /// (its group & water_mask) and (water_group & its mask) are both non-zero, as Bullet decides for two
-  /// objects. The defaults (btBroadphaseProxy::DefaultFilter, AllFilter) see every object Bullet's defaults
-  /// make.
+  /// objects, and it has a contact response (a trigger with CF_NO_CONTACT_RESPONSE lets the water pass, as
+  /// Bullet's solver lets bodies pass it). The defaults (btBroadphaseProxy::DefaultFilter, AllFilter) see
+  /// every other object Bullet's defaults make.
   int water_group = 1;
   int water_mask = -1;
 };
