@@ -336,34 +336,40 @@ TEST(CoupledWorldFrames, AHitchIsTakenInFixedStepsAndTheRestDropped) {
     EXPECT_NEAR(user.sphere.getLinearVelocity().y(), -9.81 * steps * dt,
                 bullet_tolerance(1e-12, 9.81 * steps * steps * dt));
   };
+  // Frames that add up to a step within rounding take it: (0.05 dt + 0.95 dt) / dt is 1 - 2e-16.
+  EXPECT_EQ(coupled.step_frame(0.05 * dt, 4).steps.size(), 0u);
+  CoupledFrameReport r = coupled.step_frame(0.95 * dt, 4);
+  EXPECT_EQ(r.steps.size(), 1u);
+  EXPECT_LT(r.carried_seconds, 1e-15);
+  expect_fallen_for(1);
   for (int frame = 1; frame <= 3; ++frame) {
-    const CoupledFrameReport r = coupled.step_frame(1.0 / 60.0, 4);
+    r = coupled.step_frame(1.0 / 60.0, 4);
     EXPECT_EQ(r.steps.size(), 4u) << "frame " << frame;
     EXPECT_TRUE(r.ok());
     EXPECT_EQ(r.dropped_seconds, 0.0);
     EXPECT_LT(r.carried_seconds, 1e-12);
-    expect_fallen_for(4 * frame);
+    expect_fallen_for(1 + 4 * frame);
   }
   // Two frames of 0.6 steps: the first takes none, the second one, carrying 0.2 of a step.
-  CoupledFrameReport r = coupled.step_frame(0.6 * dt, 4);
+  r = coupled.step_frame(0.6 * dt, 4);
   EXPECT_EQ(r.steps.size(), 0u);
   EXPECT_NEAR(r.carried_seconds, 0.6 * dt, 1e-15);
   r = coupled.step_frame(0.6 * dt, 4);
   EXPECT_EQ(r.steps.size(), 1u);
   EXPECT_NEAR(r.carried_seconds, 0.2 * dt, 1e-15);
-  expect_fallen_for(13);
+  expect_fallen_for(14);
   // The hitch: 60.2 steps owed, 4 taken, 56 dropped, 0.2 carried.
   r = coupled.step_frame(0.25, 4);
   EXPECT_EQ(r.steps.size(), 4u);
   EXPECT_TRUE(r.ok());
   EXPECT_NEAR(r.dropped_seconds, 56 * dt, 1e-12);
   EXPECT_NEAR(r.carried_seconds, 0.2 * dt, 1e-12);
-  expect_fallen_for(17);
+  expect_fallen_for(18);
   // Bullet's default of one step a frame.
-  r = coupled.step_frame(0.25);
+  r = coupled.step_frame(0.25, 1);
   EXPECT_EQ(r.steps.size(), 1u);
   EXPECT_NEAR(r.dropped_seconds, 59 * dt, 1e-12);
-  expect_fallen_for(18);
+  expect_fallen_for(19);
 
   // Bad values are refused, naming them, and change nothing: not the steps, not the time carried.
   for (const double bad : {-0.001, std::nan(""), std::numeric_limits<double>::infinity()}) {
@@ -380,10 +386,20 @@ TEST(CoupledWorldFrames, AHitchIsTakenInFixedStepsAndTheRestDropped) {
         std::invalid_argument);
   }
   EXPECT_THROW(coupled.step_frame(1.0 / 60.0, 0), std::invalid_argument);
-  expect_fallen_for(18);
+  EXPECT_THROW(coupled.step_frame(1.0 / 60.0, -3), std::invalid_argument);
+  expect_fallen_for(19);
   r = coupled.step_frame(0.8 * dt, 4);
   EXPECT_EQ(r.steps.size(), 1u) << "the 0.2 step carried before the refused calls is still owed";
-  expect_fallen_for(19);
+  expect_fallen_for(20);
+
+  // A step that is not ok ends the frame, its steps left counted as dropped.
+  user.cloth->m_nodes[100].m_v.setY(std::numeric_limits<double>::infinity());
+  r = coupled.step_frame(1.0 / 60.0, 4);
+  ASSERT_EQ(r.steps.size(), 1u);
+  EXPECT_FALSE(r.ok());
+  EXPECT_TRUE(r.failed());
+  EXPECT_NEAR(r.dropped_seconds, 3 * dt, 1e-12);
+  EXPECT_EQ(user.steps, 21);
 }
 
 TEST(CoupledWorld, BadSceneTimeStepIsRefused) {

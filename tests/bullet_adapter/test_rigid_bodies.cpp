@@ -854,11 +854,45 @@ TEST(RigidBodies, WaterMovedOutOfAnAddedBodyStaysOnItsSideOfTheCloth) {
     under_the_cloth(-1);
     const AfterAppearing r = step_after_appearing(coupled, 20, 0.1, under_the_cloth);
     EXPECT_GT(r.released + r.displaced, 50u) << "the box's place was full of water";
+    EXPECT_GT(r.released, 0u) << "the water by the side faces has room outside";
     EXPECT_EQ(r.leaks, 0u);
     EXPECT_EQ(coupled.particles().size() + r.displaced + r.squeezed_out, particles);
   }
   game.world.removeSoftBody(sheet);
   delete sheet;
+}
+
+// The same for a ground of triangles, which has no inside: a box added standing on it in a puddle took the
+// water by its bottom face out downwards, through the ground, to a place inside no solid under it. A way out
+// must not pass through another object the water sees.
+TEST(RigidBodies, WaterMovedOutOfAnAddedBodyStaysOnItsSideOfTheGround) {
+  const Vec3 gravity(0, -9.81, 0);
+  GameWorld game(gravity);
+  btTriangleMesh square;
+  square.addTriangle(btVector3(-0.3, 0, -0.3), btVector3(-0.3, 0, 0.3), btVector3(0.3, 0, 0.3));
+  square.addTriangle(btVector3(-0.3, 0, -0.3), btVector3(0.3, 0, 0.3), btVector3(0.3, 0, -0.3));
+  game.add(std::make_unique<btBvhTriangleMeshShape>(&square, true), 0.0, Vec3::Zero());
+  SceneConfig scene = water_scene(0.01, gravity);
+  scene.time.dt = 1.0 / 240.0;
+  scene.emitters.push_back(water_block(Vec3(-0.1, 0.0, -0.1), Vec3(0.1, 0.08, 0.1)));
+  CoupledWorld coupled(game.world, *game.cloth, scene);
+  for (int n = 0; n < 30; ++n)
+    ASSERT_TRUE(coupled.step().ok()) << n;
+  const std::size_t particles = coupled.particles().size();
+  game.add_box(Vec3::Constant(0.03), 0.0, Vec3(0.0, 0.03, 0.0));
+  const auto under_the_ground = [&](int n) {
+    const Vec3Array& x = coupled.particles().positions;
+    for (std::size_t i = 0; i < x.size(); ++i) {
+      // Over the ground; the water that runs off its edges falls past it.
+      EXPECT_FALSE(std::abs(x[i].x()) < 0.29 && std::abs(x[i].z()) < 0.29 && x[i].y() < -0.001)
+          << "particle " << i << " under the ground after step " << n;
+    }
+  };
+  const AfterAppearing r = step_after_appearing(coupled, 30, 0.1, under_the_ground);
+  EXPECT_GT(r.released, 0u) << "the water by the side faces has room outside";
+  EXPECT_GT(r.released + r.displaced, 100u) << "the box's place was full of water";
+  EXPECT_EQ(r.leaks, 0u);
+  EXPECT_EQ(coupled.particles().size() + r.displaced + r.squeezed_out, particles);
 }
 
 // A body the game throws through the water throws water past fluid.max_speed: the fluid checks the speed

@@ -4,11 +4,15 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <limits>
 #include <memory>
 #include <random>
 
+#include <drench/ccd/point_triangle_ccd.hpp>
 #include <drench/common/parallel.hpp>
 #include <drench/coupling/broad_phase.hpp>
+#include <drench/coupling/cloth_obstacle.hpp>
 #include <drench/coupling/coupler_stages.hpp>
 #include "coupling_fixtures.hpp"
 
@@ -342,6 +346,53 @@ TEST(BroadPhase, UpdatedPairsEqualAFullQueryAfterEveryKindOfChange) {
         EXPECT_TRUE(only[pair.first]) << "round " << round << ": a pair of an unmarked particle";
     }
   }
+}
+
+// Moves a game makes outside the fluid's step (water moved out of a body that appeared) against a cloth at
+// rest: those through a face or onto it cross it; those short of it, along it or beside it do not; a move or
+// a face with a NaN crosses nothing and throws nothing. The one broad-phase pass finds what testing each move
+// against every face finds.
+TEST(ClothCrossing, MovesThroughOrOntoAFaceCrossItOthersDoNot) {
+  ClothMesh cloth = test::grid_mesh(11, 0.2, 0.0, 1.0);                // y = 0, x and z in [0, 0.2]
+  cloth.positions_t1.assign(cloth.node_count(), Vec3(0.1, 5.0, 0.1));  // not read: the cloth at rest
+  const Vec3 in(0.053, 0.004, 0.071);
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const Vec3Array from = {in, in, in, in, Vec3(0.3, 0.004, 0.1), in, Vec3(nan, 0.004, 0.1)};
+  const Vec3Array to = {in - Vec3(0, 0.01, 0),      // through
+                        Vec3(in.x(), 0.0, in.z()),  // onto
+                        in - Vec3(0, 0.003, 0),     // short of it
+                        in + Vec3(0.05, 0, 0.02),   // along it
+                        Vec3(0.3, -0.01, 0.1),      // beside it
+                        Vec3(in.x(), nan, in.z()),  // to NaN
+                        Vec3(0.1, -0.01, 0.1)};     // from NaN
+  std::vector<std::uint8_t> crosses;
+  moves_crossing_cloth(cloth, from, to, crosses);
+  EXPECT_EQ(crosses, (std::vector<std::uint8_t>{1, 1, 0, 0, 0, 0, 0}));
+
+  // Random moves about the cloth, one of its nodes NaN: the same flags as each move tested against every
+  // face that has no NaN.
+  cloth.positions_t0[60] = Vec3(nan, nan, nan);
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  Vec3Array a, b;
+  for (int k = 0; k < 2000; ++k) {
+    a.push_back(Vec3(0.12 * u(rng) + 0.1, 0.01 * u(rng), 0.12 * u(rng) + 0.1));
+    b.push_back(a.back() + 0.01 * Vec3(u(rng), u(rng), u(rng)));
+  }
+  moves_crossing_cloth(cloth, a, b, crosses);
+  std::size_t crossing = 0;
+  for (std::size_t k = 0; k < a.size(); ++k) {
+    bool expected = false;
+    for (const Triangle& t : cloth.triangles) {
+      const Vec3 &p = cloth.positions_t0[t[0]], &q = cloth.positions_t0[t[1]], &r = cloth.positions_t0[t[2]];
+      if (p.allFinite() && q.allFinite() && r.allFinite())
+        expected = expected || ccd::point_static_triangle_ccd(a[k], b[k], p, q, r).hit;
+    }
+    EXPECT_EQ(crosses[k] != 0, expected) << "move " << k;
+    crossing += expected ? 1 : 0;
+  }
+  EXPECT_GT(crossing, 200u);
+  EXPECT_LT(crossing, 1800u);
 }
 
 }  // namespace

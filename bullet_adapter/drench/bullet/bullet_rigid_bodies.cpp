@@ -111,6 +111,19 @@ struct ProbeContacts : btCollisionWorld::ContactResultCallback {
   }
 };
 
+/// Bullet's ray query along a way out of a body that appeared: whether it meets another object the water sees
+/// (not `body`, not a soft body: the cloths are the caller's CrossingTest).
+struct OtherObjectsOnTheWay : btCollisionWorld::ClosestRayResultCallback {
+  OtherObjectsOnTheWay(const btVector3& from, const btVector3& to) : ClosestRayResultCallback(from, to) {}
+  const btCollisionObject* body = nullptr;
+  const RigidBodyOptions* water = nullptr;
+  bool needsCollision(btBroadphaseProxy* proxy) const override {
+    const auto* object = static_cast<const btCollisionObject*>(proxy->m_clientObject);
+    return object != body && object->getInternalType() != btCollisionObject::CO_SOFT_BODY &&
+           water_sees(*object, *proxy, *water);
+  }
+};
+
 std::string describe(const btCollisionObject& object, int index) {
   return "collision object " + std::to_string(index) + " (" + object.getCollisionShape()->getName() + ")";
 }
@@ -623,18 +636,24 @@ std::size_t BulletRigidBodies::release_trapped(Vec3Array& positions, Vec3Array& 
     return true;
   };
 
-  std::size_t released = 0;
-  std::vector<std::pair<double, Vec3>> ways;  // (length, end) of each way out of the body
+  // Every trapped point's ways out, shortest first, up to kMaxWay gaps long, so that the water leaves by a
+  // near face, not a large body's far faces or top (the cases of
+  // RigidBodies.ABodyAddedInsideWaterMovesTheWaterOutOfIt): those of trapped[i] are ways[first[i],
+  // first[i+1]).
+  constexpr double kMaxWay = 4.0;
+  std::vector<std::size_t> trapped_points, first;
+  std::vector<std::pair<double, Vec3>> ways;  // (length, end)
+  std::vector<std::pair<double, Vec3>> own;
   for (std::size_t k = 0; k < positions.size(); ++k) {
     if (holder[k] == 0) continue;
     const Appeared& a = bodies[holder[k] - 1];
-    Vec3& x = positions[k];
-    ways.clear();
+    const Vec3& x = positions[k];
+    own.clear();
     if (a.convex) {
       // A way out crosses one face plane, to `gap` beyond it.
       for (std::size_t f = 0; f < a.normals.size(); ++f) {
         const double below = a.offsets[f] - a.normals[f].dot(x);
-        ways.emplace_back(below + gap, x + (below + gap) * a.normals[f]);
+        own.emplace_back(below + gap, x + (below + gap) * a.normals[f]);
       }
     } else {
       // Along the deepest contact's normal and the object's three axes both ways, each to `gap` beyond the
@@ -650,7 +669,7 @@ std::size_t BulletRigidBodies::release_trapped(Vec3Array& positions, Vec3Array& 
                                         a.object->getCollisionShape(), a.object->getWorldTransform(), hit);
         if (!hit.hasHit()) return;
         const Vec3 end = to_vec3(hit.m_hitPointWorld) + gap * d;
-        ways.emplace_back((end - x).norm(), end);
+        own.emplace_back((end - x).norm(), end);
       };
       try_way(to_vec3(contacts(x, a.object).out));
       const Eigen::Matrix3d axes = to_matrix3(a.object->getWorldTransform().getBasis());
@@ -659,23 +678,59 @@ std::size_t BulletRigidBodies::release_trapped(Vec3Array& positions, Vec3Array& 
         try_way(-axes.col(axis));
       }
     }
-    // The shortest way that ends with room and in no solid (a crate standing on the ground would otherwise
-    // put its water into the ground), crosses no cloth, and is no longer than kMaxWay gaps, so that the
-    // water leaves by a near face, not a large body's far faces or top; with none, the body displaces the
-    // point (the cases of RigidBodies.ABodyAddedInsideWaterMovesTheWaterOutOfIt and
-    // RigidBodies.WaterMovedOutOfAnAddedBodyStaysOnItsSideOfTheCloth).
-    constexpr double kMaxWay = 4.0;
-    std::sort(ways.begin(), ways.end(), [](const auto& u, const auto& v) { return u.first < v.first; });
-    const auto free = std::find_if(ways.begin(), ways.end(), [&](const auto& way) {
-      return way.first <= kMaxWay * gap && has_room(way.second) &&
-             !(contacts(way.second, nullptr).distance < -radius) && !(crosses && crosses(x, way.second));
-    });
-    if (free == ways.end()) {
+    std::sort(own.begin(), own.end(), [](const auto& u, const auto& v) { return u.first < v.first; });
+    trapped_points.push_back(k);
+    first.push_back(ways.size());
+    for (const auto& way : own) {
+      if (way.first <= kMaxWay * gap) ways.push_back(way);
+    }
+  }
+  first.push_back(ways.size());
+
+  // Which ways cross a cloth, all asked at once (the caller's test of every cloth face).
+  std::vector<std::uint8_t> crossing(ways.size(), 0);
+  if (crosses && !ways.empty()) {
+    Vec3Array from(ways.size()), to(ways.size());
+    for (std::size_t i = 0; i + 1 < first.size(); ++i) {
+      for (std::size_t w = first[i]; w < first[i + 1]; ++w) {
+        from[w] = positions[trapped_points[i]];
+        to[w] = ways[w].second;
+      }
+    }
+    crosses(from, to, crossing);
+  }
+  // Whether a way passes through another object the water sees: a triangle mesh or a heightfield has no
+  // inside, so a way down through a ground of triangles would end in no solid, under it
+  // (RigidBodies.WaterMovedOutOfAnAddedBodyStaysOnItsSideOfTheGround).
+  const auto through_another = [&](const Vec3& from, const Vec3& to, const btCollisionObject* body) {
+    OtherObjectsOnTheWay hit(to_bt(from), to_bt(to));
+    hit.body = body;
+    hit.water = &m_options;
+    m_world.rayTest(to_bt(from), to_bt(to), hit);
+    return hit.hasHit();
+  };
+
+  // The shortest way that ends with room and in no solid (a crate standing on the ground would otherwise
+  // put its water into the ground), crosses no cloth (RigidBodies.WaterMovedOutOfAnAddedBodyStaysOnItsSide
+  // OfTheCloth) and passes through no other object; with none, the body displaces the point.
+  std::size_t released = 0;
+  for (std::size_t i = 0; i + 1 < first.size(); ++i) {
+    const std::size_t k = trapped_points[i];
+    const Appeared& a = bodies[holder[k] - 1];
+    Vec3& x = positions[k];
+    std::size_t free = first[i + 1];
+    for (std::size_t w = first[i]; w < first[i + 1] && free == first[i + 1]; ++w) {
+      const Vec3& end = ways[w].second;
+      if (!crossing[w] && has_room(end) && !(contacts(end, nullptr).distance < -radius) &&
+          !through_another(x, end, a.object))
+        free = w;
+    }
+    if (free == first[i + 1]) {
       if (displaced.empty()) displaced.assign(positions.size(), 0);
       displaced[k] = 1;
       continue;
     }
-    x = free->second;
+    x = ways[free].second;
     cells[key_of(cell_of(x))].push_back(x);
     const btRigidBody* rigid = btRigidBody::upcast(a.object);
     velocities[k] = rigid

@@ -77,8 +77,9 @@ class BulletRigidBodies final : public RigidBodySource {
   /// than its radius (a triangle mesh or a heightfield has no inside and holds none). The ways out tried
   /// cross each face plane of a convex object, or follow another object's deepest contact normal and its
   /// three axes both ways to where a ray from outside meets it; the same query on the whole world (the
-  /// water's collision filter) rejects an end inside a solid, and `crosses` a way through a cloth. Runs on
-  /// the calling thread, which must be the only one using the world.
+  /// water's collision filter) rejects an end inside a solid, its ray query a way through another object the
+  /// water sees (a ground of triangles has no inside to end in), and `crosses` a way through a cloth. Runs
+  /// on the calling thread, which must be the only one using the world.
   std::size_t release_trapped(Vec3Array& positions, Vec3Array& velocities, double gap,
                               const CrossingTest& crosses, std::vector<std::uint8_t>& displaced) override;
 

@@ -391,9 +391,16 @@ CoupledFrameReport CoupledWorld::step_frame(double frame_seconds, int max_steps)
   const double taken = std::min(whole, static_cast<double>(max_steps));
   CoupledFrameReport report;
   report.dropped_seconds = (whole - taken) * dt;
-  const double carried = std::max(0.0, owed - whole * dt);
+  // In [0, dt) whatever the rounding of a huge frame's owed - whole * dt.
+  double carried = std::max(0.0, owed - whole * dt);
+  if (!(carried < dt)) carried = 0.0;
   for (int n = 0; n < static_cast<int>(taken); ++n) {
-    report.steps.push_back(step(dt));
+    try {
+      report.steps.push_back(step(dt));
+    } catch (...) {
+      if (n > 0) m_owed_seconds = carried;  // the steps before it were taken
+      throw;
+    }
     if (!report.steps.back().ok()) {
       report.dropped_seconds += (taken - static_cast<double>(n + 1)) * dt;
       break;

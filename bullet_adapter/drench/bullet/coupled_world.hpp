@@ -115,13 +115,14 @@ struct CoupledStepReport {
 /// What one frame of a game did (CoupledWorld::step_frame).
 struct CoupledFrameReport {
   /// The coupled steps the frame took, in order, each of the scene's time.dt; a step that is not ok() is the
-  /// last (the state is no longer worth stepping).
+  /// frame's last, so that the game sees it before more steps build on it (what to do then is the game's).
   std::vector<CoupledStepReport> steps;
   /// Time the frame owed beyond its max_steps steps, or after a step that was not ok, and did not simulate
   /// (unit: s): the world runs behind the game's clock by it, as Bullet's stepSimulation drops it.
   double dropped_seconds = 0;
   /// Time owed that is less than one step, carried to the next frame (unit: s, in [0, time.dt)); divided by
-  /// time.dt, how far past the last step the game's clock is (to interpolate what it draws).
+  /// time.dt, how far past the last step the game's clock is. Bullet interpolates its motion states by it;
+  /// drench leaves the water and the cloths at the last step, for the game to interpolate what it draws.
   double carried_seconds = 0;
   /// Every step ok (true for a frame that took none).
   bool ok() const {
@@ -217,10 +218,15 @@ class CoupledWorld {
   /// CoupledWorldFrames.AHitchIsTakenInFixedStepsAndTheRestDropped). The world's time (time()) advances by
   /// whole steps only.
   /// @param frame_seconds  the game's frame time (unit: s), >= 0 and finite
-  /// @param max_steps  the most steps one frame takes, >= 1 (Bullet's maxSubSteps; its default is 1)
+  /// @param max_steps  the most steps one frame takes, >= 1 (Bullet's maxSubSteps). No default: Bullet's 1
+  ///        suits its fixed step of 1/60 s, but with a scene's time.dt of a millisecond it would take one
+  ///        step of the 17 a 1/60 s frame owes, and the world would run 17 times slower than the game.
+  ///        Frame time over max_steps * time.dt is dropped.
   /// @throws std::invalid_argument naming the value when frame_seconds or max_steps is out of range, before
-  ///         anything changes; what step() throws, from the first step before anything changes
-  CoupledFrameReport step_frame(double frame_seconds, int max_steps = 1);
+  ///         anything changes; what step() throws: from the frame's first step before anything changes,
+  ///         from a later one (a body the step before left at NaN) with the steps before it taken and the
+  ///         frame's time counted as stepped
+  CoupledFrameReport step_frame(double frame_seconds, int max_steps);
 
   const ParticleSet& particles() const { return m_simulation->particles(); }
   FluidSolver& fluid() { return m_simulation->fluid(); }

@@ -112,4 +112,27 @@ double ClothObstacle::vertical_impulse() const {
   return sum;
 }
 
+void moves_crossing_cloth(const ClothMesh& cloth, const Vec3Array& from, const Vec3Array& to,
+                          std::vector<std::uint8_t>& crosses) {
+  assert(from.size() == to.size());
+  crosses.assign(from.size(), 0);
+  if (cloth.triangles.empty() || from.empty()) return;
+  ClothMesh still;
+  still.triangles = cloth.triangles;
+  still.positions_t0 = cloth.positions_t0;
+  still.positions_t1 = cloth.positions_t0;
+  std::vector<std::pair<Index, Index>> pairs;
+  make_broad_phase(BroadPhaseKind::GRID)->find_pairs(from, to, still, 0.0, nullptr, pairs);
+  const Vec3Array& x = still.positions_t0;
+  for (const auto& [k, t] : pairs) {
+    if (crosses[k]) continue;
+    const Triangle& tri = still.triangles[t];
+    const Vec3 &a = x[tri[0]], &b = x[tri[1]], &c = x[tri[2]];
+    // The CCD refuses a non-finite coordinate (InvalidQueryError).
+    if (!(from[k].allFinite() && to[k].allFinite() && a.allFinite() && b.allFinite() && c.allFinite()))
+      continue;
+    if (ccd::point_static_triangle_ccd(from[k], to[k], a, b, c).hit) crosses[k] = 1;
+  }
+}
+
 }  // namespace drench

@@ -10,6 +10,7 @@
 
 #include <cstdint>
 #include <memory>
+#include <vector>
 
 #include <drench/common/effect_counter.hpp>
 #include <drench/coupling/broad_phase.hpp>
@@ -70,5 +71,17 @@ class ClothObstacle final : public SubstepConstraint {
   std::unique_ptr<TriangleBroadPhase> m_broad_phase;
   std::vector<std::pair<Index, Index>> m_pairs;
 };
+
+/// Which straight moves cross a cloth at rest: crosses[k] is 1 when a point moving from from[k] to to[k]
+/// passes through or ends on a face of `cloth` at its positions_t0, by the exact CCD of a point against a
+/// static triangle (eq. 5-6), else 0. Moves a game makes outside the fluid's step (water moved out of a body
+/// that appeared, RigidBodySource::release_trapped) must keep it on its side of the cloth. A move or a face
+/// with a non-finite coordinate crosses nothing here (the cloth's and the fluid's own checks report them).
+/// One broad-phase pass over all moves, so that many moves against a large cloth cost about one query each.
+/// @param cloth  its triangles and positions_t0 (unit: m); positions_t1 is not read
+/// @param from, to  N points each (unit: m)
+/// @param crosses  output, N flags
+void moves_crossing_cloth(const ClothMesh& cloth, const Vec3Array& from, const Vec3Array& to,
+                          std::vector<std::uint8_t>& crosses);
 
 }  // namespace drench

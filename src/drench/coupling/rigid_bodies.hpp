@@ -63,9 +63,11 @@ class RigidBodySource {
   /// to be applied to its body at the nodes' end positions: the sum as a linear impulse, the sum of moments
   /// about the centre of mass as an angular impulse. Static and kinematic bodies take nothing.
   virtual void apply_impulses(std::size_t index, const RigidSurface& surface, const Vec3* node_impulses) = 0;
-  /// Whether a point moved straight from `from` to `to` (unit: m) would cross a face the water stays on one
-  /// side of (a cloth's, where it starts the step): release_trapped's ways out must not.
-  using CrossingTest = std::function<bool(const Vec3& from, const Vec3& to)>;
+  /// Which straight moves of points, each from from[k] to to[k] (unit: m, N each), pass through or end on a
+  /// face the water stays on one side of (a cloth's, where it starts the step): crosses[k] (output, N flags)
+  /// nonzero. release_trapped's ways out must not; it asks once for all of them (moves_crossing_cloth).
+  using CrossingTest =
+      std::function<void(const Vec3Array& from, const Vec3Array& to, std::vector<std::uint8_t>& crosses)>;
 
   /// Called after begin_step, before the water moves: moves every point that a body new in that step (added,
   /// replaced or re-meshed since the step before) holds inside its solid out of it, by the shortest way the
@@ -78,8 +80,8 @@ class RigidBodySource {
   /// @param positions, velocities  N points and their velocities (unit: m, m/s), changed in place
   /// @param gap  how far outside the face a moved point ends, and the least distance to another (unit: m),
   ///        > 0: half a particle spacing
-  /// @param crosses  true for a way that crosses a cloth (a way under a body's face into water pooled on a
-  ///        cloth goes through it: RigidBodies.WaterMovedOutOfAnAddedBodyStaysOnItsSideOfTheCloth)
+  /// @param crosses  which ways cross a cloth (a way under a body's face into water pooled on a cloth goes
+  ///        through it: RigidBodies.WaterMovedOutOfAnAddedBodyStaysOnItsSideOfTheCloth); empty: none do
   /// @param displaced  output: empty when no point is displaced, else N flags
   /// @return how many points moved. The default moves none: a source whose bodies have no inside.
   virtual std::size_t release_trapped(Vec3Array& positions, Vec3Array& velocities, double gap,

@@ -9,7 +9,6 @@
 #include <stdexcept>
 #include <string>
 
-#include <drench/ccd/point_triangle_ccd.hpp>
 #include <drench/common/error.hpp>
 #include <drench/common/key_index_table.hpp>
 #include <drench/common/parallel.hpp>
@@ -396,25 +395,13 @@ StepStatus Simulation::step(Scalar dt) {
   if (m_bodies) {
     ParticleSet& p = m_fluid->particles();
     // The cloth where it starts the step, the side of it the coupling first keeps the water on.
-    const ClothMesh* cloth = m_cloth ? &m_cloth->mesh() : nullptr;
-    const auto crosses_cloth = [cloth](const Vec3& from, const Vec3& to) {
-      if (cloth == nullptr || !from.allFinite() || !to.allFinite()) return false;
-      Box3 way;
-      way.extend(from);
-      way.extend(to);
-      const Vec3Array& x = cloth->positions_t0;
-      for (const Triangle& t : cloth->triangles) {
-        const Vec3 &a = x[t[0]], &b = x[t[1]], &c = x[t[2]];
-        Box3 face;
-        face.extend(a);
-        face.extend(b);
-        face.extend(c);
-        // A face with a NaN node is the cloth's check's to report (check_cloth), not a crossing.
-        if (!way.overlaps(face) || !(a.allFinite() && b.allFinite() && c.allFinite())) continue;
-        if (ccd::point_static_triangle_ccd(from, to, a, b, c).hit) return true;
-      }
-      return false;
-    };
+    RigidBodySource::CrossingTest crosses_cloth;
+    if (m_cloth) {
+      crosses_cloth = [cloth = &m_cloth->mesh()](const Vec3Array& from, const Vec3Array& to,
+                                                 std::vector<std::uint8_t>& crosses) {
+        moves_crossing_cloth(*cloth, from, to, crosses);
+      };
+    }
     m_coupling_stats.released_from_bodies += m_bodies->release_trapped(
         p.positions, p.velocities, 0.5 * m_config.fluid.particle_spacing, crosses_cloth, m_displaced);
     if (!m_displaced.empty()) {
