@@ -4,6 +4,7 @@
 #include <BulletCollision/CollisionDispatch/btCollisionObject.h>
 #include <BulletCollision/CollisionDispatch/btCollisionWorld.h>
 #include <BulletCollision/CollisionShapes/btCollisionShape.h>
+#include <BulletCollision/CollisionShapes/btCompoundShape.h>
 #include <BulletCollision/CollisionShapes/btSphereShape.h>
 #include <BulletCollision/CollisionShapes/btStaticPlaneShape.h>
 #include <BulletDynamics/Dynamics/btDynamicsWorld.h>
@@ -12,6 +13,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <functional>
 #include <limits>
 #include <unordered_map>
 #include <unordered_set>
@@ -515,89 +517,99 @@ std::size_t BulletRigidBodies::release_trapped(Vec3Array& positions, Vec3Array& 
   btSphereShape sphere(radius);
   btCollisionObject probe;
   probe.setCollisionShape(&sphere);
-  // The probe's contacts at x with `object`, or with every solid the water sees when it is null.
-  const auto contacts = [&](const Vec3& x, btCollisionObject* object) {
+  // Whether x lies inside a solid the water sees: the probe's contacts with the whole world.
+  const auto in_a_solid = [&](const Vec3& x) {
     probe.setWorldTransform(btTransform(btQuaternion::getIdentity(), to_bt(x)));
     ProbeContacts c;
     c.probe = &probe;
-    if (object != nullptr) {
-      m_world.contactPairTest(&probe, object, c);
-    } else {
-      c.water = &m_options;
-      m_world.contactTest(&probe, c);
-    }
-    return c;
+    c.water = &m_options;
+    m_world.contactTest(&probe, c);
+    return c.distance < -radius;
   };
 
-  // Each appeared object: its box and, for a convex shape, its mesh's face planes: the faces that hold the
-  // water, where Bullet's own shape rounds a box's edges by its margin and would leave the water there inside
-  // (the large crate of RigidBodies.ABodyAddedInsideWaterMovesTheWaterOutOfIt).
-  struct Appeared {
+  // The appeared objects' convex pieces, each the meet of its face planes: a convex shape, a plane (the half
+  // space away from the water), or each convex child of a compound, nested ones too. The planes are those of
+  // the faces that hold the water, where Bullet's own shapes round a box's edges by its margin and would
+  // leave the water there inside (the large crate and the large compound crate of
+  // RigidBodies.ABodyAddedInsideWaterMovesTheWaterOutOfIt). A concave child (a triangle mesh) has no inside.
+  struct Piece {
     btCollisionObject* object;
     Vec3 low, high;
-    bool convex;                // or a plane: the meet of its face planes
     std::vector<Vec3> normals;  // outward, unit
     std::vector<double> offsets;
+    bool holds(const Vec3& x) const {
+      if ((x.array() < low.array()).any() || (x.array() > high.array()).any() || normals.empty())
+        return false;
+      for (std::size_t f = 0; f < normals.size(); ++f) {
+        if (!(offsets[f] - normals[f].dot(x) > 0.0)) return false;
+      }
+      return true;
+    }
   };
-  std::vector<Appeared> bodies;
-  for (const auto& [object, tracked] : m_appeared) {
-    Appeared a;
-    a.object = const_cast<btCollisionObject*>(object);
-    a.convex = object->getCollisionShape()->isConvex() || tracked->plane;
-    if (tracked->plane) {
-      // The solid is the side away from the water (PlaneFrame::normal), all of it.
-      const btTransform& placed = object->getWorldTransform();
-      const Vec3 normal = to_matrix3(placed.getBasis()) * tracked->frame.normal;
-      a.normals.push_back(normal);
-      a.offsets.push_back(normal.dot(to_vec3(placed(to_bt(tracked->frame.origin)))));
-      a.low = Vec3::Constant(-std::numeric_limits<double>::infinity());
-      a.high = -a.low;
-    } else if (a.convex) {
-      const Vec3Array world = place(tracked->local, object->getWorldTransform());
-      a.low = Vec3::Constant(std::numeric_limits<double>::infinity());
-      a.high = -a.low;
-      for (const Vec3& v : world) {
-        a.low = a.low.cwiseMin(v);
-        a.high = a.high.cwiseMax(v);
-      }
-      for (const Triangle& f : tracked->local.triangles) {
-        const Vec3 n = (world[f[1]] - world[f[0]]).cross(world[f[2]] - world[f[0]]);
-        if (!(n.norm() > 0.0)) continue;
-        a.normals.push_back(n.normalized());
-        a.offsets.push_back(a.normals.back().dot(world[f[0]]));
-      }
-    } else {
-      btVector3 lo, hi;
-      object->getCollisionShape()->getAabb(object->getWorldTransform(), lo, hi);
-      a.low = to_vec3(lo);
-      a.high = to_vec3(hi);
+  std::vector<Piece> bodies;
+  const auto add_convex = [&](btCollisionObject* object, const TriangleMesh& local, const btTransform& at) {
+    const Vec3Array world = place(local, at);
+    Piece a;
+    a.object = object;
+    a.low = Vec3::Constant(std::numeric_limits<double>::infinity());
+    a.high = -a.low;
+    for (const Vec3& v : world) {
+      a.low = a.low.cwiseMin(v);
+      a.high = a.high.cwiseMax(v);
+    }
+    for (const Triangle& f : local.triangles) {
+      const Vec3 n = (world[f[1]] - world[f[0]]).cross(world[f[2]] - world[f[0]]);
+      if (!(n.norm() > 0.0)) continue;
+      a.normals.push_back(n.normalized());
+      a.offsets.push_back(a.normals.back().dot(world[f[0]]));
     }
     bodies.push_back(std::move(a));
+  };
+  std::function<void(btCollisionObject*, const btCompoundShape&, const btTransform&)> add_children =
+      [&](btCollisionObject* object, const btCompoundShape& compound, const btTransform& at) {
+        for (int i = 0; i < compound.getNumChildShapes(); ++i) {
+          const btCollisionShape& child = *compound.getChildShape(i);
+          const btTransform child_at = at * compound.getChildTransform(i);
+          if (child.getShapeType() == COMPOUND_SHAPE_PROXYTYPE) {
+            add_children(object, static_cast<const btCompoundShape&>(child), child_at);
+          } else if (child.isConvex()) {
+            add_convex(object, shape_mesh(child, m_options.mesh), child_at);
+          }
+        }
+      };
+  for (const auto& [object, tracked] : m_appeared) {
+    auto* o = const_cast<btCollisionObject*>(object);
+    const btCollisionShape& shape = *object->getCollisionShape();
+    const btTransform& at = object->getWorldTransform();
+    if (tracked->plane) {
+      // The solid is the side away from the water (PlaneFrame::normal), all of it.
+      Piece a;
+      a.object = o;
+      const Vec3 normal = to_matrix3(at.getBasis()) * tracked->frame.normal;
+      a.normals.push_back(normal);
+      a.offsets.push_back(normal.dot(to_vec3(at(to_bt(tracked->frame.origin)))));
+      a.low = Vec3::Constant(-std::numeric_limits<double>::infinity());
+      a.high = -a.low;
+      bodies.push_back(std::move(a));
+    } else if (shape.isConvex()) {
+      add_convex(o, tracked->local, at);
+    } else if (shape.getShapeType() == COMPOUND_SHAPE_PROXYTYPE) {
+      add_children(o, static_cast<const btCompoundShape&>(shape), at);
+    }
   }
   m_appeared.clear();  // once per appearance, and never with objects the game may delete before a next call
+  const auto in_a_piece = [&](const Vec3& x) {
+    return std::any_of(bodies.begin(), bodies.end(), [&](const Piece& a) { return a.holds(x); });
+  };
 
-  // Which body holds each point (its index + 1; 0: none), the first that does.
+  // Which piece holds each point (its index + 1; 0: none), the first that does.
   std::vector<std::uint32_t> holder(positions.size(), 0);
   std::size_t trapped = 0;
   for (std::size_t b = 0; b < bodies.size(); ++b) {
-    const Appeared& a = bodies[b];
     for (std::size_t k = 0; k < positions.size(); ++k) {
-      const Vec3& x = positions[k];
-      if (holder[k] != 0 || !x.allFinite() || (x.array() < a.low.array()).any() ||
-          (x.array() > a.high.array()).any())
-        continue;
-      bool inside = false;
-      if (a.convex) {
-        inside = !a.normals.empty();
-        for (std::size_t f = 0; f < a.normals.size() && inside; ++f)
-          inside = a.offsets[f] - a.normals[f].dot(x) > 0.0;
-      } else {
-        inside = contacts(x, a.object).distance < -radius;
-      }
-      if (inside) {
-        holder[k] = static_cast<std::uint32_t>(b + 1);
-        ++trapped;
-      }
+      if (holder[k] != 0 || !positions[k].allFinite() || !bodies[b].holds(positions[k])) continue;
+      holder[k] = static_cast<std::uint32_t>(b + 1);
+      ++trapped;
     }
   }
   if (trapped == 0) return 0;
@@ -646,37 +658,13 @@ std::size_t BulletRigidBodies::release_trapped(Vec3Array& positions, Vec3Array& 
   std::vector<std::pair<double, Vec3>> own;
   for (std::size_t k = 0; k < positions.size(); ++k) {
     if (holder[k] == 0) continue;
-    const Appeared& a = bodies[holder[k] - 1];
+    const Piece& a = bodies[holder[k] - 1];
     const Vec3& x = positions[k];
     own.clear();
-    if (a.convex) {
-      // A way out crosses one face plane, to `gap` beyond it.
-      for (std::size_t f = 0; f < a.normals.size(); ++f) {
-        const double below = a.offsets[f] - a.normals[f].dot(x);
-        own.emplace_back(below + gap, x + (below + gap) * a.normals[f]);
-      }
-    } else {
-      // Along the deepest contact's normal and the object's three axes both ways, each to `gap` beyond the
-      // face a ray from outside meets first.
-      const double beyond = 2.0 * (a.high - a.low).norm() + gap;  // a ray from this far starts outside
-      const auto try_way = [&](const Vec3& direction) {
-        if (!(direction.squaredNorm() > 0.0)) return;
-        const Vec3 d = direction.normalized();
-        const btVector3 from = to_bt(x + beyond * d), to = to_bt(x);
-        btCollisionWorld::ClosestRayResultCallback hit(from, to);
-        btCollisionWorld::rayTestSingle(btTransform(btQuaternion::getIdentity(), from),
-                                        btTransform(btQuaternion::getIdentity(), to), a.object,
-                                        a.object->getCollisionShape(), a.object->getWorldTransform(), hit);
-        if (!hit.hasHit()) return;
-        const Vec3 end = to_vec3(hit.m_hitPointWorld) + gap * d;
-        own.emplace_back((end - x).norm(), end);
-      };
-      try_way(to_vec3(contacts(x, a.object).out));
-      const Eigen::Matrix3d axes = to_matrix3(a.object->getWorldTransform().getBasis());
-      for (int axis = 0; axis < 3; ++axis) {
-        try_way(axes.col(axis));
-        try_way(-axes.col(axis));
-      }
+    // A way out crosses one face plane, to `gap` beyond it.
+    for (std::size_t f = 0; f < a.normals.size(); ++f) {
+      const double below = a.offsets[f] - a.normals[f].dot(x);
+      own.emplace_back(below + gap, x + (below + gap) * a.normals[f]);
     }
     std::sort(own.begin(), own.end(), [](const auto& u, const auto& v) { return u.first < v.first; });
     trapped_points.push_back(k);
@@ -716,12 +704,12 @@ std::size_t BulletRigidBodies::release_trapped(Vec3Array& positions, Vec3Array& 
   std::size_t released = 0;
   for (std::size_t i = 0; i + 1 < first.size(); ++i) {
     const std::size_t k = trapped_points[i];
-    const Appeared& a = bodies[holder[k] - 1];
+    const Piece& a = bodies[holder[k] - 1];
     Vec3& x = positions[k];
     std::size_t free = first[i + 1];
     for (std::size_t w = first[i]; w < first[i + 1] && free == first[i + 1]; ++w) {
       const Vec3& end = ways[w].second;
-      if (!crossing[w] && has_room(end) && !(contacts(end, nullptr).distance < -radius) &&
+      if (!crossing[w] && has_room(end) && !in_a_piece(end) && !in_a_solid(end) &&
           !through_another(x, end, a.object))
         free = w;
     }

@@ -71,15 +71,14 @@ class BulletRigidBodies final : public RigidBodySource {
   /// the jump's speed. Call it between steps, after moving the object; one the water does not see is
   /// ignored.
   void teleported(const btCollisionObject& object);
-  /// A point lies inside a convex object when it is behind every face plane of the object's mesh (the faces
-  /// that hold the water; Bullet's own shape rounds a box's edges by its margin), inside a plane when below
-  /// it, inside another object when Bullet's contact query of a sphere of radius gap / 2 overlaps it by more
-  /// than its radius (a triangle mesh or a heightfield has no inside and holds none). The ways out tried
-  /// cross each face plane of a convex object, or follow another object's deepest contact normal and its
-  /// three axes both ways to where a ray from outside meets it; the same query on the whole world (the
-  /// water's collision filter) rejects an end inside a solid, its ray query a way through another object the
-  /// water sees (a ground of triangles has no inside to end in), and `crosses` a way through a cloth. Runs
-  /// on the calling thread, which must be the only one using the world.
+  /// A point lies inside a convex object, or a convex child of a compound, when it is behind every face plane
+  /// of its mesh (the faces that hold the water; Bullet's own shape rounds a box's edges by its margin), and
+  /// inside a plane when below it (a triangle mesh or a heightfield, or such a child, has no inside and holds
+  /// none). The ways out tried cross each face plane of the piece that holds the point; an end inside an
+  /// appeared piece, or inside a solid by Bullet's contact query of a sphere of radius gap / 2 (the water's
+  /// collision filter), is rejected, as are a way through another object the water sees by Bullet's ray
+  /// query (a ground of triangles has no inside to end in) and a way through a cloth by `crosses`. Runs on
+  /// the calling thread, which must be the only one using the world.
   std::size_t release_trapped(Vec3Array& positions, Vec3Array& velocities, double gap,
                               const CrossingTest& crosses, std::vector<std::uint8_t>& displaced) override;
 
