@@ -633,13 +633,15 @@ AfterAppearing step_after_appearing(CoupledWorld& coupled, int steps, double abo
 // into the water by a large crate, a 5 cm slab squeezed into one layer threw it at 174 m/s). Within 1 mm of a
 // face (and a ball's facets' depth) a particle may count either way.
 TEST(RigidBodies, ABodyAddedInsideWaterMovesTheWaterOutOfIt) {
-  enum class Shape { BOX, COMPOUND, SPHERE };
+  enum class Shape { BOX, COMPOUND, NESTED, SPHERE };
   struct Case {
     const char* name;
     double mass;  // kg; 0: static
     double half;  // of the cube's side, or the sphere's radius (unit: m)
     Vec3 centre;  // m
-    Shape shape;  // COMPOUND: the cube as the one child of a btCompoundShape
+    // COMPOUND: the cube as the one child of a btCompoundShape; NESTED: as a child of a compound, offset and
+    // turned, inside another compound, offset too
+    Shape shape;
   };
   // The large crates stand on the floor with an edge in the water: Bullet rounds a box's edges by its 4 cm
   // margin, and a query of Bullet's shape left the water in that rounding inside the crate's faces (as a
@@ -650,6 +652,7 @@ TEST(RigidBodies, ABodyAddedInsideWaterMovesTheWaterOutOfIt) {
                         Case{"large crate", 0.0, 0.4, Vec3(0.45, 0.4, 0.0), Shape::BOX},
                         Case{"compound", 0.0, 0.03, Vec3(0.0, 0.04, 0.0), Shape::COMPOUND},
                         Case{"large compound crate", 0.0, 0.4, Vec3(0.45, 0.4, 0.0), Shape::COMPOUND},
+                        Case{"nested compound", 0.0, 0.03, Vec3(0.0, 0.04, 0.0), Shape::NESTED},
                         Case{"ball", 0.0, 0.04, Vec3(0.0, 0.04, 0.0), Shape::SPHERE}}) {
     SCOPED_TRACE(c.name);
     const double half = c.half;
@@ -662,17 +665,30 @@ TEST(RigidBodies, ABodyAddedInsideWaterMovesTheWaterOutOfIt) {
     for (int n = 0; n < 30; ++n)
       ASSERT_TRUE(coupled.step().ok()) << n;
 
+    // Where the cube (or ball) lies in the body's frame.
+    btTransform cube_in_body = btTransform::getIdentity();
     btRigidBody& box = [&]() -> btRigidBody& {
       if (c.shape == Shape::BOX) return game.add_box(Vec3::Constant(half), c.mass, c.centre);
       if (c.shape == Shape::SPHERE) return game.add(std::make_unique<btSphereShape>(half), c.mass, c.centre);
       game.shapes.push_back(std::make_unique<btBoxShape>(to_bt(Vec3::Constant(half))));
+      btCollisionShape* cube = game.shapes.back().get();
       auto compound = std::make_unique<btCompoundShape>();
-      compound->addChildShape(btTransform::getIdentity(), game.shapes.back().get());
-      return game.add(std::move(compound), c.mass, c.centre);
+      if (c.shape == Shape::COMPOUND) {
+        compound->addChildShape(btTransform::getIdentity(), cube);
+        return game.add(std::move(compound), c.mass, c.centre);
+      }
+      const btTransform turned(btQuaternion(btVector3(0, 1, 0), 0.5), btVector3(0.05, 0.0, -0.02));
+      const btTransform shifted(btQuaternion::getIdentity(), btVector3(-0.03, 0.01, 0.0));
+      auto inner = std::make_unique<btCompoundShape>();
+      inner->addChildShape(turned, cube);
+      compound->addChildShape(shifted, inner.get());
+      game.shapes.push_back(std::move(inner));
+      cube_in_body = shifted * turned;
+      return game.add(std::move(compound), c.mass, c.centre - to_vec3(cube_in_body.getOrigin()));
     }();
     // How deep each particle lies inside the body (unit: m; negative outside).
     const auto depths = [&] {
-      const btTransform to_box = box.getWorldTransform().inverse();
+      const btTransform to_box = (box.getWorldTransform() * cube_in_body).inverse();
       std::vector<double> d;
       for (const Vec3& x : coupled.particles().positions) {
         const Vec3 local = to_vec3(to_box(to_bt(x)));
@@ -866,35 +882,48 @@ TEST(RigidBodies, WaterMovedOutOfAnAddedBodyStaysOnItsSideOfTheCloth) {
 
 // The same for a ground of triangles, which has no inside: a box added standing on it in a puddle took the
 // water by its bottom face out downwards, through the ground, to a place inside no solid under it. A way out
-// must not pass through another object the water sees.
+// must not pass through another object the water sees, nor through a concave child of the body's own
+// compound (a prefab's floor, the box added to it as a child).
 TEST(RigidBodies, WaterMovedOutOfAnAddedBodyStaysOnItsSideOfTheGround) {
-  const Vec3 gravity(0, -9.81, 0);
-  GameWorld game(gravity);
-  btTriangleMesh square;
-  square.addTriangle(btVector3(-0.3, 0, -0.3), btVector3(-0.3, 0, 0.3), btVector3(0.3, 0, 0.3));
-  square.addTriangle(btVector3(-0.3, 0, -0.3), btVector3(0.3, 0, 0.3), btVector3(0.3, 0, -0.3));
-  game.add(std::make_unique<btBvhTriangleMeshShape>(&square, true), 0.0, Vec3::Zero());
-  SceneConfig scene = water_scene(0.01, gravity);
-  scene.time.dt = 1.0 / 240.0;
-  scene.emitters.push_back(water_block(Vec3(-0.1, 0.0, -0.1), Vec3(0.1, 0.08, 0.1)));
-  CoupledWorld coupled(game.world, *game.cloth, scene);
-  for (int n = 0; n < 30; ++n)
-    ASSERT_TRUE(coupled.step().ok()) << n;
-  const std::size_t particles = coupled.particles().size();
-  game.add_box(Vec3::Constant(0.03), 0.0, Vec3(0.0, 0.03, 0.0));
-  const auto under_the_ground = [&](int n) {
-    const Vec3Array& x = coupled.particles().positions;
-    for (std::size_t i = 0; i < x.size(); ++i) {
-      // Over the ground; the water that runs off its edges falls past it.
-      EXPECT_FALSE(std::abs(x[i].x()) < 0.29 && std::abs(x[i].z()) < 0.29 && x[i].y() < -0.001)
-          << "particle " << i << " under the ground after step " << n;
+  for (const bool same_compound : {false, true}) {
+    SCOPED_TRACE(same_compound ? "the box a child of the ground's compound" : "the box a body of its own");
+    const Vec3 gravity(0, -9.81, 0);
+    GameWorld game(gravity);
+    btTriangleMesh square;
+    square.addTriangle(btVector3(-0.3, 0, -0.3), btVector3(-0.3, 0, 0.3), btVector3(0.3, 0, 0.3));
+    square.addTriangle(btVector3(-0.3, 0, -0.3), btVector3(0.3, 0, 0.3), btVector3(0.3, 0, -0.3));
+    btBvhTriangleMeshShape ground(&square, true);
+    btBoxShape cube(btVector3(0.03, 0.03, 0.03));
+    auto owned = std::make_unique<btCompoundShape>();
+    btCompoundShape& prefab = *owned;
+    prefab.addChildShape(btTransform::getIdentity(), &ground);
+    game.add(std::move(owned), 0.0, Vec3::Zero());
+    SceneConfig scene = water_scene(0.01, gravity);
+    scene.time.dt = 1.0 / 240.0;
+    scene.emitters.push_back(water_block(Vec3(-0.1, 0.0, -0.1), Vec3(0.1, 0.08, 0.1)));
+    CoupledWorld coupled(game.world, *game.cloth, scene);
+    for (int n = 0; n < 30; ++n)
+      ASSERT_TRUE(coupled.step().ok()) << n;
+    const std::size_t particles = coupled.particles().size();
+    if (same_compound) {
+      prefab.addChildShape(btTransform(btQuaternion::getIdentity(), btVector3(0, 0.03, 0)), &cube);
+    } else {
+      game.add_box(Vec3::Constant(0.03), 0.0, Vec3(0.0, 0.03, 0.0));
     }
-  };
-  const AfterAppearing r = step_after_appearing(coupled, 30, 0.1, under_the_ground);
-  EXPECT_GT(r.released, 0u) << "the water by the side faces has room outside";
-  EXPECT_GT(r.released + r.displaced, 100u) << "the box's place was full of water";
-  EXPECT_EQ(r.leaks, 0u);
-  EXPECT_EQ(coupled.particles().size() + r.displaced + r.squeezed_out, particles);
+    const auto under_the_ground = [&](int n) {
+      const Vec3Array& x = coupled.particles().positions;
+      for (std::size_t i = 0; i < x.size(); ++i) {
+        // Over the ground; the water that runs off its edges falls past it.
+        EXPECT_FALSE(std::abs(x[i].x()) < 0.29 && std::abs(x[i].z()) < 0.29 && x[i].y() < -0.001)
+            << "particle " << i << " under the ground after step " << n;
+      }
+    };
+    const AfterAppearing r = step_after_appearing(coupled, 30, 0.1, under_the_ground);
+    EXPECT_GT(r.released, 0u) << "the water by the side faces has room outside";
+    EXPECT_GT(r.released + r.displaced, 100u) << "the box's place was full of water";
+    EXPECT_EQ(r.leaks, 0u);
+    EXPECT_EQ(coupled.particles().size() + r.displaced + r.squeezed_out, particles);
+  }
 }
 
 // A body the game throws through the water throws water past fluid.max_speed: the fluid checks the speed
@@ -1044,6 +1073,34 @@ TEST(RigidBodies, TriggersWithoutContactResponseLetTheWaterPass) {
     }
     EXPECT_GT(under_sensor, 100u) << "the water fell through the sensor";
     EXPECT_GT(under_trigger, 100u) << "the water fell through the trigger body";
+  }
+  game.world.removeCollisionObject(&sensor);
+}
+
+// A body added in water that lies in a trigger volume (a room's sensor): the ways out of it end inside the
+// trigger, and only a query that takes the trigger for a solid refuses them.
+TEST(RigidBodies, WaterMovesOutOfAnAddedBodyInsideATrigger) {
+  const Vec3 gravity(0, -9.81, 0);
+  GameWorld game(gravity);
+  const SceneConfig scene = water_on_a_floor(game, gravity);
+  btBoxShape room(btVector3(0.5, 0.5, 0.5));
+  btGhostObject sensor;
+  sensor.setCollisionShape(&room);
+  sensor.setWorldTransform(btTransform::getIdentity());
+  sensor.setCollisionFlags(sensor.getCollisionFlags() | btCollisionObject::CF_NO_CONTACT_RESPONSE);
+  game.world.addCollisionObject(&sensor, btBroadphaseProxy::SensorTrigger,
+                                btBroadphaseProxy::AllFilter & ~btBroadphaseProxy::SensorTrigger);
+  {
+    CoupledWorld coupled(game.world, *game.cloth, scene);
+    for (int n = 0; n < 30; ++n)
+      ASSERT_TRUE(coupled.step().ok()) << n;
+    const double half = 0.03;
+    const btRigidBody& box = game.add_box(Vec3::Constant(half), 0.0, Vec3(0.0, 0.04, 0.0));
+    const AfterAppearing r = step_after_appearing(coupled, 10, 0.1, [&](int n) {
+      EXPECT_EQ(particles_inside(coupled, box, Vec3::Constant(half), 0.001), 0u) << "after step " << n;
+    });
+    EXPECT_GT(r.released, 10u) << "the trigger is no solid to end in";
+    EXPECT_EQ(r.leaks, 0u);
   }
   game.world.removeCollisionObject(&sensor);
 }

@@ -82,33 +82,28 @@ bool water_sees(const btCollisionObject& object, const btBroadphaseProxy& proxy,
          (options.water_group & proxy.m_collisionFilterMask) != 0;
 }
 
-/// Bullet's contact query of a small sphere, the probe, against objects other than soft bodies: the first
-/// object found that overlaps it by more than `limit` (a negative distance), and the deepest contact with the
-/// way that moves the probe out of it, whichever of the pair Bullet's algorithm took first (the normal on B
-/// points from B towards A). solid_holding and release_trapped ask it.
+/// Bullet's contact query of a small sphere, the probe, against the objects the water sees other than soft
+/// bodies: the first object found that overlaps it by more than `limit` (a negative distance), and the depth
+/// of the deepest contact. solid_holding and release_trapped ask it.
 struct ProbeContacts : btCollisionWorld::ContactResultCallback {
-  /// The water's filter, or null for a query of one object (contactPairTest, which asks no filter).
-  const RigidBodyOptions* water = nullptr;
+  ProbeContacts(const btCollisionObject& sphere, const RigidBodyOptions& options)
+      : probe(&sphere), water(&options) {}
   bool needsCollision(btBroadphaseProxy* proxy) const override {
-    if (water == nullptr) return ContactResultCallback::needsCollision(proxy);
     const auto* object = static_cast<const btCollisionObject*>(proxy->m_clientObject);
     return object != probe && water_sees(*object, *proxy, *water);
   }
-  const btCollisionObject* probe = nullptr;
+  const btCollisionObject* probe;
+  const RigidBodyOptions* water;
   btScalar limit = 0;
   const btCollisionObject* holder = nullptr;
   btScalar distance = 0;
-  btVector3 out{0, 0, 0};
   btScalar addSingleResult(btManifoldPoint& contact, const btCollisionObjectWrapper* a, int, int,
                            const btCollisionObjectWrapper* b, int, int) override {
     const bool probe_is_a = a->getCollisionObject() == probe;
     const btCollisionObject* other = probe_is_a ? b->getCollisionObject() : a->getCollisionObject();
     if (other->getInternalType() == btCollisionObject::CO_SOFT_BODY) return 0;
     if (holder == nullptr && contact.getDistance() < limit) holder = other;
-    if (contact.getDistance() < distance) {
-      distance = contact.getDistance();
-      out = probe_is_a ? contact.m_normalWorldOnB : -contact.m_normalWorldOnB;
-    }
+    distance = std::min(distance, contact.getDistance());
     return 0;
   }
 };
@@ -520,18 +515,27 @@ std::size_t BulletRigidBodies::release_trapped(Vec3Array& positions, Vec3Array& 
   // Whether x lies inside a solid the water sees: the probe's contacts with the whole world.
   const auto in_a_solid = [&](const Vec3& x) {
     probe.setWorldTransform(btTransform(btQuaternion::getIdentity(), to_bt(x)));
-    ProbeContacts c;
-    c.probe = &probe;
-    c.water = &m_options;
+    ProbeContacts c(probe, m_options);
     m_world.contactTest(&probe, c);
     return c.distance < -radius;
   };
+  // The queries below find objects by their broad-phase boxes, which Bullet updates in its step: a body the
+  // game moved or teleported since would be looked for where it was.
+  m_world.updateAabbs();
 
   // The appeared objects' convex pieces, each the meet of its face planes: a convex shape, a plane (the half
   // space away from the water), or each convex child of a compound, nested ones too. The planes are those of
   // the faces that hold the water, where Bullet's own shapes round a box's edges by its margin and would
   // leave the water there inside (the large crate and the large compound crate of
   // RigidBodies.ABodyAddedInsideWaterMovesTheWaterOutOfIt). A concave child (a triangle mesh) has no inside.
+  // The concave children of the appeared compounds (a floor of triangles in a prefab): no inside, but a way
+  // out through one would end under it, and the ray query below leaves out the appeared object whole.
+  struct Wall {
+    btCollisionObject* object;
+    const btCollisionShape* shape;
+    btTransform at;
+  };
+  std::vector<Wall> walls;
   struct Piece {
     btCollisionObject* object;
     Vec3 low, high;
@@ -574,6 +578,8 @@ std::size_t BulletRigidBodies::release_trapped(Vec3Array& positions, Vec3Array& 
             add_children(object, static_cast<const btCompoundShape&>(child), child_at);
           } else if (child.isConvex()) {
             add_convex(object, shape_mesh(child, m_options.mesh), child_at);
+          } else {
+            walls.push_back({object, &child, child_at});
           }
         }
       };
@@ -669,8 +675,14 @@ std::size_t BulletRigidBodies::release_trapped(Vec3Array& positions, Vec3Array& 
     std::sort(own.begin(), own.end(), [](const auto& u, const auto& v) { return u.first < v.first; });
     trapped_points.push_back(k);
     first.push_back(ways.size());
+    // The few shortest distinct ways: a box's face is two triangles in one plane, and a ball's facets near
+    // a point are hundreds of planes whose ways end within a few spacings of each other.
+    constexpr std::size_t kMostWays = 8;
+    const std::size_t from = ways.size();
     for (const auto& way : own) {
-      if (way.first <= kMaxWay * gap) ways.push_back(way);
+      if (!(way.first <= kMaxWay * gap) || ways.size() - from == kMostWays) break;
+      if (ways.size() > from && (ways.back().second - way.second).squaredNorm() <= 1e-24) continue;
+      ways.push_back(way);
     }
   }
   first.push_back(ways.size());
@@ -695,7 +707,16 @@ std::size_t BulletRigidBodies::release_trapped(Vec3Array& positions, Vec3Array& 
     hit.body = body;
     hit.water = &m_options;
     m_world.rayTest(to_bt(from), to_bt(to), hit);
-    return hit.hasHit();
+    if (hit.hasHit()) return true;
+    const btTransform start(btQuaternion::getIdentity(), to_bt(from)),
+        end(btQuaternion::getIdentity(), to_bt(to));
+    for (const Wall& w : walls) {
+      if (w.object != body) continue;
+      btCollisionWorld::ClosestRayResultCallback own_wall(to_bt(from), to_bt(to));
+      btCollisionWorld::rayTestSingle(start, end, w.object, w.shape, w.at, own_wall);
+      if (own_wall.hasHit()) return true;
+    }
+    return false;
   };
 
   // The shortest way that ends with room and in no solid (a crate standing on the ground would otherwise
@@ -735,12 +756,10 @@ std::string BulletRigidBodies::solid_holding(const Vec3& point, double depth) co
   btCollisionObject probe;
   probe.setCollisionShape(&sphere);
   probe.setWorldTransform(btTransform(btQuaternion::getIdentity(), to_bt(point)));
-  ProbeContacts result;
-  result.probe = &probe;
+  ProbeContacts result(probe, m_options);
   // A sphere whose centre lies outside overlaps a face by less than its radius; one whose centre lies
   // deeper than `depth`, by more than depth + radius.
   result.limit = static_cast<btScalar>(-(depth + radius));
-  result.water = &m_options;
   m_world.contactTest(&probe, result);
   if (result.holder == nullptr) return "";
   const btCollisionObjectArray& objects = m_world.getCollisionObjectArray();

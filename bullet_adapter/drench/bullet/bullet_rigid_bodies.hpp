@@ -33,8 +33,8 @@ struct RigidBodyOptions {
   /// The water's collision filter group and mask, as a btCollisionObject's: an object holds the water when
   /// (its group & water_mask) and (water_group & its mask) are both non-zero, as Bullet decides for two
   /// objects, and it has a contact response (a trigger with CF_NO_CONTACT_RESPONSE lets the water pass, as
-  /// Bullet's solver lets bodies pass it). The defaults (btBroadphaseProxy::DefaultFilter, AllFilter) see
-  /// every other object Bullet's defaults make.
+  /// Bullet's solver lets rigid bodies pass it; Bullet's cloth still rests on it). The defaults
+  /// (btBroadphaseProxy::DefaultFilter, AllFilter) see every other object Bullet's defaults make.
   int water_group = 1;
   int water_mask = -1;
 };
