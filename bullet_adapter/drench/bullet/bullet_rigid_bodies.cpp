@@ -519,9 +519,6 @@ std::size_t BulletRigidBodies::release_trapped(Vec3Array& positions, Vec3Array& 
     m_world.contactTest(&probe, c);
     return c.distance < -radius;
   };
-  // The queries below find objects by their broad-phase boxes, which Bullet updates in its step: a body the
-  // game moved or teleported since would be looked for where it was.
-  m_world.updateAabbs();
 
   // The appeared objects' convex pieces, each the meet of its face planes: a convex shape, a plane (the half
   // space away from the water), or each convex child of a compound, nested ones too. The planes are those of
@@ -619,6 +616,10 @@ std::size_t BulletRigidBodies::release_trapped(Vec3Array& positions, Vec3Array& 
     }
   }
   if (trapped == 0) return 0;
+  // The queries below find objects by their broad-phase boxes, which Bullet updates in its step: a body the
+  // game moved or teleported since would be looked for where it was. Only with water to move: a plane's new
+  // cover appears often, and Bullet's step would otherwise see its broad phase as it left it.
+  m_world.updateAabbs();
 
   // The points outside every appeared body, hashed in cells of 2 room (a key may stand for several far
   // apart: only the distance decides); `room` (unit: m) is the least distance a way out must end from any
