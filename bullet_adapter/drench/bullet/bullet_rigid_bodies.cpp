@@ -28,6 +28,7 @@ struct BulletRigidBodies::Tracked {
   std::uint64_t signature = 0;  // shape_signature: a compound's children the game changes re-mesh it
   bool supported = false;
   TriangleMesh local;      // the shape's surface in the object's frame
+  double volume = 0.0;     // inside `local` (unit: m^3; 0 for a surface without an inside)
   bool has_end = false;    // `end` and `world_end` hold the end of the last step the object took part in
   btTransform end;         // the object's transform then
   Vec3Array world_end;     // `local` placed by `end` (unit: m)
@@ -224,6 +225,15 @@ BulletRigidBodies::Tracked* BulletRigidBodies::track(const btCollisionObject& ob
   try {
     t.local = shape_mesh(*shape, m_options.mesh);
     problem = mesh_problem(*shape, t.local);
+    // By the divergence theorem over the closed mesh of a convex shape or a compound of them.
+    t.volume = 0.0;
+    if (!shape->isConcave()) {
+      for (const Triangle& f : t.local.triangles) {
+        const Vec3Array& x = t.local.positions;
+        t.volume += x[f[0]].dot(x[f[1]].cross(x[f[2]])) / 6.0;
+      }
+      t.volume = std::abs(t.volume);
+    }
   } catch (const SceneError& e) {
     // A shape out of range (a scaling of 0, a sphere of 1e9 m) was reported without the object, and after
     // a caught throw the object's old mesh went on holding the water.
@@ -496,6 +506,56 @@ void BulletRigidBodies::apply_impulses(std::size_t index, const RigidSurface& su
   // A body Bullet put to sleep would ignore the water that now lifts or pushes it.
   body->activate(true);
   m_impulse_given += to_vec3(impulse);
+}
+
+namespace {
+
+/// The speed of the fastest point of `body` (unit: m/s): its centre's and its spin about it times the radius
+/// of its shape's bounding sphere.
+double point_speed(const btRigidBody& body) {
+  btVector3 centre;
+  btScalar radius = 0;
+  body.getCollisionShape()->getBoundingSphere(centre, radius);
+  return static_cast<double>(body.getLinearVelocity().length() +
+                             body.getAngularVelocity().length() * (radius + centre.length()));
+}
+
+}  // namespace
+
+void BulletRigidBodies::note_speeds() {
+  m_start_speeds.clear();
+  const btCollisionObjectArray& objects = m_world.getCollisionObjectArray();
+  for (int i = 0; i < objects.size(); ++i) {
+    const btRigidBody* body = btRigidBody::upcast(objects[i]);
+    if (body != nullptr && body->getInvMass() > 0 && sees(*body)) m_start_speeds[body] = point_speed(*body);
+  }
+}
+
+std::string BulletRigidBodies::thrown_body(double water_speed, double rest_density, const Vec3& gravity,
+                                           double dt) const {
+  const btCollisionObjectArray& objects = m_world.getCollisionObjectArray();
+  for (int i = 0; i < objects.size(); ++i) {
+    const btRigidBody* body = btRigidBody::upcast(objects[i]);
+    const auto start = body != nullptr ? m_start_speeds.find(body) : m_start_speeds.end();
+    if (start == m_start_speeds.end() || !sees(*body)) continue;
+    // Water drags a body towards its own speed and lifts it by buoyancy, at most (rest density / body's)
+    // g; its weight adds g. Twice the larger speed and a metre a second more leave room for the water's
+    // pressure and Bullet's contacts; a light plank thrown from 1 to 25 m/s in one step is far beyond
+    // (RigidBodies.AWaterLaunchedBodyEndsTheStepThatThrewIt).
+    const auto t = m_tracked.find(body);
+    const double volume = t != m_tracked.end() ? t->second->volume : 0.0;
+    const double density = volume > 0.0 ? 1.0 / (static_cast<double>(body->getInvMass()) * volume) : 0.0;
+    const double lift = density > 0.0 ? rest_density / density : 1.0;
+    const double bound =
+        2.0 * std::max(start->second, water_speed) + (1.0 + lift) * gravity.norm() * dt + 1.0;
+    const double now = point_speed(*body);
+    if (!(now <= bound)) {
+      return describe(*body, i) + " moves at " + format_number(now) + " m/s after the step, from " +
+             format_number(start->second) + " m/s, where the water (at most " + format_number(water_speed) +
+             " m/s) could take it to " + format_number(bound) + " m/s";
+    }
+  }
+  return "";
 }
 
 void BulletRigidBodies::teleported(const btCollisionObject& object) {

@@ -82,6 +82,20 @@ class BulletRigidBodies final : public RigidBodySource {
   std::size_t release_trapped(Vec3Array& positions, Vec3Array& velocities, double gap,
                               const CrossingTest& crosses, std::vector<std::uint8_t>& displaced) override;
 
+  /// Notes the speed of every dynamic body the water sees, before a coupled step: what thrown_body compares
+  /// with. CoupledWorld::step calls it.
+  void note_speeds();
+  /// The first dynamic body the water sees that moves faster after the step than water can take it from its
+  /// speed before the step (note_speeds), named with its speeds, or "": a blow-up of the body's coupling
+  /// (a light or thin body the water's impulses threw at tens of m/s) that no particle's or node's speed
+  /// limit sees. The bound: twice the larger of its speed before and the water's fastest particle, plus its
+  /// weight's and its buoyancy's gain over the step (g dt (1 + rest_density / the body's density, from its
+  /// mesh's volume)), plus 1 m/s. Speeds are of the body's fastest point (centre and spin).
+  /// @param water_speed  the fastest particle over the step (unit: m/s)
+  /// @param rest_density  the water's (unit: kg/m^3)
+  /// @param gravity  (unit: m/s^2)
+  /// @param dt  the step (unit: s)
+  std::string thrown_body(double water_speed, double rest_density, const Vec3& gravity, double dt) const;
   /// The linear impulse the water gave the dynamic bodies, summed over all steps (unit: N s): with the
   /// fluid's momentum, what a test of momentum conservation adds up.
   const Vec3& impulse_given() const { return m_impulse_given; }
@@ -118,6 +132,7 @@ class BulletRigidBodies final : public RigidBodySource {
   std::vector<const Vec3Array*> m_points;  // expect_points' arrays, until the next begin_step
   double m_reach = 0;
   Vec3 m_impulse_given = Vec3::Zero();
+  std::unordered_map<const btCollisionObject*, double> m_start_speeds;  // note_speeds (unit: m/s)
   std::uint64_t m_step = 0;
   std::uint64_t m_instances = 0;  // bodies tracked so far: each new one's RigidSurface::instance
 };

@@ -350,9 +350,20 @@ CoupledStepReport CoupledWorld::step(double dt) {
   const double cloth_before = sim.cloth_seconds();
   const double rigid_before = sim.rigid_seconds();
   const double coupling_before_s = sim.coupling_seconds() + leaks_before.seconds;
+  // The water's fastest particle and the bodies' speeds before the step: what the water can throw a body to.
+  double water_speed = 0.0;
+  if (m_rigid) {
+    m_rigid->note_speeds();
+    water_speed = sim.fluid().max_speed();
+  }
   {
     ScopedTimer total(report.seconds.total);
     report.fluid = sim.step(dt);
+  }
+  if (m_rigid) {
+    water_speed = std::max(water_speed, static_cast<double>(sim.fluid().max_speed()));
+    report.thrown_body =
+        m_rigid->thrown_body(water_speed, sim.config().fluid.rest_density, sim.config().gravity, dt);
   }
   if (m_world_steps) m_world_steps->stepped();
   report.non_finite_node = sim.non_finite_cloth_node();

@@ -36,6 +36,7 @@
 #include <algorithm>
 #include <cstdint>
 #include <memory>
+#include <string>
 #include <vector>
 
 #include <drench/bullet/bullet_cloth.hpp>
@@ -105,9 +106,14 @@ struct CoupledStepReport {
     double emit = 0, fluid = 0, cloth = 0, rigid = 0, coupling = 0, total = 0;
   } seconds;
 
+  /// A dynamic body the step threw faster than water can (BulletRigidBodies::thrown_body: named, with its
+  /// speeds), or empty.
+  std::string thrown_body;
+
   /// False when the fluid or the cloth became non-finite or blew up (a particle or node over its speed
-  /// limit, an edge over its strain limit): the state is no longer worth stepping.
-  bool ok() const { return fluid.ok() && non_finite_node < 0; }
+  /// limit, an edge over its strain limit), or the water threw a body (thrown_body): the state is no longer
+  /// worth stepping.
+  bool ok() const { return fluid.ok() && non_finite_node < 0 && thrown_body.empty(); }
   /// True when the step cannot be trusted: !ok(), or a particle LEAKED through the cloth.
   bool failed() const { return !ok() || fluid.failed(); }
 };
