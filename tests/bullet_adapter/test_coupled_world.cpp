@@ -400,6 +400,13 @@ TEST(CoupledWorldFrames, AHitchIsTakenInFixedStepsAndTheRestDropped) {
   EXPECT_TRUE(r.failed());
   EXPECT_NEAR(r.dropped_seconds, 3 * dt, 1e-12);
   EXPECT_EQ(user.steps, 21);
+
+  // The largest frame there is takes its step and drops a finite time.
+  r = coupled.step_frame(std::numeric_limits<double>::max(), 1);
+  EXPECT_EQ(r.steps.size(), 1u);
+  EXPECT_TRUE(std::isfinite(r.dropped_seconds)) << r.dropped_seconds;
+  EXPECT_GE(r.carried_seconds, 0.0);
+  EXPECT_LT(r.carried_seconds, dt);
 }
 
 TEST(CoupledWorld, BadSceneTimeStepIsRefused) {

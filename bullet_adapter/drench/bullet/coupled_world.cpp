@@ -401,10 +401,11 @@ CoupledFrameReport CoupledWorld::step_frame(double frame_seconds, int max_steps)
   const double whole = std::floor(owed / dt + 1e-9);
   const double taken = std::min(whole, static_cast<double>(max_steps));
   CoupledFrameReport report;
-  report.dropped_seconds = (whole - taken) * dt;
   // In [0, dt) whatever the rounding of a huge frame's owed - whole * dt.
   double carried = std::max(0.0, owed - whole * dt);
   if (!(carried < dt)) carried = 0.0;
+  // From the owed time rather than the whole steps, which overflow to infinity for a frame near DBL_MAX.
+  report.dropped_seconds = std::max(0.0, owed - taken * dt - carried);
   for (int n = 0; n < static_cast<int>(taken); ++n) {
     try {
       report.steps.push_back(step(dt));
