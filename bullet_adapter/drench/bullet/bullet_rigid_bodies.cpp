@@ -75,7 +75,7 @@ RigidMotion motion_of(const btCollisionObject& object) {
 
 /// Whether the water sees `object`, whose broad-phase proxy is `proxy`: Bullet's collision filter between the
 /// water's group and mask and the object's, and the object's contact response. Bullet's solver lets every
-/// body pass an object with CF_NO_CONTACT_RESPONSE (a trigger, a sensor ghost), and so does the water
+/// rigid body pass an object with CF_NO_CONTACT_RESPONSE (a trigger, a sensor ghost), and so does the water
 /// (RigidBodies.TriggersWithoutContactResponseLetTheWaterPass).
 bool water_sees(const btCollisionObject& object, const btBroadphaseProxy& proxy,
                 const RigidBodyOptions& options) {
@@ -540,7 +540,7 @@ std::string BulletRigidBodies::thrown_body(double water_speed, double rest_densi
     if (start == m_start_speeds.end() || !sees(*body)) continue;
     // Water drags a body towards its own speed and lifts it by buoyancy, at most (rest density / body's)
     // g; its weight adds g. Twice the larger speed and a metre a second more leave room for the water's
-    // pressure and Bullet's contacts; a light plank thrown from 1 to 25 m/s in one step is far beyond
+    // pressure and Bullet's contacts; a light plank the water threw up at 18 m/s is far beyond
     // (RigidBodies.AWaterLaunchedBodyEndsTheStepThatThrewIt).
     const auto t = m_tracked.find(body);
     const double volume = t != m_tracked.end() ? t->second->volume : 0.0;
@@ -781,8 +781,9 @@ std::size_t BulletRigidBodies::release_trapped(Vec3Array& positions, Vec3Array& 
   };
 
   // The shortest way that ends with room and in no solid (a crate standing on the ground would otherwise
-  // put its water into the ground), crosses no cloth (RigidBodies.WaterMovedOutOfAnAddedBodyStaysOnItsSide
-  // OfTheCloth) and passes through no other object; with none, the body displaces the point.
+  // put its water into the ground), crosses no cloth (a box dropped into water pooled on a hammock:
+  // RigidBodies.WaterMovedOutOfAnAddedBodyStaysOnItsSideOfTheCloth) and passes through no other object; with
+  // none, the body displaces the point.
   std::size_t released = 0;
   for (std::size_t i = 0; i + 1 < first.size(); ++i) {
     const std::size_t k = trapped_points[i];
