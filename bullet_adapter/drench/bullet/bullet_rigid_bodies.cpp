@@ -489,6 +489,24 @@ void BulletRigidBodies::end_positions(std::vector<RigidSurface>& surfaces) {
   }
 }
 
+namespace {
+
+/// The radius about the centre of mass within which `body`'s shape lies (unit: m): its bounding sphere's.
+double reach(const btRigidBody& body) {
+  btVector3 centre;
+  btScalar radius = 0;
+  body.getCollisionShape()->getBoundingSphere(centre, radius);
+  return static_cast<double>(radius + centre.length());
+}
+
+/// The speed of the fastest point of `body` (unit: m/s): its centre's, and its spin times its reach.
+double point_speed(const btRigidBody& body) {
+  return static_cast<double>(body.getLinearVelocity().length()) +
+         static_cast<double>(body.getAngularVelocity().length()) * reach(body);
+}
+
+}  // namespace
+
 void BulletRigidBodies::apply_impulses(std::size_t index, const RigidSurface& surface,
                                        const Vec3* node_impulses) {
   auto* object = reinterpret_cast<btCollisionObject*>(static_cast<std::uintptr_t>(surface.key));
@@ -501,29 +519,24 @@ void BulletRigidBodies::apply_impulses(std::size_t index, const RigidSurface& su
     angular += (surface.positions_t1[k] - centre).cross(node_impulses[k]);
   }
   const btVector3 impulse = to_bt(linear);
+  // What the water gives the body this step, apart from what Bullet's own step gives it, and the body's
+  // fastest speed without it as the water meets it (thrown_body).
+  Kick& kick = m_kicks[body];
+  const Vec3 own_linear = to_vec3(body->getLinearVelocity()) - kick.linear;
+  const Vec3 own_angular = to_vec3(body->getAngularVelocity()) - kick.angular;
+  kick.met = std::max(kick.met, own_linear.norm() + own_angular.norm() * reach(*body));
   body->applyCentralImpulse(impulse);
   body->applyTorqueImpulse(to_bt(angular));
+  kick.linear += to_vec3(impulse * body->getLinearFactor() * body->getInvMass());
+  kick.angular += to_vec3(body->getInvInertiaTensorWorld() * (to_bt(angular) * body->getAngularFactor()));
   // A body Bullet put to sleep would ignore the water that now lifts or pushes it.
   body->activate(true);
   m_impulse_given += to_vec3(impulse);
 }
 
-namespace {
-
-/// The speed of the fastest point of `body` (unit: m/s): its centre's and its spin about it times the radius
-/// of its shape's bounding sphere.
-double point_speed(const btRigidBody& body) {
-  btVector3 centre;
-  btScalar radius = 0;
-  body.getCollisionShape()->getBoundingSphere(centre, radius);
-  return static_cast<double>(body.getLinearVelocity().length() +
-                             body.getAngularVelocity().length() * (radius + centre.length()));
-}
-
-}  // namespace
-
 void BulletRigidBodies::note_speeds() {
   m_start_speeds.clear();
+  m_kicks.clear();
   const btCollisionObjectArray& objects = m_world.getCollisionObjectArray();
   for (int i = 0; i < objects.size(); ++i) {
     const btRigidBody* body = btRigidBody::upcast(objects[i]);
@@ -537,22 +550,24 @@ std::string BulletRigidBodies::thrown_body(double water_speed, double rest_densi
   for (int i = 0; i < objects.size(); ++i) {
     const btRigidBody* body = btRigidBody::upcast(objects[i]);
     const auto start = body != nullptr ? m_start_speeds.find(body) : m_start_speeds.end();
-    if (start == m_start_speeds.end() || !sees(*body)) continue;
+    const auto kick = body != nullptr ? m_kicks.find(body) : m_kicks.end();
+    if (start == m_start_speeds.end() || kick == m_kicks.end() || !sees(*body)) continue;
     // Water drags a body towards its own speed and lifts it by buoyancy, at most (rest density / body's)
-    // g; its weight adds g. Twice the larger speed and a metre a second more leave room for the water's
-    // pressure and Bullet's contacts; a light plank the water threw up at 18 m/s is far beyond
-    // (RigidBodies.AWaterLaunchedBodyEndsTheStepThatThrewIt).
+    // g, and holds its weight, g. Twice the larger speed and a metre a second more leave room for the
+    // water's pressure; a light plank the water threw up at 18 m/s is far beyond
+    // (RigidBodies.AWaterLaunchedBodyEndsTheStepThatThrewIt). Only the water's own impulses count: Bullet's
+    // contacts, constraints and the game's forces are the game's (a rocket in the water).
     const auto t = m_tracked.find(body);
     const double volume = t != m_tracked.end() ? t->second->volume : 0.0;
     const double density = volume > 0.0 ? 1.0 / (static_cast<double>(body->getInvMass()) * volume) : 0.0;
     const double lift = density > 0.0 ? rest_density / density : 1.0;
-    const double bound =
-        2.0 * std::max(start->second, water_speed) + (1.0 + lift) * gravity.norm() * dt + 1.0;
-    const double now = point_speed(*body);
-    if (!(now <= bound)) {
-      return describe(*body, i) + " moves at " + format_number(now) + " m/s after the step, from " +
-             format_number(start->second) + " m/s, where the water (at most " + format_number(water_speed) +
-             " m/s) could take it to " + format_number(bound) + " m/s";
+    const double body_speed = std::max(start->second, kick->second.met);
+    const double bound = 2.0 * std::max(body_speed, water_speed) + (1.0 + lift) * gravity.norm() * dt + 1.0;
+    const double given = kick->second.linear.norm() + kick->second.angular.norm() * reach(*body);
+    if (!(given <= bound)) {
+      return describe(*body, i) + " was given " + format_number(given) +
+             " m/s by the water in the step, at " + format_number(body_speed) + " m/s, where water at most " +
+             format_number(water_speed) + " m/s fast could give it " + format_number(bound) + " m/s";
     }
   }
   return "";

@@ -85,12 +85,14 @@ class BulletRigidBodies final : public RigidBodySource {
   /// Notes the speed of every dynamic body the water sees, before a coupled step: what thrown_body compares
   /// with. CoupledWorld::step calls it.
   void note_speeds();
-  /// The first dynamic body the water sees that moves faster after the step than water can take it from its
-  /// speed before the step (note_speeds), named with its speeds, or "": a blow-up of the body's coupling
-  /// (a light or thin body the water's impulses threw at tens of m/s) that no particle's or node's speed
-  /// limit sees. The bound: twice the larger of its speed before and the water's fastest particle, plus its
-  /// weight's and its buoyancy's gain over the step (g dt (1 + rest_density / the body's density, from its
-  /// mesh's volume)), plus 1 m/s. Speeds are of the body's fastest point (centre and spin).
+  /// The first dynamic body the water sees to which the water's impulses of the step (apply_impulses) gave
+  /// more speed than water can, named with its speeds, or "": a blow-up of the body's coupling (a light or
+  /// thin body thrown at tens of m/s) that no particle's or node's speed limit sees. The bound: twice the
+  /// largest of the body's speed before the step (note_speeds) or as the water met it and the water's
+  /// fastest particle (water can at most bring a body to its own speed), plus its
+  /// weight's and its buoyancy's share over the step (g dt (1 + rest_density / the body's density, from its
+  /// mesh's volume)), plus 1 m/s. Speeds are of the body's fastest point (centre and spin). What Bullet's own
+  /// step gives a body (contacts, constraints, the game's forces) does not count.
   /// @param water_speed  the fastest particle over the step (unit: m/s)
   /// @param rest_density  the water's (unit: kg/m^3)
   /// @param gravity  (unit: m/s^2)
@@ -133,6 +135,13 @@ class BulletRigidBodies final : public RigidBodySource {
   double m_reach = 0;
   Vec3 m_impulse_given = Vec3::Zero();
   std::unordered_map<const btCollisionObject*, double> m_start_speeds;  // note_speeds (unit: m/s)
+  /// The velocity changes the water's impulses gave a body since note_speeds (unit: m/s, rad/s).
+  struct Kick {
+    Vec3 linear = Vec3::Zero();
+    Vec3 angular = Vec3::Zero();
+    double met = 0.0;  // the body's fastest point speed without them, as the water met it (unit: m/s)
+  };
+  std::unordered_map<const btCollisionObject*, Kick> m_kicks;
   std::uint64_t m_step = 0;
   std::uint64_t m_instances = 0;  // bodies tracked so far: each new one's RigidSurface::instance
 };
