@@ -521,26 +521,28 @@ void BulletRigidBodies::apply_impulses(std::size_t index, const RigidSurface& su
   const btVector3 impulse = to_bt(linear);
   // What the water gives the body this step, apart from what Bullet's own step gives it, and the body's
   // fastest speed without it as the water meets it (thrown_body).
-  Kick& kick = m_kicks[body];
-  const Vec3 own_linear = to_vec3(body->getLinearVelocity()) - kick.linear;
-  const Vec3 own_angular = to_vec3(body->getAngularVelocity()) - kick.angular;
-  kick.met = std::max(kick.met, own_linear.norm() + own_angular.norm() * reach(*body));
+  const auto noted = m_kicks.find(body);
+  if (noted != m_kicks.end()) {
+    Kick& kick = noted->second;
+    const Vec3 own_linear = to_vec3(body->getLinearVelocity()) - kick.linear;
+    const Vec3 own_angular = to_vec3(body->getAngularVelocity()) - kick.angular;
+    kick.met = std::max(kick.met, own_linear.norm() + own_angular.norm() * reach(*body));
+    kick.linear += to_vec3(impulse * body->getLinearFactor() * body->getInvMass());
+    kick.angular += to_vec3(body->getInvInertiaTensorWorld() * (to_bt(angular) * body->getAngularFactor()));
+  }
   body->applyCentralImpulse(impulse);
   body->applyTorqueImpulse(to_bt(angular));
-  kick.linear += to_vec3(impulse * body->getLinearFactor() * body->getInvMass());
-  kick.angular += to_vec3(body->getInvInertiaTensorWorld() * (to_bt(angular) * body->getAngularFactor()));
   // A body Bullet put to sleep would ignore the water that now lifts or pushes it.
   body->activate(true);
   m_impulse_given += to_vec3(impulse);
 }
 
 void BulletRigidBodies::note_speeds() {
-  m_start_speeds.clear();
   m_kicks.clear();
   const btCollisionObjectArray& objects = m_world.getCollisionObjectArray();
   for (int i = 0; i < objects.size(); ++i) {
     const btRigidBody* body = btRigidBody::upcast(objects[i]);
-    if (body != nullptr && body->getInvMass() > 0 && sees(*body)) m_start_speeds[body] = point_speed(*body);
+    if (body != nullptr && body->getInvMass() > 0 && sees(*body)) m_kicks[body].start = point_speed(*body);
   }
 }
 
@@ -549,9 +551,8 @@ std::string BulletRigidBodies::thrown_body(double water_speed, double rest_densi
   const btCollisionObjectArray& objects = m_world.getCollisionObjectArray();
   for (int i = 0; i < objects.size(); ++i) {
     const btRigidBody* body = btRigidBody::upcast(objects[i]);
-    const auto start = body != nullptr ? m_start_speeds.find(body) : m_start_speeds.end();
     const auto kick = body != nullptr ? m_kicks.find(body) : m_kicks.end();
-    if (start == m_start_speeds.end() || kick == m_kicks.end() || !sees(*body)) continue;
+    if (kick == m_kicks.end() || !sees(*body)) continue;
     // Water drags a body towards its own speed and lifts it by buoyancy, at most (rest density / body's)
     // g, and holds its weight, g. Twice the larger speed and a metre a second more leave room for the
     // water's pressure; a light plank the water threw up at 18 m/s is far beyond
@@ -561,7 +562,7 @@ std::string BulletRigidBodies::thrown_body(double water_speed, double rest_densi
     const double volume = t != m_tracked.end() ? t->second->volume : 0.0;
     const double density = volume > 0.0 ? 1.0 / (static_cast<double>(body->getInvMass()) * volume) : 0.0;
     const double lift = density > 0.0 ? rest_density / density : 1.0;
-    const double body_speed = std::max(start->second, kick->second.met);
+    const double body_speed = std::max(kick->second.start, kick->second.met);
     const double bound = 2.0 * std::max(body_speed, water_speed) + (1.0 + lift) * gravity.norm() * dt + 1.0;
     const double given = kick->second.linear.norm() + kick->second.angular.norm() * reach(*body);
     if (!(given <= bound)) {

@@ -134,14 +134,15 @@ class BulletRigidBodies final : public RigidBodySource {
   std::vector<const Vec3Array*> m_points;  // expect_points' arrays, until the next begin_step
   double m_reach = 0;
   Vec3 m_impulse_given = Vec3::Zero();
-  std::unordered_map<const btCollisionObject*, double> m_start_speeds;  // note_speeds (unit: m/s)
-  /// The velocity changes the water's impulses gave a body since note_speeds (unit: m/s, rad/s).
+  /// A dynamic body's speed at note_speeds and the velocity changes the water's impulses gave it since
+  /// (unit: m/s, rad/s): what thrown_body compares.
   struct Kick {
+    double start = 0.0;  // its fastest point speed at note_speeds (unit: m/s)
     Vec3 linear = Vec3::Zero();
     Vec3 angular = Vec3::Zero();
-    double met = 0.0;  // the body's fastest point speed without them, as the water met it (unit: m/s)
+    double met = 0.0;  // its fastest point speed without them, as the water met it (unit: m/s)
   };
-  std::unordered_map<const btCollisionObject*, Kick> m_kicks;
+  std::unordered_map<const btCollisionObject*, Kick> m_kicks;  // the bodies note_speeds found
   std::uint64_t m_step = 0;
   std::uint64_t m_instances = 0;  // bodies tracked so far: each new one's RigidSurface::instance
 };
