@@ -46,7 +46,9 @@ class RigidBoundary {
   const Vec3Array& normals() const { return m_normals; }
 
   /// How far the samples sit inside the faces (unit: m): where a resting fluid's first layer, next to a plane
-  /// of such samples, has the rest density, less half a spacing (0.60 spacings for the cubic spline).
+  /// of such samples, has the rest density, less half a spacing (0.60 spacings for the cubic spline). Where
+  /// the body is thinner than twice this behind a sample (a plank, a small cube), the sample sits half way
+  /// through it instead: deeper, it would stand outside the opposite face.
   Scalar inset() const { return m_inset; }
 
   /// Adds the impulses on the samples of the last place() (B entries, unit: N s) to the nodes of their faces
@@ -60,6 +62,7 @@ class RigidBoundary {
     Index triangle;
     Vec3 weights;
     Scalar volume;
+    Scalar inset;  // how far inside its face (unit: m): inset(), or less in a thin part (sample())
   };
   struct Body {
     std::size_t nodes = 0, triangles = 0;
