@@ -15,6 +15,7 @@
 #include <drench/common/stopwatch.hpp>
 #include <drench/coupling/broad_phase.hpp>
 #include <drench/coupling/cloth_obstacle.hpp>
+#include <drench/coupling/swept_water.hpp>
 #include <drench/io/obj_reader.hpp>
 #include <drench/scene/scene_document.hpp>
 #include <drench/scene/scene_resources.hpp>
@@ -414,6 +415,18 @@ StepStatus Simulation::step(Scalar dt) {
       m_removed += static_cast<std::int64_t>(p.remove_flagged(m_displaced));
     }
   }
+  if (m_with_obstacles) {
+    // The dynamic bodies and the water they would sweep meet before either moves (swept_water.hpp).
+    ParticleSet& p = m_fluid->particles();
+    Vec3Array nodes(m_engine->mesh().node_count(), Vec3::Zero());
+    std::size_t swept = 0;
+    {
+      ScopedTimer timer(m_rigid_seconds);  // apply_body_impulses times itself (body_seconds)
+      swept = meet_swept_water(m_with_obstacles->rigid_surfaces(), rigid_first_nodes(), dt,
+                               m_config.fluid.rest_density, p.positions, p.masses, p.velocities, nodes);
+    }
+    if (swept > 0) m_with_obstacles->apply_body_impulses(nodes);
+  }
   StepStatus jump_status;
   if (m_engine) audit_face_jumps_since_last_step(jump_status);
   // The cloth at its start positions is an obstacle inside the fluid's sub-steps
@@ -449,6 +462,13 @@ StepStatus Simulation::step(Scalar dt) {
     status |= m_config.kill_regions.empty() ? m_fluid->speed_check(particle_speed) : m_fluid->speed_check();
   }
   return status;
+}
+
+std::vector<std::size_t> Simulation::rigid_first_nodes() const {
+  std::vector<std::size_t> first(m_with_obstacles->rigid_surfaces().size());
+  for (std::size_t s = 0; s < first.size(); ++s)
+    first[s] = m_with_obstacles->rigid_surface_first_node(s);
+  return first;
 }
 
 void Simulation::tell_bodies_the_points(Scalar dt) {
@@ -495,12 +515,8 @@ void Simulation::push_rigid_bodies() {
   Vec3Array nodes;
   {
     ScopedTimer timer(m_rigid_seconds);  // apply_body_impulses times itself (body_seconds)
-    const std::vector<RigidSurface>& surfaces = m_with_obstacles->rigid_surfaces();
-    std::vector<std::size_t> first(surfaces.size());
-    for (std::size_t s = 0; s < surfaces.size(); ++s)
-      first[s] = m_with_obstacles->rigid_surface_first_node(s);
     nodes.assign(m_engine->mesh().node_count(), Vec3::Zero());
-    m_rigid_boundary->spread(surfaces, on_boundary, first, nodes);
+    m_rigid_boundary->spread(m_with_obstacles->rigid_surfaces(), on_boundary, rigid_first_nodes(), nodes);
   }
   // Before the bodies' step: the water's pressure moves them in it.
   m_with_obstacles->apply_body_impulses(nodes);
