@@ -6,9 +6,33 @@
 
 #include <drench/coupling/cloth_mesh.hpp>
 #include <drench/coupling/coupler.hpp>
+#include <drench/coupling/rigid_bodies.hpp>
 #include <drench/sph/fluid_solver.hpp>
 
 namespace drench::test {
+
+/// A rigid body's surface: the cube of side `side` (unit: m) with its lowest corner at `corner`, 8 nodes at
+/// rest, 12 faces turned outward (counter-clockwise seen from outside).
+inline RigidSurface cube_surface(std::uint64_t key, RigidMotion motion, const Vec3& corner, double side) {
+  RigidSurface s;
+  s.key = key;
+  s.motion = motion;
+  for (int i = 0; i < 8; ++i)
+    s.positions_t0.push_back(corner + side * Vec3(i & 1, (i >> 1) & 1, (i >> 2) & 1));
+  const Index faces[6][4] = {{0, 1, 3, 2}, {4, 5, 7, 6}, {0, 1, 5, 4},
+                             {2, 3, 7, 6}, {0, 2, 6, 4}, {1, 3, 7, 5}};
+  const Vec3 centre = corner + Vec3::Constant(0.5 * side);
+  const Vec3Array& x = s.positions_t0;
+  for (const auto& f : faces) {
+    for (const Triangle t : {Triangle{f[0], f[1], f[2]}, Triangle{f[0], f[2], f[3]}}) {
+      const Vec3 n = (x[t[1]] - x[t[0]]).cross(x[t[2]] - x[t[0]]);
+      s.triangles.push_back(n.dot(x[t[0]] - centre) > 0.0 ? t : Triangle{t[0], t[2], t[1]});
+    }
+  }
+  s.positions_t1 = s.positions_t0;
+  s.velocities_t0.assign(8, Vec3::Zero());
+  return s;
+}
 
 /// ClothMesh::grid, under the name the tests use.
 inline ClothMesh grid_mesh(int n, double size, double y, double inverse_mass, double x0 = 0.0,

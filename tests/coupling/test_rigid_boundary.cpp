@@ -9,32 +9,15 @@
 
 #include <drench/coupling/rigid_boundary.hpp>
 
+#include "coupling_fixtures.hpp"
+
 namespace drench {
 namespace {
 
 constexpr double kSpacing = 0.01;  // the fluid's particle spacing (unit: m)
 
-/// A cube of side `side` (unit: m) with its lowest corner at `corner`: 8 nodes, 12 faces turned outward.
 RigidSurface cube(std::uint64_t key, RigidMotion motion, const Vec3& corner, double side) {
-  RigidSurface s;
-  s.key = key;
-  s.motion = motion;
-  for (int i = 0; i < 8; ++i)
-    s.positions_t0.push_back(corner + side * Vec3(i & 1, (i >> 1) & 1, (i >> 2) & 1));
-  // Two triangles per face, each turned so that its normal points away from the centre.
-  const Index faces[6][4] = {{0, 1, 3, 2}, {4, 5, 7, 6}, {0, 1, 5, 4},
-                             {2, 3, 7, 6}, {0, 2, 6, 4}, {1, 3, 7, 5}};
-  const Vec3 centre = corner + Vec3::Constant(0.5 * side);
-  const Vec3Array& x = s.positions_t0;
-  for (const auto& f : faces) {
-    for (const Triangle t : {Triangle{f[0], f[1], f[2]}, Triangle{f[0], f[2], f[3]}}) {
-      const Vec3 n = (x[t[1]] - x[t[0]]).cross(x[t[2]] - x[t[0]]);
-      s.triangles.push_back(n.dot(x[t[0]] - centre) > 0.0 ? t : Triangle{t[0], t[2], t[1]});
-    }
-  }
-  s.positions_t1 = s.positions_t0;
-  s.velocities_t0.assign(8, Vec3::Zero());
-  return s;
+  return test::cube_surface(key, motion, corner, side);
 }
 
 /// The surface moved by `offset` (unit: m).

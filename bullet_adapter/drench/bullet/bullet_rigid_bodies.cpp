@@ -455,6 +455,7 @@ void BulletRigidBodies::begin_step(std::vector<RigidSurface>& surfaces) {
       if (s.motion == RigidMotion::DYNAMIC) {
         // What it and the water it sweeps share (meet_swept_water).
         s.inverse_mass = static_cast<double>(body->getInvMass());
+        s.centre = centre;
         s.velocity = v;
       }
       for (std::size_t k = 0; k < s.positions_t0.size(); ++k)

@@ -34,10 +34,11 @@ struct RigidSurface {
   Vec3Array positions_t0;           ///< M nodes at the start of the step (unit: m)
   Vec3Array positions_t1;           ///< M nodes at the end of the engine's step (unit: m)
   Vec3Array velocities_t0;          ///< M node velocities at the start of the step (unit: m/s)
-  /// A DYNAMIC body's inverse mass (unit: 1/kg) and its centre's velocity at the start of the step (unit:
-  /// m/s): what it and the water it sweeps share (meet_swept_water). 0, the default, for every static or
-  /// kinematic body, which the coupling treats as infinitely heavy.
+  /// A DYNAMIC body's inverse mass (unit: 1/kg), its centre of mass and that centre's velocity at the start
+  /// of the step (unit: m, m/s): what it and the water it sweeps share (meet_swept_water). 0, the default,
+  /// for every static or kinematic body, which the coupling treats as infinitely heavy.
   double inverse_mass = 0.0;
+  Vec3 centre = Vec3::Zero();
   Vec3 velocity = Vec3::Zero();
 };
 
@@ -59,7 +60,7 @@ class RigidBodySource {
   }
   /// The bodies now: fills `surfaces` (replacing what it held) with every body that holds water, its
   /// triangles, positions_t0 and velocities_t0, positions_t1 = positions_t0, and a dynamic body's
-  /// inverse_mass and velocity (a source may leave them 0).
+  /// inverse_mass, centre and velocity (a source may leave them 0).
   virtual void begin_step(std::vector<RigidSurface>& surfaces) = 0;
   /// Advances the bodies alone by dt (unit: s): used when no cloth engine steps the world they are in.
   virtual void step(double dt) = 0;

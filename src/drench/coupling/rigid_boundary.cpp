@@ -58,7 +58,8 @@ RigidBoundary::RigidBoundary(Scalar spacing) : m_spacing(spacing) {
   if (!(spacing > 0.0) || !std::isfinite(spacing))
     throw std::invalid_argument("RigidBoundary: the spacing must be > 0 and finite");
   // The water's volume ends half a spacing beyond its first layer: the samples sit so far inside the face
-  // that a resting first layer lies half a spacing outside it, and the body displaces its own volume.
+  // that a resting first layer lies half a spacing outside it, and the body displaces its own volume (a
+  // part thinner than twice the inset displaces more: inset()).
   static const Scalar resting = resting_distance_in_spacings();
   m_inset = (resting - 0.5) * spacing;
 }
@@ -131,6 +132,10 @@ std::vector<Scalar> depths_behind(const RigidSurface& surface, const Vec3Array& 
                                   const std::vector<Index>& faces, const Vec3Array& normals, Scalar reach) {
   const Vec3Array& x = surface.positions_t0;
   const Scalar inverse_cell = 1.0 / reach;
+  // Cell coordinates stay far inside int64: a point beyond this many cells from the origin is not binned
+  // (a body that far is refused elsewhere; its samples keep the whole inset).
+  constexpr double kMaxCell = 1e15;
+  const auto binnable = [&](const Vec3& p) { return (p.cwiseAbs() * inverse_cell).maxCoeff() <= kMaxCell; };
   const auto cell = [&](const Vec3& p) {
     return Eigen::Vector3<std::int64_t>(static_cast<std::int64_t>(std::floor(p.x() * inverse_cell)),
                                         static_cast<std::int64_t>(std::floor(p.y() * inverse_cell)),
@@ -146,7 +151,7 @@ std::vector<Scalar> depths_behind(const RigidSurface& surface, const Vec3Array& 
     const Triangle& t = surface.triangles[f];
     const Vec3 lo = x[t[0]].cwiseMin(x[t[1]]).cwiseMin(x[t[2]]);
     const Vec3 hi = x[t[0]].cwiseMax(x[t[1]]).cwiseMax(x[t[2]]);
-    if (!lo.allFinite() || !hi.allFinite()) continue;  // the fluid names a body that is not finite
+    if (!lo.allFinite() || !hi.allFinite() || !binnable(lo) || !binnable(hi)) continue;
     const auto a = cell(lo), b = cell(hi);
     if (((b - a).array() + 1).cast<double>().prod() > 64.0) {
       large.push_back(static_cast<Index>(f));
@@ -167,7 +172,8 @@ std::vector<Scalar> depths_behind(const RigidSurface& surface, const Vec3Array& 
     };
     for (Index f : large)
       test(f);
-    if (!points[s].allFinite() || !d.allFinite()) continue;
+    if (!points[s].allFinite() || !d.allFinite() || !binnable(points[s]) || !binnable(points[s] + reach * d))
+      continue;
     const auto a = cell(points[s].cwiseMin(points[s] + reach * d));
     const auto b = cell(points[s].cwiseMax(points[s] + reach * d));
     for (std::int64_t i = a.x(); i <= b.x(); ++i)

@@ -7,6 +7,7 @@
 
 #include <drench/common/error.hpp>
 #include <drench/common/stopwatch.hpp>
+#include <drench/coupling/swept_water.hpp>
 
 namespace drench {
 
@@ -251,6 +252,15 @@ void ClothWithObstacles::apply_body_impulses(const Vec3Array& node_impulses) {
                                 " impulses for " + std::to_string(m_mesh.node_count()) + " nodes");
   }
   give_bodies(node_impulses);
+}
+
+std::size_t ClothWithObstacles::meet_swept_water(double dt, double rest_density, const Vec3Array& positions,
+                                                 const ScalarArray& masses, Vec3Array& velocities) {
+  Vec3Array impulses;
+  const std::size_t swept = drench::meet_swept_water(m_surfaces, m_surface_first, m_mesh.node_count(), dt,
+                                                     rest_density, positions, masses, velocities, impulses);
+  if (!impulses.empty()) give_bodies(impulses);
+  return swept;
 }
 
 void ClothWithObstacles::set_carried_masses(const ScalarArray& carried) {

@@ -82,10 +82,19 @@ class ClothWithObstacles final : public ClothEngine {
   double total_mass() const override;
 
   /// Gives each dynamic body the impulses the water gave its nodes in this step (unit: N s, one per node of
-  /// mesh(), e.g. Coupler::node_impulses); the other entries are ignored. Call after step(), before the
-  /// next begin_step().
+  /// mesh(), e.g. Coupler::node_impulses); the other entries are ignored. Call after begin_step(), before
+  /// the next one: before step() the bodies move with them in it.
   /// @throws std::invalid_argument if `node_impulses` does not have one entry per node of mesh()
   void apply_body_impulses(const Vec3Array& node_impulses);
+
+  /// Meets the dynamic bodies and the water they would sweep in a step of dt (coupling/swept_water.hpp):
+  /// changes the swept particles' `velocities` and gives the bodies their share before they move; their
+  /// velocities() follow. Call after begin_step(), before the water moves.
+  /// @param rest_density  the water's (unit: kg/m^3)
+  /// @param positions, masses, velocities  N particles (unit: m, kg, m/s)
+  /// @return how many particles were swept
+  std::size_t meet_swept_water(double dt, double rest_density, const Vec3Array& positions,
+                               const ScalarArray& masses, Vec3Array& velocities);
 
   /// Nodes of the cloth, the first of mesh()'s (0 without a cloth).
   std::size_t cloth_nodes() const { return m_cloth ? m_cloth->mesh().node_count() : 0; }

@@ -15,29 +15,31 @@
 namespace drench {
 
 /// Before the fluid and the bodies move in a step: each dynamic body with a mass (RigidSurface::
-/// inverse_mass > 0) and the water its motion over the step would sweep meet in one inelastic collision, eq.
-/// 2 with both masses, as a lump: body and swept particles take their common velocity
-/// V' = (M V + sum m_p v_p) / (M + sum m_p). A particle is swept when the body's faces, moved by their node
-/// velocities over dt, meet it where it stands (the exact CCD, eq. 5-6). For a body far heavier than the
-/// water it sweeps V' is V, and that water takes the body's velocity before the fluid's step rather than from
-/// the coupler after it. Each particle's impulse m_p (V' - v_p) reaches the body, opposite, at the nodes of
-/// the face it met, by the weights there. Linear momentum is conserved exactly; the body's spin is left to
-/// the coupler (a share of the faces' point velocities along their normals let a light cube's spin grow to
-/// 35 rad/s and its water sink it: the common velocity also drags the water along the faces, which damps it).
-/// The coupler still holds the water out of the bodies where their engine then moves them.
-/// @param surfaces  the step's rigid surfaces at its start: positions_t0, velocities_t0, inverse_mass and
-///        velocity
+/// inverse_mass > 0) and the water its translation over the step would sweep meet in one inelastic
+/// collision, eq. 2 with both masses, as a lump: body and swept particles take their common velocity
+/// V' = (M V + sum m_p v_p) / (M + sum m_p). A particle is swept when a face, moved by V dt, meets it moving
+/// by its own v dt (the exact CCD, eq. 5-6). The body takes the water's impulses at its centre, so the
+/// collision only loses energy; its spin is left to the coupler. For a body far heavier than the water it
+/// can sweep, V' is V to within a tenth of what the coupler's stops take from it, and it is left to them.
+/// Linear momentum is conserved exactly between the water and a free body; a body a joint, a contact or a
+/// locked axis holds gives part of its share to what holds it, as it does the coupler's.
+/// @param surfaces  the step's rigid surfaces at its start, in mesh order: positions_t0, velocities_t0,
+///        inverse_mass, velocity and centre; a swept body's velocity and velocities_t0 become V' (plus its
+///        spin), so that the rest of the step sees it as it will move
 /// @param first_node  per surface, its first node in the mesh (ClothWithObstacles::rigid_surface_first_node)
+/// @param node_count  the mesh's nodes
 /// @param dt  the step (unit: s), > 0
-/// @param rest_density  the water's (unit: kg/m^3): a body ten times heavier than the water its faces can
-///        sweep in the step is left to the coupler, which gives it the same to within a tenth
+/// @param rest_density  the water's (unit: kg/m^3): what a body's faces can sweep holds at most that
 /// @param positions  N particle positions (unit: m); masses N (unit: kg, > 0)
-/// @param velocities  N particle velocities (unit: m/s): a swept particle's becomes V'
-/// @param node_impulses  one per mesh node, added to (unit: N s): what each body takes, for
-///        RigidBodySource::apply_impulses before its engine's step
+/// @param velocities  N particle velocities (unit: m/s): a swept particle's becomes V'; a particle whose
+///        position or velocity is not finite is never swept
+/// @param node_impulses  output: empty when no body took an impulse, else one per mesh node (unit: N s),
+///        each body's at its nodes with no torque about its centre, for RigidBodySource::apply_impulses
+///        before its engine's step
 /// @return how many particles were swept
-std::size_t meet_swept_water(const std::vector<RigidSurface>& surfaces,
-                             const std::vector<std::size_t>& first_node, double dt, double rest_density,
+/// @throws std::invalid_argument when the sizes disagree or a surface's nodes run past node_count
+std::size_t meet_swept_water(std::vector<RigidSurface>& surfaces, const std::vector<std::size_t>& first_node,
+                             std::size_t node_count, double dt, double rest_density,
                              const Vec3Array& positions, const ScalarArray& masses, Vec3Array& velocities,
                              Vec3Array& node_impulses);
 

@@ -15,7 +15,6 @@
 #include <drench/common/stopwatch.hpp>
 #include <drench/coupling/broad_phase.hpp>
 #include <drench/coupling/cloth_obstacle.hpp>
-#include <drench/coupling/swept_water.hpp>
 #include <drench/io/obj_reader.hpp>
 #include <drench/scene/scene_document.hpp>
 #include <drench/scene/scene_resources.hpp>
@@ -417,15 +416,11 @@ StepStatus Simulation::step(Scalar dt) {
   }
   if (m_with_obstacles) {
     // The dynamic bodies and the water they would sweep meet before either moves (swept_water.hpp).
+    const double bodies_before = body_seconds();
+    ScopedTimer timer(m_rigid_seconds);
     ParticleSet& p = m_fluid->particles();
-    Vec3Array nodes(m_engine->mesh().node_count(), Vec3::Zero());
-    std::size_t swept = 0;
-    {
-      ScopedTimer timer(m_rigid_seconds);  // apply_body_impulses times itself (body_seconds)
-      swept = meet_swept_water(m_with_obstacles->rigid_surfaces(), rigid_first_nodes(), dt,
-                               m_config.fluid.rest_density, p.positions, p.masses, p.velocities, nodes);
-    }
-    if (swept > 0) m_with_obstacles->apply_body_impulses(nodes);
+    m_with_obstacles->meet_swept_water(dt, m_config.fluid.rest_density, p.positions, p.masses, p.velocities);
+    m_rigid_seconds -= body_seconds() - bodies_before;  // apply_impulses times itself (body_seconds)
   }
   StepStatus jump_status;
   if (m_engine) audit_face_jumps_since_last_step(jump_status);
