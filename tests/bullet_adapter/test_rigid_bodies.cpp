@@ -1067,6 +1067,27 @@ TEST(RigidBodies, ALightBodyFallingIntoWaterFloats) {
   }
 }
 
+// The sweep is a part of the "coupling" effect: without it the water passes through the bodies, and the
+// water a light box falls into moves bit for bit as without the box.
+TEST(RigidBodies, WithoutTheCouplingABodySweepsNoWater) {
+  const Vec3 gravity(0, -9.81, 0);
+  Vec3Array alone, with_box;
+  for (const bool box : {false, true}) {
+    GameWorld game(gravity);
+    game.add_box(Vec3(0.5, 0.05, 0.5), 0.0, Vec3(0, -0.05, 0));
+    SceneConfig scene = game_step_tank(gravity);
+    scene.effects = {"leak_audit"};
+    if (box)
+      game.add_box(Vec3::Constant(0.02), 0.0064, Vec3(0, 0.13, 0)).setLinearVelocity(btVector3(0, -1.3, 0));
+    CoupledWorld coupled(game.world, *game.cloth, scene);
+    for (int n = 0; n < 3; ++n)
+      ASSERT_TRUE(coupled.step().ok()) << "step " << n;
+    (box ? with_box : alone) = coupled.particles().velocities;
+  }
+  ASSERT_EQ(with_box.size(), alone.size());
+  EXPECT_TRUE(with_box == alone) << "the box changed the water's velocities";
+}
+
 // A body the game throws through the water throws water past fluid.max_speed: the fluid checks the speed
 // before it moves the particles, after the bodies pushed them in the step before, so that step ended ok and
 // a run whose last step it was ended ok with a particle at 100 m/s. A 0.2 kg box and the water in its way

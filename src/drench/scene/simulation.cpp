@@ -414,8 +414,9 @@ StepStatus Simulation::step(Scalar dt) {
       m_removed += static_cast<std::int64_t>(p.remove_flagged(m_displaced));
     }
   }
-  if (m_with_obstacles) {
-    // The dynamic bodies and the water they would sweep meet before either moves (swept_water.hpp).
+  if (m_with_obstacles && m_effects.coupler) {
+    // The dynamic bodies and the water they would sweep meet before either moves (swept_water.hpp), a part
+    // of the "coupling" effect: without it the water passes through the bodies.
     const double bodies_before = body_seconds();
     ScopedTimer timer(m_rigid_seconds);
     ParticleSet& p = m_fluid->particles();
