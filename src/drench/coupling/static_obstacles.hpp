@@ -101,8 +101,8 @@ class ClothWithObstacles final : public ClothEngine {
   const std::vector<TriangleMesh>& obstacles() const { return m_obstacles; }
   /// The rigid bodies' surfaces of the current step, in mesh() order after the static obstacles.
   const std::vector<RigidSurface>& rigid_surfaces() const { return m_surfaces; }
-  /// The first node in mesh() of rigid_surfaces()[i].
-  std::size_t rigid_surface_first_node(std::size_t i) const { return m_surface_first[i]; }
+  /// Per surface of rigid_surfaces(), its first node in mesh().
+  const std::vector<std::size_t>& rigid_surface_first_nodes() const { return m_surface_first; }
   /// What holding the cloth off the obstacles did, summed over steps: `contacts` node-face pairs within the
   /// clearance, `ccd_impacts` nodes stopped before a face.
   const CouplingStepStats& cloth_contact_stats() const { return m_hold_stats; }

@@ -26,7 +26,7 @@ namespace drench {
 /// @param surfaces  the step's rigid surfaces at its start, in mesh order: positions_t0, velocities_t0,
 ///        inverse_mass, velocity and centre; a swept body's velocity and velocities_t0 become V' (plus its
 ///        spin), so that the rest of the step sees it as it will move
-/// @param first_node  per surface, its first node in the mesh (ClothWithObstacles::rigid_surface_first_node)
+/// @param first_node  per surface, its first node in the mesh (ClothWithObstacles::rigid_surface_first_nodes)
 /// @param node_count  the mesh's nodes
 /// @param dt  the step (unit: s), > 0
 /// @param rest_density  the water's (unit: kg/m^3): what a body's faces can sweep holds at most that

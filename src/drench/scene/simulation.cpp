@@ -460,13 +460,6 @@ StepStatus Simulation::step(Scalar dt) {
   return status;
 }
 
-std::vector<std::size_t> Simulation::rigid_first_nodes() const {
-  std::vector<std::size_t> first(m_with_obstacles->rigid_surfaces().size());
-  for (std::size_t s = 0; s < first.size(); ++s)
-    first[s] = m_with_obstacles->rigid_surface_first_node(s);
-  return first;
-}
-
 void Simulation::tell_bodies_the_points(Scalar dt) {
   // Gravity's pull over the step on top of the fastest speed at the end of the last one, or of a nozzle's new
   // particles: no pass over the particles of its own.
@@ -512,7 +505,8 @@ void Simulation::push_rigid_bodies() {
   {
     ScopedTimer timer(m_rigid_seconds);  // apply_body_impulses times itself (body_seconds)
     nodes.assign(m_engine->mesh().node_count(), Vec3::Zero());
-    m_rigid_boundary->spread(m_with_obstacles->rigid_surfaces(), on_boundary, rigid_first_nodes(), nodes);
+    m_rigid_boundary->spread(m_with_obstacles->rigid_surfaces(), on_boundary,
+                             m_with_obstacles->rigid_surface_first_nodes(), nodes);
   }
   // Before the bodies' step: the water's pressure moves them in it.
   m_with_obstacles->apply_body_impulses(nodes);

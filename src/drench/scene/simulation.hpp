@@ -177,8 +177,6 @@ class Simulation {
   /// Tells the rigid bodies where the particles and the cloth's nodes are and how far they may move in a
   /// step of dt (RigidBodySource::expect_points).
   void tell_bodies_the_points(Scalar dt);
-  /// Per rigid surface of the step, its first node in the engine's mesh.
-  std::vector<std::size_t> rigid_first_nodes() const;
   void step_cloth_and_couple(Scalar dt, StepStatus& status);
   /// The leak audit of the faces' move from where the last audited step ended them to where the engine
   /// starts them now (audit_face_jumps), after the engine's begin_step; sets LEAKED in `status` naming the
