@@ -251,5 +251,81 @@ TEST(ClothWetting, BadMeshesAndMassesAreNamed) {
   EXPECT_THROW(wetting.set_water(ScalarArray(3, 0.0)), Error);
 }
 
+// Two cloths of 3 x 3 nodes in one mesh; the first is torn (a node added off its edge, with a face of its
+// own): each node's water and capacity move with it, the new node holds none, the water held stays what it
+// was, and the spread after it still conserves it.
+TEST(ClothWetting, ATornClothsWaterStaysWithItsNodes) {
+  const Patch one = patch(3, 0.1);
+  ClothMesh two;
+  Vec3Array positions;
+  ScalarArray dry;
+  for (int c = 0; c < 2; ++c) {
+    const auto offset = static_cast<Index>(9 * c);
+    for (const Triangle& t : one.mesh.triangles)
+      two.triangles.push_back({t[0] + offset, t[1] + offset, t[2] + offset});
+    for (const Vec3& x : one.mesh.positions_t0)
+      positions.push_back(x + Vec3(0.5 * c, 0.0, 0.0));
+    dry.insert(dry.end(), one.dry_masses.begin(), one.dry_masses.end());
+  }
+  WettingSettings settings;
+  ClothWetting wetting(settings, two.triangles, positions, dry);
+  ScalarArray water(18);
+  for (std::size_t i = 0; i < 18; ++i)
+    water[i] = 0.01 * static_cast<double>(i + 1) * wetting.capacities()[i];
+  wetting.set_water(water);
+  const ScalarArray capacities = wetting.capacities();
+  const double held = wetting.held();
+
+  // Node 9 of the new layout is cloth 0's new node, just off its edge between nodes 0 and 1; cloth 1's
+  // nodes are 10-18 now.
+  std::vector<Triangle> torn;
+  for (const Triangle& t : one.mesh.triangles)
+    torn.push_back(t);
+  torn.push_back({0, 9, 1});
+  for (const Triangle& t : one.mesh.triangles)
+    torn.push_back({t[0] + 10, t[1] + 10, t[2] + 10});
+  Vec3Array now(positions.begin(), positions.begin() + 9);
+  now.push_back(0.5 * (positions[0] + positions[1]) + Vec3(0.0, 0.0, -0.02));
+  now.insert(now.end(), positions.begin() + 9, positions.end());
+  ScalarArray dry_now(dry.begin(), dry.begin() + 9);
+  dry_now.push_back(0.5 * dry[0]);
+  dry_now.insert(dry_now.end(), dry.begin() + 9, dry.end());
+  const ClothLayoutChange change({{0, 9, 0, 8}, {9, 9, 8, 8}}, {{0, 10, 0, 9}, {10, 9, 9, 8}});
+
+  // A new node without a mass is refused, and nothing changes.
+  ScalarArray massless = dry_now;
+  massless[9] = 0.0;
+  try {
+    wetting.follow(change, torn, now, massless);
+    FAIL() << "a new node of mass 0";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("cloth node 9 has mass 0"), std::string::npos) << e.what();
+  }
+  ASSERT_EQ(wetting.water(), water);
+
+  wetting.follow(change, torn, now, dry_now);
+  ASSERT_EQ(wetting.water().size(), 19u);
+  for (std::size_t old = 0; old < 18; ++old) {
+    const std::size_t i = old < 9 ? old : old + 1;
+    EXPECT_EQ(wetting.water()[i], water[old]) << old;
+    EXPECT_EQ(wetting.capacities()[i], capacities[old]) << old;
+  }
+  EXPECT_EQ(wetting.water()[9], 0.0);
+  EXPECT_EQ(wetting.capacities()[9], settings.max_saturation * dry_now[9]);
+  EXPECT_EQ(wetting.held(), held);
+  WettingStepStats stats;
+  for (int s = 0; s < 100; ++s)
+    wetting.spread(now, Vec3(0, -9.81, 0), 0.01, stats);
+  EXPECT_NEAR(wetting.held(), held, 1e-12 * held);
+  EXPECT_GT(wetting.water()[9], 0.0) << "the new node takes water from its neighbours";
+  // Each cloth's water stays in it (they share no edge): cloth 0's nodes, the new one included, and cloth
+  // 1's, now at 10-18.
+  const ScalarArray& after = wetting.water();
+  const double cloth0 = std::accumulate(water.begin(), water.begin() + 9, 0.0);
+  EXPECT_NEAR(std::accumulate(after.begin(), after.begin() + 10, 0.0), cloth0, 1e-12 * cloth0);
+  const double cloth1 = std::accumulate(water.begin() + 9, water.end(), 0.0);
+  EXPECT_NEAR(std::accumulate(after.begin() + 10, after.end(), 0.0), cloth1, 1e-12 * cloth1);
+}
+
 }  // namespace
 }  // namespace drench

@@ -150,6 +150,8 @@ class Coupler {
   /// @throws SceneError when a work is negative or not finite (naming the triangle), or the range or the
   ///         rest density is not positive and finite
   void set_adhesion(AdhesionSettings settings);
+  /// What set_adhesion last set, or nullopt without the adhesion stage.
+  const std::optional<AdhesionSettings>& adhesion() const { return m_adhesion; }
   /// The "adhesion" effect's counts: constructed 1 after set_adhesion; a pass per step() that ran its stages.
   const EffectCounter& adhesion_counter() const { return m_adhesion_counter; }
 

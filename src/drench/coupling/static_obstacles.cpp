@@ -308,6 +308,10 @@ void ClothWithObstacles::end_step(double dt) {
   }
 }
 
+std::vector<ClothPiece> ClothWithObstacles::pieces() const {
+  return m_cloth ? m_cloth->pieces() : std::vector<ClothPiece>{};
+}
+
 Vec3Array ClothWithObstacles::velocities() const {
   Vec3Array v = m_cloth ? m_cloth->velocities() : Vec3Array();
   v.resize(m_mesh.node_count(), Vec3::Zero());

@@ -79,6 +79,9 @@ class ClothWithObstacles final : public ClothEngine {
   void end_step(double dt) override;
   /// The cloth's velocities, 0 for static obstacles, each body's node velocities at the start of the step.
   Vec3Array velocities() const override;
+  /// The cloth's pieces (its engine's), first in mesh(); none without a cloth. The obstacles and bodies
+  /// follow them.
+  std::vector<ClothPiece> pieces() const override;
   double total_mass() const override;
 
   /// Gives each dynamic body the impulses the water gave its nodes in this step (unit: N s, one per node of

@@ -54,25 +54,9 @@ void build_leak_audit(const EffectSite& site, EffectParts& parts) {
 void build_wetting(const EffectSite& site, EffectParts& parts) {
   // The water comes from the coupling's contacts: without a coupler there is none to absorb.
   if (!site.cloth_mesh || !parts.coupler) return;
-  // The dry node masses, pinned nodes included (they hold water too). A scene that describes its cloth
-  // (a `cloth` section) sets them: its area_density over each node's third of its faces' area. Without one
-  // (a game's cloths, embedded) they are the engine's own, or, from an engine that cannot tell, the default
-  // area density's.
   const ClothMesh& nodes = *site.cloth_mesh;
-  ScalarArray dry;
-  if (!site.config.cloth && site.cloth) dry = site.cloth->dry_node_masses();
-  if (dry.empty()) {
-    const double area_density = (site.config.cloth ? *site.config.cloth : ClothSettings{}).area_density;
-    dry.assign(nodes.node_count(), 0.0);
-    for (const Triangle& t : nodes.triangles) {
-      const Vec3& a = nodes.positions_t0[t[0]];
-      const double area = 0.5 * (nodes.positions_t0[t[1]] - a).cross(nodes.positions_t0[t[2]] - a).norm();
-      for (const Index i : t)
-        dry[i] += area_density * area / 3.0;
-    }
-  }
-  parts.wetting =
-      std::make_unique<ClothWetting>(site.config.wetting, nodes.triangles, nodes.positions_t0, dry);
+  parts.wetting = std::make_unique<ClothWetting>(site.config.wetting, nodes.triangles, nodes.positions_t0,
+                                                 cloth_dry_masses(site.config, site.cloth, nodes));
   ++parts.wetting_counter.constructed;
 }
 
@@ -146,6 +130,21 @@ const EffectEntry* find_effect(const std::string& name) {
   const auto it = std::find_if(registry.begin(), registry.end(),
                                [&](const EffectEntry& entry) { return name == entry.name; });
   return it == registry.end() ? nullptr : &*it;
+}
+
+ScalarArray cloth_dry_masses(const SceneConfig& config, const ClothEngine* engine, const ClothMesh& cloth) {
+  ScalarArray dry;
+  if (!config.cloth && engine) dry = engine->dry_node_masses();
+  if (!dry.empty()) return dry;
+  const double area_density = (config.cloth ? *config.cloth : ClothSettings{}).area_density;
+  dry.assign(cloth.node_count(), 0.0);
+  for (const Triangle& t : cloth.triangles) {
+    const Vec3& a = cloth.positions_t0[t[0]];
+    const double area = 0.5 * (cloth.positions_t0[t[1]] - a).cross(cloth.positions_t0[t[2]] - a).norm();
+    for (const Index i : t)
+      dry[i] += area_density * area / 3.0;
+  }
+  return dry;
 }
 
 EffectParts build_effects(const EffectSite& site) {

@@ -104,6 +104,13 @@ const std::vector<EffectEntry>& effect_registry();
 /// The entry named `name`, or nullptr when no effect has that name.
 const EffectEntry* find_effect(const std::string& name);
 
+/// The dry node masses of the cloth that the wetting's capacities are made of (unit: kg), one per node of
+/// `cloth`, pinned nodes included (they hold water too). A scene that describes its cloth (a `cloth`
+/// section) sets them: its area_density over each node's third of its faces' area (positions_t0). Without
+/// one (a game's cloths, embedded) they are the engine's own (ClothEngine::dry_node_masses), or, from an
+/// engine that cannot tell, the default area density's.
+ScalarArray cloth_dry_masses(const SceneConfig& config, const ClothEngine* engine, const ClothMesh& cloth);
+
 /// Builds the effects `site.config.effects` lists, each by its entry, in the registry's order; an effect not
 /// listed is never built.
 /// @throws SceneError or drench::Error as the entries' build functions do

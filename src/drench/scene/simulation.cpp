@@ -196,6 +196,23 @@ std::vector<TriangleMesh> build_obstacles(const SceneConfig& config) {
   return meshes;
 }
 
+namespace {
+
+/// Each edge of `triangles` once, as (lower, higher node), ascending.
+std::vector<std::pair<Index, Index>> unique_edges(const std::vector<Triangle>& triangles) {
+  std::vector<std::pair<Index, Index>> edges;
+  edges.reserve(3 * triangles.size());
+  for (const Triangle& t : triangles) {
+    for (int k = 0; k < 3; ++k)
+      edges.push_back({std::min(t[k], t[(k + 1) % 3]), std::max(t[k], t[(k + 1) % 3])});
+  }
+  std::sort(edges.begin(), edges.end());
+  edges.erase(std::unique(edges.begin(), edges.end()), edges.end());
+  return edges;
+}
+
+}  // namespace
+
 Simulation::Simulation(const SceneConfig& config, const ClothEngineFactory& cloth_factory)
     : Simulation(config, build_cloth(checked(config), cloth_factory)) {}
 
@@ -263,17 +280,89 @@ Simulation::Simulation(const SceneConfig& config, std::unique_ptr<ClothEngine> c
   if (m_cloth) {
     // The cloth's edges and their lengths now, the rest lengths cloth.max_strain is measured against.
     const ClothMesh& mesh = m_cloth->mesh();
-    for (const Triangle& t : mesh.triangles) {
-      for (int k = 0; k < 3; ++k)
-        m_cloth_edges.push_back({std::min(t[k], t[(k + 1) % 3]), std::max(t[k], t[(k + 1) % 3])});
-    }
-    std::sort(m_cloth_edges.begin(), m_cloth_edges.end());
-    m_cloth_edges.erase(std::unique(m_cloth_edges.begin(), m_cloth_edges.end()), m_cloth_edges.end());
+    m_cloth_edges = unique_edges(mesh.triangles);
     const Vec3Array& x =
         mesh.positions_t1.size() == mesh.node_count() ? mesh.positions_t1 : mesh.positions_t0;
     m_rest_lengths.reserve(m_cloth_edges.size());
     for (const auto& [a, b] : m_cloth_edges)
       m_rest_lengths.push_back((x[a] - x[b]).norm());
+    m_cloth_pieces = m_cloth->pieces();
+  }
+}
+
+void Simulation::follow_cloth_layout() {
+  std::vector<ClothPiece> pieces = m_cloth->pieces();
+  if (pieces == m_cloth_pieces) return;
+  const ClothLayoutChange change(m_cloth_pieces, pieces);
+  const ClothMesh& cloth = m_cloth->mesh();
+  // The wetting first: the only part that can refuse (a new node without a mass), before anything moved.
+  if (m_effects.wetting) {
+    m_effects.wetting->follow(change, cloth.triangles, cloth.positions_t0,
+                              cloth_dry_masses(m_config, m_cloth.get(), cloth));
+  }
+  m_cloth_pieces = std::move(pieces);
+  // What the last step owes the cloth: each node's at its new index (bodies' nodes, after the cloths', owe
+  // nothing). The links name faces, which keep their index unless their cloth lost faces.
+  if (m_pending_cloth_impulses.size() >= change.cloth_nodes_before()) {
+    m_pending_cloth_impulses = change.nodes_moved(m_pending_cloth_impulses, Vec3(Vec3::Zero()));
+    m_pending_cloth_nodes = change.cloth_nodes_after();
+  }
+  ImpulseLinks links;
+  for (ImpulseLink link : m_pending_links) {
+    const std::size_t t = change.triangle(link.triangle);
+    if (t == ClothLayoutChange::kGone) continue;
+    link.triangle = static_cast<Index>(t);
+    links.push_back(link);
+  }
+  m_pending_links = std::move(links);
+  // The strain limit's edges: an edge that was one keeps its rest length, a new one (around a new node, or
+  // one a refinement drew) starts at its length now.
+  std::vector<std::pair<std::pair<Index, Index>, Scalar>> old_edges;
+  for (std::size_t e = 0; e < m_cloth_edges.size(); ++e) {
+    const auto a = static_cast<Index>(change.node(m_cloth_edges[e].first));
+    const auto b = static_cast<Index>(change.node(m_cloth_edges[e].second));
+    old_edges.push_back({{std::min(a, b), std::max(a, b)}, m_rest_lengths[e]});
+  }
+  std::sort(old_edges.begin(), old_edges.end());
+  m_cloth_edges = unique_edges(cloth.triangles);
+  m_rest_lengths.clear();
+  for (const auto& edge : m_cloth_edges) {
+    const auto found = std::lower_bound(old_edges.begin(), old_edges.end(), std::make_pair(edge, Scalar{-1}));
+    m_rest_lengths.push_back(found != old_edges.end() && found->first == edge
+                                 ? found->second
+                                 : (cloth.positions_t0[edge.first] - cloth.positions_t0[edge.second]).norm());
+  }
+  // The jump audit's end of the last step: each node's at its new index, a new node's where it starts (it
+  // was made on its cloth's faces, crossing nothing); the cloths' faces are their new ones, the others'
+  // their old ones renumbered.
+  if (!m_audited_end.empty() && m_audited_end.size() >= change.cloth_nodes_before()) {
+    Vec3Array end = change.nodes_moved(m_audited_end, Vec3(Vec3::Zero()));
+    for (std::size_t i = 0; i < change.cloth_nodes_after(); ++i) {
+      if (change.is_new_node(i)) end[i] = cloth.positions_t0[i];
+    }
+    std::vector<Triangle> faces = cloth.triangles;
+    for (std::size_t t = change.cloth_triangles_before(); t < m_audited_triangles.size(); ++t) {
+      const Triangle& old = m_audited_triangles[t];
+      faces.push_back({static_cast<Index>(change.node(old[0])), static_cast<Index>(change.node(old[1])),
+                       static_cast<Index>(change.node(old[2]))});
+    }
+    m_audited_end = std::move(end);
+    m_audited_triangles = std::move(faces);
+  }
+  // The adhesion's work per face (the cloths' faces, then the obstacles'): a cloth's new faces are of its
+  // fabric.
+  if (m_effects.coupler && m_effects.coupler->adhesion()) {
+    AdhesionSettings adhesion = *m_effects.coupler->adhesion();
+    const double fabric = (m_config.cloth ? *m_config.cloth : ClothSettings{}).adhesion;
+    const std::size_t size =
+        adhesion.work.size() + change.cloth_triangles_after() - change.cloth_triangles_before();
+    ScalarArray work(std::max(size, change.cloth_triangles_after()), fabric);
+    for (std::size_t t = 0; t < adhesion.work.size(); ++t) {
+      const std::size_t now = change.triangle(t);
+      if (now != ClothLayoutChange::kGone && now < work.size()) work[now] = adhesion.work[t];
+    }
+    adhesion.work = std::move(work);
+    m_effects.coupler->set_adhesion(std::move(adhesion));
   }
 }
 
@@ -392,6 +481,7 @@ StepStatus Simulation::step(Scalar dt) {
   }
   if (m_bodies) tell_bodies_the_points(dt);
   if (m_engine) m_engine->begin_step();
+  if (m_cloth) follow_cloth_layout();
   if (m_bodies) {
     ParticleSet& p = m_fluid->particles();
     // The cloth where it starts the step, the side of it the coupling first keeps the water on.

@@ -56,6 +56,11 @@ class Simulation {
   /// the particles and, per coupling.scheme, the cloth now or at its next step (repulsion, friction,
   /// continuous handling); the leak audit checks the final motion; the cloth takes its corrections; kill
   /// regions remove the particles that left. Stages of effects the scene does not list are never built.
+  /// A cloth torn, cut or refined since the last step (more nodes, other faces: ClothEngine::pieces) is
+  /// followed: what the run keeps per node and face moves with it (cloth_layout.hpp).
+  /// @throws Error when the engine's cloth lost nodes, or has a new node without a positive dry mass for
+  ///         the wetting; the nozzles of this step have emitted then (CoupledWorld refuses a cloth that
+  ///         lost nodes before it steps)
   StepStatus step() { return step(next_dt()); }
   /// The same with a step other than the scene's (unit: s, > 0).
   StepStatus step(Scalar dt);
@@ -184,6 +189,12 @@ class Simulation {
   /// (key, instance) of each rigid surface of the step, in order: which bodies the mesh's faces belong to.
   std::vector<std::pair<std::uint64_t, std::uint64_t>> rigid_body_instances() const;
   void audit_face_jumps_since_last_step(StepStatus& status);
+  /// After the engine's begin_step: when a cloth was torn, cut or refined since the last step (more nodes,
+  /// other faces), moves what the run keeps per node and face to the new layout (cloth_layout.hpp): the
+  /// impulses owed to the cloth and the particles that gave them, the strain limit's edges, the jump
+  /// audit's end positions, the adhesion's works and the wetting's water.
+  /// @throws Error naming the cloth when one has fewer nodes than before
+  void follow_cloth_layout();
   void remove_killed();
   /// The cloth's blow-up checks after a step: the fastest node against cloth.max_speed (RUNAWAY_NODE), the
   /// most stretched edge against cloth.max_strain (CLOTH_OVERSTRETCHED); also keeps the run's largest.
@@ -236,9 +247,10 @@ class Simulation {
   Scalar m_last_particle_speed = 0;  // the fastest particle then (unit: m/s)
   Scalar m_nozzle_speed = 0;         // the fastest nozzle's speed (unit: m/s)
   Scalar m_max_strain = 0;
+  std::vector<ClothPiece> m_cloth_pieces;              // the cloth engine's pieces at the last step
   std::vector<std::pair<Index, Index>> m_cloth_edges;  // each edge of the cloth once, (lower, higher node)
-  ScalarArray m_rest_lengths;                          // their lengths at construction (unit: m)
-  double m_energy_floor = 0;  // -g.x of the lowest particle at construction, per kg (unit: J/kg)
+  ScalarArray m_rest_lengths;  // their lengths at construction, or at the tear that made them (unit: m)
+  double m_energy_floor = 0;   // -g.x of the lowest particle at construction, per kg (unit: J/kg)
   double m_initial_energy = 0;
 };
 

@@ -49,6 +49,7 @@ ClothWetting::ClothWetting(const WettingSettings& settings, const std::vector<Tr
     m_capacity[i] = settings.max_saturation * dry_masses[i];
   }
   m_water.assign(m, 0.0);
+  m_rest_positions = rest_positions;
   m_node_area.assign(m, 0.0);
   m_flow.assign(m, 0.0);
   std::vector<std::pair<Index, Index>> pairs;
@@ -80,6 +81,85 @@ ClothWetting::ClothWetting(const WettingSettings& settings, const std::vector<Tr
     }
     m_edges.push_back(
         {a, b, settings.diffusion * 0.5 * (m_capacity[a] + m_capacity[b]) / (length * length), length});
+  }
+}
+
+void ClothWetting::follow(const ClothLayoutChange& change, const std::vector<Triangle>& triangles,
+                          const Vec3Array& positions, const ScalarArray& dry_masses) {
+  const std::size_t m = positions.size();
+  if (m != change.cloth_nodes_after() || dry_masses.size() != m ||
+      m_water.size() != change.cloth_nodes_before()) {
+    throw Error("wetting: a cloth of " + std::to_string(m_water.size()) + " nodes followed to " +
+                std::to_string(change.cloth_nodes_after()) + " with " + std::to_string(m) +
+                " positions and " + std::to_string(dry_masses.size()) + " masses");
+  }
+  for (std::size_t f = 0; f < triangles.size(); ++f) {
+    for (const Index v : triangles[f]) {
+      if (v >= m) {
+        throw Error("wetting: cloth triangle " + std::to_string(f) + " has node " + std::to_string(v) +
+                    ", out of range [0, " + std::to_string(m) + ")");
+      }
+    }
+  }
+  // The water stays with its nodes, a node the tear made holding none. The capacities are those of the
+  // dry masses now: the engine may have moved mass from the old nodes to the new (Bullet's refine does), and
+  // kept, the old nodes' would hold more water than the cloth can. Water over a capacity drips.
+  ScalarArray capacity(m);
+  for (std::size_t i = 0; i < m; ++i) {
+    if (!(dry_masses[i] > 0.0) || !std::isfinite(dry_masses[i])) {
+      throw Error("wetting: cloth node " + std::to_string(i) + " has mass " + format_number(dry_masses[i]) +
+                  ", must be > 0 and finite");
+    }
+    capacity[i] = m_settings.max_saturation * dry_masses[i];
+  }
+  m_capacity = std::move(capacity);
+  m_water = change.nodes_moved(m_water, 0.0);
+  m_flow.assign(m, 0.0);
+  // Rest geometry: a face of old nodes keeps theirs; one with a new node, whose place at rest is unknown, is
+  // taken as it lies now (all three of its nodes, so that its shape is one the cloth had). An edge keeps
+  // its rest length when it was an edge before, else takes its length now.
+  std::vector<std::uint8_t> is_new(m, 0);
+  for (std::size_t i = 0; i < m; ++i)
+    is_new[i] = change.is_new_node(i) ? 1 : 0;
+  m_rest_positions = change.nodes_moved(m_rest_positions, Vec3(Vec3::Zero()));
+  for (std::size_t i = 0; i < m; ++i) {
+    if (is_new[i]) m_rest_positions[i] = positions[i];
+  }
+  std::vector<std::pair<std::pair<Index, Index>, double>> old_edges;
+  old_edges.reserve(m_edges.size());
+  for (const Edge& e : m_edges) {
+    const auto a = static_cast<Index>(change.node(e.a)), b = static_cast<Index>(change.node(e.b));
+    old_edges.push_back({{std::min(a, b), std::max(a, b)}, e.rest_length});
+  }
+  std::sort(old_edges.begin(), old_edges.end());
+  m_triangles = triangles;
+  m_node_area.assign(m, 0.0);
+  std::vector<std::pair<Index, Index>> pairs;
+  pairs.reserve(3 * triangles.size());
+  for (const Triangle& t : triangles) {
+    const bool moved = is_new[t[0]] || is_new[t[1]] || is_new[t[2]];
+    const Vec3Array& x = moved ? positions : m_rest_positions;
+    const double area = 0.5 * (x[t[1]] - x[t[0]]).cross(x[t[2]] - x[t[0]]).norm();
+    for (int k = 0; k < 3; ++k) {
+      m_node_area[t[k]] += area / 3.0;
+      const Index u = t[k], v = t[(k + 1) % 3];
+      pairs.emplace_back(std::min(u, v), std::max(u, v));
+    }
+  }
+  std::sort(pairs.begin(), pairs.end());
+  pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
+  m_edges.clear();
+  for (const auto& pair : pairs) {
+    const auto found = std::lower_bound(old_edges.begin(), old_edges.end(), std::make_pair(pair, -1.0));
+    const double length = found != old_edges.end() && found->first == pair
+                              ? found->second
+                              : (positions[pair.first] - positions[pair.second]).norm();
+    // Two nodes a tear put at one place share no water along their edge: it has no length to diffuse over.
+    if (!(length > 0.0) || !std::isfinite(length)) continue;
+    m_edges.push_back(
+        {pair.first, pair.second,
+         m_settings.diffusion * 0.5 * (m_capacity[pair.first] + m_capacity[pair.second]) / (length * length),
+         length});
   }
 }
 

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include <drench/common/types.hpp>
+#include <drench/coupling/cloth_layout.hpp>
 #include <drench/wetting/wetting_settings.hpp>
 
 namespace drench {
@@ -86,6 +87,20 @@ class ClothWetting {
                                 double particle_mass, double offset, const Vec3Array& particles,
                                 double clearance, WettingStepStats& stats);
 
+  /// Follows the cloth torn, cut or refined between two steps (ClothEngine::pieces): each node keeps its
+  /// water at its new index and a node the tear added holds none, so the water held is what it was; every
+  /// node can hold max_saturation times its dry mass now (a tear moves mass between nodes; water over a
+  /// capacity drips at the next drip()). The faces become `triangles`; an edge keeps its rest length when it
+  /// was an edge before, a new one takes its length now, and a face with a new node its area now (its nodes'
+  /// rest places are unknown). An edge of zero length is left out of the diffusion.
+  /// @param change  from the layout of the last call (or construction) to now; this cloth is its pieces
+  /// @param triangles  F' faces, node indices < M'
+  /// @param positions  M' node positions now (unit: m)
+  /// @param dry_masses  M' dry node masses now (unit: kg), > 0 and finite
+  /// @throws drench::Error on sizes that do not match the change, a node index out of range or a mass that
+  ///         is not > 0 and finite, before anything changes
+  void follow(const ClothLayoutChange& change, const std::vector<Triangle>& triangles,
+              const Vec3Array& positions, const ScalarArray& dry_masses);
   /// Water held per node (unit: kg), M entries, >= 0.
   const ScalarArray& water() const { return m_water; }
   /// Capacity per node (unit: kg), M entries.
@@ -114,7 +129,8 @@ class ClothWetting {
   ScalarArray m_capacity;
   ScalarArray m_water;
   ScalarArray m_node_area;
-  ScalarArray m_flow;  // M, scratch of spread()
+  Vec3Array m_rest_positions;  // M, the rest places the node areas and the edges' rest lengths are of
+  ScalarArray m_flow;          // M, scratch of spread()
 };
 
 }  // namespace drench
