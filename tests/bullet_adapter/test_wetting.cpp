@@ -133,4 +133,62 @@ TEST(Wetting, WaterMassesAreCheckedAndPinnedNodesStayPinned) {
 }
 
 }  // namespace
+
+/// The water of every node of `cloth` as set_water_masses takes it: `per_node` times (1 + its index mod 5)
+/// for the first `wet` nodes, none for the rest (a tear's new nodes).
+ScalarArray some_water(const bullet::BulletCloth& cloth, std::size_t wet, double per_node) {
+  ScalarArray water(cloth.mesh().node_count(), 0.0);
+  for (std::size_t i = 0; i < wet; ++i)
+    water[i] = per_node * static_cast<double>(1 + i % 5);
+  return water;
+}
+
+/// The water on the nodes Bullet moves (pinned ones weigh nothing in Bullet).
+double moving_water(const bullet::BulletCloth& cloth, const ScalarArray& water) {
+  double sum = 0.0;
+  for (std::size_t i = 0; i < water.size(); ++i)
+    if (cloth.mesh().inverse_masses[i] > 0.0) sum += water[i];
+  return sum;
+}
+
+/// Cuts the cloth along the plane x = `x` as Bullet's own cutting does (refine with cut).
+void refine_across(btSoftBody& body, double x) {
+  struct Plane : btSoftBody::ImplicitFn {
+    btScalar x = 0;
+    btScalar Eval(const btVector3& p) override { return p.x() - x; }
+  } plane;
+  plane.x = static_cast<btScalar>(x);
+  body.refine(&plane, static_cast<btScalar>(1e-4), true);
+}
+
+// A wet cloth torn by Bullet's refine, which makes its new nodes of its old nodes' wet masses: the dry masses
+// follow, so the cloth weighs its dry mass plus its water after the tear, also when it is torn twice before
+// the water is set again; a cutLink's new nodes weigh Bullet's 1 kg each, dry.
+TEST(Wetting, ATornClothWeighsItsDryMassPlusItsWater) {
+  bullet::BulletCloth cloth(bullet::test::patch_settings(9, 9), Vec3(0, -9.81, 0));
+  const double dry = cloth.total_mass();
+  const std::size_t nodes = cloth.mesh().node_count();
+  const ScalarArray water = some_water(cloth, nodes, 2e-4);
+  cloth.set_water_masses(water);
+  const double wet = moving_water(cloth, water);
+  ASSERT_NEAR(cloth.total_mass(), dry + wet, bullet::test::bullet_tolerance(1e-12, dry + wet, 4.0 * 81));
+  refine_across(cloth.body(), 0.12);
+  cloth.begin_step();
+  refine_across(cloth.body(), -0.05);  // torn again before the water is set
+  cloth.begin_step();
+  ASSERT_GT(cloth.mesh().node_count(), nodes + 16) << "two cuts across 9 rows";
+  cloth.set_water_masses(some_water(cloth, nodes, 2e-4));
+  const std::size_t now = cloth.mesh().node_count();
+  EXPECT_NEAR(cloth.total_mass(), dry + wet, bullet::test::bullet_tolerance(1e-12, dry + wet, 16.0 * now))
+      << "dry " << dry << " kg, water " << wet << " kg";
+
+  bullet::BulletCloth cut(bullet::test::patch_settings(9, 9), Vec3(0, -9.81, 0));
+  cut.set_water_masses(water);
+  ASSERT_TRUE(cut.body().cutLink(40, 41, 0.5)) << "the middle node and the next along x";
+  cut.begin_step();
+  ASSERT_EQ(cut.mesh().node_count(), nodes + 2);
+  cut.set_water_masses(some_water(cut, nodes, 2e-4));
+  EXPECT_NEAR(cut.total_mass(), dry + wet + 2.0, bullet::test::bullet_tolerance(1e-12, 2.0, 4.0 * 83));
+}
+
 }  // namespace drench

@@ -89,11 +89,48 @@ void BulletCloth::read_inverse_masses() {
     m_mesh.inverse_masses[i] = body.m_nodes[i].m_im;
 }
 
+void BulletCloth::follow_dry_masses() {
+  if (m_dry_inverse_masses.empty()) return;  // not wetted yet: the first set_water_masses reads them all
+  const btSoftBody& body = *m_body;
+  const std::size_t old_nodes = m_dry_inverse_masses.size();
+  // A tear made its new nodes of its old nodes' wet masses (refine scales both ends of a split edge, and
+  // halves a node it doubles): an old node keeps its water (the wetting's), and its dry mass scales as
+  // Bullet scaled its whole mass; the new nodes, which hold no water, take as dry mass theirs less the
+  // share of water that came with it. So the cloth's dry mass and its water stay what they were.
+  double moved_water = 0.0, new_mass = 0.0;
+  for (std::size_t i = 0; i < old_nodes; ++i) {
+    const double dry = m_dry_inverse_masses[i];
+    const double left = m_left_inverse_masses[i];
+    const btScalar now = body.m_nodes[static_cast<int>(i)].m_im;
+    // As drench left it (set_water_masses, or the last tear's follow), or pinned.
+    if (!(dry > 0.0) || !(now > 0) || !(left > 0.0) || now == static_cast<btScalar>(left)) continue;
+    const double scale = left / static_cast<double>(now);  // its mass now over its mass then
+    m_dry_inverse_masses[i] = dry / scale;
+    moved_water += (1.0 - scale) * m_last_water[i];
+  }
+  for (int i = static_cast<int>(old_nodes); i < body.m_nodes.size(); ++i) {
+    if (body.m_nodes[i].m_im > 0) new_mass += 1.0 / static_cast<double>(body.m_nodes[i].m_im);
+  }
+  // Bullet moves no more than it takes: a share of 1 or more (or below 0) is the game's own change of masses,
+  // and the new nodes are then taken as dry.
+  const double share = new_mass > 0.0 ? moved_water / new_mass : 0.0;
+  const double water_share = share >= 0.0 && share < 1.0 ? share : 0.0;
+  for (int i = static_cast<int>(old_nodes); i < body.m_nodes.size(); ++i) {
+    const double im = body.m_nodes[i].m_im;
+    m_dry_inverse_masses.push_back(im > 0.0 ? im / (1.0 - water_share) : 0.0);
+  }
+  m_last_water.resize(m_dry_inverse_masses.size(), 0.0);
+  m_left_inverse_masses.resize(m_dry_inverse_masses.size());
+  for (int i = 0; i < body.m_nodes.size(); ++i)
+    m_left_inverse_masses[static_cast<std::size_t>(i)] = body.m_nodes[i].m_im;
+}
+
 void BulletCloth::begin_step() {
   restore_masses();  // carried masses set for a step that never ran are not the cloth's
   const btSoftBody& body = *m_body;
   if (static_cast<std::size_t>(body.m_nodes.size()) != m_mesh.node_count() ||
       static_cast<std::size_t>(body.m_faces.size()) != m_mesh.triangle_count()) {
+    follow_dry_masses();
     read_topology();
   } else {
     read_inverse_masses();
@@ -152,6 +189,10 @@ void BulletCloth::set_water_masses(const ScalarArray& water) {
     const double dry = m_dry_inverse_masses[i];
     if (dry > 0.0) body.m_nodes[i].m_im = 1.0 / (1.0 / dry + water[i]);
   }
+  m_last_water = water;
+  m_left_inverse_masses.resize(water.size());
+  for (int i = 0; i < body.m_nodes.size(); ++i)
+    m_left_inverse_masses[static_cast<std::size_t>(i)] = body.m_nodes[i].m_im;
   body.updateLinkConstants();
   read_inverse_masses();
 }

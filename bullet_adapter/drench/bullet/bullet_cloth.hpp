@@ -79,8 +79,11 @@ class BulletCloth final : public ClothEngine {
   void set_carried_masses(const ScalarArray& carried) override;
 
   /// node.m_im = 1 / (dry mass + water[i]) for every node with m_im > 0, the dry masses being the nodes' at
-  /// the first call, and updateLinkConstants() (never setMass: see set_carried_masses). Pinning or
-  /// unpinning nodes after the first call is not supported: their dry mass is not re-read.
+  /// the first call; a tear since (begin_step finding more nodes or other faces) moves them as Bullet moved
+  /// the masses: an old node's scales with its whole mass, a new node's is its mass less the share of water
+  /// that came with it, so the cloth's dry mass stays what it was. And updateLinkConstants() (never setMass:
+  /// see set_carried_masses). Pinning or unpinning nodes after the first call is not supported: their dry
+  /// mass is not re-read.
   /// @throws std::invalid_argument on a wrong size or a negative or non-finite entry
   void set_water_masses(const ScalarArray& water) override;
 
@@ -141,6 +144,9 @@ class BulletCloth final : public ClothEngine {
   struct OwnedWorld;
 
   void read_topology();
+  /// Before read_topology of a cloth a game tore since the last step (more nodes or other faces): the dry
+  /// masses of its old and new nodes, as Bullet moved its masses about (see the .cpp).
+  void follow_dry_masses();
   void read_inverse_masses();
   void restore_masses();
 
@@ -148,7 +154,9 @@ class BulletCloth final : public ClothEngine {
   btSoftBody* m_body = nullptr;
   int m_substeps = 1;  // owned cloth: ClothSettings::substeps; attached: 1
   std::vector<std::pair<int, double>> m_saved_inverse_masses;  // node, its own m_im, while carrying water
-  ScalarArray m_dry_inverse_masses;  // m_im of every node before the first set_water_masses
+  ScalarArray m_dry_inverse_masses;   // m_im of every node before the first set_water_masses
+  ScalarArray m_last_water;           // what the last set_water_masses weighed each node with (unit: kg)
+  ScalarArray m_left_inverse_masses;  // m_im as drench last left it (set_water_masses, follow_dry_masses)
   btSoftRigidDynamicsWorld* m_world = nullptr;
   ClothMesh m_mesh;
   Vec3Array m_predicted;  // M, Bullet's end positions before the coupling

@@ -210,6 +210,15 @@ const BulletCloth& BulletClothSet::cloth(std::size_t i) const {
   return *m_cloths[check_index(i)];
 }
 
+std::vector<ClothPiece> BulletClothSet::pieces() const {
+  std::vector<ClothPiece> pieces(m_cloths.size());
+  for (std::size_t c = 0; c < m_cloths.size(); ++c) {
+    pieces[c] = {m_first_node[c], m_first_node[c + 1] - m_first_node[c], m_first_triangle[c],
+                 m_first_triangle[c + 1] - m_first_triangle[c]};
+  }
+  return pieces;
+}
+
 std::size_t BulletClothSet::first_node(std::size_t i) const {
   return m_first_node[check_index(i)];
 }

@@ -46,7 +46,7 @@ class BulletClothSet final : public ClothEngine {
   BulletClothSet& operator=(const BulletClothSet&) = delete;
 
   /// Every cloth's begin_step, then their start positions and inverse masses into mesh(). A cloth whose
-  /// node or face count changed rebuilds the mesh (CoupledWorld refuses that before: see its step).
+  /// node or face count changed (torn, cut, refined) rebuilds the mesh, and pieces() tells the new layout.
   void begin_step() override;
   /// Each cloth takes its nodes' share. @throws std::invalid_argument unless one entry per node of the set
   void apply_impulses(const Vec3Array& impulses) override;
@@ -75,6 +75,8 @@ class BulletClothSet final : public ClothEngine {
   /// pinned nodes from its own mean area density.
   ScalarArray dry_node_masses() const override;
 
+  /// Each cloth's nodes and faces in mesh(), cloth i the i-th (first_node, node_count, ...).
+  std::vector<ClothPiece> pieces() const override;
   std::size_t cloth_count() const { return m_cloths.size(); }
   /// Cloth i. @throws std::out_of_range naming i and the count
   BulletCloth& cloth(std::size_t i);

@@ -203,10 +203,13 @@ class CoupledWorld {
   /// - dt is not > 0 and finite: std::invalid_argument "CoupledWorld::step: dt must be > 0 and finite, got
   ///   <dt> s"; or dt is less than the scene's time.dt / kMinStepDivisor (std::invalid_argument naming both);
   /// - a cloth is no longer in the world's soft body array (the game called world.removeSoftBody, perhaps
-  ///   to delete it) or its node or face count changed (torn, cut, refined: the coupling's edges and the
-  ///   wetting's nodes would no longer match): drench::Error naming the cloth's index. A removed cloth is
-  ///   never dereferenced, so deleting it after removeSoftBody is safe; deleting a body still in the world
-  ///   breaks Bullet's own next step, which no check here can see;
+  ///   to delete it) or has fewer nodes than at the last step (Bullet's own tearing, cutLink and refine,
+  ///   only adds nodes: what drench keeps per node would no longer match): drench::Error naming the cloth's
+  ///   index. A removed cloth is never dereferenced, so deleting it after removeSoftBody is safe; deleting
+  ///   a body still in the world breaks Bullet's own next step, which no check here can see. A cloth with
+  ///   more nodes or other faces (torn, cut, refined since the last step) is followed: the water it holds,
+  ///   what it is owed and its strain limit's rest lengths stay with its nodes, a new node or edge starting
+  ///   dry at its length now (cloth_layout.hpp);
   /// - built to couple every soft body of the world, the world now has another count of them (one added
   ///   since would not be coupled): drench::Error naming both counts;
   /// - the world's rigid-body or soft-body gravity is no longer the scene's (world.setGravity or
@@ -298,8 +301,8 @@ class CoupledWorld {
   std::unique_ptr<WorldSteps> m_world_steps;  // null for the world this class owns
   BulletClothSet* m_cloths;                   // owned by m_simulation
   struct CoupledBody {
-    const btSoftBody* body;    // compared with the world's soft bodies before it is read
-    std::size_t nodes, faces;  // when coupled
+    const btSoftBody* body;  // compared with the world's soft bodies before it is read
+    std::size_t nodes;       // its node count in the last step
   };
   std::vector<CoupledBody> m_bodies;  // one per cloth
   bool m_every_soft_body = false;     // built by the constructor that couples every soft body of the world
