@@ -48,6 +48,18 @@ struct SoftRigidWorld {
   btSoftRigidDynamicsWorld world{&dispatcher, &broadphase, &solver, &configuration};
 };
 
+/// Cuts `body` along the plane x = `x` as Bullet's own cutting does (btSoftBody::refine with cut: the edges
+/// across the plane are split where they cross it and the nodes there doubled, one for each side), which
+/// adds nodes and faces to the cloth and moves some of its mass to the new nodes: a game's tear.
+inline void refine_across(btSoftBody& body, double x) {
+  struct Plane : btSoftBody::ImplicitFn {
+    btScalar x = 0;
+    btScalar Eval(const btVector3& p) override { return p.x() - x; }
+  } plane;
+  plane.x = static_cast<btScalar>(x);
+  body.refine(&plane, static_cast<btScalar>(1e-4), true);
+}
+
 inline ClothSettings patch_settings(int nodes_x, int nodes_z, const std::string& pinned = "corners") {
   ClothSettings s;
   s.center = Vec3(0.1, 0.5, -0.2);

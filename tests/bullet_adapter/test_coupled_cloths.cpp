@@ -467,18 +467,6 @@ TEST(CoupledWorldChecks, AClothThatLostNodesIsNamed) {
   EXPECT_TRUE(Snapshot(coupled, bodies, user.steps) == before);
 }
 
-/// Cuts `cloth` along the plane x = `x` as Bullet's own cutting does (btSoftBody::refine with cut: the
-/// edges across the plane are split where they cross it, and the nodes there doubled, one for each side),
-/// which adds nodes and faces to the cloth and moves some of its mass to the new nodes.
-void tear_across(btSoftBody& cloth, double x) {
-  struct Plane : btSoftBody::ImplicitFn {
-    btScalar x = 0;
-    btScalar Eval(const btVector3& p) override { return p.x() - x; }
-  } plane;
-  plane.x = static_cast<btScalar>(x);
-  cloth.refine(&plane, static_cast<btScalar>(1e-4), true);
-}
-
 /// What a run of TwoClothWorld with wet_two_jets water shows after a tear of cloth 0 (or none).
 struct TearRun {
   int nodes0 = 0;            // cloth 0's nodes at the end
@@ -523,7 +511,7 @@ TearRun run_and_tear(bool tear) {
   }
   EXPECT_EQ(below(0), 0u);
   EXPECT_GT(coupled.water_held(0), 0.0);
-  if (tear) tear_across(*user.cloths[0], kClothX[0] + 0.01);
+  if (tear) test::refine_across(*user.cloths[0], kClothX[0] + 0.01);
   run.nodes0 = user.cloths[0]->m_nodes.size();
   for (int n = 0; n < 400; ++n) {
     step(300 + n);

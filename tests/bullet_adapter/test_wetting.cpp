@@ -151,16 +151,6 @@ double moving_water(const bullet::BulletCloth& cloth, const ScalarArray& water) 
   return sum;
 }
 
-/// Cuts the cloth along the plane x = `x` as Bullet's own cutting does (refine with cut).
-void refine_across(btSoftBody& body, double x) {
-  struct Plane : btSoftBody::ImplicitFn {
-    btScalar x = 0;
-    btScalar Eval(const btVector3& p) override { return p.x() - x; }
-  } plane;
-  plane.x = static_cast<btScalar>(x);
-  body.refine(&plane, static_cast<btScalar>(1e-4), true);
-}
-
 // A wet cloth torn by Bullet's refine, which makes its new nodes of its old nodes' wet masses: the dry masses
 // follow, so the cloth weighs its dry mass plus its water after the tear, also when it is torn twice before
 // the water is set again; a cutLink's new nodes weigh Bullet's 1 kg each, dry.
@@ -172,9 +162,9 @@ TEST(Wetting, ATornClothWeighsItsDryMassPlusItsWater) {
   cloth.set_water_masses(water);
   const double wet = moving_water(cloth, water);
   ASSERT_NEAR(cloth.total_mass(), dry + wet, bullet::test::bullet_tolerance(1e-12, dry + wet, 4.0 * 81));
-  refine_across(cloth.body(), 0.12);
+  bullet::test::refine_across(cloth.body(), 0.12);
   cloth.begin_step();
-  refine_across(cloth.body(), -0.05);  // torn again before the water is set
+  bullet::test::refine_across(cloth.body(), -0.05);  // torn again before the water is set
   cloth.begin_step();
   ASSERT_GT(cloth.mesh().node_count(), nodes + 16) << "two cuts across 9 rows";
   cloth.set_water_masses(some_water(cloth, nodes, 2e-4));

@@ -78,4 +78,16 @@ bool triangle_overlaps_cube(const Vec3& a, const Vec3& b, const Vec3& c, const V
   return true;
 }
 
+std::vector<std::pair<Index, Index>> unique_edges(const std::vector<Triangle>& triangles) {
+  std::vector<std::pair<Index, Index>> edges;
+  edges.reserve(3 * triangles.size());
+  for (const Triangle& t : triangles) {
+    for (int k = 0; k < 3; ++k)
+      edges.emplace_back(std::min(t[k], t[(k + 1) % 3]), std::max(t[k], t[(k + 1) % 3]));
+  }
+  std::sort(edges.begin(), edges.end());
+  edges.erase(std::unique(edges.begin(), edges.end()), edges.end());
+  return edges;
+}
+
 }  // namespace drench

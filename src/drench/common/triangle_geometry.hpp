@@ -3,6 +3,9 @@
 /// coupling's proximity test (Huber et al. 2013 sec. 3.1); segment-triangle crossings for the surface's
 /// visibility criterion (sec. 4, Fig. 2a) and its intersection count.
 
+#include <utility>
+#include <vector>
+
 #include <drench/common/types.hpp>
 
 namespace drench {
@@ -24,5 +27,9 @@ bool segment_crosses_triangle(const Vec3& p, const Vec3& q, const Vec3& a, const
 /// (unit: m, > 0): the separating-axis test of Akenine-Möller 2001 (the box's 3 axes, the triangle's normal
 /// and the 9 edge cross products), in double precision.
 bool triangle_overlaps_cube(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& centre, double half);
+
+/// Each edge of `triangles` once, as (lower, higher node index), ascending: a cloth's links for its strain
+/// limit and its wetting's diffusion.
+std::vector<std::pair<Index, Index>> unique_edges(const std::vector<Triangle>& triangles);
 
 }  // namespace drench

@@ -1,5 +1,6 @@
 #include <drench/coupling/cloth_layout.hpp>
 
+#include <algorithm>
 #include <stdexcept>
 #include <string>
 #include <tuple>
@@ -82,6 +83,29 @@ bool ClothLayoutChange::is_new_node(std::size_t now) const {
   const std::size_t c = piece_of_node(m_after, now);
   if (c == m_after.size()) return false;
   return now - m_after[c].first_node >= m_before[c].nodes;
+}
+
+ScalarArray ClothLayoutChange::rest_lengths(const std::vector<std::pair<Index, Index>>& old_edges,
+                                            const ScalarArray& old_lengths,
+                                            const std::vector<std::pair<Index, Index>>& edges,
+                                            const Vec3Array& positions) const {
+  std::vector<std::pair<std::pair<Index, Index>, double>> kept;
+  kept.reserve(old_edges.size());
+  for (std::size_t e = 0; e < old_edges.size(); ++e) {
+    const auto a = static_cast<Index>(node(old_edges[e].first));
+    const auto b = static_cast<Index>(node(old_edges[e].second));
+    kept.push_back({{std::min(a, b), std::max(a, b)}, old_lengths[e]});
+  }
+  std::sort(kept.begin(), kept.end());
+  ScalarArray lengths;
+  lengths.reserve(edges.size());
+  for (const auto& edge : edges) {
+    const auto found = std::lower_bound(kept.begin(), kept.end(), std::make_pair(edge, -1.0));
+    lengths.push_back(found != kept.end() && found->first == edge
+                          ? found->second
+                          : (positions[edge.first] - positions[edge.second]).norm());
+  }
+  return lengths;
 }
 
 }  // namespace drench

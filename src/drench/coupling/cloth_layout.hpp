@@ -7,6 +7,7 @@
 /// audit's end positions) follows its node or face through these maps instead of being lost.
 
 #include <cstddef>
+#include <utility>
 #include <vector>
 
 #include <drench/common/types.hpp>
@@ -58,6 +59,16 @@ class ClothLayoutChange {
   std::size_t cloth_nodes_after() const { return m_nodes_after; }
   std::size_t cloth_triangles_before() const { return m_triangles_before; }
   std::size_t cloth_triangles_after() const { return m_triangles_after; }
+
+  /// The rest lengths of the cloths' edges now (unit: m), one per entry of `edges`: an edge that was one of
+  /// `old_edges` (its nodes moved to their new indices) keeps its old rest length; another, around a node a
+  /// tear added or drawn by a refinement, takes its length in `positions`.
+  /// @param old_edges, old_lengths  the edges of the old layout (any order) and their rest lengths (m)
+  /// @param edges  the edges now, each (lower, higher node index) of the new layout
+  /// @param positions  the nodes now (unit: m)
+  ScalarArray rest_lengths(const std::vector<std::pair<Index, Index>>& old_edges,
+                           const ScalarArray& old_lengths, const std::vector<std::pair<Index, Index>>& edges,
+                           const Vec3Array& positions) const;
 
   /// `old` (an array with one entry per node of the old layout, cloths' and others') in the new layout:
   /// each entry at its node's new index, `fill` at the nodes the cloths gained.

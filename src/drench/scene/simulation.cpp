@@ -13,6 +13,7 @@
 #include <drench/common/key_index_table.hpp>
 #include <drench/common/parallel.hpp>
 #include <drench/common/stopwatch.hpp>
+#include <drench/common/triangle_geometry.hpp>
 #include <drench/coupling/broad_phase.hpp>
 #include <drench/coupling/cloth_obstacle.hpp>
 #include <drench/io/obj_reader.hpp>
@@ -196,23 +197,6 @@ std::vector<TriangleMesh> build_obstacles(const SceneConfig& config) {
   return meshes;
 }
 
-namespace {
-
-/// Each edge of `triangles` once, as (lower, higher node), ascending.
-std::vector<std::pair<Index, Index>> unique_edges(const std::vector<Triangle>& triangles) {
-  std::vector<std::pair<Index, Index>> edges;
-  edges.reserve(3 * triangles.size());
-  for (const Triangle& t : triangles) {
-    for (int k = 0; k < 3; ++k)
-      edges.push_back({std::min(t[k], t[(k + 1) % 3]), std::max(t[k], t[(k + 1) % 3])});
-  }
-  std::sort(edges.begin(), edges.end());
-  edges.erase(std::unique(edges.begin(), edges.end()), edges.end());
-  return edges;
-}
-
-}  // namespace
-
 Simulation::Simulation(const SceneConfig& config, const ClothEngineFactory& cloth_factory)
     : Simulation(config, build_cloth(checked(config), cloth_factory)) {}
 
@@ -317,21 +301,9 @@ void Simulation::follow_cloth_layout() {
   m_pending_links = std::move(links);
   // The strain limit's edges: an edge that was one keeps its rest length, a new one (around a new node, or
   // one a refinement drew) starts at its length now.
-  std::vector<std::pair<std::pair<Index, Index>, Scalar>> old_edges;
-  for (std::size_t e = 0; e < m_cloth_edges.size(); ++e) {
-    const auto a = static_cast<Index>(change.node(m_cloth_edges[e].first));
-    const auto b = static_cast<Index>(change.node(m_cloth_edges[e].second));
-    old_edges.push_back({{std::min(a, b), std::max(a, b)}, m_rest_lengths[e]});
-  }
-  std::sort(old_edges.begin(), old_edges.end());
-  m_cloth_edges = unique_edges(cloth.triangles);
-  m_rest_lengths.clear();
-  for (const auto& edge : m_cloth_edges) {
-    const auto found = std::lower_bound(old_edges.begin(), old_edges.end(), std::make_pair(edge, Scalar{-1}));
-    m_rest_lengths.push_back(found != old_edges.end() && found->first == edge
-                                 ? found->second
-                                 : (cloth.positions_t0[edge.first] - cloth.positions_t0[edge.second]).norm());
-  }
+  std::vector<std::pair<Index, Index>> edges = unique_edges(cloth.triangles);
+  m_rest_lengths = change.rest_lengths(m_cloth_edges, m_rest_lengths, edges, cloth.positions_t0);
+  m_cloth_edges = std::move(edges);
   // The jump audit's end of the last step: each node's at its new index, a new node's where it starts (it
   // was made on its cloth's faces, crossing nothing); the cloths' faces are their new ones, the others'
   // their old ones renumbered.

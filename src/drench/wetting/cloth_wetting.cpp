@@ -6,6 +6,7 @@
 #include <utility>
 
 #include <drench/common/error.hpp>
+#include <drench/common/triangle_geometry.hpp>
 
 namespace drench {
 
@@ -52,8 +53,6 @@ ClothWetting::ClothWetting(const WettingSettings& settings, const std::vector<Tr
   m_rest_positions = rest_positions;
   m_node_area.assign(m, 0.0);
   m_flow.assign(m, 0.0);
-  std::vector<std::pair<Index, Index>> pairs;
-  pairs.reserve(3 * triangles.size());
   for (std::size_t f = 0; f < triangles.size(); ++f) {
     const Triangle& t = triangles[f];
     for (int k = 0; k < 3; ++k) {
@@ -64,14 +63,10 @@ ClothWetting::ClothWetting(const WettingSettings& settings, const std::vector<Tr
     }
     const Vec3& a = rest_positions[t[0]];
     const double area = 0.5 * (rest_positions[t[1]] - a).cross(rest_positions[t[2]] - a).norm();
-    for (int k = 0; k < 3; ++k) {
-      m_node_area[t[k]] += area / 3.0;
-      const Index u = t[k], v = t[(k + 1) % 3];
-      pairs.emplace_back(std::min(u, v), std::max(u, v));
-    }
+    for (const Index v : t)
+      m_node_area[v] += area / 3.0;
   }
-  std::sort(pairs.begin(), pairs.end());
-  pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
+  const std::vector<std::pair<Index, Index>> pairs = unique_edges(triangles);
   m_edges.reserve(pairs.size());
   for (const auto& [a, b] : pairs) {
     const double length = (rest_positions[a] - rest_positions[b]).norm();
@@ -125,41 +120,31 @@ void ClothWetting::follow(const ClothLayoutChange& change, const std::vector<Tri
   for (std::size_t i = 0; i < m; ++i) {
     if (is_new[i]) m_rest_positions[i] = positions[i];
   }
-  std::vector<std::pair<std::pair<Index, Index>, double>> old_edges;
-  old_edges.reserve(m_edges.size());
+  std::vector<std::pair<Index, Index>> old_edges;
+  ScalarArray old_lengths;
   for (const Edge& e : m_edges) {
-    const auto a = static_cast<Index>(change.node(e.a)), b = static_cast<Index>(change.node(e.b));
-    old_edges.push_back({{std::min(a, b), std::max(a, b)}, e.rest_length});
+    old_edges.emplace_back(e.a, e.b);
+    old_lengths.push_back(e.rest_length);
   }
-  std::sort(old_edges.begin(), old_edges.end());
   m_triangles = triangles;
   m_node_area.assign(m, 0.0);
-  std::vector<std::pair<Index, Index>> pairs;
-  pairs.reserve(3 * triangles.size());
   for (const Triangle& t : triangles) {
     const bool moved = is_new[t[0]] || is_new[t[1]] || is_new[t[2]];
     const Vec3Array& x = moved ? positions : m_rest_positions;
     const double area = 0.5 * (x[t[1]] - x[t[0]]).cross(x[t[2]] - x[t[0]]).norm();
-    for (int k = 0; k < 3; ++k) {
-      m_node_area[t[k]] += area / 3.0;
-      const Index u = t[k], v = t[(k + 1) % 3];
-      pairs.emplace_back(std::min(u, v), std::max(u, v));
-    }
+    for (const Index v : t)
+      m_node_area[v] += area / 3.0;
   }
-  std::sort(pairs.begin(), pairs.end());
-  pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
+  const std::vector<std::pair<Index, Index>> pairs = unique_edges(triangles);
+  const ScalarArray lengths = change.rest_lengths(old_edges, old_lengths, pairs, positions);
   m_edges.clear();
-  for (const auto& pair : pairs) {
-    const auto found = std::lower_bound(old_edges.begin(), old_edges.end(), std::make_pair(pair, -1.0));
-    const double length = found != old_edges.end() && found->first == pair
-                              ? found->second
-                              : (positions[pair.first] - positions[pair.second]).norm();
+  for (std::size_t e = 0; e < pairs.size(); ++e) {
+    const auto [a, b] = pairs[e];
+    const double length = lengths[e];
     // Two nodes a tear put at one place share no water along their edge: it has no length to diffuse over.
     if (!(length > 0.0) || !std::isfinite(length)) continue;
     m_edges.push_back(
-        {pair.first, pair.second,
-         m_settings.diffusion * 0.5 * (m_capacity[pair.first] + m_capacity[pair.second]) / (length * length),
-         length});
+        {a, b, m_settings.diffusion * 0.5 * (m_capacity[a] + m_capacity[b]) / (length * length), length});
   }
 }
 
