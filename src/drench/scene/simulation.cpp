@@ -286,7 +286,8 @@ void Simulation::follow_cloth_layout() {
   }
   m_cloth_pieces = std::move(pieces);
   // What the last step owes the cloth: each node's at its new index (bodies' nodes, after the cloths', owe
-  // nothing). The links name faces, which keep their index unless their cloth lost faces.
+  // nothing). The links name faces: a torn cloth's are dropped (ClothLayoutChange::triangle), the impulses
+  // they carried stay owed to the nodes.
   if (m_pending_cloth_impulses.size() >= change.cloth_nodes_before()) {
     m_pending_cloth_impulses = change.nodes_moved(m_pending_cloth_impulses, Vec3(Vec3::Zero()));
     m_pending_cloth_nodes = change.cloth_nodes_after();
