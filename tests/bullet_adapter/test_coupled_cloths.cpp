@@ -467,6 +467,22 @@ TEST(CoupledWorldChecks, AClothThatLostNodesIsNamed) {
   EXPECT_TRUE(Snapshot(coupled, bodies, user.steps) == before);
 }
 
+TEST(CoupledWorldChecks, AClothWithoutFacesLeftIsNamed) {
+  TwoClothWorld user;
+  CoupledWorld coupled(user.world, user.cloths, two_jets());
+  ASSERT_TRUE(coupled.step().ok());
+  // The game took every face out (the water would pass through what is left, as through a rope).
+  btSoftBody& cloth = *user.cloths[1];
+  for (int f = 0; f < cloth.m_faces.size(); ++f) {
+    if (cloth.m_faces[f].m_leaf) cloth.m_fdbvt.remove(cloth.m_faces[f].m_leaf);
+  }
+  cloth.m_faces.clear();
+  const std::vector<const btSoftBody*> bodies = {user.cloths[0], user.cloths[1]};
+  const Snapshot before(coupled, bodies, user.steps);
+  expect_throw<Error>([&] { coupled.step(); }, {"cloth 1 has no faces left"});
+  EXPECT_TRUE(Snapshot(coupled, bodies, user.steps) == before);
+}
+
 /// What a run of TwoClothWorld with wet_two_jets water shows after a tear of cloth 0 (or none).
 struct TearRun {
   int nodes0 = 0;            // cloth 0's nodes at the end
