@@ -101,9 +101,9 @@ class ClothEngine {
   /// describes no cloth of its own (effect_registry.cpp, build_wetting).
   virtual ScalarArray dry_node_masses() const { return {}; }
   /// Where each of the engine's cloths lies in mesh(), as of construction or the last begin_step: back to
-  /// back from node and face 0. A cloth torn, cut or refined between two steps has more nodes (appended to its own) and
-  /// maybe more faces; the coupled step moves what it keeps per node and face along (cloth_layout.hpp).
-  /// This default: one cloth, the whole mesh.
+  /// back from node and face 0. A cloth torn, cut or refined between two steps has more nodes (appended to
+  /// its own) and maybe more faces; the coupled step moves what it keeps per node and face along
+  /// (cloth_layout.hpp). This default: one cloth, the whole mesh.
   virtual std::vector<ClothPiece> pieces() const {
     const ClothMesh& m = mesh();
     return {ClothPiece{0, m.node_count(), 0, m.triangle_count()}};
