@@ -257,7 +257,7 @@ CoupledWorld::CoupledWorld(std::unique_ptr<BulletClothSet> cloths, const SceneCo
                            btSoftRigidDynamicsWorld* world, const RigidBodyOptions* bodies)
     : m_world_steps(world ? std::make_unique<WorldSteps>(*world) : nullptr), m_cloths(cloths.get()) {
   for (std::size_t i = 0; i < m_cloths->cloth_count(); ++i)
-    m_bodies.push_back({&m_cloths->cloth(i).body(), m_cloths->node_count(i)});
+    m_bodies.push_back({&m_cloths->cloth(i).body()});
   // After the cloths' checks, so that a wrong gravity or a missing cloth is named before any shape.
   if (world) m_rigid = std::make_unique<BulletRigidBodies>(*world, *bodies);
   m_simulation =
@@ -291,9 +291,10 @@ void CoupledWorld::check_world() const {
                   "world does not; build a new CoupledWorld with the cloths that are left");
     }
     const btSoftBody& body = *coupled.body;
-    if (static_cast<std::size_t>(body.m_nodes.size()) < coupled.nodes) {
+    // The set's count is the cloth's as of the last step's begin_step (or construction).
+    if (static_cast<std::size_t>(body.m_nodes.size()) < m_cloths->node_count(i)) {
       throw Error("cloth " + std::to_string(i) + " has " + std::to_string(body.m_nodes.size()) +
-                  " nodes, but had " + std::to_string(coupled.nodes) +
+                  " nodes, but had " + std::to_string(m_cloths->node_count(i)) +
                   " at the last step: drench follows nodes added to a cloth (torn, cut, refined), not "
                   "removed; build a new CoupledWorld");
     }
@@ -363,9 +364,6 @@ CoupledStepReport CoupledWorld::step(double dt) {
     ScopedTimer total(report.seconds.total);
     report.fluid = sim.step(dt);
   }
-  // What the next step's check compares with: a cloth torn in this step's world is followed from here on.
-  for (std::size_t i = 0; i < m_bodies.size(); ++i)
-    m_bodies[i].nodes = m_cloths->node_count(i);
   if (m_rigid) {
     water_speed = std::max(water_speed, static_cast<double>(sim.fluid().max_speed()));
     report.thrown_body =

@@ -302,7 +302,6 @@ class CoupledWorld {
   BulletClothSet* m_cloths;                   // owned by m_simulation
   struct CoupledBody {
     const btSoftBody* body;  // compared with the world's soft bodies before it is read
-    std::size_t nodes;       // its node count in the last step
   };
   std::vector<CoupledBody> m_bodies;  // one per cloth
   bool m_every_soft_body = false;     // built by the constructor that couples every soft body of the world
