@@ -74,9 +74,13 @@ ClothWetting::ClothWetting(const WettingSettings& settings, const std::vector<Tr
       throw Error("wetting: cloth edge between nodes " + std::to_string(a) + " and " + std::to_string(b) +
                   " has length " + format_number(length) + ", must be > 0 and finite");
     }
-    m_edges.push_back(
-        {a, b, settings.diffusion * 0.5 * (m_capacity[a] + m_capacity[b]) / (length * length), length});
+    m_edges.push_back(edge(a, b, length));
   }
+}
+
+ClothWetting::Edge ClothWetting::edge(Index a, Index b, double rest_length) const {
+  return {a, b, m_settings.diffusion * 0.5 * (m_capacity[a] + m_capacity[b]) / (rest_length * rest_length),
+          rest_length};
 }
 
 void ClothWetting::follow(const ClothLayoutChange& change, const std::vector<Triangle>& triangles,
@@ -143,8 +147,7 @@ void ClothWetting::follow(const ClothLayoutChange& change, const std::vector<Tri
     const double length = lengths[e];
     // Two nodes a tear put at one place share no water along their edge: it has no length to diffuse over.
     if (!(length > 0.0) || !std::isfinite(length)) continue;
-    m_edges.push_back(
-        {a, b, m_settings.diffusion * 0.5 * (m_capacity[a] + m_capacity[b]) / (length * length), length});
+    m_edges.push_back(edge(a, b, length));
   }
 }
 

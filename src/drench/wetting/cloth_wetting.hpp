@@ -123,6 +123,9 @@ class ClothWetting {
     double rest_length = 0.0;  // (unit: m)
   };
 
+  /// The edge between nodes a and b of that rest length (m), its conductance of m_capacity's.
+  Edge edge(Index a, Index b, double rest_length) const;
+
   WettingSettings m_settings;
   std::vector<Triangle> m_triangles;
   std::vector<Edge> m_edges;
